@@ -1,0 +1,25 @@
+#pragma once
+/// scatterlab's public entry point: include this, call initialize() once, then load or build a
+/// Scene, create a Method and render.
+///
+///   scatterlab::initialize();
+///   scatterlab::Scene scene = scatterlab::loadScene("data/scenes/glow.json");
+///   auto method = scatterlab::createMethod(scene, "exact", "cpu");
+///   scatterlab::RenderResult r = method->render(scene, nullptr);
+///   scatterlab::writeExr(r.image, "glow.exr");
+
+#include "core/error.h"
+#include "core/image.h"
+#include "core/method.h"
+#include "core/scene.h"
+
+namespace scatterlab {
+
+/// Registers every built-in stage variant (density models, methods, ...). Idempotent and
+/// thread-safe; call before loading scenes.
+void initialize();
+
+/// Library version, "MAJOR.MINOR.PATCH".
+const char* version();
+
+}  // namespace scatterlab

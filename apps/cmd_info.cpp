@@ -1,0 +1,86 @@
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "api/scatterlab.h"
+#include "apps/commands.h"
+#include "apps/info.h"
+#include "core/atomic_file.h"
+
+namespace scatterlab::cli {
+
+void printSceneInfo(const std::string& path) {
+  const Scene s = loadScene(path);
+  const Medium& m = s.medium;
+  std::printf("scene %s\n", path.c_str());
+  std::printf("  medium: box [%g %g %g]..[%g %g %g], %dx%dx%d voxels, sigma_t %g, albedo %g, %s\n",
+              m.bounds.min.x, m.bounds.min.y, m.bounds.min.z, m.bounds.max.x, m.bounds.max.y,
+              m.bounds.max.z, m.resolution.x, m.resolution.y, m.resolution.z, m.sigmaT, m.albedo,
+              m.phase.type == Phase::Type::Isotropic
+                  ? "isotropic phase"
+                  : ("Henyey-Greenstein g=" + std::to_string(m.phase.g)).c_str());
+  std::printf("  density: %s\n", m.density->describe().c_str());
+  for (const Light& l : s.lights) {
+    const char* t = l.type == Light::Type::Point ? "point" : l.type == Light::Type::Spot ? "spot" : "directional";
+    std::printf("  light: %s, position [%g %g %g], direction [%g %g %g], %s [%g %g %g]\n", t,
+                l.position.x, l.position.y, l.position.z, l.direction.x, l.direction.y,
+                l.direction.z, l.type == Light::Type::Directional ? "irradiance" : "intensity",
+                l.intensity.x, l.intensity.y, l.intensity.z);
+  }
+  const Camera& c = s.camera;
+  std::printf("  camera: [%g %g %g] -> [%g %g %g], fov_y %g deg, %dx%d\n", c.position.x,
+              c.position.y, c.position.z, c.lookAt.x, c.lookAt.y, c.lookAt.z, c.fovYDeg, c.width,
+              c.height);
+  std::printf("  render: %s\n", s.render.dump().c_str());
+  auto method = createMethod(s);  // validates the render settings
+  (void)method;
+}
+
+void printImageInfo(const std::string& path) {
+  const Image img = readExr(path);
+  Vec3 lo(kInfinity), hi(-kInfinity);
+  glm::dvec3 sum(0.0);
+  for (const Vec3& p : img.pixels()) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+    sum += glm::dvec3(p);
+  }
+  sum /= double(std::max<size_t>(1, img.pixels().size()));
+  std::printf("image %s: %dx%d RGB float\n", path.c_str(), img.width(), img.height());
+  std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", lo.x, lo.y, lo.z, hi.x, hi.y,
+              hi.z, sum.x, sum.y, sum.z);
+}
+
+Action addInfo(CLI::App& app) {
+  auto file = std::make_shared<std::string>();
+  CLI::App* c = app.add_subcommand("info", "Describe a scene (.json), image (.exr) or volume");
+  c->add_option("file", *file, "File to describe")->required();
+  return [file]() {
+    checkReadableFile(*file);
+    std::string ext = std::filesystem::path(*file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (const InfoHandler* h = findInfoHandler(ext)) {
+      h->print(*file);
+      return 0;
+    }
+    std::string known;
+    for (const auto& h : infoHandlers()) known += (known.empty() ? "" : ", ") + h.extension;
+    throw IoError("info: don't know how to describe '" + *file + "'; known extensions: " + known);
+  };
+}
+
+const std::vector<InfoHandler>& infoHandlers() {
+  static const std::vector<InfoHandler> h = {
+      {".json", "scene", printSceneInfo},
+      {".exr", "OpenEXR image", printImageInfo},
+  };
+  return h;
+}
+
+const InfoHandler* findInfoHandler(const std::string& ext) {
+  for (const auto& h : infoHandlers())
+    if (h.extension == ext) return &h;
+  return nullptr;
+}
+
+}  // namespace scatterlab::cli

@@ -1,0 +1,40 @@
+/// `scatterlab`: render scenes, compare images, inspect files. See README.md.
+
+#include <cstdio>
+#include <vector>
+
+#include "api/scatterlab.h"
+#include "apps/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"scatterlab: real-time single-scattering participating media, with references "
+               "and comparisons"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(scatterlab::version()));
+  std::vector<std::pair<CLI::App*, scatterlab::cli::Action>> cmds;
+  const auto add = [&](scatterlab::cli::Action (*f)(CLI::App&)) {
+    const size_t before = app.get_subcommands({}).size();
+    auto action = f(app);
+    cmds.emplace_back(app.get_subcommands({})[before], action);
+  };
+  add(scatterlab::cli::addRender);
+  add(scatterlab::cli::addCompare);
+  add(scatterlab::cli::addInfo);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    scatterlab::initialize();
+    for (auto& [sub, action] : cmds)
+      if (sub->parsed()) return action();
+  } catch (const scatterlab::Error& e) {
+    std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scatterlab: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 1;
+}

@@ -1,0 +1,59 @@
+#pragma once
+/// Stage interface: the density model (DESIGN.md §3). A model gives D(x) >= 0 in world space
+/// and builds the dense density volume the renderers march through. Implementations live in
+/// media/ and are registered by registerMediaModels().
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "core/grid.h"
+#include "core/params.h"
+#include "core/registry.h"
+
+namespace scatterlab {
+
+class DensityModel {
+ public:
+  virtual ~DensityModel() = default;
+
+  /// Registry name of the model ("uniform", "gaussians", ...).
+  virtual std::string type() const = 0;
+
+  /// Density at world point x (the model's own continuous field, before any resampling).
+  /// Thread-safe. A virtual call per point: meant for tests, construction and probes, never
+  /// for the renderers' inner loops, which read the volume from build().
+  virtual float eval(const Vec3& x) const = 0;
+
+  /// Fills every cell centre of `grid` (bounds and dims already set by the caller) with the
+  /// density there. The default evaluates eval() at each centre in parallel (TBB); models with
+  /// a faster construction (splatting) override it. No GL context needed.
+  virtual void build(DensityGrid& grid) const;
+
+  /// The box the model covers when the scene gives no medium.bounds (a VDB's world bounds).
+  virtual std::optional<Box> naturalBounds() const { return std::nullopt; }
+
+  /// One-line human-readable summary for `scatterlab info`.
+  virtual std::string describe() const = 0;
+};
+
+/// Where relative paths in a scene resolve from.
+struct LoadContext {
+  std::filesystem::path baseDir;
+  std::optional<Box> mediumBounds;  ///< medium.bounds when the scene gives it
+  std::filesystem::path resolve(const std::string& p) const {
+    const std::filesystem::path q(p);
+    return q.is_absolute() ? q : baseDir / q;
+  }
+};
+
+/// Reads its own keys from `params` (the medium.density object; "type" is already read) and
+/// returns the model. Must not call params.finish(); the caller does.
+using DensityModelFactory =
+    std::function<std::unique_ptr<DensityModel>(Params& params, const LoadContext& ctx)>;
+
+Registry<DensityModelFactory>& densityModels();
+
+}  // namespace scatterlab

@@ -1,0 +1,98 @@
+#pragma once
+/// Dense voxel grid over a box with values at cell centres (DESIGN.md §2): voxel (i, j, k) has
+/// its centre at min + (i + 1/2, j + 1/2, k + 1/2) * cellSize. Lookups interpolate trilinearly,
+/// clamp to the outermost centres inside the box, and return zero outside the box.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/error.h"
+#include "core/math.h"
+
+namespace scatterlab {
+
+/// Upper bound on voxels of one grid (512³): a larger request throws LimitError instead of
+/// trying to allocate gigabytes.
+inline constexpr std::int64_t kMaxGridVoxels = std::int64_t(512) * 512 * 512;
+
+template <class T>
+class Grid3 {
+ public:
+  Grid3() = default;
+  Grid3(const Box& bounds, IVec3 dims, const T& fill = T(0)) { reset(bounds, dims, fill); }
+
+  void reset(const Box& bounds, IVec3 dims, const T& fill = T(0)) {
+    if (dims.x < 1 || dims.y < 1 || dims.z < 1)
+      throw ConfigError("grid dimensions must be at least 1 in every axis");
+    const std::int64_t n = std::int64_t(dims.x) * dims.y * dims.z;
+    if (n > kMaxGridVoxels)
+      throw LimitError("grid of " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
+                       std::to_string(dims.z) + " voxels exceeds the limit of " +
+                       std::to_string(kMaxGridVoxels) + " voxels (512^3)");
+    bounds_ = bounds;
+    dims_ = dims;
+    cell_ = bounds.extent() / Vec3(dims);
+    invCell_ = Vec3(1.0f) / cell_;
+    data_.assign(std::size_t(n), fill);
+  }
+
+  const Box& bounds() const { return bounds_; }
+  IVec3 dims() const { return dims_; }
+  Vec3 cellSize() const { return cell_; }
+  std::size_t size() const { return data_.size(); }
+  std::size_t index(int i, int j, int k) const {
+    return (std::size_t(k) * dims_.y + j) * dims_.x + i;
+  }
+  Vec3 cellCenter(int i, int j, int k) const {
+    return bounds_.min + (Vec3(i, j, k) + 0.5f) * cell_;
+  }
+
+  T& at(int i, int j, int k) { return data_[index(i, j, k)]; }
+  const T& at(int i, int j, int k) const { return data_[index(i, j, k)]; }
+  std::vector<T>& data() { return data_; }
+  const std::vector<T>& data() const { return data_; }
+
+  /// Trilinear lookup at world point p; zero outside the box.
+  T sample(const Vec3& p) const {
+    if (!bounds_.contains(p)) return T(0);
+    return sampleIndex((p - bounds_.min) * invCell_ - 0.5f);
+  }
+
+  /// Trilinear lookup at continuous index coordinates u (voxel centre i at u = i), clamped to
+  /// the outermost centres. The caller guarantees u lies within the box.
+  T sampleIndex(Vec3 u) const {
+    u = glm::clamp(u, Vec3(0.0f), Vec3(dims_ - 1));
+    const int i0 = std::min(int(u.x), dims_.x - 1), j0 = std::min(int(u.y), dims_.y - 1),
+              k0 = std::min(int(u.z), dims_.z - 1);
+    const int i1 = std::min(i0 + 1, dims_.x - 1), j1 = std::min(j0 + 1, dims_.y - 1),
+              k1 = std::min(k0 + 1, dims_.z - 1);
+    const float fx = u.x - i0, fy = u.y - j0, fz = u.z - k0;
+    const std::size_t sy = std::size_t(dims_.x), sz = std::size_t(dims_.x) * dims_.y;
+    const T* p = data_.data();
+    const std::size_t b00 = k0 * sz + j0 * sy, b10 = k0 * sz + j1 * sy;
+    const std::size_t b01 = k1 * sz + j0 * sy, b11 = k1 * sz + j1 * sy;
+    const T c00 = p[b00 + i0] + (p[b00 + i1] - p[b00 + i0]) * fx;
+    const T c10 = p[b10 + i0] + (p[b10 + i1] - p[b10 + i0]) * fx;
+    const T c01 = p[b01 + i0] + (p[b01 + i1] - p[b01 + i0]) * fx;
+    const T c11 = p[b11 + i0] + (p[b11 + i1] - p[b11 + i0]) * fx;
+    const T c0 = c00 + (c10 - c00) * fy;
+    const T c1 = c01 + (c11 - c01) * fy;
+    return c0 + (c1 - c0) * fz;
+  }
+
+  /// World-to-index transform: u = p * scale + offset gives sampleIndex coordinates.
+  Vec3 indexScale() const { return invCell_; }
+  Vec3 indexOffset() const { return -bounds_.min * invCell_ - 0.5f; }
+
+ private:
+  Box bounds_;
+  IVec3 dims_{0};
+  Vec3 cell_{1.0f}, invCell_{1.0f};
+  std::vector<T> data_;
+};
+
+using DensityGrid = Grid3<float>;
+using RadianceGrid = Grid3<Vec3>;
+
+}  // namespace scatterlab

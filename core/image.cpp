@@ -1,0 +1,120 @@
+#include "core/image.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <png.h>
+
+#include <cstring>
+#include <limits>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace scatterlab {
+
+void writeExr(const Image& img, const std::string& path) {
+  if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
+  writeAtomically(path, [&](const std::string& tmp) {
+    try {
+      Imf::Header header(img.width(), img.height());
+      for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+      Imf::OutputFile file(tmp.c_str(), header);
+      Imf::FrameBuffer fb;
+      char* base = const_cast<char*>(reinterpret_cast<const char*>(img.pixels().data()));
+      const size_t xs = sizeof(Vec3), ys = sizeof(Vec3) * img.width();
+      fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+      fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+      fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+      file.setFrameBuffer(fb);
+      file.writePixels(img.height());
+    } catch (const std::exception& e) {
+      throw IoError("cannot write EXR '" + path + "': " + e.what());
+    }
+  });
+}
+
+Image readExr(const std::string& path) {
+  checkReadableFile(path, "image");
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    const Imf::ChannelList& ch = file.header().channels();
+    if (!ch.findChannel("R") && !ch.findChannel("G") && !ch.findChannel("B"))
+      throw IoError("no R, G or B channel");
+    Image img(w, h);
+    Imf::FrameBuffer fb;
+    char* base = reinterpret_cast<char*>(img.pixels().data());
+    const size_t xs = sizeof(Vec3), ys = sizeof(Vec3) * w;
+    base -= (dw.min.x * xs + dw.min.y * ys);
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    return img;
+  } catch (const IoError& e) {
+    throw IoError("cannot read EXR '" + path + "': " + e.what());
+  } catch (const std::exception& e) {
+    throw IoError("cannot read EXR '" + path + "': " + e.what());
+  }
+}
+
+float toneMapSrgb(float linear, float exposure) {
+  float v = linear * std::exp2(exposure);
+  if (!(v > 0.0f)) return 0.0f;  // also maps NaN to 0
+  if (v >= 1.0f) return 1.0f;
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+void writePng(const Image& img, const std::string& path, float exposure) {
+  if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
+  std::vector<unsigned char> buf(size_t(img.width()) * img.height() * 3);
+  for (size_t i = 0; i < img.pixels().size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      buf[3 * i + c] =
+          static_cast<unsigned char>(toneMapSrgb(img.pixels()[i][c], exposure) * 255.0f + 0.5f);
+  writeAtomically(path, [&](const std::string& tmp) {
+    png_image pi;
+    std::memset(&pi, 0, sizeof(pi));
+    pi.version = PNG_IMAGE_VERSION;
+    pi.width = img.width();
+    pi.height = img.height();
+    pi.format = PNG_FORMAT_RGB;
+    if (!png_image_write_to_file(&pi, tmp.c_str(), 0, buf.data(), 0, nullptr))
+      throw IoError("cannot write PNG '" + path + "': " + pi.message);
+  });
+}
+
+ImageError compareImages(const Image& img, const Image& ref) {
+  if (img.width() != ref.width() || img.height() != ref.height())
+    throw ConfigError("image sizes differ: " + std::to_string(img.width()) + "x" +
+                      std::to_string(img.height()) + " vs reference " +
+                      std::to_string(ref.width()) + "x" + std::to_string(ref.height()));
+  double d2 = 0, b2 = 0, d1 = 0, b1 = 0, mse = 0, maxAbs = 0;
+  const size_t n = img.pixels().size();
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double a = img.pixels()[i][c], b = ref.pixels()[i][c];
+      const double d = a - b;
+      d2 += d * d;
+      b2 += b * b;
+      d1 += std::abs(d);
+      b1 += std::abs(b);
+      maxAbs = std::max(maxAbs, std::abs(d));
+      const double t = double(toneMapSrgb(float(a))) - double(toneMapSrgb(float(b)));
+      mse += t * t;
+    }
+  ImageError e;
+  e.relL2 = b2 > 0 ? std::sqrt(d2 / b2) : (d2 > 0 ? std::numeric_limits<double>::infinity() : 0);
+  e.relL1 = b1 > 0 ? d1 / b1 : (d1 > 0 ? std::numeric_limits<double>::infinity() : 0);
+  mse /= double(n * 3);
+  e.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : std::numeric_limits<double>::infinity();
+  e.maxAbs = maxAbs;
+  return e;
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,55 @@
+#pragma once
+/// Linear RGB float images, OpenEXR and PNG I/O, image error measures (DESIGN.md §2).
+
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+
+namespace scatterlab {
+
+/// Row-major RGB image, row 0 at the top, linear radiance.
+class Image {
+ public:
+  Image() = default;
+  Image(int width, int height) : width_(width), height_(height), pixels_(size_t(width) * height) {}
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  Vec3& at(int x, int y) { return pixels_[size_t(y) * width_ + x]; }
+  const Vec3& at(int x, int y) const { return pixels_[size_t(y) * width_ + x]; }
+  std::vector<Vec3>& pixels() { return pixels_; }
+  const std::vector<Vec3>& pixels() const { return pixels_; }
+
+ private:
+  int width_ = 0, height_ = 0;
+  std::vector<Vec3> pixels_;
+};
+
+/// Writes a 32-bit float RGB OpenEXR file atomically (temporary file, then rename); on any
+/// failure no file is left at `path`. Throws IoError.
+void writeExr(const Image& img, const std::string& path);
+
+/// Reads the R, G, B channels of an OpenEXR file (missing channels read as 0; a file with none
+/// of them is an error). Throws IoError naming the file.
+Image readExr(const std::string& path);
+
+/// Display transform used for PNG output and PSNR: multiply by 2^exposure, clamp to [0, 1],
+/// encode with the sRGB transfer curve.
+float toneMapSrgb(float linear, float exposure = 0.0f);
+
+/// Writes an 8-bit sRGB PNG (toneMapSrgb) atomically. Throws IoError.
+void writePng(const Image& img, const std::string& path, float exposure = 0.0f);
+
+/// Error of `img` against `ref` over all pixels and channels (DESIGN.md §2).
+struct ImageError {
+  double relL2 = 0.0;   ///< sqrt(Σ(a−b)²) / sqrt(Σb²): the headline "relative error"
+  double relL1 = 0.0;   ///< Σ|a−b| / Σ|b|
+  double psnr = 0.0;    ///< dB on the tone-mapped (exposure 0, sRGB) image; +inf when equal
+  double maxAbs = 0.0;  ///< max |a−b| in linear units
+};
+
+/// Throws ConfigError when the sizes differ.
+ImageError compareImages(const Image& img, const Image& ref);
+
+}  // namespace scatterlab

@@ -1,0 +1,233 @@
+#include "core/params.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace scatterlab {
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const char* typeName(const Json& v) {
+  if (v.is_null()) return "null";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_number()) return "a number";
+  if (v.is_string()) return "a string";
+  if (v.is_array()) return "an array";
+  return "an object";
+}
+
+}  // namespace
+
+bool Interval::contains(double v) const {
+  if (std::isnan(v)) return false;
+  if (loOpen ? !(v > lo) : !(v >= lo)) return false;
+  if (hiOpen ? !(v < hi) : !(v <= hi)) return false;
+  return true;
+}
+
+std::string Interval::describe() const {
+  const bool hasLo = std::isfinite(lo), hasHi = std::isfinite(hi);
+  if (hasLo && hasHi)
+    return std::string(loOpen ? "(" : "[") + fmt(lo) + ", " + fmt(hi) + (hiOpen ? ")" : "]");
+  if (hasLo) return std::string(loOpen ? "> " : ">= ") + fmt(lo);
+  if (hasHi) return std::string(hiOpen ? "< " : "<= ") + fmt(hi);
+  return "any finite number";
+}
+
+std::string describeValue(const Json& v) {
+  std::string s = v.dump();
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+
+Params::Params(const Json& j, std::string path) : j_(&j), path_(std::move(path)) {
+  if (!j.is_object())
+    throw ConfigError((path_.empty() ? std::string("document") : "'" + path_ + "'") +
+                      " must be a JSON object, got " + typeName(j) + " " + describeValue(j));
+}
+
+std::string Params::keyPath(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+bool Params::has(const std::string& key) const { return j_->contains(key); }
+
+void Params::fail(const std::string& key, const std::string& why) const {
+  throw ConfigError("'" + keyPath(key) + "': " + why);
+}
+
+void Params::allow(const std::string& key) { known_.insert(key); }
+
+const Json& Params::require(const std::string& key, const char* expected) {
+  known_.insert(key);
+  auto it = j_->find(key);
+  if (it == j_->end()) fail(key, std::string("required key is missing (expected ") + expected + ")");
+  return *it;
+}
+
+const Json& Params::raw(const std::string& key) { return require(key, "a value"); }
+
+double Params::number(const std::string& key, std::optional<double> def, const Interval& range) {
+  known_.insert(key);
+  double v;
+  if (!has(key)) {
+    if (!def) require(key, "a number");
+    v = *def;
+  } else {
+    const Json& j = (*j_)[key];
+    if (!j.is_number())
+      fail(key, std::string("expected a number, got ") + typeName(j) + " " + describeValue(j));
+    v = j.get<double>();
+  }
+  if (!std::isfinite(v) || !range.contains(v))
+    fail(key, "value " + fmt(v) + " is out of range; allowed: " + range.describe());
+  return v;
+}
+
+long long Params::integer(const std::string& key, std::optional<long long> def,
+                          const Interval& range) {
+  known_.insert(key);
+  long long v;
+  if (!has(key)) {
+    if (!def) require(key, "an integer");
+    v = *def;
+  } else {
+    const Json& j = (*j_)[key];
+    if (j.is_number_integer() || j.is_number_unsigned()) {
+      v = j.get<long long>();
+    } else if (j.is_number_float() && std::floor(j.get<double>()) == j.get<double>() &&
+               std::abs(j.get<double>()) < 9e15) {
+      v = (long long)j.get<double>();
+    } else {
+      fail(key, std::string("expected an integer, got ") + typeName(j) + " " + describeValue(j));
+    }
+  }
+  if (!range.contains(double(v)))
+    fail(key, "value " + std::to_string(v) + " is out of range; allowed: " + range.describe());
+  return v;
+}
+
+bool Params::boolean(const std::string& key, std::optional<bool> def) {
+  known_.insert(key);
+  if (!has(key)) {
+    if (!def) require(key, "true or false");
+    return *def;
+  }
+  const Json& j = (*j_)[key];
+  if (!j.is_boolean())
+    fail(key, std::string("expected true or false, got ") + typeName(j) + " " + describeValue(j));
+  return j.get<bool>();
+}
+
+std::string Params::string(const std::string& key, std::optional<std::string> def) {
+  known_.insert(key);
+  if (!has(key)) {
+    if (!def) require(key, "a string");
+    return *def;
+  }
+  const Json& j = (*j_)[key];
+  if (!j.is_string())
+    fail(key, std::string("expected a string, got ") + typeName(j) + " " + describeValue(j));
+  return j.get<std::string>();
+}
+
+std::string Params::choice(const std::string& key, const std::vector<std::string>& allowed,
+                           std::optional<std::string> def) {
+  const std::string v = string(key, def);
+  for (const auto& a : allowed)
+    if (a == v) return v;
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + ("'" + a + "'");
+  fail(key, "unknown value '" + v + "'; allowed: " + list);
+}
+
+Vec3 Params::vec3(const std::string& key, std::optional<Vec3> def, const Interval& range) {
+  known_.insert(key);
+  if (!has(key)) {
+    if (!def) require(key, "an array of 3 numbers");
+    return *def;
+  }
+  const Json& j = (*j_)[key];
+  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() ||
+      !j[2].is_number())
+    fail(key, "expected an array of 3 numbers, got " + describeValue(j));
+  Vec3 v;
+  for (int i = 0; i < 3; ++i) {
+    const double x = j[i].get<double>();
+    if (!std::isfinite(x) || !range.contains(x))
+      fail(key, "component " + std::to_string(i) + " = " + fmt(x) +
+                    " is out of range; allowed: " + range.describe());
+    v[i] = float(x);
+  }
+  return v;
+}
+
+Vec3 Params::rgb(const std::string& key, std::optional<Vec3> def, const Interval& range) {
+  if (has(key) && (*j_)[key].is_number()) return Vec3(real(key, std::nullopt, range));
+  return vec3(key, def, range);
+}
+
+Params Params::child(const std::string& key) {
+  return Params(require(key, "an object"), keyPath(key));
+}
+
+std::vector<Params> Params::children(const std::string& key, bool required) {
+  known_.insert(key);
+  std::vector<Params> out;
+  if (!has(key)) {
+    if (required) require(key, "an array of objects");
+    return out;
+  }
+  const Json& j = (*j_)[key];
+  if (!j.is_array()) fail(key, std::string("expected an array, got ") + typeName(j));
+  for (size_t i = 0; i < j.size(); ++i)
+    out.emplace_back(j[i], keyPath(key) + "[" + std::to_string(i) + "]");
+  return out;
+}
+
+void Params::finish() const {
+  std::string unknown;
+  for (auto it = j_->begin(); it != j_->end(); ++it)
+    if (!known_.count(it.key())) unknown += (unknown.empty() ? "'" : ", '") + keyPath(it.key()) + "'";
+  if (unknown.empty()) return;
+  std::string allowed;
+  for (const auto& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
+  throw ConfigError("unknown key " + unknown + "; allowed keys" +
+                    (path_.empty() ? std::string() : " in '" + path_ + "'") + ": " + allowed);
+}
+
+void applyOverride(Json& doc, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw ConfigError("--set '" + assignment + "': expected key.path=VALUE");
+  const std::string path = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  Json value = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (value.is_discarded()) value = text;
+  Json* node = &doc;
+  std::string walked;
+  size_t start = 0;
+  while (true) {
+    const size_t dot = path.find('.', start);
+    const std::string part = path.substr(start, dot == std::string::npos ? dot : dot - start);
+    if (part.empty()) throw ConfigError("--set '" + assignment + "': empty key in path");
+    if (!node->is_object())
+      throw ConfigError("--set '" + assignment + "': '" + walked + "' is not an object");
+    walked += (walked.empty() ? "" : ".") + part;
+    if (dot == std::string::npos) {
+      (*node)[part] = value;
+      return;
+    }
+    if (!node->contains(part)) (*node)[part] = Json::object();
+    node = &(*node)[part];
+    start = dot + 1;
+  }
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,96 @@
+#pragma once
+/// Strict reading of JSON objects (scene files, render settings, experiment configs): every
+/// read marks its key used, finish() rejects keys nobody read (pbrt's ReportUnused), and every
+/// error names the dotted key path, the value and what is allowed.
+
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+
+namespace scatterlab {
+
+using Json = nlohmann::json;
+
+/// Allowed numeric range, for messages and checks.
+struct Interval {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool loOpen = false, hiOpen = false;
+
+  static Interval atLeast(double v) { return {v, std::numeric_limits<double>::infinity()}; }
+  static Interval above(double v) {
+    return {v, std::numeric_limits<double>::infinity(), true, false};
+  }
+  static Interval closed(double a, double b) { return {a, b}; }
+  static Interval open(double a, double b) { return {a, b, true, true}; }
+  bool contains(double v) const;
+  std::string describe() const;
+};
+
+class Params {
+ public:
+  /// `path` is the dotted location of `j` in its document ("" for the root); `j` must be an
+  /// object, else ConfigError.
+  Params(const Json& j, std::string path);
+
+  const std::string& path() const { return path_; }
+  std::string keyPath(const std::string& key) const;
+  bool has(const std::string& key) const;
+  const Json& json() const { return *j_; }
+
+  /// Raw value; marks the key used. Throws when missing.
+  const Json& raw(const std::string& key);
+  /// Marks a key as known without reading it (for keys handled elsewhere).
+  void allow(const std::string& key);
+
+  double number(const std::string& key, std::optional<double> def = std::nullopt,
+                const Interval& range = {});
+  float real(const std::string& key, std::optional<double> def = std::nullopt,
+             const Interval& range = {}) {
+    return float(number(key, def, range));
+  }
+  long long integer(const std::string& key, std::optional<long long> def = std::nullopt,
+                    const Interval& range = {});
+  bool boolean(const std::string& key, std::optional<bool> def = std::nullopt);
+  std::string string(const std::string& key, std::optional<std::string> def = std::nullopt);
+  /// A string from a fixed set; the message lists the set.
+  std::string choice(const std::string& key, const std::vector<std::string>& allowed,
+                     std::optional<std::string> def = std::nullopt);
+  /// Array of 3 numbers, each within `range`.
+  Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt,
+            const Interval& range = {});
+  /// Either a number (broadcast to RGB) or an array of 3 numbers.
+  Vec3 rgb(const std::string& key, std::optional<Vec3> def = std::nullopt,
+           const Interval& range = Interval::atLeast(0));
+  /// Nested object.
+  Params child(const std::string& key);
+  /// Array of objects (possibly empty); missing gives an empty list when `required` is false.
+  std::vector<Params> children(const std::string& key, bool required = false);
+
+  /// Throws ConfigError naming every key present but never read, with the allowed keys.
+  void finish() const;
+
+  /// Throws a ConfigError for `key` with the given explanation.
+  [[noreturn]] void fail(const std::string& key, const std::string& why) const;
+
+ private:
+  const Json& require(const std::string& key, const char* expected);
+
+  const Json* j_;
+  std::string path_;
+  std::set<std::string> known_;
+};
+
+/// Applies `--set a.b.c=VALUE`: VALUE is parsed as JSON where it parses, else taken as a
+/// string; missing objects on the way are created; a non-object on the way is an error.
+void applyOverride(Json& doc, const std::string& assignment);
+
+/// Short printable form of a JSON value for messages (truncated).
+std::string describeValue(const Json& v);
+
+}  // namespace scatterlab

@@ -1,0 +1,51 @@
+#pragma once
+/// The scene: medium, lights, camera, background and the render settings, loaded from JSON
+/// (documented key by key in docs/scene-format.md).
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/density_model.h"
+#include "core/light.h"
+#include "core/params.h"
+#include "core/phase.h"
+
+namespace scatterlab {
+
+struct Medium {
+  Box bounds;                                  ///< world-space box B; D = 0 outside
+  std::shared_ptr<const DensityModel> density; ///< D(x) >= 0
+  IVec3 resolution{128};                       ///< density (and radiance) volume voxels
+  float sigmaT = 1.0f;                         ///< extinction per unit density, >= 0
+  float albedo = 1.0f;                         ///< Ω in [0, 1]; σs = Ω·σt
+  Phase phase;
+
+  float sigmaS() const { return albedo * sigmaT; }
+  /// Smallest voxel edge: the default step for marching and volume tracing.
+  float voxelSize() const;
+};
+
+struct Scene {
+  Medium medium;
+  std::vector<Light> lights;
+  Camera camera;
+  Vec3 background{0.0f};
+  Json render = Json::object();  ///< the "render" object, parsed by the chosen method
+  std::filesystem::path baseDir;  ///< directory of the scene file
+};
+
+/// Parses a scene document. Throws ConfigError naming the key, the value and what is allowed;
+/// IoError for files the scene refers to.
+Scene parseScene(const Json& doc, const std::filesystem::path& baseDir);
+
+/// Reads the JSON file at `path` (IoError when missing, a directory or malformed), applies the
+/// `--set` overrides in order, and parses it.
+Scene loadScene(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// Reads and parses a JSON file without interpreting it. Throws IoError with line/column.
+Json readJsonFile(const std::string& path);
+
+}  // namespace scatterlab
