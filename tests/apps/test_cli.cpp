@@ -1,0 +1,197 @@
+/// The `scatterlab` tool end to end: good runs write complete outputs; bad input gives one clear
+/// message, a non-zero exit code, and no output file.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "api/scatterlab.h"
+
+namespace fs = std::filesystem;
+using scatterlab::Json;
+
+namespace {
+
+struct RunResult {
+  int code;
+  std::string output;
+};
+
+RunResult run(const std::string& args) {
+  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("scatterlab_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static Json tinyScene() {
+    return Json::parse(R"({
+      "medium": {"bounds": {"min": [0,0,0], "max": [1,1,1]},
+                 "density": {"type": "gaussians", "blobs": [{"center": [0.5,0.5,0.5], "radius": 0.25, "weight": 1.0}]},
+                 "resolution": 16, "sigma_t": 4.0, "albedo": 0.6, "phase": {"type": "isotropic"}},
+      "lights": [{"type": "point", "position": [0.5,1.4,0.5], "intensity": [4,4,4]}],
+      "camera": {"position": [0.5,0.5,-2], "look_at": [0.5,0.5,0.5], "up": [0,1,0], "fov_y_deg": 40,
+                 "width": 16, "height": 12},
+      "render": {"method": "exact"}})");
+  }
+  std::string write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  std::string writeScene(const Json& j) const { return write("scene.json", j.dump(2)); }
+  std::string out(const std::string& name) const { return (dir_ / name).string(); }
+
+  /// Runs a render expected to fail; checks exit code, message fragments, and no outputs.
+  void expectRenderFails(const std::string& scene, std::initializer_list<std::string> fragments,
+                         const std::string& extra = "") {
+    const std::string exr = out("o.exr"), png = out("o.png"), stats = out("o.json");
+    const RunResult r =
+        run("render " + scene + " -o " + exr + " --png " + png + " --stats " + stats + " " + extra);
+    EXPECT_NE(r.code, 0) << r.output;
+    for (const auto& f : fragments)
+      EXPECT_NE(r.output.find(f), std::string::npos) << "output '" << r.output << "' lacks '" << f << "'";
+    EXPECT_FALSE(fs::exists(exr));
+    EXPECT_FALSE(fs::exists(png));
+    EXPECT_FALSE(fs::exists(stats));
+    for (const auto& e : fs::directory_iterator(dir_))
+      EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+  }
+
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(Cli, RenderWritesImageStatsAndHonoursSet) {
+  const std::string scene = writeScene(tinyScene());
+  const RunResult r = run("render " + scene + " -o " + out("a.exr") + " --png " + out("a.png") +
+                          " --stats " + out("a.json") + " --set camera.width=20 --set render.march_step=0.01");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Json stats = Json::parse(std::ifstream(out("a.json")));
+  EXPECT_EQ(stats["method"], "exact");
+  EXPECT_EQ(stats["backend"], "cpu");
+  EXPECT_EQ(stats["width"], 20);
+  EXPECT_EQ(stats["height"], 12);
+  EXPECT_FALSE(stats["device"].get<std::string>().empty());
+  EXPECT_TRUE(stats["timings_ms"].contains("total"));
+  EXPECT_TRUE(stats["timings_ms"].contains("march"));
+  EXPECT_DOUBLE_EQ(stats["march_step"].get<double>(), 0.01f);
+  const scatterlab::Image img = scatterlab::readExr(out("a.exr"));
+  EXPECT_EQ(img.width(), 20);
+  EXPECT_GT(img.at(10, 6).x, 0.0f);
+  EXPECT_TRUE(fs::exists(out("a.png")));
+  EXPECT_NE(r.output.find(out("a.exr")), std::string::npos);
+}
+
+TEST_F(Cli, CompareReportsErrorsAsJson) {
+  const std::string scene = writeScene(tinyScene());
+  ASSERT_EQ(run("render " + scene + " -q -o " + out("ref.exr")).code, 0);
+  ASSERT_EQ(run("render " + scene + " -q -o " + out("pv.exr") + " --method per-voxel").code, 0);
+  RunResult r = run("compare " + out("ref.exr") + " " + out("ref.exr") + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  Json j = Json::parse(r.output);
+  EXPECT_EQ(j["rel_l2"], 0.0);
+  EXPECT_EQ(j["psnr_db"], "inf");
+  r = run("compare " + out("pv.exr") + " " + out("ref.exr") + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  j = Json::parse(r.output);
+  EXPECT_GT(j["rel_l2"].get<double>(), 0.0);
+  EXPECT_LT(j["rel_l2"].get<double>(), 0.2);
+  r = run("compare " + out("pv.exr") + " " + out("missing.exr"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("missing.exr"), std::string::npos);
+}
+
+TEST_F(Cli, InfoDescribesScenesAndImages) {
+  const std::string scene = writeScene(tinyScene());
+  RunResult r = run("info " + scene);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("Gaussian"), std::string::npos);
+  EXPECT_NE(r.output.find("16x16x16"), std::string::npos);
+  ASSERT_EQ(run("render " + scene + " -q -o " + out("i.exr")).code, 0);
+  r = run("info " + out("i.exr"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("16x12"), std::string::npos);
+  r = run("info " + write("x.txt", "hello"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("known extensions"), std::string::npos);
+}
+
+TEST_F(Cli, HelpOnEveryCommand) {
+  for (const char* c : {"", "render ", "compare ", "info "}) {
+    const RunResult r = run(std::string(c) + "--help");
+    EXPECT_EQ(r.code, 0) << c;
+    EXPECT_NE(r.output.find("Usage"), std::string::npos) << c;
+  }
+}
+
+TEST_F(Cli, MalformedJson) {
+  expectRenderFails(write("bad.json", "{\"medium\": {,}"), {"malformed JSON", "bad.json"});
+}
+
+TEST_F(Cli, MissingSceneFileAndDirectory) {
+  expectRenderFails(out("nope.json"), {"nope.json", "does not exist"});
+  expectRenderFails(dir_.string(), {"is a directory"});
+}
+
+TEST_F(Cli, UnknownKey) {
+  Json s = tinyScene();
+  s["camera"]["zoom"] = 2;
+  expectRenderFails(writeScene(s), {"camera.zoom", "unknown key", "fov_y_deg"});
+}
+
+TEST_F(Cli, MissingRequiredKey) {
+  Json s = tinyScene();
+  s["camera"].erase("position");
+  expectRenderFails(writeScene(s), {"camera.position", "missing"});
+}
+
+TEST_F(Cli, WrongType) {
+  Json s = tinyScene();
+  s["camera"]["width"] = "wide";
+  expectRenderFails(writeScene(s), {"camera.width", "expected an integer", "\"wide\""});
+}
+
+TEST_F(Cli, OutOfRangeValues) {
+  const std::string scene = writeScene(tinyScene());
+  expectRenderFails(scene, {"medium.sigma_t", "-2", ">= 0"}, "--set medium.sigma_t=-2");
+  expectRenderFails(scene, {"medium.albedo", "[0, 1]"}, "--set medium.albedo=1.2");
+  expectRenderFails(scene, {"camera.fov_y_deg", "(0, 180)"}, "--set camera.fov_y_deg=190");
+  expectRenderFails(scene, {"medium.resolution", "[1, 4096]"}, "--set medium.resolution=0");
+  expectRenderFails(scene, {"medium.resolution", "memory bound"}, "--set medium.resolution=[4096,4096,4096]");
+  expectRenderFails(scene, {"--method", "'exact'"}, "--method nonsense");
+}
+
+TEST_F(Cli, OutputIntoMissingDirectoryOrOntoDirectory) {
+  const std::string scene = writeScene(tinyScene());
+  RunResult r = run("render " + scene + " -o " + out("no/such/dir/x.exr"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
+  r = run("render " + scene + " -o " + dir_.string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("is a directory"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, UnknownBackendIsAUsageError) {
+  const std::string scene = writeScene(tinyScene());
+  const RunResult r = run("render " + scene + " -o " + out("x.exr") + " --backend tpu");
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(fs::exists(out("x.exr")));
+}
