@@ -34,6 +34,9 @@ class Grid3 {
     dims_ = dims;
     cell_ = bounds.extent() / Vec3(dims);
     invCell_ = Vec3(1.0f) / cell_;
+    maxIndex_ = Vec3(dims - 1);
+    maxBase_ = glm::max(dims - 2, IVec3(0));
+    step_ = IVec3(dims.x > 1 ? 1 : 0, dims.y > 1 ? dims.x : 0, dims.z > 1 ? dims.x * dims.y : 0);
     data_.assign(std::size_t(n), fill);
   }
 
@@ -62,23 +65,20 @@ class Grid3 {
   /// Trilinear lookup at continuous index coordinates u (voxel centre i at u = i), clamped to
   /// the outermost centres. The caller guarantees u lies within the box.
   T sampleIndex(Vec3 u) const {
-    u = glm::clamp(u, Vec3(0.0f), Vec3(dims_ - 1));
-    const int i0 = std::min(int(u.x), dims_.x - 1), j0 = std::min(int(u.y), dims_.y - 1),
-              k0 = std::min(int(u.z), dims_.z - 1);
-    const int i1 = std::min(i0 + 1, dims_.x - 1), j1 = std::min(j0 + 1, dims_.y - 1),
-              k1 = std::min(k0 + 1, dims_.z - 1);
-    const float fx = u.x - i0, fy = u.y - j0, fz = u.z - k0;
-    const std::size_t sy = std::size_t(dims_.x), sz = std::size_t(dims_.x) * dims_.y;
-    const T* p = data_.data();
-    const std::size_t b00 = k0 * sz + j0 * sy, b10 = k0 * sz + j1 * sy;
-    const std::size_t b01 = k1 * sz + j0 * sy, b11 = k1 * sz + j1 * sy;
-    const T c00 = p[b00 + i0] + (p[b00 + i1] - p[b00 + i0]) * fx;
-    const T c10 = p[b10 + i0] + (p[b10 + i1] - p[b10 + i0]) * fx;
-    const T c01 = p[b01 + i0] + (p[b01 + i1] - p[b01 + i0]) * fx;
-    const T c11 = p[b11 + i0] + (p[b11 + i1] - p[b11 + i0]) * fx;
-    const T c0 = c00 + (c10 - c00) * fy;
-    const T c1 = c01 + (c11 - c01) * fy;
-    return c0 + (c1 - c0) * fz;
+    u = glm::clamp(u, Vec3(0.0f), maxIndex_);
+    // Base corner clamped to dims-2 so the +1 neighbour exists; along an axis of one voxel the
+    // neighbour offset is 0.
+    const IVec3 b = glm::min(IVec3(u), maxBase_);
+    const Vec3 f = u - Vec3(b);
+    const T* p = data_.data() + (std::size_t(b.z) * dims_.y + b.y) * dims_.x + b.x;
+    const std::size_t dx = step_.x, dy = step_.y, dz = step_.z;
+    const T c00 = p[0] + (p[dx] - p[0]) * f.x;
+    const T c10 = p[dy] + (p[dy + dx] - p[dy]) * f.x;
+    const T c01 = p[dz] + (p[dz + dx] - p[dz]) * f.x;
+    const T c11 = p[dz + dy] + (p[dz + dy + dx] - p[dz + dy]) * f.x;
+    const T c0 = c00 + (c10 - c00) * f.y;
+    const T c1 = c01 + (c11 - c01) * f.y;
+    return c0 + (c1 - c0) * f.z;
   }
 
   /// World-to-index transform: u = p * scale + offset gives sampleIndex coordinates.
@@ -89,6 +89,8 @@ class Grid3 {
   Box bounds_;
   IVec3 dims_{0};
   Vec3 cell_{1.0f}, invCell_{1.0f};
+  Vec3 maxIndex_{0.0f};
+  IVec3 maxBase_{0}, step_{0};  ///< trilinear base clamp and neighbour strides (0 for 1-voxel axes)
   std::vector<T> data_;
 };
 

@@ -107,3 +107,14 @@ TEST(AtomicFile, FailedWriteLeavesNothing) {
   EXPECT_THROW(checkWritablePath(fs::temp_directory_path().string()), IoError);
   EXPECT_THROW(checkWritablePath("/nonexistent-dir-xyz/out.exr"), IoError);
 }
+
+TEST(Grid, SingleVoxelAxesAreConstantAlongThem) {
+  DensityGrid g(Box{Vec3(0), Vec3(1)}, IVec3(1, 3, 1));
+  g.at(0, 0, 0) = 1.0f;
+  g.at(0, 1, 0) = 2.0f;
+  g.at(0, 2, 0) = 4.0f;
+  EXPECT_FLOAT_EQ(g.sample(Vec3(0.1f, 0.5f, 0.9f)), 2.0f);
+  EXPECT_FLOAT_EQ(g.sample(Vec3(0.7f, 0.5f + 1.0f / 6.0f, 0.2f)), 3.0f);
+  EXPECT_FLOAT_EQ(g.sample(Vec3(0.5f, 0.99f, 0.5f)), 4.0f);
+  EXPECT_FLOAT_EQ(g.sample(Vec3(0.5f, 0.01f, 0.5f)), 1.0f);
+}
