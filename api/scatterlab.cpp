@@ -15,6 +15,8 @@ void initialize() {
   });
 }
 
-const char* version() { return SCATTERLAB_VERSION; }
+const char* version() {
+  return SCATTERLAB_VERSION;
+}
 
 }  // namespace scatterlab

@@ -21,7 +21,9 @@ void printSceneInfo(const std::string& path) {
                   : ("Henyey-Greenstein g=" + std::to_string(m.phase.g)).c_str());
   std::printf("  density: %s\n", m.density->describe().c_str());
   for (const Light& l : s.lights) {
-    const char* t = l.type == Light::Type::Point ? "point" : l.type == Light::Type::Spot ? "spot" : "directional";
+    const char* t = l.type == Light::Type::Point  ? "point"
+                    : l.type == Light::Type::Spot ? "spot"
+                                                  : "directional";
     std::printf("  light: %s, position [%g %g %g], direction [%g %g %g], %s [%g %g %g]\n", t,
                 l.position.x, l.position.y, l.position.z, l.direction.x, l.direction.y,
                 l.direction.z, l.type == Light::Type::Directional ? "irradiance" : "intensity",

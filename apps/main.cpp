@@ -7,8 +7,9 @@
 #include "apps/commands.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"scatterlab: real-time single-scattering participating media, with references "
-               "and comparisons"};
+  CLI::App app{
+      "scatterlab: real-time single-scattering participating media, with references "
+      "and comparisons"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(scatterlab::version()));
   std::vector<std::pair<CLI::App*, scatterlab::cli::Action>> cmds;

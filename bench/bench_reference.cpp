@@ -51,12 +51,28 @@ void renderMethod(benchmark::State& state, const char* method) {
   for (auto _ : state) benchmark::DoNotOptimize(m->render(scene, nullptr));
 }
 
-void BM_Exact_Glow_320x240(benchmark::State& state) { renderMethod(state, "exact"); }
-void BM_PerVoxel_Glow_320x240(benchmark::State& state) { renderMethod(state, "per-voxel"); }
+void BM_Exact_Glow_320x240(benchmark::State& state) {
+  renderMethod(state, "exact");
+}
+void BM_PerVoxel_Glow_320x240(benchmark::State& state) {
+  renderMethod(state, "per-voxel");
+}
 
 }  // namespace
 
-BENCHMARK(BM_PerVoxelRadiance_Glow)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_PerVoxelRadiance_UniformFog)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PerVoxelRadiance_Glow)
+    ->Arg(64)
+    ->Arg(128)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_PerVoxelRadiance_UniformFog)
+    ->Arg(64)
+    ->Arg(128)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_Exact_Glow_320x240)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_PerVoxel_Glow_320x240)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PerVoxel_Glow_320x240)
+    ->Arg(64)
+    ->Arg(128)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();

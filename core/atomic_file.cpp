@@ -16,8 +16,8 @@ namespace {
 std::string tempPathFor(const std::string& path) {
   static std::atomic<unsigned> counter{0};
   const fs::path p(path);
-  const std::string name = "." + p.filename().string() + ".tmp" + std::to_string(::getpid()) +
-                           "_" + std::to_string(counter++);
+  const std::string name = "." + p.filename().string() + ".tmp" + std::to_string(::getpid()) + "_" +
+                           std::to_string(counter++);
   return (p.parent_path() / name).string();
 }
 

@@ -26,7 +26,9 @@ Camera::RayGenerator Camera::rayGenerator() const {
   return g;
 }
 
-Ray Camera::primaryRay(int px, int py) const { return rayGenerator()(px, py); }
+Ray Camera::primaryRay(int px, int py) const {
+  return rayGenerator()(px, py);
+}
 
 bool Camera::project(const Vec3& p, float& px, float& py) const {
   Vec3 f, r, u;

@@ -11,7 +11,7 @@ struct Light {
   Type type = Type::Point;
   Vec3 position{0.0f};                ///< point and spot: world position
   Vec3 direction{0.0f, -1.0f, 0.0f};  ///< spot: axis; directional: the way light travels (unit)
-  Vec3 intensity{1.0f};  ///< point/spot: radiant intensity I (RGB); directional: irradiance
+  Vec3 intensity{1.0f};   ///< point/spot: radiant intensity I (RGB); directional: irradiance
   float cosInner = 1.0f;  ///< spot: cos of the inner half-angle (full intensity inside)
   float cosOuter = 0.0f;  ///< spot: cos of the outer half-angle (zero outside)
 

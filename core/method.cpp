@@ -22,7 +22,8 @@ std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& meth
   const std::string fileMethod = p.string("method", "exact");
   const std::string b = backendOf(p, backend);
   const std::string name = methodOverride.empty() ? fileMethod : methodOverride;
-  auto method = methods().get(name, methodOverride.empty() ? "render.method" : "--method")(p, scene, b);
+  auto method =
+      methods().get(name, methodOverride.empty() ? "render.method" : "--method")(p, scene, b);
   if (name != fileMethod && methods().contains(fileMethod)) {
     // Validate the file's own settings with its own method, then accept its keys here.
     Params own(scene.render, "render");

@@ -29,9 +29,8 @@ class Method {
 
 /// Reads the method's own keys from the scene's render object ("method" and "backend" are
 /// read by the caller) and validates them against `scene`. Must not call finish().
-using MethodFactory =
-    std::function<std::unique_ptr<Method>(Params& render, const Scene& scene,
-                                          const std::string& backend)>;
+using MethodFactory = std::function<std::unique_ptr<Method>(Params& render, const Scene& scene,
+                                                            const std::string& backend)>;
 
 Registry<MethodFactory>& methods();
 

@@ -57,22 +57,29 @@ std::string Params::keyPath(const std::string& key) const {
   return path_.empty() ? key : path_ + "." + key;
 }
 
-bool Params::has(const std::string& key) const { return j_->contains(key); }
+bool Params::has(const std::string& key) const {
+  return j_->contains(key);
+}
 
 void Params::fail(const std::string& key, const std::string& why) const {
   throw ConfigError("'" + keyPath(key) + "': " + why);
 }
 
-void Params::allow(const std::string& key) { known_.insert(key); }
+void Params::allow(const std::string& key) {
+  known_.insert(key);
+}
 
 const Json& Params::require(const std::string& key, const char* expected) {
   known_.insert(key);
   auto it = j_->find(key);
-  if (it == j_->end()) fail(key, std::string("required key is missing (expected ") + expected + ")");
+  if (it == j_->end())
+    fail(key, std::string("required key is missing (expected ") + expected + ")");
   return *it;
 }
 
-const Json& Params::raw(const std::string& key) { return require(key, "a value"); }
+const Json& Params::raw(const std::string& key) {
+  return require(key, "a value");
+}
 
 double Params::number(const std::string& key, std::optional<double> def, const Interval& range) {
   known_.insert(key);
@@ -155,8 +162,7 @@ Vec3 Params::vec3(const std::string& key, std::optional<Vec3> def, const Interva
     return *def;
   }
   const Json& j = (*j_)[key];
-  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() ||
-      !j[2].is_number())
+  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
     fail(key, "expected an array of 3 numbers, got " + describeValue(j));
   Vec3 v;
   for (int i = 0; i < 3; ++i) {
@@ -195,7 +201,8 @@ std::vector<Params> Params::children(const std::string& key, bool required) {
 void Params::finish() const {
   std::string unknown;
   for (auto it = j_->begin(); it != j_->end(); ++it)
-    if (!known_.count(it.key())) unknown += (unknown.empty() ? "'" : ", '") + keyPath(it.key()) + "'";
+    if (!known_.count(it.key()))
+      unknown += (unknown.empty() ? "'" : ", '") + keyPath(it.key()) + "'";
   if (unknown.empty()) return;
   std::string allowed;
   for (const auto& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;

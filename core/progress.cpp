@@ -43,11 +43,12 @@ void Progress::draw(bool final) {
   const long long done = final ? total_ : done_.load();
   const double f = total_ > 0 ? double(done) / double(total_) : 1.0;
   const int width = 30, filled = int(f * width + 0.5);
-  const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double el =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double eta = f > 0 ? el * (1.0 - f) / f : 0.0;
   std::fprintf(stderr, "\r%-12s [%.*s%*s] %3d%%  %.1fs elapsed, ETA %.1fs%s", label_.c_str(),
-               filled, "##############################", width - filled, "", int(f * 100 + 0.5),
-               el, eta, final ? "\n" : "");
+               filled, "##############################", width - filled, "", int(f * 100 + 0.5), el,
+               eta, final ? "\n" : "");
   std::fflush(stderr);
   drawn_ = true;
 }

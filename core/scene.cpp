@@ -21,7 +21,8 @@ IVec3 parseResolution(Params& p, const std::string& key, IVec3 def) {
   if (p.has(key) && p.json()[key].is_array()) {
     const Vec3 v = p.vec3(key, std::nullopt, range);
     for (int i = 0; i < 3; ++i) {
-      if (v[i] != std::floor(v[i])) p.fail(key, "expected integers, got " + describeValue(p.json()[key]));
+      if (v[i] != std::floor(v[i]))
+        p.fail(key, "expected integers, got " + describeValue(p.json()[key]));
       r[i] = int(v[i]);
     }
   } else {
@@ -126,8 +127,10 @@ Medium parseMedium(Params p, LoadContext ctx) {
   m.resolution = parseResolution(p, "resolution", IVec3(128));
   m.sigmaT = p.real("sigma_t", 1.0, Interval::atLeast(0));
   m.albedo = p.real("albedo", 1.0, Interval::closed(0, 1));
-  if (p.has("phase")) m.phase = parsePhase(p.child("phase"));
-  else p.allow("phase");
+  if (p.has("phase"))
+    m.phase = parsePhase(p.child("phase"));
+  else
+    p.allow("phase");
   p.finish();
   return m;
 }

@@ -16,11 +16,11 @@
 namespace scatterlab {
 
 struct Medium {
-  Box bounds;                                  ///< world-space box B; D = 0 outside
-  std::shared_ptr<const DensityModel> density; ///< D(x) >= 0
-  IVec3 resolution{128};                       ///< density (and radiance) volume voxels
-  float sigmaT = 1.0f;                         ///< extinction per unit density, >= 0
-  float albedo = 1.0f;                         ///< Ω in [0, 1]; σs = Ω·σt
+  Box bounds;                                   ///< world-space box B; D = 0 outside
+  std::shared_ptr<const DensityModel> density;  ///< D(x) >= 0
+  IVec3 resolution{128};                        ///< density (and radiance) volume voxels
+  float sigmaT = 1.0f;                          ///< extinction per unit density, >= 0
+  float albedo = 1.0f;                          ///< Ω in [0, 1]; σs = Ω·σt
   Phase phase;
 
   float sigmaS() const { return albedo * sigmaT; }
@@ -33,7 +33,7 @@ struct Scene {
   std::vector<Light> lights;
   Camera camera;
   Vec3 background{0.0f};
-  Json render = Json::object();  ///< the "render" object, parsed by the chosen method
+  Json render = Json::object();   ///< the "render" object, parsed by the chosen method
   std::filesystem::path baseDir;  ///< directory of the scene file
 };
 

@@ -14,7 +14,7 @@ namespace scatterlab {
 struct RenderStats {
   std::string method, backend = "cpu", device;
   int width = 0, height = 0;
-  std::optional<long long> samples;  ///< radiance samples, when a sampler ran
+  std::optional<long long> samples;                       ///< radiance samples, when a sampler ran
   std::vector<std::pair<std::string, double>> timingsMs;  ///< per stage, in order
   Json extra = Json::object();  ///< method-specific facts (traced voxels, levels, ...)
 

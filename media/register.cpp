@@ -38,12 +38,14 @@ std::unique_ptr<DensityModel> makeHeight(Params& p, const LoadContext& ctx) {
 std::unique_ptr<DensityModel> makeGrid(Params& p, const LoadContext& ctx) {
   const Vec3 dv = p.vec3("dims", std::nullopt, Interval::closed(1, 4096));
   const IVec3 dims(dv);
-  if (Vec3(dims) != dv) p.fail("dims", "expected 3 integers, got " + describeValue(p.json()["dims"]));
+  if (Vec3(dims) != dv)
+    p.fail("dims", "expected 3 integers, got " + describeValue(p.json()["dims"]));
   if ((long long)dims.x * dims.y * dims.z > kMaxGridVoxels)
     p.fail("dims", "more than " + std::to_string(kMaxGridVoxels) + " voxels (512^3)");
   if (!ctx.mediumBounds) p.fail("type", "'grid' needs medium.bounds");
   const bool hasValues = p.has("values"), hasFile = p.has("file");
-  if (hasValues == hasFile) p.fail("values", "give exactly one of 'values' (inline) or 'file' (raw float32)");
+  if (hasValues == hasFile)
+    p.fail("values", "give exactly one of 'values' (inline) or 'file' (raw float32)");
   DensityGrid g(*ctx.mediumBounds, dims);
   std::string source;
   if (hasValues) {

@@ -85,7 +85,9 @@ class PerVoxelMethod : public Method {
       ScopedTimer t(r.stats, "march");
       if (progress) progress->restart("march", scene.camera.height);
       const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
-      const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
+      const auto lookup = [&](const Vec3& x, const Vec3&) {
+        return radiance.sampleIndex(x * s + o);
+      };
       r.image = marchImage(scene, density, lookup, mp_.march, progress);
     }
     r.stats.extra["traced_voxels"] = pv.traced;

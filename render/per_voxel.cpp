@@ -8,8 +8,8 @@
 
 namespace scatterlab {
 
-PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density,
-                                    float delta1, RadianceGrid& radiance, Progress* progress) {
+PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
+                                    RadianceGrid& radiance, Progress* progress) {
   const IVec3 nr = radiance.dims(), nd = density.dims();
   const Vec3 hr = radiance.cellSize();
   const Vec3 dScale = density.indexScale(), dOffset = density.indexOffset();

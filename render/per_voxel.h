@@ -17,7 +17,7 @@ struct PerVoxelStats {
 /// point from one direction, so S is single-valued per point even for HG phase). A voxel whose
 /// trilinear neighbourhood in the density volume is empty cannot contribute to the image and is
 /// skipped; the result is identical to tracing it. TBB-parallel; no GL context.
-PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density,
-                                    float delta1, RadianceGrid& radiance, Progress* progress);
+PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
+                                    RadianceGrid& radiance, Progress* progress);
 
 }  // namespace scatterlab

@@ -28,33 +28,34 @@ Image marchImage(const Scene& scene, const DensityGrid& density, const Source& s
   const Medium& m = scene.medium;
   const float sigmaT = m.sigmaT, ratio = m.albedo;  // σs/σt = Ω
   Image img(cam.width, cam.height);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      for (int x = 0; x < cam.width; ++x) {
-        const Ray r = rays(x, y);
-        Vec3 L(0.0f);
-        float T = 1.0f;
-        float t0, t1;
-        if (sigmaT > 0.0f && m.bounds.intersect(r, t0, t1) && t1 > t0) {
-          const int n = std::max(1, int(std::ceil((t1 - t0) / ms.step)));
-          const float dt = (t1 - t0) / float(n);
-          const Vec3 s = density.indexScale();
-          const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + density.indexOffset();
-          const Vec3 du = r.dir * dt * s;
-          for (int i = 0; i < n && T > ms.minTransmittance; ++i) {
-            const float D = density.sampleIndex(u0 + float(i) * du);
-            if (D <= 0.0f) continue;
-            const float a = std::exp(-sigmaT * D * dt);
-            const Vec3 p = r.at(t0 + (float(i) + 0.5f) * dt);
-            L += (T * ratio * (1.0f - a)) * source(p, -r.dir);
-            T *= a;
-          }
-        }
-        img.at(x, y) = L + T * scene.background;
-      }
-      if (progress) progress->advance(1);
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height),
+                    [&](const tbb::blocked_range<int>& rows) {
+                      for (int y = rows.begin(); y < rows.end(); ++y) {
+                        for (int x = 0; x < cam.width; ++x) {
+                          const Ray r = rays(x, y);
+                          Vec3 L(0.0f);
+                          float T = 1.0f;
+                          float t0, t1;
+                          if (sigmaT > 0.0f && m.bounds.intersect(r, t0, t1) && t1 > t0) {
+                            const int n = std::max(1, int(std::ceil((t1 - t0) / ms.step)));
+                            const float dt = (t1 - t0) / float(n);
+                            const Vec3 s = density.indexScale();
+                            const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + density.indexOffset();
+                            const Vec3 du = r.dir * dt * s;
+                            for (int i = 0; i < n && T > ms.minTransmittance; ++i) {
+                              const float D = density.sampleIndex(u0 + float(i) * du);
+                              if (D <= 0.0f) continue;
+                              const float a = std::exp(-sigmaT * D * dt);
+                              const Vec3 p = r.at(t0 + (float(i) + 0.5f) * dt);
+                              L += (T * ratio * (1.0f - a)) * source(p, -r.dir);
+                              T *= a;
+                            }
+                          }
+                          img.at(x, y) = L + T * scene.background;
+                        }
+                        if (progress) progress->advance(1);
+                      }
+                    });
   return img;
 }
 

@@ -63,8 +63,11 @@ class SourceRadiance {
  public:
   /// `delta1`: volume tracing step (world units). References must outlive this object.
   SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
-      : lights_(scene.lights), phase_(scene.medium.phase), sigmaT_(scene.medium.sigmaT),
-        density_(density), delta1_(delta1) {}
+      : lights_(scene.lights),
+        phase_(scene.medium.phase),
+        sigmaT_(scene.medium.sigmaT),
+        density_(density),
+        delta1_(delta1) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -72,8 +75,8 @@ class SourceRadiance {
     for (const Light& l : lights_) {
       Light::Incident inc;
       if (!l.incident(x, inc)) continue;
-      const float tau = opticalDepth(density_, x, lightSegmentEnd(l, inc, density_.bounds(), x),
-                                     delta1_);
+      const float tau =
+          opticalDepth(density_, x, lightSegmentEnd(l, inc, density_.bounds(), x), delta1_);
       s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
     }
     return s;

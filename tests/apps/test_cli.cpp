@@ -34,7 +34,8 @@ class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("scatterlab_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("scatterlab_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -66,7 +67,8 @@ class Cli : public ::testing::Test {
         run("render " + scene + " -o " + exr + " --png " + png + " --stats " + stats + " " + extra);
     EXPECT_NE(r.code, 0) << r.output;
     for (const auto& f : fragments)
-      EXPECT_NE(r.output.find(f), std::string::npos) << "output '" << r.output << "' lacks '" << f << "'";
+      EXPECT_NE(r.output.find(f), std::string::npos)
+          << "output '" << r.output << "' lacks '" << f << "'";
     EXPECT_FALSE(fs::exists(exr));
     EXPECT_FALSE(fs::exists(png));
     EXPECT_FALSE(fs::exists(stats));
@@ -81,8 +83,9 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, RenderWritesImageStatsAndHonoursSet) {
   const std::string scene = writeScene(tinyScene());
-  const RunResult r = run("render " + scene + " -o " + out("a.exr") + " --png " + out("a.png") +
-                          " --stats " + out("a.json") + " --set camera.width=20 --set render.march_step=0.01");
+  const RunResult r =
+      run("render " + scene + " -o " + out("a.exr") + " --png " + out("a.png") + " --stats " +
+          out("a.json") + " --set camera.width=20 --set render.march_step=0.01");
   ASSERT_EQ(r.code, 0) << r.output;
   const Json stats = Json::parse(std::ifstream(out("a.json")));
   EXPECT_EQ(stats["method"], "exact");
@@ -175,7 +178,8 @@ TEST_F(Cli, OutOfRangeValues) {
   expectRenderFails(scene, {"medium.albedo", "[0, 1]"}, "--set medium.albedo=1.2");
   expectRenderFails(scene, {"camera.fov_y_deg", "(0, 180)"}, "--set camera.fov_y_deg=190");
   expectRenderFails(scene, {"medium.resolution", "[1, 4096]"}, "--set medium.resolution=0");
-  expectRenderFails(scene, {"medium.resolution", "memory bound"}, "--set medium.resolution=[4096,4096,4096]");
+  expectRenderFails(scene, {"medium.resolution", "memory bound"},
+                    "--set medium.resolution=[4096,4096,4096]");
   expectRenderFails(scene, {"--method", "'exact'"}, "--method nonsense");
 }
 

@@ -57,7 +57,8 @@ Image quadratureImage(const Scene& s, const std::function<double(const DVec3&)>&
     for (int x = 0; x < img.width(); ++x) {
       const Ray r = s.camera.primaryRay(x, y);
       const double split = glm::dot(light - DVec3(r.origin), DVec3(r.dir));
-      img.at(x, y) = Vec3(float(quadratureRadiance(r, D, s.medium.sigmaT, s.medium.albedo, source, split)));
+      img.at(x, y) =
+          Vec3(float(quadratureRadiance(r, D, s.medium.sigmaT, s.medium.albedo, source, split)));
     }
   return img;
 }
@@ -146,10 +147,12 @@ TEST_F(PointLightInBox, ExactMatchesQuadratureWithinHalfPercent) {
     }
     const double rel = std::abs(img.pixels()[i].x / ref.pixels()[i].x - 1.0);
     worst = std::max(worst, rel);
-    EXPECT_LT(rel, 0.005) << "pixel " << i << ": " << img.pixels()[i].x << " vs " << ref.pixels()[i].x;
+    EXPECT_LT(rel, 0.005) << "pixel " << i << ": " << img.pixels()[i].x << " vs "
+                          << ref.pixels()[i].x;
   }
   RecordProperty("worst_relative_error", std::to_string(worst));
-  std::printf("exact: worst pixel %.4f%%, relative L2 %.4f%%\n", 100 * worst, 100 * compareImages(img, ref).relL2);
+  std::printf("exact: worst pixel %.4f%%, relative L2 %.4f%%\n", 100 * worst,
+              100 * compareImages(img, ref).relL2);
   EXPECT_LT(compareImages(img, ref).relL2, 0.005);
 }
 
@@ -172,7 +175,8 @@ TEST_F(PointLightInBox, PerVoxelConvergesAndIsWithinTwoPercentAt128) {
 
 TEST(DirectionalLight, ExactMatchesQuadratureInHomogeneousBox) {
   Json doc = homogeneousBoxDoc(0.8f, 2.0f, 0.5f, Vec3(0), 1.0f, 12, 9, 16);
-  doc["lights"] = Json::parse(R"([{"type": "directional", "direction": [0, -1, 0], "irradiance": 2}])");
+  doc["lights"] =
+      Json::parse(R"([{"type": "directional", "direction": [0, -1, 0], "irradiance": 2}])");
   const Scene s = sceneFromJson(doc);
   const double D = 0.8, sigmaT = 2.0;
   // Sunlight from +y: transmittance exp(−σt·D·(1 − y)), isotropic phase.

@@ -16,22 +16,21 @@ inline Scene sceneFromJson(const Json& doc) {
 /// `I` at `light`, camera at (0.5, 0.5, -2) looking at the box centre.
 inline Json homogeneousBoxDoc(float density, float sigmaT, float albedo, Vec3 light, float I,
                               int width, int height, int resolution) {
-  return Json{
-      {"medium",
-       {{"bounds", {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}}},
-        {"density", {{"type", "uniform"}, {"value", density}}},
-        {"resolution", resolution},
-        {"sigma_t", sigmaT},
-        {"albedo", albedo}}},
-      {"lights", Json::array({{{"type", "point"},
-                               {"position", {light.x, light.y, light.z}},
-                               {"intensity", {I, I, I}}}})},
-      {"camera",
-       {{"position", {0.5, 0.5, -2}},
-        {"look_at", {0.5, 0.5, 0.5}},
-        {"fov_y_deg", 30},
-        {"width", width},
-        {"height", height}}}};
+  return Json{{"medium",
+               {{"bounds", {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}}},
+                {"density", {{"type", "uniform"}, {"value", density}}},
+                {"resolution", resolution},
+                {"sigma_t", sigmaT},
+                {"albedo", albedo}}},
+              {"lights", Json::array({{{"type", "point"},
+                                       {"position", {light.x, light.y, light.z}},
+                                       {"intensity", {I, I, I}}}})},
+              {"camera",
+               {{"position", {0.5, 0.5, -2}},
+                {"look_at", {0.5, 0.5, 0.5}},
+                {"fov_y_deg", 30},
+                {"width", width},
+                {"height", height}}}};
 }
 
 }  // namespace scatterlab::testing

@@ -1,0 +1,215 @@
+#include "sampling/dynamic_sampling.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+
+#include "render/volume_tracer.h"
+#include "sampling/scan.h"
+
+namespace scatterlab {
+
+GridInfoBuffer::GridInfoBuffer(const Box& b, int resolution)
+    : bounds(b), dims(resolution), interval(b.extent() / float(resolution)) {
+  const std::size_t n = std::size_t(resolution) * resolution * resolution;
+  inSet.assign(n, 0);
+  error.assign(n, 0.0f);
+  ancestor.assign(n, -1);
+}
+
+Vec3 GridInfoBuffer::vertex(std::size_t linear) const {
+  const int i = int(linear % dims.x), j = int((linear / dims.x) % dims.y),
+            k = int(linear / (std::size_t(dims.x) * dims.y));
+  return bounds.min + (Vec3(i, j, k) + 0.5f) * interval;
+}
+
+void GridInfoBuffer::markSphere(const Vec3& c, float R, std::int32_t anc) {
+  const IVec3 lo = glm::max(IVec3(glm::ceil((c - R - bounds.min) / interval - 0.5f)), IVec3(0));
+  const IVec3 hi = glm::min(IVec3(glm::floor((c + R - bounds.min) / interval - 0.5f)), dims - 1);
+  const float R2 = R * R;
+  for (int k = lo.z; k <= hi.z; ++k)
+    for (int j = lo.y; j <= hi.y; ++j)
+      for (int i = lo.x; i <= hi.x; ++i) {
+        const Vec3 q = bounds.min + (Vec3(i, j, k) + 0.5f) * interval;
+        const Vec3 d = q - c;
+        if (glm::dot(d, d) >= R2) continue;
+        const std::size_t v = (std::size_t(k) * dims.y + j) * dims.x + i;
+        std::atomic_ref<std::uint8_t>(inSet[v]).store(1, std::memory_order_relaxed);
+        std::atomic_ref<std::int32_t> a(ancestor[v]);
+        std::int32_t cur = a.load(std::memory_order_relaxed);
+        while ((cur < 0 || anc < cur) && !a.compare_exchange_weak(cur, anc)) {
+        }
+      }
+}
+
+void probePoints(const RadianceSample& s, Vec3 out[6]) {
+  for (int a = 0; a < 3; ++a) {
+    Vec3 d(0.0f);
+    d[a] = s.radius;
+    out[2 * a] = s.position + d;
+    out[2 * a + 1] = s.position - d;
+  }
+}
+
+float localShadingError(const RadianceSample& s, const Vec3 probeS[6], const float probeD[6],
+                        float tau) {
+  Vec3 p[6];
+  probePoints(s, p);
+  float sum = 0.0f;
+  for (int i = 0; i < 6; ++i) {
+    const Vec3 diff = glm::abs(s.taylor(p[i]) - probeS[i]);
+    sum += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
+  }
+  return s.radius * s.radius * s.radius * sum / 6.0f * tau;
+}
+
+namespace {
+
+float quantile(std::vector<float> v, double q) {
+  if (v.empty()) return 0.0f;
+  const std::size_t k = std::min(v.size() - 1, std::size_t(q * double(v.size())));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+/// Transmittance from x to the camera position.
+float viewTransmittance(const Scene& scene, const DensityGrid& density, const Vec3& x,
+                        float delta1) {
+  return std::exp(-scene.medium.sigmaT * opticalDepth(density, x, scene.camera.position, delta1));
+}
+
+}  // namespace
+
+DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
+                                      std::vector<RadianceSample> current,
+                                      RadianceEvaluator& evaluator,
+                                      const DynamicSamplingSettings& settings) {
+  using Clock = std::chrono::steady_clock;
+  DynamicSamplingResult result;
+  // τ of every level-0 sample; descendants index it through their ancestor.
+  std::vector<float> rootTau(current.size());
+  std::vector<std::int32_t> anc(current.size());
+  tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t i) {
+    rootTau[i] = viewTransmittance(scene, density, current[i].position, settings.delta1);
+    anc[i] = std::int32_t(i);
+  });
+
+  const std::size_t nLevels = settings.levels.size();
+  for (std::size_t level = 0; level <= nLevels; ++level) {
+    const auto t0 = Clock::now();
+    LevelStats ls;
+    ls.resolution = level == 0 ? 0 : settings.levels[level - 1];
+    ls.samples = (long long)current.size();
+    for (auto& s : current) s.level = int(level);
+    evaluator.evaluate(scene, density, current, /*gradients=*/true);
+
+    if (level == nLevels || current.empty()) {
+      // The finest level is not split further.
+      result.samples.insert(result.samples.end(), current.begin(), current.end());
+      ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      result.levels.push_back(ls);
+      if (current.empty()) {
+        for (std::size_t l = level + 1; l <= nLevels; ++l)
+          result.levels.push_back(LevelStats{settings.levels[l - 1]});
+        break;
+      }
+      continue;
+    }
+
+    // Probes: S traced at x_j ± R_j along X, Y, Z (one batched evaluation).
+    std::vector<RadianceSample> probes(current.size() * 6);
+    tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
+      Vec3 p[6];
+      probePoints(current[j], p);
+      for (int i = 0; i < 6; ++i) probes[6 * j + i].position = p[i];
+    });
+    evaluator.evaluate(scene, density, probes, /*gradients=*/false);
+
+    std::vector<float> errors(current.size());
+    tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
+      Vec3 S[6];
+      float D[6];
+      for (int i = 0; i < 6; ++i) {
+        S[i] = probes[6 * j + i].S;
+        D[i] = density.sample(probes[6 * j + i].position);
+      }
+      const float tau =
+          settings.perSampleTau && level > 0
+              ? viewTransmittance(scene, density, current[j].position, settings.delta1)
+              : rootTau[anc[j]];
+      errors[j] = localShadingError(current[j], S, D, tau);
+    });
+    ls.maxError = errors.empty() ? 0.0f : *std::max_element(errors.begin(), errors.end());
+    ls.p90Error = quantile(errors, 0.9);
+
+    // Split: mark the vertices of G_{k+1} inside every sphere with E > ε.
+    GridInfoBuffer next(scene.medium.bounds, settings.levels[level]);
+    std::vector<std::uint8_t> split(current.size());
+    tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
+      split[j] = double(errors[j]) > settings.epsilon ? 1 : 0;
+      if (split[j]) next.markSphere(current[j].position, current[j].radius, anc[j]);
+    });
+    for (std::size_t j = 0; j < current.size(); ++j) {
+      if (split[j]) {
+        ++ls.split;
+      } else {
+        result.samples.push_back(current[j]);
+      }
+    }
+
+    // Scan compaction of the grid information buffer into Q^{k+1}.
+    const std::vector<std::uint32_t> verts = compactFlags(next.inSet);
+    std::vector<RadianceSample> nextSamples(verts.size());
+    std::vector<std::int32_t> nextAnc(verts.size());
+    const float R = next.radius();
+    tbb::parallel_for(std::size_t(0), verts.size(), [&](std::size_t i) {
+      nextSamples[i].position = next.vertex(verts[i]);
+      nextSamples[i].radius = R;
+      nextAnc[i] = next.ancestor[verts[i]];
+    });
+    current = std::move(nextSamples);
+    anc = std::move(nextAnc);
+    ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    result.levels.push_back(ls);
+  }
+  return result;
+}
+
+DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
+  DynamicSamplingSettings s;
+  s.epsilon = p.number("epsilon", 1e-4, Interval::atLeast(0));
+  const IVec3 res = scene.medium.resolution;
+  const int finestAllowed = std::max(2, std::max(res.x, std::max(res.y, res.z)) / 2);
+  if (p.has("levels")) {
+    const Json& j = p.raw("levels");
+    if (!j.is_array() || j.empty())
+      p.fail("levels",
+             "expected a non-empty array of increasing integers, got " + describeValue(j));
+    s.levels.clear();
+    for (const Json& v : j) {
+      if (!v.is_number_integer() || v.get<int>() < 2 || v.get<int>() > 1024)
+        p.fail("levels", "element " + describeValue(v) + " is not an integer in [2, 1024]");
+      if (!s.levels.empty() && v.get<int>() <= s.levels.back())
+        p.fail("levels", "must be increasing, got " + describeValue(j));
+      s.levels.push_back(v.get<int>());
+    }
+  } else {
+    p.allow("levels");
+    s.levels.clear();
+    for (int l : {16, 32, 64})
+      if (l <= finestAllowed) s.levels.push_back(l);
+  }
+  if (!s.levels.empty() && s.levels.back() > finestAllowed)
+    p.fail("levels", "finest level " + std::to_string(s.levels.back()) +
+                         " exceeds half the medium resolution (" + std::to_string(finestAllowed) +
+                         ")");
+  s.perSampleTau = p.choice("tau", {"ancestor", "sample"}, "ancestor") == "sample";
+  s.delta1 = p.real("delta1", scene.medium.voxelSize(),
+                    Interval{glm::length(scene.medium.bounds.extent()) * 1e-6,
+                             glm::length(scene.medium.bounds.extent()), true, false});
+  return s;
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,269 @@
+/// Dynamic sampling (paper Sec. 5): error metric, splitting, scan compaction.
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <random>
+
+#include "render/volume_tracer.h"
+#include "sampling/dynamic_sampling.h"
+#include "sampling/scan.h"
+#include "support/scenes.h"
+
+using namespace scatterlab;
+using scatterlab::testing::homogeneousBoxDoc;
+using scatterlab::testing::sceneFromJson;
+
+namespace {
+
+/// An evaluator with a given analytic field S(x) and its exact gradient.
+class AnalyticEvaluator : public RadianceEvaluator {
+ public:
+  std::function<Vec3(const Vec3&)> S;
+  std::function<void(const Vec3&, Vec3[3])> grad;
+  void evaluate(const Scene&, const DensityGrid&, std::span<RadianceSample> samples,
+                bool gradients) override {
+    for (auto& s : samples) {
+      s.S = S(s.position);
+      if (gradients) grad(s.position, s.dS);
+    }
+  }
+};
+
+/// Traced S and central-difference ∇S (Δ2 = half a voxel) through SourceRadiance.
+class TracingEvaluator : public RadianceEvaluator {
+ public:
+  void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
+                bool gradients) override {
+    const float d1 = scene.medium.voxelSize(), d2 = 0.5f * d1;
+    const SourceRadiance src(scene, density, d1);
+    const auto S = [&](const Vec3& p) { return src(p, glm::normalize(scene.camera.position - p)); };
+    for (auto& s : samples) {
+      s.S = S(s.position);
+      if (!gradients) continue;
+      for (int a = 0; a < 3; ++a) {
+        Vec3 e(0.0f);
+        e[a] = d2;
+        s.dS[a] = (S(s.position + e) - S(s.position - e)) / (2 * d2);
+      }
+    }
+  }
+};
+
+DensityGrid densityOf(const Scene& s) {
+  DensityGrid g(s.medium.bounds, s.medium.resolution);
+  s.medium.density->build(g);
+  return g;
+}
+
+RadianceSample sampleAt(const Vec3& p, float r) {
+  RadianceSample s;
+  s.position = p;
+  s.radius = r;
+  return s;
+}
+
+Scene spotScene() {
+  Json doc = homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0), 1.0f, 16, 12, 64);
+  doc["lights"] = Json::parse(R"([{"type": "spot", "position": [0.5, 1.3, 0.5],
+      "direction": [0, -1, 0], "intensity": 10, "inner_deg": 10, "outer_deg": 12}])");
+  return sceneFromJson(doc);
+}
+
+}  // namespace
+
+TEST(Scan, CompactionEqualsSerialReference) {
+  std::mt19937 rng(42);
+  for (std::size_t n : {0u, 1u, 7u, 4096u, 100003u}) {
+    std::vector<std::uint8_t> flags(n);
+    for (auto& f : flags) f = (rng() % 3 == 0) ? 1 : 0;
+    std::vector<std::uint32_t> expected, offsets(n), serialOffsets(n);
+    std::uint32_t sum = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      serialOffsets[i] = sum;
+      if (flags[i]) {
+        expected.push_back(std::uint32_t(i));
+        ++sum;
+      }
+    }
+    EXPECT_EQ(exclusiveScan(flags, offsets), sum);
+    EXPECT_EQ(offsets, serialOffsets);
+    EXPECT_EQ(compactFlags(flags), expected);
+  }
+}
+
+TEST(LocalShadingError, ZeroForALinearFieldAndScalesWithRCubed) {
+  RadianceSample s = sampleAt(Vec3(0.5f), 0.1f);
+  const auto lin = [](const Vec3& p) {
+    return Vec3(1.0f) + p.x * Vec3(2, 0, 1) - p.z * Vec3(0, 3, 0);
+  };
+  s.S = lin(s.position);
+  s.dS[0] = Vec3(2, 0, 1);
+  s.dS[1] = Vec3(0);
+  s.dS[2] = Vec3(0, -3, 0);
+  Vec3 p[6], S[6];
+  float D[6];
+  probePoints(s, p);
+  for (int i = 0; i < 6; ++i) {
+    S[i] = lin(p[i]);
+    D[i] = 1.0f;
+  }
+  EXPECT_NEAR(localShadingError(s, S, D, 1.0f), 0.0f, 1e-9);
+  // A constant offset of 0.3 in every channel at every probe: E = R³·0.3·D·τ.
+  for (int i = 0; i < 6; ++i) S[i] += Vec3(0.3f);
+  EXPECT_NEAR(localShadingError(s, S, D, 0.5f), 1e-3f * 0.3f * 0.5f, 1e-9);
+  s.radius = 0.2f;  // probes move but the field is linear: only R³ changes
+  probePoints(s, p);
+  for (int i = 0; i < 6; ++i) S[i] = lin(p[i]) + Vec3(0.3f);
+  EXPECT_NEAR(localShadingError(s, S, D, 0.5f), 8e-3f * 0.3f * 0.5f, 1e-8);
+}
+
+TEST(DynamicSampling, LinearFieldIsNotSplit) {
+  const Scene scene =
+      sceneFromJson(homogeneousBoxDoc(1.0f, 1.0f, 1.0f, Vec3(0.5f), 1.0f, 8, 6, 32));
+  const DensityGrid density = densityOf(scene);
+  AnalyticEvaluator ev;
+  ev.S = [](const Vec3& p) { return Vec3(2.0f + p.x + 0.5f * p.y - p.z); };
+  ev.grad = [](const Vec3&, Vec3 g[3]) {
+    g[0] = Vec3(1.0f);
+    g[1] = Vec3(0.5f);
+    g[2] = Vec3(-1.0f);
+  };
+  DynamicSamplingSettings st;
+  st.epsilon = 1e-9;  // E is zero up to float rounding
+  st.delta1 = scene.medium.voxelSize();
+  const std::vector<RadianceSample> init = {sampleAt(Vec3(0.3f), 0.2f),
+                                            sampleAt(Vec3(0.6f, 0.5f, 0.4f), 0.25f)};
+  const DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
+  ASSERT_EQ(r.samples.size(), 2u);
+  EXPECT_EQ(r.levels[0].split, 0);
+  EXPECT_LT(r.levels[0].maxError, 1e-9f);
+}
+
+TEST(DynamicSampling, SampleStraddlingSpotConeEdgeIsSplitAndInsideIsNot) {
+  const Scene scene = spotScene();
+  const DensityGrid density = densityOf(scene);
+  TracingEvaluator ev;
+  DynamicSamplingSettings st;
+  st.delta1 = scene.medium.voxelSize();
+  st.levels = {16};
+  // Cone of half-angle ~11° from (0.5, 1.3, 0.5): at y = 0.5 its edge is 0.8·tan(11°) ≈ 0.155
+  // off the axis.
+  const Vec3 edge(0.5f + 0.155f, 0.5f, 0.5f), inside(0.5f, 0.5f, 0.5f), outside(0.1f, 0.5f, 0.15f);
+  const std::vector<RadianceSample> init = {sampleAt(edge, 0.08f), sampleAt(inside, 0.04f),
+                                            sampleAt(outside, 0.06f)};
+  st.epsilon = std::numeric_limits<double>::infinity();
+  DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
+  ASSERT_EQ(r.samples.size(), 3u);
+  st.epsilon = 0.2 * r.levels[0].maxError;
+  r = dynamicSampling(scene, density, init, ev, st);
+  EXPECT_EQ(r.levels[0].split, 1);
+  long long children = 0;
+  for (const auto& s : r.samples) {
+    if (s.level == 1) {
+      EXPECT_LT(glm::length(s.position - edge), 0.08f);
+      EXPECT_FLOAT_EQ(s.radius, 1.0f / 16.0f);
+      ++children;
+    } else {
+      EXPECT_NE(s.position, edge);
+    }
+  }
+  EXPECT_GT(children, 4);
+  EXPECT_EQ(r.levels[1].samples, children);
+}
+
+TEST(DynamicSampling, EpsilonInfinityKeepsInitialAndZeroGivesFinestGrid) {
+  const Scene scene =
+      sceneFromJson(homogeneousBoxDoc(1.0f, 1.5f, 0.8f, Vec3(0.45f, 0.55f, 0.5f), 2.0f, 8, 6, 64));
+  const DensityGrid density = densityOf(scene);
+  TracingEvaluator ev;
+  const std::vector<RadianceSample> init = {sampleAt(Vec3(0.5f), 0.2f),
+                                            sampleAt(Vec3(0.3f, 0.7f, 0.6f), 0.15f)};
+  DynamicSamplingSettings st;
+  st.delta1 = scene.medium.voxelSize();
+  st.levels = {8, 16, 32};
+  st.epsilon = std::numeric_limits<double>::infinity();
+  DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
+  ASSERT_EQ(r.samples.size(), 2u);
+  EXPECT_EQ(r.samples[0].position, init[0].position);
+  EXPECT_NE(r.samples[0].S, Vec3(0.0f));  // evaluated
+
+  st.epsilon = 0.0;
+  r = dynamicSampling(scene, density, init, ev, st);
+  GridInfoBuffer finest(scene.medium.bounds, 32);
+  long long insideOriginal = 0;
+  for (std::size_t v = 0; v < finest.inSet.size(); ++v) {
+    const Vec3 q = finest.vertex(v);
+    if (glm::length(q - init[0].position) < init[0].radius ||
+        glm::length(q - init[1].position) < init[1].radius) {
+      ++insideOriginal;
+      bool found = false;
+      for (const auto& s : r.samples) found |= (s.level == 3 && s.position == q);
+      EXPECT_TRUE(found) << "finest vertex " << v << " missing";
+    }
+  }
+  EXPECT_GT(insideOriginal, 100);
+  for (const auto& s : r.samples) EXPECT_EQ(s.level, 3);
+}
+
+TEST(DynamicSampling, SplitSpheresCoverTheOriginalsAndResultIsDeterministic) {
+  const Scene scene = spotScene();
+  const DensityGrid density = densityOf(scene);
+  TracingEvaluator ev;
+  DynamicSamplingSettings st;
+  st.delta1 = scene.medium.voxelSize();
+  st.levels = {8, 16, 32};
+  std::vector<RadianceSample> init;
+  for (float x : {0.2f, 0.5f, 0.8f})
+    for (float y : {0.2f, 0.5f, 0.8f})
+      for (float z : {0.2f, 0.5f, 0.8f}) init.push_back(sampleAt(Vec3(x, y, z), 0.2f));
+  st.epsilon = 1e-6;
+  const DynamicSamplingResult a = dynamicSampling(scene, density, init, ev, st);
+  const DynamicSamplingResult b = dynamicSampling(scene, density, init, ev, st);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    EXPECT_EQ(a.samples[i].position, b.samples[i].position);
+    EXPECT_EQ(a.samples[i].radius, b.samples[i].radius);
+    EXPECT_EQ(a.samples[i].S, b.samples[i].S);
+  }
+  EXPECT_GT(a.levels[0].split, 0);
+  EXPECT_GT(a.samples.size(), init.size());
+  // Every point of every original sphere lies in some final valid sphere.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  int checked = 0;
+  while (checked < 3000) {
+    const Vec3 d(u(rng), u(rng), u(rng));
+    if (glm::length(d) >= 1.0f) continue;
+    const RadianceSample& o = init[rng() % init.size()];
+    const Vec3 p = o.position + 0.999f * o.radius * d;
+    bool covered = false;
+    for (const auto& s : a.samples)
+      if (glm::length(p - s.position) < s.radius) {
+        covered = true;
+        break;
+      }
+    EXPECT_TRUE(covered) << p.x << " " << p.y << " " << p.z;
+    ++checked;
+  }
+}
+
+TEST(DynamicSampling, SettingsAreValidated) {
+  const Scene scene = spotScene();  // resolution 64: finest level at most 32
+  const auto parse = [&](const Json& j) {
+    Params p(j, "render");
+    return parseDynamicSampling(p, scene);
+  };
+  EXPECT_EQ(parse(Json::object()).levels, (std::vector<int>{16, 32}));
+  EXPECT_THROW(parse({{"levels", {16, 8}}}), ConfigError);
+  EXPECT_THROW(parse({{"levels", {16, 64}}}), ConfigError);
+  EXPECT_THROW(parse({{"levels", Json::array()}}), ConfigError);
+  EXPECT_THROW(parse({{"epsilon", -1}}), ConfigError);
+  EXPECT_THROW(parse({{"tau", "viewer"}}), ConfigError);
+  try {
+    parse({{"levels", {16, 64}}});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("render.levels"), std::string::npos);
+  }
+}
