@@ -176,9 +176,15 @@ TEST(GpuPerVoxel, MatchesCpuPerVoxelRadiance) {
   EXPECT_EQ(bad, 0);
 }
 
-TEST(GpuSliceMarcher, MatchesCpuMarcherOnTheSameVolumes) {
-  SCATTERLAB_REQUIRE_GPU();
-  Scene scene = sceneFromJson(blobSceneDoc(24, 32, 24));
+/// CPU marcher and slice marcher on the same volumes. `lightInside`: the point light sits in
+/// the medium, where S has a 1/d² spike; both are midpoint rules but at different points
+/// (per-ray steps vs view-depth slabs), so near the spike they differ by more than 0.5% at
+/// practical steps (measured: 1.07% at half a voxel, one pixel next to the light) and agree
+/// once the step is small; with the light outside the medium they agree at half a voxel.
+double sliceVsCpu(bool lightInside, float stepVoxels) {
+  Json doc = blobSceneDoc(24, 32, 24);
+  if (!lightInside) doc["lights"][0]["position"] = {1.25, 0.8, 0.3};
+  Scene scene = sceneFromJson(doc);
   scene.background = Vec3(0.05f, 0.1f, 0.2f);
   scene.camera.position = Vec3(1.6f, 1.1f, -1.5f);  // oblique: slices not aligned with axes
   DensityGrid density(scene.medium.bounds, scene.medium.resolution);
@@ -186,7 +192,7 @@ TEST(GpuSliceMarcher, MatchesCpuMarcherOnTheSameVolumes) {
   RadianceGrid radiance(scene.medium.bounds, IVec3(20));
   buildPerVoxelRadiance(scene, density, 1.0f / 24, radiance, nullptr);
   MarchSettings ms;
-  ms.step = 0.5f / 24;
+  ms.step = stepVoxels / 24;
   ms.minTransmittance = 0.0f;
   const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
   const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
@@ -198,18 +204,30 @@ TEST(GpuSliceMarcher, MatchesCpuMarcherOnTheSameVolumes) {
   p.finish();
   const Image g = integ->integrate(scene, density, radiance);
   expectNoGlError();
-  ASSERT_EQ(g.width(), 32);
-  ASSERT_EQ(g.height(), 24);
-  const double err = relL2(g, cpu);
-  std::printf("slice marcher vs CPU marcher: relative L2 %.3g\n", err);
-  EXPECT_LT(err, 0.005);
+  EXPECT_EQ(g.width(), 32);
+  EXPECT_EQ(g.height(), 24);
   // Orientation: the top-left pixel of both images is background (no flip).
   EXPECT_NEAR(g.at(0, 0).z, cpu.at(0, 0).z, 1e-4f);
+  const double err = relL2(g, cpu);
+  std::printf("slice marcher vs CPU marcher (light %s, step %.3g voxel): relative L2 %.3g\n",
+              lightInside ? "inside" : "outside", stepVoxels, err);
+  return err;
+}
+
+TEST(GpuSliceMarcher, MatchesCpuMarcherOnTheSameVolumes) {
+  SCATTERLAB_REQUIRE_GPU();
+  EXPECT_LT(sliceVsCpu(false, 0.5f), 0.005);
+}
+
+TEST(GpuSliceMarcher, AgreesWithCpuMarcherNearALightInsideTheMediumAtSmallSteps) {
+  SCATTERLAB_REQUIRE_GPU();
+  EXPECT_LT(sliceVsCpu(true, 0.125f), 0.005);
 }
 
 TEST(GpuPerVoxelMethod, EndToEndMatchesCpuMethod) {
   SCATTERLAB_REQUIRE_GPU();
   Json doc = blobSceneDoc(20, 32, 24);
+  doc["lights"][0]["position"] = {1.25, 0.8, 0.3};  // see sliceVsCpu on lights inside
   doc["render"]["march_step"] = 0.5 / 20;
   const Scene scene = sceneFromJson(doc);
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
