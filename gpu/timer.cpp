@@ -6,33 +6,34 @@ namespace scatterlab::gpu {
 
 void StageTimer::begin(const std::string& stage) {
   if (open_) throw GpuError("StageTimer: '" + stage + "' begun inside another stage");
-  queries_.emplace_back(stage, Query(GL_TIME_ELAPSED, "timer " + stage));
-  glBeginQuery(GL_TIME_ELAPSED, queries_.back().second.id());
+  spans_.push_back({stage, Query(GL_TIMESTAMP, "start " + stage), Query(GL_TIMESTAMP, "end " + stage)});
+  glQueryCounter(spans_.back().start.id(), GL_TIMESTAMP);
   open_ = true;
 }
 
 void StageTimer::end() {
   if (!open_) return;
-  glEndQuery(GL_TIME_ELAPSED);
+  glQueryCounter(spans_.back().stop.id(), GL_TIMESTAMP);
   open_ = false;
 }
 
 std::vector<std::pair<std::string, double>> StageTimer::results() {
   end();
   std::vector<std::pair<std::string, double>> out;
-  for (auto& [name, q] : queries_) {
-    GLuint64 ns = 0;
-    glGetQueryObjectui64v(q.id(), GL_QUERY_RESULT, &ns);
-    const double ms = double(ns) * 1e-6;
+  for (Span& s : spans_) {
+    GLuint64 t0 = 0, t1 = 0;
+    glGetQueryObjectui64v(s.start.id(), GL_QUERY_RESULT, &t0);
+    glGetQueryObjectui64v(s.stop.id(), GL_QUERY_RESULT, &t1);
+    const double ms = t1 > t0 ? double(t1 - t0) * 1e-6 : 0.0;
     bool merged = false;
     for (auto& [n, v] : out)
-      if (n == name) {
+      if (n == s.stage) {
         v += ms;
         merged = true;
       }
-    if (!merged) out.emplace_back(name, ms);
+    if (!merged) out.emplace_back(s.stage, ms);
   }
-  queries_.clear();
+  spans_.clear();
   return out;
 }
 

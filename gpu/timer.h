@@ -1,5 +1,7 @@
 #pragma once
-/// Per-stage GPU times from GL_TIME_ELAPSED timer queries. Needs a current context.
+/// Per-stage GPU times from timer queries: a GL_TIMESTAMP (glQueryCounter) at the start and the
+/// end of each stage. (GL_TIME_ELAPSED begin/end pairs returned garbage on Mesa 22.3 llvmpipe
+/// when no rendering preceded the begin.) Needs a current context.
 /// Queries are read when results() is called (which waits for the GPU), so timing does not
 /// stall the pipeline between stages.
 
@@ -13,14 +15,18 @@ namespace scatterlab::gpu {
 
 class StageTimer {
  public:
-  /// Starts timing `stage`; only one stage at a time (GL allows one GL_TIME_ELAPSED query).
+  /// Starts timing `stage`; stages do not nest.
   void begin(const std::string& stage);
   void end();
   /// GPU milliseconds per stage, in order of begin(); stages timed more than once are summed.
   std::vector<std::pair<std::string, double>> results();
 
  private:
-  std::vector<std::pair<std::string, Query>> queries_;
+  struct Span {
+    std::string stage;
+    Query start, stop;
+  };
+  std::vector<Span> spans_;
   bool open_ = false;
 };
 
