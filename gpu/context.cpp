@@ -33,16 +33,26 @@ bool hasExtension(const char* list, const char* name) {
 
 std::string eglErrorName(EGLint e) {
   switch (e) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
     default: {
       char buf[32];
       std::snprintf(buf, sizeof buf, "EGL error 0x%04x", unsigned(e));
@@ -82,21 +92,25 @@ bool makeContext(EGLDisplay dpy, const std::string& platform, Egl& out, std::str
 #else
   const EGLint debugFlag = 0;
 #endif
-  const EGLint ctxAttrs[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
-                             EGL_CONTEXT_MINOR_VERSION, 5,
-                             EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                             EGL_CONTEXT_FLAGS_KHR, debugFlag,
+  const EGLint ctxAttrs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                             4,
+                             EGL_CONTEXT_MINOR_VERSION,
+                             5,
+                             EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                             EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                             EGL_CONTEXT_FLAGS_KHR,
+                             debugFlag,
                              EGL_NONE};
-  EGLContext ctx = eglCreateContext(dpy, noConfig ? EGL_NO_CONFIG_KHR : config, EGL_NO_CONTEXT,
-                                    ctxAttrs);
+  EGLContext ctx =
+      eglCreateContext(dpy, noConfig ? EGL_NO_CONFIG_KHR : config, EGL_NO_CONTEXT, ctxAttrs);
   if (ctx == EGL_NO_CONTEXT) {
     why += platform + ": no OpenGL 4.5 core context (" + eglErrorName(eglGetError()) + "); ";
     eglTerminate(dpy);
     return false;
   }
   if (!eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
-    why += platform + ": eglMakeCurrent without surface failed (" +
-           eglErrorName(eglGetError()) + "); ";
+    why += platform + ": eglMakeCurrent without surface failed (" + eglErrorName(eglGetError()) +
+           "); ";
     eglDestroyContext(dpy, ctx);
     eglTerminate(dpy);
     return false;
@@ -128,8 +142,8 @@ std::optional<Egl> createEgl(std::string& why) {
         // Mesa's software device advertises EGL_MESA_device_software; skip it here so the
         // surfaceless path below reports itself honestly.
         if (hasExtension(dexts, "EGL_MESA_device_software")) continue;
-        EGLDisplay dpy = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[size_t(i)],
-                                                  nullptr);
+        EGLDisplay dpy =
+            eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[size_t(i)], nullptr);
         if (dpy == EGL_NO_DISPLAY) continue;
         if (makeContext(dpy, "device", egl, why)) return egl;
       }
@@ -138,8 +152,8 @@ std::optional<Egl> createEgl(std::string& why) {
   }
   // 2. Mesa's surfaceless platform (llvmpipe without a GPU).
   if (hasExtension(clientExts, "EGL_MESA_platform_surfaceless")) {
-    EGLDisplay dpy = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
-                                              nullptr);
+    EGLDisplay dpy =
+        eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (dpy != EGL_NO_DISPLAY && makeContext(dpy, "surfaceless", egl, why)) return egl;
     if (dpy == EGL_NO_DISPLAY) why += "surfaceless: no display; ";
   } else {
@@ -152,8 +166,8 @@ std::optional<Egl> createEgl(std::string& why) {
 void GLAPIENTRY debugCallback(GLenum, GLenum type, GLuint, GLenum severity, GLsizei,
                               const GLchar* message, const void*) {
   if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) return;
-  std::fprintf(stderr, "scatterlab GL debug%s: %s\n",
-               type == GL_DEBUG_TYPE_ERROR ? " (error)" : "", message);
+  std::fprintf(stderr, "scatterlab GL debug%s: %s\n", type == GL_DEBUG_TYPE_ERROR ? " (error)" : "",
+               message);
 }
 
 #endif
@@ -191,8 +205,7 @@ Context::Context() {
   const std::string& r = info_.renderer;
   info_.hardware = r.find("llvmpipe") == std::string::npos &&
                    r.find("softpipe") == std::string::npos &&
-                   r.find("swrast") == std::string::npos &&
-                   r.find("Software") == std::string::npos;
+                   r.find("swrast") == std::string::npos && r.find("Software") == std::string::npos;
 #ifndef NDEBUG
   if (epoxy_has_gl_extension("GL_KHR_debug") || epoxy_gl_version() >= 43) {
     glEnable(GL_DEBUG_OUTPUT);

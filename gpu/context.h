@@ -14,12 +14,12 @@ namespace scatterlab::gpu {
 
 /// What the context runs on.
 struct DeviceInfo {
-  std::string vendor;    ///< GL_VENDOR
-  std::string renderer;  ///< GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
-  std::string version;   ///< GL_VERSION
-  std::string glsl;      ///< GL_SHADING_LANGUAGE_VERSION
-  std::string platform;  ///< "device" (EGL_EXT_platform_device) or "surfaceless"
-  std::string eglVendor; ///< EGL_VENDOR of the display used
+  std::string vendor;     ///< GL_VENDOR
+  std::string renderer;   ///< GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string version;    ///< GL_VERSION
+  std::string glsl;       ///< GL_SHADING_LANGUAGE_VERSION
+  std::string platform;   ///< "device" (EGL_EXT_platform_device) or "surfaceless"
+  std::string eglVendor;  ///< EGL_VENDOR of the display used
   /// True when the renderer is a real GPU, not a software rasteriser (llvmpipe, softpipe,
   /// swrast, lavapipe). `--backend auto` picks the GPU only then.
   bool hardware = false;

@@ -39,13 +39,27 @@ class GlObject {
   GLuint id_ = 0;
 };
 
-struct BufferDeleter { void operator()(GLuint id) const { glDeleteBuffers(1, &id); } };
-struct TextureDeleter { void operator()(GLuint id) const { glDeleteTextures(1, &id); } };
-struct FramebufferDeleter { void operator()(GLuint id) const { glDeleteFramebuffers(1, &id); } };
-struct ShaderDeleter { void operator()(GLuint id) const { glDeleteShader(id); } };
-struct ProgramDeleter { void operator()(GLuint id) const { glDeleteProgram(id); } };
-struct QueryDeleter { void operator()(GLuint id) const { glDeleteQueries(1, &id); } };
-struct VertexArrayDeleter { void operator()(GLuint id) const { glDeleteVertexArrays(1, &id); } };
+struct BufferDeleter {
+  void operator()(GLuint id) const { glDeleteBuffers(1, &id); }
+};
+struct TextureDeleter {
+  void operator()(GLuint id) const { glDeleteTextures(1, &id); }
+};
+struct FramebufferDeleter {
+  void operator()(GLuint id) const { glDeleteFramebuffers(1, &id); }
+};
+struct ShaderDeleter {
+  void operator()(GLuint id) const { glDeleteShader(id); }
+};
+struct ProgramDeleter {
+  void operator()(GLuint id) const { glDeleteProgram(id); }
+};
+struct QueryDeleter {
+  void operator()(GLuint id) const { glDeleteQueries(1, &id); }
+};
+struct VertexArrayDeleter {
+  void operator()(GLuint id) const { glDeleteVertexArrays(1, &id); }
+};
 
 /// Buffer object with immutable storage (glNamedBufferStorage).
 class Buffer : public GlObject<BufferDeleter> {

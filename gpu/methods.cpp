@@ -35,8 +35,8 @@ class PerVoxelGpuMethod : public Method {
     }
     {
       ScopedTimer t(st, "radiance");
-      radiance = PerVoxelGpu(mp_.delta1).build(scene, density, scene.medium.bounds, res_, &pv,
-                                              &timer);
+      radiance =
+          PerVoxelGpu(mp_.delta1).build(scene, density, scene.medium.bounds, res_, &pv, &timer);
       glFinish();
     }
     int slices = 0;

@@ -27,7 +27,8 @@ std::string resolveBackend(const std::string& backend, std::string* why) {
     return "cpu";
   }
   if (!ctx->info().hardware) {
-    if (why) *why = "auto: only a software rasteriser ('" + ctx->info().renderer + "'); using the CPU";
+    if (why)
+      *why = "auto: only a software rasteriser ('" + ctx->info().renderer + "'); using the CPU";
     return "cpu";
   }
   if (why) *why = "auto: GPU '" + ctx->info().renderer + "' found; using it";

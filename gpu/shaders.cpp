@@ -10,7 +10,8 @@ std::string_view shaderSource(std::string_view file) {
   for (const EmbeddedShader& s : embeddedShaders())
     if (file == s.name) return s.source;
   std::string known;
-  for (const EmbeddedShader& s : embeddedShaders()) known += (known.empty() ? "" : ", ") + std::string(s.name);
+  for (const EmbeddedShader& s : embeddedShaders())
+    known += (known.empty() ? "" : ", ") + std::string(s.name);
   throw GpuError("no embedded shader '" + std::string(file) + "'; embedded: " + known);
 }
 

@@ -17,7 +17,9 @@ void setIVec3(const Program& p, const char* name, const IVec3& v) {
   glUniform3i(p.uniform(name), v.x, v.y, v.z);
 }
 
-GLuint groups(int n, int size) { return GLuint((n + size - 1) / size); }
+GLuint groups(int n, int size) {
+  return GLuint((n + size - 1) / size);
+}
 
 }  // namespace
 
@@ -25,7 +27,9 @@ TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float de
     : scene_(scene), density_(density), delta1_(delta1) {
   std::vector<float> packed;
   for (const Light& l : scene.lights) {
-    const float type = l.type == Light::Type::Point ? 0.0f : l.type == Light::Type::Spot ? 1.0f : 2.0f;
+    const float type = l.type == Light::Type::Point  ? 0.0f
+                       : l.type == Light::Type::Spot ? 1.0f
+                                                     : 2.0f;
     packed.insert(packed.end(), {l.position.x, l.position.y, l.position.z, type, l.direction.x,
                                  l.direction.y, l.direction.z, l.cosInner, l.intensity.x,
                                  l.intensity.y, l.intensity.z, l.cosOuter});
@@ -124,9 +128,10 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   std::vector<float> packed;
   packed.reserve(samples.size() * 20);
   for (const RadianceSample& s : samples) {
-    packed.insert(packed.end(), {s.position.x, s.position.y, s.position.z, s.radius, s.S.x, s.S.y,
-                                 s.S.z, 0.0f});
-    for (int a = 0; a < 3; ++a) packed.insert(packed.end(), {s.dS[a].x, s.dS[a].y, s.dS[a].z, 0.0f});
+    packed.insert(packed.end(),
+                  {s.position.x, s.position.y, s.position.z, s.radius, s.S.x, s.S.y, s.S.z, 0.0f});
+    for (int a = 0; a < 3; ++a)
+      packed.insert(packed.end(), {s.dS[a].x, s.dS[a].y, s.dS[a].z, 0.0f});
   }
   const Buffer sampleBuf(packed.size() * sizeof(float), packed.data(), 0, "radiance samples");
   const GLuint zeroCount = 0;
@@ -160,8 +165,7 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
         throw GpuError("radiance splat: RGBA32F 3D texture layer is not a complete framebuffer");
       glClearBufferfv(GL_COLOR, 0, zero);
       glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);
-      if (!samples.empty())
-        glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(samples.size()));
+      if (!samples.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(samples.size()));
     }
     glDisable(GL_BLEND);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -180,9 +184,9 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     const Vec3 dd = Vec3(density.dims), ds = density.indexScale(), dof = density.indexOffset();
     setVec3(normalize, "uDensityLookupScale", cell * ds / dd);
     setVec3(normalize, "uDensityLookupOffset", ((bounds.min + 0.5f * cell) * ds + dof + 0.5f) / dd);
-    glUniform1i(normalize.uniform("uSameGrid"),
-                density.dims == dims && density.bounds.min == bounds.min &&
-                    density.bounds.max == bounds.max);
+    glUniform1i(normalize.uniform("uSameGrid"), density.dims == dims &&
+                                                    density.bounds.min == bounds.min &&
+                                                    density.bounds.max == bounds.max);
     glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
@@ -205,8 +209,8 @@ ReconstructionStats PerVoxelGpu::reconstruct(const Scene& scene, const DensityGr
   return {};
 }
 
-Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& bounds,
-                          IVec3 dims, PerVoxelStats* stats, StageTimer* timer) {
+Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
+                          PerVoxelStats* stats, StageTimer* timer) {
   context();
   const Program& program = cachedProgram("per-voxel S", [] {
     return computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "per-voxel S");

@@ -60,8 +60,7 @@ class GradientSplatGpu : public Reconstruction {
                                   RadianceGrid& out) override;
   /// Splats into a new volume over `bounds` with `dims`.
   Volume reconstruct(const Volume& density, std::span<const RadianceSample> samples,
-                     const Box& bounds, IVec3 dims, ReconstructionStats* stats,
-                     StageTimer* timer);
+                     const Box& bounds, IVec3 dims, ReconstructionStats* stats, StageTimer* timer);
 };
 
 /// The per-voxel baseline on the GPU (twin of buildPerVoxelRadiance): S traced at every voxel

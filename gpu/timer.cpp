@@ -6,7 +6,8 @@ namespace scatterlab::gpu {
 
 void StageTimer::begin(const std::string& stage) {
   if (open_) throw GpuError("StageTimer: '" + stage + "' begun inside another stage");
-  spans_.push_back({stage, Query(GL_TIMESTAMP, "start " + stage), Query(GL_TIMESTAMP, "end " + stage)});
+  spans_.push_back(
+      {stage, Query(GL_TIMESTAMP, "start " + stage), Query(GL_TIMESTAMP, "end " + stage)});
   glQueryCounter(spans_.back().start.id(), GL_TIMESTAMP);
   open_ = true;
 }

@@ -63,7 +63,8 @@ RadianceGrid readRadiance(const Volume& v) {
   glGetTextureImage(v.texture.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
                     rgba.data());
   checkGl("radiance read-back");
-  for (size_t i = 0; i < g.size(); ++i) g.data()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+  for (size_t i = 0; i < g.size(); ++i)
+    g.data()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
   return g;
 }
 
@@ -106,7 +107,8 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
   const float zero[4] = {0, 0, 0, 0};
   for (int k = 0; k < dims.z; ++k) {
     glNamedFramebufferTextureLayer(fbo.id(), GL_COLOR_ATTACHMENT0, v.texture.id(), 0, k);
-    if (k == 0 && glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    if (k == 0 &&
+        glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw GpuError("density splat: R32F 3D texture layer is not a complete framebuffer");
     glClearBufferfv(GL_COLOR, 0, zero);
     glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);

@@ -46,21 +46,20 @@ TEST(GpuWrappers, MoveAssignSwapsAndMoveConstructEmpties) {
 
 TEST(GpuShaders, EveryEmbeddedFileIsPresent) {
   // No context needed: the table is compiled into the library.
-  for (const char* f : {"common.glsl", "volume_tracer.comp.glsl", "per_voxel.comp.glsl",
-                        "density_splat.vert.glsl", "density_splat.frag.glsl",
-                        "radiance_splat.vert.glsl", "radiance_splat.frag.glsl",
-                        "radiance_normalize.comp.glsl", "fullscreen.vert.glsl",
-                        "slice_march.frag.glsl"})
+  for (const char* f :
+       {"common.glsl", "volume_tracer.comp.glsl", "per_voxel.comp.glsl", "density_splat.vert.glsl",
+        "density_splat.frag.glsl", "radiance_splat.vert.glsl", "radiance_splat.frag.glsl",
+        "radiance_normalize.comp.glsl", "fullscreen.vert.glsl", "slice_march.frag.glsl"})
     EXPECT_FALSE(gpu::shaderSource(f).empty()) << f;
   EXPECT_THROW(gpu::shaderSource("nope.glsl"), GpuError);
 }
 
 TEST(GpuShaders, EveryProgramCompilesAndLinks) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_NO_THROW(gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"},
-                                      {"SL_GRADIENTS"}, "t"));
-  EXPECT_NO_THROW(gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"},
-                                      {"SL_HW_FILTER"}, "t"));
+  EXPECT_NO_THROW(
+      gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, {"SL_GRADIENTS"}, "t"));
+  EXPECT_NO_THROW(
+      gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, {"SL_HW_FILTER"}, "t"));
   EXPECT_NO_THROW(gpu::computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "t"));
   EXPECT_NO_THROW(gpu::computeProgram({"radiance_normalize.comp.glsl"}, {}, "t"));
   EXPECT_NO_THROW(gpu::graphicsProgram({"fullscreen.vert.glsl"},
@@ -87,8 +86,8 @@ TEST(GpuShaders, CompileErrorNamesTheFileAndQuotesTheLog) {
     EXPECT_NE(std::string(e.what()).find("volume_tracer.comp.glsl"), std::string::npos) << e.what();
   }
   // A bad variant #define.
-  EXPECT_THROW(gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"},
-                                   {"kInvFourPi )"}, "bad define"),
+  EXPECT_THROW(gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, {"kInvFourPi )"},
+                                   "bad define"),
                GpuError);
   glGetError();  // compile failures are not GL errors, but leave the queue clean
 }
@@ -98,8 +97,8 @@ TEST(GpuCli, BackendGpuWithoutContextFailsClearly) {
   const std::string scene = dir + "/gpu_cli_scene.json", out = dir + "/gpu_cli_out.exr";
   std::ofstream(scene) << blobSceneDoc(8, 8, 6).dump();
   std::remove(out.c_str());
-  const std::string cmd = "SCATTERLAB_NO_GPU=1 " SCATTERLAB_CLI " render " + scene + " -o " +
-                          out + " --backend gpu 2> " + dir + "/gpu_cli_err.txt";
+  const std::string cmd = "SCATTERLAB_NO_GPU=1 " SCATTERLAB_CLI " render " + scene + " -o " + out +
+                          " --backend gpu 2> " + dir + "/gpu_cli_err.txt";
   const int rc = std::system(cmd.c_str());
   EXPECT_NE(rc, 0);
   std::ifstream err(dir + "/gpu_cli_err.txt");

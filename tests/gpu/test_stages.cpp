@@ -20,13 +20,14 @@ namespace {
 ::testing::AssertionResult close3(const Vec3& a, const Vec3& b, float tol, float floor) {
   for (int c = 0; c < 3; ++c)
     if (!(std::abs(a[c] - b[c]) <= tol * (std::abs(b[c]) + floor)))
-      return ::testing::AssertionFailure()
-             << "channel " << c << ": gpu " << a[c] << " vs cpu " << b[c] << " (tol " << tol
-             << ", floor " << floor << ")";
+      return ::testing::AssertionFailure() << "channel " << c << ": gpu " << a[c] << " vs cpu "
+                                           << b[c] << " (tol " << tol << ", floor " << floor << ")";
   return ::testing::AssertionSuccess();
 }
 
-void expectNoGlError() { EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR)); }
+void expectNoGlError() {
+  EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+}
 
 TEST(GpuDensitySplat, MatchesGaussianDensityBuild) {
   SCATTERLAB_REQUIRE_GPU();
@@ -100,7 +101,8 @@ TEST(GpuVolumeTracer, SAndGradientMatchCpuTracing) {
     EXPECT_TRUE(close3(samples[i].S, cs[i], 1e-3f, 1e-3f * sMax)) << "S of sample " << i;
     for (int a = 0; a < 3; ++a)
       EXPECT_TRUE(close3(samples[i].dS[a], cg[3 * i + a], 1e-3f, 1e-2f * gMax))
-          << "dS/d" << "xyz"[a] << " of sample " << i;
+          << "dS/d"
+          << "xyz"[a] << " of sample " << i;
   }
   // S only: gradients left zero.
   std::vector<RadianceSample> only = samples;
@@ -139,10 +141,13 @@ TEST(GpuGradientSplat, MatchesDirectEq4) {
           wsum += W;
         }
         const Vec3 want = wsum > 0 ? sum / wsum : Vec3(0.0f);
-        if (wsum > 0) ++covered;
-        else if (density.at(i, j, k) > 0) ++uncovered;
+        if (wsum > 0)
+          ++covered;
+        else if (density.at(i, j, k) > 0)
+          ++uncovered;
         const auto r = close3(out.at(i, j, k), want, 1e-3f, 1e-2f);
-        if (!r && ++bad < 5) ADD_FAILURE() << "voxel " << i << "," << j << "," << k << ": " << r.message();
+        if (!r && ++bad < 5)
+          ADD_FAILURE() << "voxel " << i << "," << j << "," << k << ": " << r.message();
       }
   EXPECT_EQ(bad, 0);
   EXPECT_GT(covered, 0);
