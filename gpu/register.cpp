@@ -52,7 +52,8 @@ void registerGpuStages() {
   integrators().add("slice-marcher", [](Params& p, const Scene& scene) {
     MarchSettings ms;
     ms.step = p.real("march_step", scene.medium.voxelSize(), stepRange(scene));
-    return std::unique_ptr<Integrator>(new SliceMarcher(ms));
+    const std::string slicing = p.choice("slicing", {"view-planes", "ray-steps"}, "view-planes");
+    return std::unique_ptr<Integrator>(new SliceMarcher(ms, slicing == "ray-steps"));
   });
 
   // per-voxel: keep the CPU factory for "cpu", dispatch to the GPU method otherwise.

@@ -253,9 +253,11 @@ Image SliceMarcher::integrate(const Scene& scene, const DensityGrid& density,
 Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
                               StageTimer* timer, int* sliceCount) {
   context();
-  const Program& program = cachedProgram("slice marcher", [] {
-    return graphicsProgram({"fullscreen.vert.glsl"}, {"common.glsl", "slice_march.frag.glsl"}, {},
-                           "slice marcher");
+  const std::string key = raySteps_ ? "slice marcher (ray steps)" : "slice marcher";
+  const Program& program = cachedProgram(key, [&] {
+    return graphicsProgram(
+        {"fullscreen.vert.glsl"}, {"common.glsl", "slice_march.frag.glsl"},
+        raySteps_ ? std::vector<std::string>{"SL_RAY_STEPS"} : std::vector<std::string>{}, key);
   });
   const Camera& cam = scene.camera;
   const auto gen = cam.rayGenerator();
@@ -284,7 +286,11 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
                     ? std::max(1, int(std::ceil((zmax - zmin) / settings_.step)))
                     : 0;
   const float dz = n > 0 ? (zmax - zmin) / float(n) : 0.0f;
-  if (sliceCount) *sliceCount = n;
+  // Ray-step layers: enough for the longest chord through the box.
+  const int layers = m.sigmaT > 0.0f
+                         ? std::max(1, int(std::ceil(glm::length(b.extent()) / settings_.step)) + 1)
+                         : 0;
+  if (sliceCount) *sliceCount = raySteps_ ? layers : n;
   {
     ScopedGpuTimer t(timer, "slice march");
     glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
@@ -311,10 +317,19 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
     glBlendEquation(GL_FUNC_ADD);
     // rgb: dst = src + a·dst (paper Sec. 6); alpha: dst = a·dst keeps the transmittance.
     glBlendFuncSeparate(GL_ONE, GL_SRC_ALPHA, GL_ZERO, GL_SRC_ALPHA);
-    for (int k = n - 1; k >= 0; --k) {
-      glUniform1f(nearLoc, zmin + float(k) * dz);
-      glUniform1f(farLoc, k == n - 1 ? zmax : zmin + float(k + 1) * dz);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
+    if (raySteps_) {
+      glUniform1f(program.uniform("uStep"), settings_.step);
+      const GLint layerLoc = program.uniform("uLayer");
+      for (int k = 0; k < layers; ++k) {
+        glUniform1i(layerLoc, k);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      }
+    } else {
+      for (int k = n - 1; k >= 0; --k) {
+        glUniform1f(nearLoc, zmin + float(k) * dz);
+        glUniform1f(farLoc, k == n - 1 ? zmax : zmin + float(k + 1) * dz);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      }
     }
     glDisable(GL_BLEND);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);

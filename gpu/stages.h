@@ -84,9 +84,13 @@ class PerVoxelGpu : public Reconstruction {
 /// GL_ONE / GL_SRC_ALPHA; per pixel each slab's piece of the ray, clipped to the box, is one
 /// step of the CPU marcher's formula (rgb = Ω(1 − a)S, a = exp(−σt·D·Δt)), and the framebuffer
 /// starts as the background. minTransmittance is not used (there is no early exit).
+/// With `raySteps`, layer k is instead step n−1−k of each pixel's own ray (the CPU marcher's
+/// sample points exactly, composited the same way): it matches the CPU image where the planar
+/// slabs' different sample points matter (a point light inside the medium).
 class SliceMarcher : public Integrator {
  public:
-  explicit SliceMarcher(MarchSettings settings) : settings_(settings) {}
+  explicit SliceMarcher(MarchSettings settings, bool raySteps = false)
+      : settings_(settings), raySteps_(raySteps) {}
   Image integrate(const Scene& scene, const DensityGrid& density,
                   const RadianceGrid& radiance) override;
   Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
@@ -94,6 +98,7 @@ class SliceMarcher : public Integrator {
 
  private:
   MarchSettings settings_;
+  bool raySteps_;
 };
 
 }  // namespace scatterlab::gpu

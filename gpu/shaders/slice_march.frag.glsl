@@ -15,6 +15,8 @@ uniform vec2 uSize;       // image width, height
 uniform float uDepthNear;
 uniform float uDepthFar;
 uniform float uAlbedo;
+uniform int uLayer;      // SL_RAY_STEPS: layer index counted from the far end
+uniform float uStep;     // SL_RAY_STEPS: the CPU marcher's step
 layout(location = 0) out vec4 outColor;
 
 void main() {
@@ -25,11 +27,21 @@ void main() {
   vec3 dir = normalize(uForward + u * uRight + v * uUp);
   float t0, t1;
   if (!intersectBox(uEye, dir, 0.0, kInf, t0, t1) || !(t1 > t0)) discard;
+#ifdef SL_RAY_STEPS
+  // Variant: layer k is step n-1-k of this pixel's ray, exactly the CPU marcher's steps
+  // (same sample points), still composited far to near with the same blending.
+  int n = max(1, int(ceil((t1 - t0) / uStep)));
+  int i = n - 1 - uLayer;
+  if (i < 0) discard;
+  float dt = (t1 - t0) / float(n);
+  vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+#else
   float c = dot(dir, uForward);
   float a = max(t0, uDepthNear / c), b = min(t1, uDepthFar / c);
   if (!(b > a)) discard;
   float dt = b - a;
   vec3 x = uEye + dir * (0.5 * (a + b));
+#endif
   float D = densityAtIndex(x * uDensityScale + uDensityOffset);
   if (!(D > 0.0)) discard;
   float alpha = exp(-uSigmaT * D * dt);

@@ -186,7 +186,7 @@ TEST(GpuPerVoxel, MatchesCpuPerVoxelRadiance) {
 /// (per-ray steps vs view-depth slabs), so near the spike they differ by more than 0.5% at
 /// practical steps (measured: 1.07% at half a voxel, one pixel next to the light) and agree
 /// once the step is small; with the light outside the medium they agree at half a voxel.
-double sliceVsCpu(bool lightInside, float stepVoxels) {
+double sliceVsCpu(bool lightInside, float stepVoxels, const char* slicing = "view-planes") {
   Json doc = blobSceneDoc(24, 32, 24);
   if (!lightInside) doc["lights"][0]["position"] = {1.25, 0.8, 0.3};
   Scene scene = sceneFromJson(doc);
@@ -203,7 +203,7 @@ double sliceVsCpu(bool lightInside, float stepVoxels) {
   const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
   const Image cpu = marchImage(scene, density, lookup, ms, nullptr);
 
-  const Json cfg{{"march_step", ms.step}};
+  const Json cfg{{"march_step", ms.step}, {"slicing", slicing}};
   Params p(cfg, "integrator");
   auto integ = integrators().get("slice-marcher", "integrator")(p, scene);
   p.finish();
@@ -227,6 +227,11 @@ TEST(GpuSliceMarcher, MatchesCpuMarcherOnTheSameVolumes) {
 TEST(GpuSliceMarcher, AgreesWithCpuMarcherNearALightInsideTheMediumAtSmallSteps) {
   SCATTERLAB_REQUIRE_GPU();
   EXPECT_LT(sliceVsCpu(true, 0.125f), 0.005);
+}
+
+TEST(GpuSliceMarcher, RayStepLayersMatchCpuMarcherNearALightInsideTheMedium) {
+  SCATTERLAB_REQUIRE_GPU();
+  EXPECT_LT(sliceVsCpu(true, 0.5f, "ray-steps"), 0.005);
 }
 
 TEST(GpuPerVoxelMethod, EndToEndMatchesCpuMethod) {
