@@ -4,6 +4,9 @@
 
 #include "media/register.h"
 #include "render/methods.h"
+#ifdef SCATTERLAB_HAS_GPU
+#include "gpu/register.h"
+#endif
 
 namespace scatterlab {
 
@@ -12,6 +15,9 @@ void initialize() {
   std::call_once(once, [] {
     registerMediaModels();
     registerReferenceMethods();
+#ifdef SCATTERLAB_HAS_GPU
+    gpu::registerGpuStages();
+#endif
   });
 }
 

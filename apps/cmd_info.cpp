@@ -6,6 +6,9 @@
 #include "apps/commands.h"
 #include "apps/info.h"
 #include "core/atomic_file.h"
+#ifdef SCATTERLAB_HAS_GPU
+#include "gpu/context.h"
+#endif
 
 namespace scatterlab::cli {
 
@@ -53,11 +56,31 @@ void printImageInfo(const std::string& path) {
               hi.z, sum.x, sum.y, sum.z);
 }
 
+/// `info --gpu`: the OpenGL device the GPU backend would use (creates the context).
+void printGpuInfo() {
+#ifdef SCATTERLAB_HAS_GPU
+  const gpu::DeviceInfo& i = gpu::context().info();  // GpuError when there is none
+  std::printf("gpu: %s\n  vendor: %s\n  renderer: %s\n  version: %s\n  glsl: %s\n",
+              i.hardware ? "hardware" : "software rasteriser (--backend auto uses the CPU)",
+              i.vendor.c_str(), i.renderer.c_str(), i.version.c_str(), i.glsl.c_str());
+  std::printf("  egl: %s platform, %s\n", i.platform.c_str(), i.eglVendor.c_str());
+#else
+  throw GpuError("this scatterlab was built without the GPU backend (SCATTERLAB_GPU=OFF)");
+#endif
+}
+
 Action addInfo(CLI::App& app) {
   auto file = std::make_shared<std::string>();
+  auto gpuFlag = std::make_shared<bool>(false);
   CLI::App* c = app.add_subcommand("info", "Describe a scene (.json), image (.exr) or volume");
-  c->add_option("file", *file, "File to describe")->required();
-  return [file]() {
+  c->add_option("file", *file, "File to describe");
+  c->add_flag("--gpu", *gpuFlag, "Print the OpenGL vendor, renderer and version of the GPU backend");
+  return [file, gpuFlag]() {
+    if (*gpuFlag) printGpuInfo();
+    if (file->empty()) {
+      if (*gpuFlag) return 0;
+      throw ConfigError("info: give a FILE to describe, or --gpu");
+    }
     checkReadableFile(*file);
     std::string ext = std::filesystem::path(*file).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);

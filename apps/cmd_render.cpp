@@ -58,6 +58,8 @@ Action addRender(CLI::App& app) {
       std::printf("%s (%s, %s): %dx%d in %.1f ms\n", r.stats.method.c_str(),
                   r.stats.backend.c_str(), r.stats.device.c_str(), r.stats.width, r.stats.height,
                   r.stats.totalMs());
+      if (r.stats.extra.contains("backend_choice"))
+        std::printf("%s\n", r.stats.extra["backend_choice"].get<std::string>().c_str());
       std::printf("wrote %s", o->out.c_str());
       if (!o->png.empty()) std::printf(", %s", o->png.c_str());
       if (!o->stats.empty()) std::printf(", %s", o->stats.c_str());

@@ -26,10 +26,11 @@ std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& meth
       methods().get(name, methodOverride.empty() ? "render.method" : "--method")(p, scene, b);
   if (name != fileMethod && methods().contains(fileMethod)) {
     // Validate the file's own settings with its own method, then accept its keys here.
+    // Validated for key checking only, on its own backend setting: the requested backend
+    // applies to the overriding method, which may support it where the file's does not.
     Params own(scene.render, "render");
     own.string("method");
-    backendOf(own, backend);
-    methods().get(fileMethod, "render.method")(own, scene, b);
+    methods().get(fileMethod, "render.method")(own, scene, backendOf(own, "auto"));
     own.finish();
     for (auto it = scene.render.begin(); it != scene.render.end(); ++it) p.allow(it.key());
   }

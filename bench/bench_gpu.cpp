@@ -1,0 +1,162 @@
+/// GPU stage benchmarks (issue 6): per-stage GPU times from timer queries, reported as manual
+/// time, on the glow scene (five Gaussian blobs, one point light) at 64³ and 128³ and an
+/// 800×600 image. Needs an EGL context; each benchmark reports an error when there is none.
+/// On llvmpipe run with few iterations (see docs/benchmarks.md).
+
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <random>
+
+#include "api/scatterlab.h"
+#include "gpu/context.h"
+#include "gpu/stages.h"
+#include "gpu/timer.h"
+#include "gpu/volume.h"
+#include "media/procedural.h"
+
+namespace scatterlab {
+namespace {
+
+Scene glowScene(int res) {
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json");
+  s.medium.resolution = IVec3(res);
+  s.camera.width = 800;
+  s.camera.height = 600;
+  return s;
+}
+
+bool needGpu(benchmark::State& state) {
+  std::string why;
+  if (gpu::tryContext(&why)) return true;
+  state.SkipWithError(why.c_str());
+  return false;
+}
+
+/// Runs `body` per iteration and reports the sum of the timer's GPU milliseconds.
+template <class Body>
+void gpuLoop(benchmark::State& state, Body&& body) {
+  for (auto _ : state) {
+    gpu::StageTimer timer;
+    body(timer);
+    double ms = 0;
+    for (const auto& [stage, t] : timer.results()) ms += t;
+    state.SetIterationTime(ms * 1e-3);
+  }
+  state.SetLabel(gpu::context().info().renderer);
+}
+
+std::vector<RadianceSample> samples512(const Scene& s) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(0.1f, 0.9f);
+  std::vector<RadianceSample> out(512);
+  for (RadianceSample& r : out) {
+    r.position = Vec3(u(rng), u(rng), u(rng));
+    r.radius = 0.15f;
+  }
+  return out;
+}
+
+void BM_GpuDensitySplat(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const auto& g = dynamic_cast<const GaussianDensity&>(*s.medium.density);
+  gpuLoop(state, [&](gpu::StageTimer& t) {
+    gpu::Volume v = gpu::splatGaussians(g.blobs(), s.medium.bounds, s.medium.resolution, &t);
+    benchmark::DoNotOptimize(v.texture.id());
+  });
+}
+
+void BM_GpuVolumeTracer512(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const gpu::Volume d = gpu::buildDensity(s);
+  auto samples = samples512(s);
+  const float vox = s.medium.voxelSize();
+  gpuLoop(state, [&](gpu::StageTimer& t) {
+    gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, &t);
+  });
+}
+
+void BM_GpuGradientSplat512(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const gpu::Volume d = gpu::buildDensity(s);
+  auto samples = samples512(s);
+  const float vox = s.medium.voxelSize();
+  gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, nullptr);
+  gpuLoop(state, [&](gpu::StageTimer& t) {
+    gpu::Volume v = gpu::GradientSplatGpu().reconstruct(d, samples, s.medium.bounds,
+                                                        s.medium.resolution, nullptr, &t);
+    benchmark::DoNotOptimize(v.texture.id());
+  });
+}
+
+void BM_GpuPerVoxel(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const gpu::Volume d = gpu::buildDensity(s);
+  gpuLoop(state, [&](gpu::StageTimer& t) {
+    gpu::Volume v = gpu::PerVoxelGpu(s.medium.voxelSize())
+                        .build(s, d, s.medium.bounds, s.medium.resolution, nullptr, &t);
+    benchmark::DoNotOptimize(v.texture.id());
+  });
+}
+
+void BM_GpuSliceMarch800x600(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const gpu::Volume d = gpu::buildDensity(s);
+  const gpu::Volume r = gpu::PerVoxelGpu(s.medium.voxelSize())
+                            .build(s, d, s.medium.bounds, s.medium.resolution, nullptr, nullptr);
+  MarchSettings ms;
+  ms.step = s.medium.voxelSize();
+  int slices = 0;
+  gpuLoop(state, [&](gpu::StageTimer& t) {
+    Image img = gpu::SliceMarcher(ms).integrate(s, d, r, &t, &slices);
+    benchmark::DoNotOptimize(img.pixels().data());
+  });
+  state.counters["slices"] = slices;
+}
+
+/// Iterations are fixed small so the suite finishes on llvmpipe; on a real GPU set
+/// SCATTERLAB_GPU_BENCH_ITERS (e.g. 100) to run every GPU benchmark that many times.
+int iters(int n) {
+  const char* e = std::getenv("SCATTERLAB_GPU_BENCH_ITERS");
+  return e && std::atoi(e) > 0 ? std::atoi(e) : n;
+}
+
+BENCHMARK(BM_GpuDensitySplat)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(3))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuVolumeTracer512)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(2))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuGradientSplat512)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(2))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuPerVoxel)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuSliceMarch800x600)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace scatterlab

@@ -1,0 +1,144 @@
+// Shared by every stage that traces source radiance (DESIGN.md §2). Mirrors, line for line,
+// core/light.h (Light::incident, spotFalloff), core/phase.h (Phase::evalCos), core/math.h
+// (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and render/volume_tracer.h
+// (opticalDepth, lightSegmentEnd, SourceRadiance); tests/gpu holds them in step (CPU == GPU).
+
+const float kInvFourPi = 1.0 / (4.0 * 3.14159265358979323846);
+const float kInf = 1.0 / 0.0;
+
+// One light: type 0 point, 1 spot, 2 directional (Light::Type order).
+struct GpuLight {
+  vec4 positionType;       // xyz position, w type
+  vec4 directionCosInner;  // xyz direction (unit), w cos of the inner half-angle
+  vec4 intensityCosOuter;  // rgb intensity / irradiance, w cos of the outer half-angle
+};
+layout(std430, binding = 0) readonly buffer Lights { GpuLight lights[]; };
+uniform int uLightCount;
+uniform int uPhaseType;  // 0 isotropic, 1 Henyey-Greenstein
+uniform float uPhaseG;
+uniform float uSigmaT;
+uniform float uDelta1;
+
+// Density volume: texture unit 0, lookups in index space u (voxel centre i at u = i).
+layout(binding = 0) uniform sampler3D uDensity;
+uniform vec3 uBoxMin;
+uniform vec3 uBoxMax;
+uniform vec3 uDensityScale;   // world -> index: u = p * scale + offset
+uniform vec3 uDensityOffset;
+uniform ivec3 uDensityDims;
+
+float smoothStepCpu(float x, float e0, float e1) {
+  if (e0 == e1) return x < e0 ? 0.0 : 1.0;
+  float t = clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+float phaseEvalCos(float c) {
+  if (uPhaseType == 0) return kInvFourPi;
+  float g = uPhaseG;
+  float denom = 1.0 + g * g - 2.0 * g * c;
+  return kInvFourPi * (1.0 - g * g) / (denom * sqrt(denom));
+}
+
+// Box::intersect: slab test; false when the ray misses.
+bool intersectBox(vec3 o, vec3 d, float tmin, float tmax, out float t0, out float t1) {
+  t0 = tmin;
+  t1 = tmax;
+  for (int a = 0; a < 3; ++a) {
+    float inv = 1.0 / d[a];
+    float tn = (uBoxMin[a] - o[a]) * inv;
+    float tf = (uBoxMax[a] - o[a]) * inv;
+    if (tn > tf) { float s = tn; tn = tf; tf = s; }
+    t0 = tn > t0 ? tn : t0;
+    t1 = tf < t1 ? tf : t1;
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+// Grid3::sampleIndex. SL_HW_FILTER uses the texture unit's trilinear filter (fast on a GPU,
+// limited to 8 fractional bits of weight on most hardware); the default fetches the eight
+// neighbours and interpolates in float, as the CPU does.
+float densityAtIndex(vec3 u) {
+#ifdef SL_HW_FILTER
+  return textureLod(uDensity, (u + 0.5) / vec3(uDensityDims), 0.0).r;
+#else
+  u = clamp(u, vec3(0.0), vec3(uDensityDims - 1));
+  ivec3 i0 = min(ivec3(u), uDensityDims - 1);
+  ivec3 i1 = min(i0 + 1, uDensityDims - 1);
+  vec3 f = u - vec3(i0);
+  float c000 = texelFetch(uDensity, i0, 0).r;
+  float c100 = texelFetch(uDensity, ivec3(i1.x, i0.y, i0.z), 0).r;
+  float c010 = texelFetch(uDensity, ivec3(i0.x, i1.y, i0.z), 0).r;
+  float c110 = texelFetch(uDensity, ivec3(i1.x, i1.y, i0.z), 0).r;
+  float c001 = texelFetch(uDensity, ivec3(i0.x, i0.y, i1.z), 0).r;
+  float c101 = texelFetch(uDensity, ivec3(i1.x, i0.y, i1.z), 0).r;
+  float c011 = texelFetch(uDensity, ivec3(i0.x, i1.y, i1.z), 0).r;
+  float c111 = texelFetch(uDensity, i1, 0).r;
+  float c00 = c000 + (c100 - c000) * f.x;
+  float c10 = c010 + (c110 - c010) * f.x;
+  float c01 = c001 + (c101 - c001) * f.x;
+  float c11 = c011 + (c111 - c011) * f.x;
+  float c0 = c00 + (c10 - c00) * f.y;
+  float c1 = c01 + (c11 - c01) * f.y;
+  return c0 + (c1 - c0) * f.z;
+#endif
+}
+
+// opticalDepth(DensityGrid, a, b, step): midpoint rule in index space.
+float opticalDepth(vec3 a, vec3 b, float stepLen) {
+  vec3 d = b - a;
+  float len = length(d);
+  if (len <= 0.0) return 0.0;
+  vec3 dir = d / len;
+  float t0, t1;
+  if (!intersectBox(a, dir, 0.0, len, t0, t1) || t1 <= t0) return 0.0;
+  int n = max(1, int(ceil((t1 - t0) / stepLen)));
+  float dt = (t1 - t0) / float(n);
+  vec3 u0 = (a + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
+  vec3 du = dir * dt * uDensityScale;
+  float sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += densityAtIndex(u0 + float(i) * du);
+  return sum * dt;
+}
+
+// SourceRadiance::operator(): S at x for light leaving towards the viewer along toViewer.
+vec3 sourceRadiance(vec3 x, vec3 toViewer) {
+  vec3 s = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) {
+    GpuLight l = lights[li];
+    int type = int(l.positionType.w);
+    vec3 toLight, irradiance, segEnd;
+    if (type == 2) {
+      toLight = -l.directionCosInner.xyz;
+      irradiance = l.intensityCosOuter.rgb;
+      float t0, t1;
+      segEnd = intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
+    } else {
+      vec3 d = l.positionType.xyz - x;
+      float dist2 = dot(d, d);
+      if (dist2 <= 0.0) continue;
+      float dist = sqrt(dist2);
+      toLight = d / dist;
+      float f = 1.0;
+      if (type == 1) {
+        f = smoothStepCpu(dot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
+                          l.directionCosInner.w);
+        if (f <= 0.0) continue;
+      }
+      irradiance = l.intensityCosOuter.rgb * (f / dist2);
+      segEnd = x + toLight * dist;
+    }
+    float tau = opticalDepth(x, segEnd, uDelta1);
+    s += irradiance * (phaseEvalCos(dot(-toLight, toViewer)) * exp(-uSigmaT * tau));
+  }
+  return s;
+}
+
+// S at p seen from the camera at uEye (per-voxel and evaluator convention).
+uniform vec3 uEye;
+vec3 sourceTowardsEye(vec3 p) {
+  vec3 v = uEye - p;
+  float len = length(v);
+  return sourceRadiance(p, len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0));
+}

@@ -1,0 +1,33 @@
+// Per-voxel source radiance (the paper's baseline; render/per_voxel.cpp on the CPU): S traced
+// at each voxel centre of the radiance volume, skipping voxels whose trilinear neighbourhood
+// in the density volume is empty (identical to tracing them).
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+
+layout(rgba32f, binding = 0) uniform writeonly image3D uRadiance;
+layout(std430, binding = 3) buffer Counters { uint traced; uint skipped; };
+uniform ivec3 uRadDims;
+uniform vec3 uRadMin;
+uniform vec3 uRadCell;
+
+void main() {
+  ivec3 v = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(v, uRadDims))) return;
+  vec3 c = uRadMin + (vec3(v) + 0.5) * uRadCell;
+  ivec3 lo = max(ivec3(floor((c - uRadCell) * uDensityScale + uDensityOffset)), ivec3(0));
+  ivec3 hi = min(ivec3(ceil((c + uRadCell) * uDensityScale + uDensityOffset)), uDensityDims - 1);
+  bool occupied = false;
+  for (int k = lo.z; k <= hi.z && !occupied; ++k)
+    for (int j = lo.y; j <= hi.y && !occupied; ++j)
+      for (int i = lo.x; i <= hi.x; ++i)
+        if (texelFetch(uDensity, ivec3(i, j, k), 0).r > 0.0) {
+          occupied = true;
+          break;
+        }
+  if (!occupied) {
+    imageStore(uRadiance, v, vec4(0.0));
+    atomicAdd(skipped, 1u);
+    return;
+  }
+  imageStore(uRadiance, v, vec4(sourceTowardsEye(c), 0.0));
+  atomicAdd(traced, 1u);
+}

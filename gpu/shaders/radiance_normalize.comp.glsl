@@ -1,0 +1,25 @@
+// Normalises the splatted sums into the source-radiance volume: S = Σ W·taylor / Σ W, zero
+// where no sample covers the voxel; counts covered-nothing voxels that hold density.
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+layout(rgba32f, binding = 0) uniform readonly image3D uSums;
+layout(rgba32f, binding = 1) uniform writeonly image3D uRadiance;
+layout(binding = 0) uniform sampler3D uDensity;
+layout(std430, binding = 3) buffer Counters { uint uncovered; };
+uniform ivec3 uGridDims;
+uniform vec3 uDensityLookupScale;  // radiance voxel index -> density texture coordinate
+uniform vec3 uDensityLookupOffset;
+uniform bool uSameGrid;  // density and radiance share dims: read the voxel itself, unfiltered
+
+void main() {
+  ivec3 v = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(v, uGridDims))) return;
+  vec4 s = imageLoad(uSums, v);
+  if (s.a > 0.0) {
+    imageStore(uRadiance, v, vec4(s.rgb / s.a, 0.0));
+  } else {
+    imageStore(uRadiance, v, vec4(0.0));
+    float D = uSameGrid ? texelFetch(uDensity, v, 0).r
+                        : textureLod(uDensity, vec3(v) * uDensityLookupScale + uDensityLookupOffset, 0.0).r;
+    if (D > 0.0) atomicAdd(uncovered, 1u);
+  }
+}

@@ -1,0 +1,24 @@
+// Adds (W·(S_j + (x − x_j)·∇S_j), W) with W = R_j/‖x − x_j‖ (paper Eq. 4) for voxel centres
+// inside the valid sphere; blending GL_ONE/GL_ONE into an RGBA32F layer.
+uniform vec3 uGridMin;
+uniform vec3 uGridCell;
+uniform float uSliceZ;
+flat in vec4 vPosR;
+flat in vec3 vS;
+flat in vec3 vDx;
+flat in vec3 vDy;
+flat in vec3 vDz;
+layout(location = 0) out vec4 outSum;
+
+void main() {
+  vec3 x = vec3(uGridMin.xy + gl_FragCoord.xy * uGridCell.xy, uSliceZ);
+  vec3 d = x - vPosR.xyz;
+  float dist = length(d);
+  float R = vPosR.w;
+  if (!(dist < R)) discard;
+  // A voxel centre on the sample itself: W is unbounded; a large finite weight keeps the sum a
+  // weighted average dominated by this sample (the same clamp as the CPU twin in the tests).
+  float W = R / max(dist, 1e-6 * R);
+  vec3 taylor = vS + d.x * vDx + d.y * vDy + d.z * vDz;
+  outSum = vec4(W * taylor, W);
+}

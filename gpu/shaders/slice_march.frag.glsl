@@ -1,0 +1,50 @@
+// Slice-based ray marching (paper Sec. 6). One slab of view depth [uDepthNear, uDepthFar]
+// (perpendicular to the view direction) per draw, drawn far to near with blending
+// GL_ONE / GL_SRC_ALPHA: dst = rgb + alpha·dst. Per pixel, the slab's piece of the camera ray
+// is clipped to the box and treated as the CPU marcher treats one step:
+// rgb = Ω·(1 − a)·S(x_mid), a = exp(−σt·D(x_mid)·Δt).
+layout(binding = 1) uniform sampler3D uRadiance;
+uniform vec3 uRadScale;   // world -> radiance index
+uniform vec3 uRadOffset;
+uniform ivec3 uRadDims;
+uniform vec3 uForward;
+uniform vec3 uRight;
+uniform vec3 uUp;
+uniform vec2 uTanHalf;    // (tan(fov/2)·aspect, tan(fov/2))
+uniform vec2 uSize;       // image width, height
+uniform float uDepthNear;
+uniform float uDepthFar;
+uniform float uAlbedo;
+uniform int uLayer;      // SL_RAY_STEPS: layer index counted from the far end
+uniform float uStep;     // SL_RAY_STEPS: the CPU marcher's step
+layout(location = 0) out vec4 outColor;
+
+void main() {
+  // GL row r is image row r (row 0 at the top once read back without flipping).
+  vec2 pix = gl_FragCoord.xy;  // (px + 0.5, py + 0.5)
+  float u = (pix.x / uSize.x * 2.0 - 1.0) * uTanHalf.x;
+  float v = (1.0 - pix.y / uSize.y * 2.0) * uTanHalf.y;
+  vec3 dir = normalize(uForward + u * uRight + v * uUp);
+  float t0, t1;
+  if (!intersectBox(uEye, dir, 0.0, kInf, t0, t1) || !(t1 > t0)) discard;
+#ifdef SL_RAY_STEPS
+  // Variant: layer k is step n-1-k of this pixel's ray, exactly the CPU marcher's steps
+  // (same sample points), still composited far to near with the same blending.
+  int n = max(1, int(ceil((t1 - t0) / uStep)));
+  int i = n - 1 - uLayer;
+  if (i < 0) discard;
+  float dt = (t1 - t0) / float(n);
+  vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+#else
+  float c = dot(dir, uForward);
+  float a = max(t0, uDepthNear / c), b = min(t1, uDepthFar / c);
+  if (!(b > a)) discard;
+  float dt = b - a;
+  vec3 x = uEye + dir * (0.5 * (a + b));
+#endif
+  float D = densityAtIndex(x * uDensityScale + uDensityOffset);
+  if (!(D > 0.0)) discard;
+  float alpha = exp(-uSigmaT * D * dt);
+  vec3 S = textureLod(uRadiance, (x * uRadScale + uRadOffset + 0.5) / vec3(uRadDims), 0.0).rgb;
+  outColor = vec4(uAlbedo * (1.0 - alpha) * S, alpha);
+}

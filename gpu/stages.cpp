@@ -1,0 +1,351 @@
+#include "gpu/stages.h"
+
+#include <vector>
+
+#include "core/error.h"
+#include "gpu/context.h"
+#include "gpu/shaders.h"
+
+namespace scatterlab::gpu {
+
+namespace {
+
+void setVec3(const Program& p, const char* name, const Vec3& v) {
+  glUniform3f(p.uniform(name), v.x, v.y, v.z);
+}
+void setIVec3(const Program& p, const char* name, const IVec3& v) {
+  glUniform3i(p.uniform(name), v.x, v.y, v.z);
+}
+
+GLuint groups(int n, int size) {
+  return GLuint((n + size - 1) / size);
+}
+
+}  // namespace
+
+TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1)
+    : scene_(scene), density_(density), delta1_(delta1) {
+  std::vector<float> packed;
+  for (const Light& l : scene.lights) {
+    const float type = l.type == Light::Type::Point  ? 0.0f
+                       : l.type == Light::Type::Spot ? 1.0f
+                                                     : 2.0f;
+    packed.insert(packed.end(), {l.position.x, l.position.y, l.position.z, type, l.direction.x,
+                                 l.direction.y, l.direction.z, l.cosInner, l.intensity.x,
+                                 l.intensity.y, l.intensity.z, l.cosOuter});
+  }
+  lights_ = Buffer(packed.size() * sizeof(float), packed.data(), 0, "lights");
+}
+
+void TracingInputs::apply(const Program& p) const {
+  const Medium& m = scene_.medium;
+  lights_.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  glBindTextureUnit(0, density_.texture.id());
+  glUniform1i(p.uniform("uLightCount"), GLint(scene_.lights.size()));
+  glUniform1i(p.uniform("uPhaseType"), m.phase.type == Phase::Type::Isotropic ? 0 : 1);
+  glUniform1f(p.uniform("uPhaseG"), m.phase.g);
+  glUniform1f(p.uniform("uSigmaT"), m.sigmaT);
+  glUniform1f(p.uniform("uDelta1"), delta1_);
+  setVec3(p, "uBoxMin", density_.bounds.min);
+  setVec3(p, "uBoxMax", density_.bounds.max);
+  setVec3(p, "uDensityScale", density_.indexScale());
+  setVec3(p, "uDensityOffset", density_.indexOffset());
+  setIVec3(p, "uDensityDims", density_.dims);
+  setVec3(p, "uEye", scene_.camera.position);
+}
+
+// ---------------------------------------------------------------- radiance evaluator
+
+void VolumeTracerGpu::evaluate(const Scene& scene, const DensityGrid& density,
+                               std::span<RadianceSample> samples, bool gradients) {
+  const Volume d = uploadDensity(density);
+  evaluate(scene, d, samples, gradients, nullptr);
+}
+
+void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
+                               std::span<RadianceSample> samples, bool gradients,
+                               StageTimer* timer) {
+  context();
+  if (samples.empty()) return;
+  const std::string key = gradients ? "volume tracer (S, grad S)" : "volume tracer (S)";
+  const Program& program = cachedProgram(key, [&] {
+    std::vector<std::string> defines;
+    if (gradients) defines.push_back("SL_GRADIENTS");
+    return computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, defines, key);
+  });
+  std::vector<float> pos;
+  pos.reserve(samples.size() * 4);
+  for (const RadianceSample& s : samples)
+    pos.insert(pos.end(), {s.position.x, s.position.y, s.position.z, 0.0f});
+  const Buffer positions(pos.size() * sizeof(float), pos.data(), 0, "sample positions");
+  const Buffer results(samples.size() * 16 * sizeof(float), nullptr, 0, "sample S and grad S");
+  const TracingInputs inputs(scene, density, delta1_);
+  {
+    ScopedGpuTimer t(timer, "radiance evaluation");
+    program.use();
+    inputs.apply(program);
+    glUniform1ui(program.uniform("uCount"), GLuint(samples.size()));
+    glUniform1f(program.uniform("uDelta2"), delta2_);
+    positions.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+    results.bindBase(GL_SHADER_STORAGE_BUFFER, 2);
+    glDispatchCompute(groups(int(samples.size()), 64), 1, 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+  checkGl("radiance evaluation");
+  std::vector<float> r(samples.size() * 16);
+  results.read(r.data(), r.size() * sizeof(float));
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const float* q = &r[16 * i];
+    samples[i].S = Vec3(q[0], q[1], q[2]);
+    for (int a = 0; a < 3; ++a)
+      samples[i].dS[a] = gradients ? Vec3(q[4 + 4 * a], q[5 + 4 * a], q[6 + 4 * a]) : Vec3(0.0f);
+  }
+}
+
+// ---------------------------------------------------------------- gradient splatting
+
+ReconstructionStats GradientSplatGpu::reconstruct(const Scene& scene, const DensityGrid& density,
+                                                  std::span<const RadianceSample> samples,
+                                                  RadianceGrid& out) {
+  const Volume d = uploadDensity(density);
+  ReconstructionStats st;
+  const Volume v = reconstruct(d, samples, out.bounds(), out.dims(), &st, nullptr);
+  out = readRadiance(v);
+  return st;
+}
+
+Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const RadianceSample> samples,
+                                     const Box& bounds, IVec3 dims, ReconstructionStats* stats,
+                                     StageTimer* timer) {
+  context();
+  const Program& splat = cachedProgram("radiance splat", [] {
+    return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"}, {},
+                           "radiance splat");
+  });
+  const Program& normalize = cachedProgram("radiance normalize", [] {
+    return computeProgram({"radiance_normalize.comp.glsl"}, {}, "radiance normalize");
+  });
+  std::vector<float> packed;
+  packed.reserve(samples.size() * 20);
+  for (const RadianceSample& s : samples) {
+    packed.insert(packed.end(),
+                  {s.position.x, s.position.y, s.position.z, s.radius, s.S.x, s.S.y, s.S.z, 0.0f});
+    for (int a = 0; a < 3; ++a)
+      packed.insert(packed.end(), {s.dS[a].x, s.dS[a].y, s.dS[a].z, 0.0f});
+  }
+  const Buffer sampleBuf(packed.size() * sizeof(float), packed.data(), 0, "radiance samples");
+  const GLuint zeroCount = 0;
+  const Buffer counter(sizeof(GLuint), &zeroCount, 0, "uncovered voxel count");
+  const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums");
+  Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)");
+  const Framebuffer fbo("radiance splat target");
+  const VertexArray vao("attribute-less");
+  const Vec3 cell = bounds.extent() / Vec3(dims);
+  {
+    ScopedGpuTimer t(timer, "radiance splat");
+    splat.use();
+    setVec3(splat, "uGridMin", bounds.min);
+    setVec3(splat, "uGridCell", cell);
+    setIVec3(splat, "uGridDims", dims);
+    const GLint sliceLoc = splat.uniform("uSliceZ");
+    sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+    glBindVertexArray(vao.id());
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+    glViewport(0, 0, dims.x, dims.y);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_SCISSOR_TEST);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    glBlendFunc(GL_ONE, GL_ONE);
+    const float zero[4] = {0, 0, 0, 0};
+    for (int k = 0; k < dims.z; ++k) {
+      glNamedFramebufferTextureLayer(fbo.id(), GL_COLOR_ATTACHMENT0, sums.id(), 0, k);
+      if (k == 0 &&
+          glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GpuError("radiance splat: RGBA32F 3D texture layer is not a complete framebuffer");
+      glClearBufferfv(GL_COLOR, 0, zero);
+      glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);
+      if (!samples.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(samples.size()));
+    }
+    glDisable(GL_BLEND);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+  checkGl("radiance splat");
+  {
+    ScopedGpuTimer t(timer, "radiance normalize");
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    normalize.use();
+    glBindImageTexture(0, sums.id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindTextureUnit(0, density.texture.id());
+    counter.bindBase(GL_SHADER_STORAGE_BUFFER, 3);
+    setIVec3(normalize, "uGridDims", dims);
+    // radiance voxel index v -> density texture coordinate (u + 0.5) / dims_density.
+    const Vec3 dd = Vec3(density.dims), ds = density.indexScale(), dof = density.indexOffset();
+    setVec3(normalize, "uDensityLookupScale", cell * ds / dd);
+    setVec3(normalize, "uDensityLookupOffset", ((bounds.min + 0.5f * cell) * ds + dof + 0.5f) / dd);
+    glUniform1i(normalize.uniform("uSameGrid"), density.dims == dims &&
+                                                    density.bounds.min == bounds.min &&
+                                                    density.bounds.max == bounds.max);
+    glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  checkGl("radiance normalize");
+  if (stats) {
+    GLuint n = 0;
+    counter.read(&n, sizeof n);
+    stats->uncovered = n;
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- per-voxel
+
+ReconstructionStats PerVoxelGpu::reconstruct(const Scene& scene, const DensityGrid& density,
+                                             std::span<const RadianceSample>, RadianceGrid& out) {
+  const Volume d = uploadDensity(density);
+  const Volume v = build(scene, d, out.bounds(), out.dims(), nullptr, nullptr);
+  out = readRadiance(v);
+  return {};
+}
+
+Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
+                          PerVoxelStats* stats, StageTimer* timer) {
+  context();
+  const Program& program = cachedProgram("per-voxel S", [] {
+    return computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "per-voxel S");
+  });
+  Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)");
+  const GLuint zeros[2] = {0, 0};
+  const Buffer counters(sizeof zeros, zeros, 0, "per-voxel counters");
+  const TracingInputs inputs(scene, density, delta1_);
+  {
+    ScopedGpuTimer t(timer, "per-voxel S");
+    program.use();
+    inputs.apply(program);
+    glBindImageTexture(0, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    counters.bindBase(GL_SHADER_STORAGE_BUFFER, 3);
+    setIVec3(program, "uRadDims", dims);
+    setVec3(program, "uRadMin", bounds.min);
+    setVec3(program, "uRadCell", bounds.extent() / Vec3(dims));
+    glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  checkGl("per-voxel S");
+  if (stats) {
+    GLuint n[2] = {0, 0};
+    counters.read(n, sizeof n);
+    stats->traced = n[0];
+    stats->skipped = n[1];
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- slice marcher
+
+Image SliceMarcher::integrate(const Scene& scene, const DensityGrid& density,
+                              const RadianceGrid& radiance) {
+  const Volume d = uploadDensity(density);
+  const Volume r = uploadRadiance(radiance);
+  return integrate(scene, d, r, nullptr);
+}
+
+Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
+                              StageTimer* timer, int* sliceCount) {
+  context();
+  const std::string key = raySteps_ ? "slice marcher (ray steps)" : "slice marcher";
+  const Program& program = cachedProgram(key, [&] {
+    return graphicsProgram(
+        {"fullscreen.vert.glsl"}, {"common.glsl", "slice_march.frag.glsl"},
+        raySteps_ ? std::vector<std::string>{"SL_RAY_STEPS"} : std::vector<std::string>{}, key);
+  });
+  const Camera& cam = scene.camera;
+  const auto gen = cam.rayGenerator();
+  const Medium& m = scene.medium;
+  const int w = cam.width, h = cam.height;
+  const Texture target = Texture::make2D(GL_RGBA32F, w, h, "slice marcher image");
+  const Framebuffer fbo("slice marcher target");
+  glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0);
+  if (glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GpuError("slice marcher: RGBA32F image is not a complete framebuffer");
+  const VertexArray vao("attribute-less");
+  const TracingInputs inputs(scene, density, 0.0f);
+
+  // View-depth range of the box (distance along the forward axis from the eye).
+  const Box& b = density.bounds;
+  float zmin = kInfinity, zmax = -kInfinity;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 p((c & 1) ? b.max.x : b.min.x, (c & 2) ? b.max.y : b.min.y,
+                 (c & 4) ? b.max.z : b.min.z);
+    const float z = glm::dot(p - gen.origin, gen.forward);
+    zmin = std::min(zmin, z);
+    zmax = std::max(zmax, z);
+  }
+  zmin = std::max(zmin, 0.0f);
+  const int n = zmax > zmin && m.sigmaT > 0.0f
+                    ? std::max(1, int(std::ceil((zmax - zmin) / settings_.step)))
+                    : 0;
+  const float dz = n > 0 ? (zmax - zmin) / float(n) : 0.0f;
+  // Ray-step layers: enough for the longest chord through the box.
+  const int layers = m.sigmaT > 0.0f
+                         ? std::max(1, int(std::ceil(glm::length(b.extent()) / settings_.step)) + 1)
+                         : 0;
+  if (sliceCount) *sliceCount = raySteps_ ? layers : n;
+  {
+    ScopedGpuTimer t(timer, "slice march");
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+    glViewport(0, 0, w, h);
+    const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
+    glClearBufferfv(GL_COLOR, 0, clear);
+    program.use();
+    inputs.apply(program);
+    glBindTextureUnit(1, radiance.texture.id());
+    setVec3(program, "uRadScale", radiance.indexScale());
+    setVec3(program, "uRadOffset", radiance.indexOffset());
+    setIVec3(program, "uRadDims", radiance.dims);
+    setVec3(program, "uForward", gen.forward);
+    setVec3(program, "uRight", gen.right);
+    setVec3(program, "uUp", gen.up);
+    glUniform2f(program.uniform("uTanHalf"), gen.sx, gen.sy);
+    glUniform2f(program.uniform("uSize"), float(w), float(h));
+    glUniform1f(program.uniform("uAlbedo"), m.albedo);
+    const GLint nearLoc = program.uniform("uDepthNear"), farLoc = program.uniform("uDepthFar");
+    glBindVertexArray(vao.id());
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_SCISSOR_TEST);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    // rgb: dst = src + a·dst (paper Sec. 6); alpha: dst = a·dst keeps the transmittance.
+    glBlendFuncSeparate(GL_ONE, GL_SRC_ALPHA, GL_ZERO, GL_SRC_ALPHA);
+    if (raySteps_) {
+      glUniform1f(program.uniform("uStep"), settings_.step);
+      const GLint layerLoc = program.uniform("uLayer");
+      for (int k = 0; k < layers; ++k) {
+        glUniform1i(layerLoc, k);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      }
+    } else {
+      for (int k = n - 1; k >= 0; --k) {
+        glUniform1f(nearLoc, zmin + float(k) * dz);
+        glUniform1f(farLoc, k == n - 1 ? zmax : zmin + float(k + 1) * dz);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      }
+    }
+    glDisable(GL_BLEND);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+  checkGl("slice march");
+  std::vector<float> rgba(size_t(w) * h * 4);
+  glGetTextureImage(target.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                    rgba.data());
+  checkGl("slice march read-back");
+  Image img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float* p = &rgba[(size_t(y) * w + x) * 4];
+      img.at(x, y) = Vec3(p[0], p[1], p[2]);
+    }
+  return img;
+}
+
+}  // namespace scatterlab::gpu

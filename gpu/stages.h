@@ -1,0 +1,104 @@
+#pragma once
+/// GL variants of the pipeline stages (DESIGN.md §3), behind the interfaces of core/stages.h
+/// and registered by name in gpu/register.cpp:
+///   radiance evaluator "volume-tracer-gpu", reconstructions "gradient-gpu" and
+///   "per-voxel-gpu", integrator "slice-marcher".
+/// The interface methods take and return host data (they upload and read back), so one test
+/// body serves the CPU and GPU variants. The Volume overloads keep data on the GPU for whole
+/// pipelines. Every member function needs a GL context (gpu::context(), created on demand);
+/// constructors do not.
+
+#include <span>
+
+#include "core/stages.h"
+#include "gpu/timer.h"
+#include "gpu/volume.h"
+#include "render/per_voxel.h"
+#include "render/ray_marcher.h"
+
+namespace scatterlab::gpu {
+
+/// Buffers and uniforms every tracing shader (common.glsl) needs: lights SSBO at binding 0,
+/// density on texture unit 0, phase, σt, Δ1, eye. Needs a current context.
+class TracingInputs {
+ public:
+  TracingInputs(const Scene& scene, const Volume& density, float delta1);
+  /// Binds the buffers and texture and sets the uniforms of `program` (which must be in use).
+  void apply(const Program& program) const;
+
+ private:
+  const Scene& scene_;
+  const Volume& density_;
+  float delta1_;
+  Buffer lights_;
+};
+
+/// S and ∇S at every sample in one compute dispatch (GPU twin of the CPU volume tracer):
+/// S(x) = SourceRadiance(x, towards the camera position), ∇S by central differences with step
+/// delta2 along each world axis, each offset point with its own view direction.
+class VolumeTracerGpu : public RadianceEvaluator {
+ public:
+  /// delta1: tracing step towards the lights; delta2: central-difference step (world units).
+  VolumeTracerGpu(float delta1, float delta2) : delta1_(delta1), delta2_(delta2) {}
+  void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
+                bool gradients) override;
+  void evaluate(const Scene& scene, const Volume& density, std::span<RadianceSample> samples,
+                bool gradients, StageTimer* timer);
+
+ private:
+  float delta1_, delta2_;
+};
+
+/// Radiance splatting (paper Sec. 4, Eq. 4) by rasterisation: for each z slice of the output
+/// volume, one quad per sample bounding its valid sphere's cut, blending
+/// (W·(S_j + (x − x_j)·∇S_j), W), W = R_j/‖x − x_j‖, into an RGBA32F layer; then a compute
+/// pass normalises into the source-radiance volume. Voxels no sphere covers get S = 0.
+class GradientSplatGpu : public Reconstruction {
+ public:
+  ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
+                                  std::span<const RadianceSample> samples,
+                                  RadianceGrid& out) override;
+  /// Splats into a new volume over `bounds` with `dims`.
+  Volume reconstruct(const Volume& density, std::span<const RadianceSample> samples,
+                     const Box& bounds, IVec3 dims, ReconstructionStats* stats, StageTimer* timer);
+};
+
+/// The per-voxel baseline on the GPU (twin of buildPerVoxelRadiance): S traced at every voxel
+/// centre in one compute dispatch, empty neighbourhoods skipped. As a Reconstruction it
+/// ignores the samples.
+class PerVoxelGpu : public Reconstruction {
+ public:
+  explicit PerVoxelGpu(float delta1) : delta1_(delta1) {}
+  ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
+                                  std::span<const RadianceSample> samples,
+                                  RadianceGrid& out) override;
+  Volume build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
+               PerVoxelStats* stats, StageTimer* timer);
+
+ private:
+  float delta1_;
+};
+
+/// Slice-based ray marching (paper Sec. 6): slabs of view depth perpendicular to the camera's
+/// forward axis, thickness `settings.step`, drawn far to near with blending
+/// GL_ONE / GL_SRC_ALPHA; per pixel each slab's piece of the ray, clipped to the box, is one
+/// step of the CPU marcher's formula (rgb = Ω(1 − a)S, a = exp(−σt·D·Δt)), and the framebuffer
+/// starts as the background. minTransmittance is not used (there is no early exit).
+/// With `raySteps`, layer k is instead step n−1−k of each pixel's own ray (the CPU marcher's
+/// sample points exactly, composited the same way): it matches the CPU image where the planar
+/// slabs' different sample points matter (a point light inside the medium).
+class SliceMarcher : public Integrator {
+ public:
+  explicit SliceMarcher(MarchSettings settings, bool raySteps = false)
+      : settings_(settings), raySteps_(raySteps) {}
+  Image integrate(const Scene& scene, const DensityGrid& density,
+                  const RadianceGrid& radiance) override;
+  Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
+                  StageTimer* timer, int* slices = nullptr);
+
+ private:
+  MarchSettings settings_;
+  bool raySteps_;
+};
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,136 @@
+#include "gpu/volume.h"
+
+#include <vector>
+
+#include "core/error.h"
+#include "gpu/context.h"
+#include "gpu/shaders.h"
+
+namespace scatterlab::gpu {
+
+Volume uploadDensity(const DensityGrid& g) {
+  context();
+  Volume v;
+  v.bounds = g.bounds();
+  v.dims = g.dims();
+  v.texture = Texture::make3D(GL_R32F, v.dims.x, v.dims.y, v.dims.z, "density volume");
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTextureSubImage3D(v.texture.id(), 0, 0, 0, 0, v.dims.x, v.dims.y, v.dims.z, GL_RED, GL_FLOAT,
+                      g.data().data());
+  checkGl("density upload");
+  return v;
+}
+
+Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label) {
+  context();
+  Volume v;
+  v.bounds = bounds;
+  v.dims = dims;
+  v.texture = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, label);
+  return v;
+}
+
+Volume uploadRadiance(const RadianceGrid& g) {
+  Volume v = makeRadianceVolume(g.bounds(), g.dims(), "radiance volume");
+  // RGB32F would do, but RGBA32F is the image format the compute passes write.
+  std::vector<float> rgba(g.size() * 4);
+  for (size_t i = 0; i < g.size(); ++i) {
+    rgba[4 * i] = g.data()[i].x;
+    rgba[4 * i + 1] = g.data()[i].y;
+    rgba[4 * i + 2] = g.data()[i].z;
+    rgba[4 * i + 3] = 0.0f;
+  }
+  glTextureSubImage3D(v.texture.id(), 0, 0, 0, 0, v.dims.x, v.dims.y, v.dims.z, GL_RGBA, GL_FLOAT,
+                      rgba.data());
+  checkGl("radiance upload");
+  return v;
+}
+
+DensityGrid readDensity(const Volume& v) {
+  context();
+  DensityGrid g(v.bounds, v.dims);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glGetTextureImage(v.texture.id(), 0, GL_RED, GL_FLOAT, GLsizei(g.size() * sizeof(float)),
+                    g.data().data());
+  checkGl("density read-back");
+  return g;
+}
+
+RadianceGrid readRadiance(const Volume& v) {
+  context();
+  RadianceGrid g(v.bounds, v.dims);
+  std::vector<float> rgba(g.size() * 4);
+  glGetTextureImage(v.texture.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                    rgba.data());
+  checkGl("radiance read-back");
+  for (size_t i = 0; i < g.size(); ++i)
+    g.data()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+  return g;
+}
+
+Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
+                      StageTimer* timer) {
+  context();
+  const Program& program = cachedProgram("density splat", [] {
+    return graphicsProgram({"density_splat.vert.glsl"}, {"density_splat.frag.glsl"}, {},
+                           "density splat");
+  });
+  Volume v;
+  v.bounds = bounds;
+  v.dims = dims;
+  v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (splatted)");
+  std::vector<float> packed;
+  packed.reserve(blobs.size() * 8);
+  for (const GaussianBlob& b : blobs)
+    packed.insert(packed.end(), {b.center.x, b.center.y, b.center.z, b.radius, b.weight, 0, 0, 0});
+  const Buffer blobBuf(packed.size() * sizeof(float), packed.data(), 0, "gaussian blobs");
+  const Framebuffer fbo("density splat target");
+  const VertexArray vao("attribute-less");
+  const Vec3 cell = v.cellSize();
+
+  ScopedGpuTimer t(timer, "density splat");
+  program.use();
+  glUniform3fv(program.uniform("uGridMin"), 1, &bounds.min.x);
+  glUniform3fv(program.uniform("uGridCell"), 1, &cell.x);
+  glUniform3i(program.uniform("uGridDims"), dims.x, dims.y, dims.z);
+  glUniform1f(program.uniform("uCull"), GaussianDensity::kCullRadius);
+  const GLint sliceLoc = program.uniform("uSliceZ");
+  blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+  glBindVertexArray(vao.id());
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+  glViewport(0, 0, dims.x, dims.y);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFunc(GL_ONE, GL_ONE);
+  const float zero[4] = {0, 0, 0, 0};
+  for (int k = 0; k < dims.z; ++k) {
+    glNamedFramebufferTextureLayer(fbo.id(), GL_COLOR_ATTACHMENT0, v.texture.id(), 0, k);
+    if (k == 0 &&
+        glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GpuError("density splat: R32F 3D texture layer is not a complete framebuffer");
+    glClearBufferfv(GL_COLOR, 0, zero);
+    glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);
+    if (!blobs.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(blobs.size()));
+  }
+  glDisable(GL_BLEND);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  checkGl("density splat");
+  return v;
+}
+
+Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted) {
+  const Medium& m = scene.medium;
+  if (const auto* g = dynamic_cast<const GaussianDensity*>(m.density.get())) {
+    if (splatted) *splatted = true;
+    return splatGaussians(g->blobs(), m.bounds, m.resolution, timer);
+  }
+  if (splatted) *splatted = false;
+  DensityGrid grid(m.bounds, m.resolution);
+  m.density->build(grid);
+  ScopedGpuTimer t(timer, "density upload");
+  return uploadDensity(grid);
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,47 @@
+#pragma once
+/// Volumes on the GPU: 3D textures over the medium box with the cell-centre convention of
+/// core/grid.h, their upload and read-back, and density construction by splatting (paper
+/// Sec. 6). Everything here needs a current context (gpu::context()).
+
+#include <span>
+
+#include "core/grid.h"
+#include "core/scene.h"
+#include "gpu/gl.h"
+#include "gpu/timer.h"
+#include "media/procedural.h"
+
+namespace scatterlab::gpu {
+
+/// A 3D texture over `bounds`: voxel i's centre at bounds.min + (i + ½)·cell, GL_LINEAR with
+/// CLAMP_TO_EDGE (so lookups match Grid3::sample inside the box). Density volumes are R32F,
+/// radiance volumes RGBA32F (rgb = S, a unused).
+struct Volume {
+  Texture texture;
+  Box bounds;
+  IVec3 dims{0};
+
+  Vec3 cellSize() const { return bounds.extent() / Vec3(dims); }
+  Vec3 indexScale() const { return Vec3(1.0f) / cellSize(); }
+  Vec3 indexOffset() const { return -bounds.min / cellSize() - 0.5f; }
+};
+
+Volume uploadDensity(const DensityGrid& grid);
+Volume uploadRadiance(const RadianceGrid& grid);
+/// Read back to host memory (waits for the GPU).
+DensityGrid readDensity(const Volume& v);
+RadianceGrid readRadiance(const Volume& v);
+/// An empty RGBA32F radiance volume.
+Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label);
+
+/// Density construction by splatting (paper Sec. 6; GPU twin of GaussianDensity::build): for
+/// each z slice, one quad per blob bounding the blob's culling sphere (3r) cut by the slice,
+/// blended additively (in blob order) into that layer of an R32F 3D texture.
+Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
+                      StageTimer* timer = nullptr);
+
+/// The scene's density volume at medium.resolution: splatted on the GPU when the medium is a
+/// sum of Gaussians, else built on the CPU and uploaded. `splatted` reports which.
+Volume buildDensity(const Scene& scene, StageTimer* timer = nullptr, bool* splatted = nullptr);
+
+}  // namespace scatterlab::gpu
