@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "media/dense_grid.h"
 #include "media/procedural.h"
+#include "media/vdb.h"
 
 namespace scatterlab {
 namespace {
@@ -38,12 +39,14 @@ std::unique_ptr<DensityModel> makeHeight(Params& p, const LoadContext& ctx) {
 std::unique_ptr<DensityModel> makeGrid(Params& p, const LoadContext& ctx) {
   const Vec3 dv = p.vec3("dims", std::nullopt, Interval::closed(1, 4096));
   const IVec3 dims(dv);
-  if (Vec3(dims) != dv) p.fail("dims", "expected 3 integers, got " + describeValue(p.json()["dims"]));
+  if (Vec3(dims) != dv)
+    p.fail("dims", "expected 3 integers, got " + describeValue(p.json()["dims"]));
   if ((long long)dims.x * dims.y * dims.z > kMaxGridVoxels)
     p.fail("dims", "more than " + std::to_string(kMaxGridVoxels) + " voxels (512^3)");
   if (!ctx.mediumBounds) p.fail("type", "'grid' needs medium.bounds");
   const bool hasValues = p.has("values"), hasFile = p.has("file");
-  if (hasValues == hasFile) p.fail("values", "give exactly one of 'values' (inline) or 'file' (raw float32)");
+  if (hasValues == hasFile)
+    p.fail("values", "give exactly one of 'values' (inline) or 'file' (raw float32)");
   DensityGrid g(*ctx.mediumBounds, dims);
   std::string source;
   if (hasValues) {
@@ -72,14 +75,27 @@ std::unique_ptr<DensityModel> makeGrid(Params& p, const LoadContext& ctx) {
   return std::make_unique<DenseGridDensity>(std::move(g), source);
 }
 
+std::unique_ptr<DensityModel> makeVdb(Params& p, const LoadContext& ctx) {
+  const std::string file = ctx.resolve(p.string("file")).string();
+  const std::string grid = p.string("grid", std::string("density"));
+  try {
+    return VdbDensity::load(file, grid);
+  } catch (const ConfigError& e) {
+    // Name the scene key too: the grid is chosen by `grid`.
+    throw ConfigError("'" + p.keyPath("grid") + "': " + e.what());
+  }
+}
+
 }  // namespace
 
 void registerMediaModels() {
+  ensureOpenVdbInitialized();
   auto& r = densityModels();
   r.add("uniform", makeUniform);
   r.add("gaussians", makeGaussians);
   r.add("height", makeHeight);
   r.add("grid", makeGrid);
+  r.add("vdb", makeVdb);
 }
 
 }  // namespace scatterlab
