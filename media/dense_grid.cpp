@@ -30,8 +30,8 @@ std::vector<float> readRawFloats(const std::string& path, IVec3 dims) {
   const std::uintmax_t expected = std::uintmax_t(dims.x) * dims.y * dims.z * sizeof(float);
   const std::uintmax_t size = std::filesystem::file_size(path);
   if (size != expected)
-    throw IoError("raw density file '" + path + "' has " + std::to_string(size) +
-                  " bytes; dims " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
+    throw IoError("raw density file '" + path + "' has " + std::to_string(size) + " bytes; dims " +
+                  std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
                   std::to_string(dims.z) + " of float32 need " + std::to_string(expected));
   std::vector<float> v(size_t(dims.x) * dims.y * dims.z);
   std::ifstream in(path, std::ios::binary);

@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "media/dense_grid.h"
 #include "media/procedural.h"
+#include "media/sog.h"
 #include "media/vdb.h"
 
 namespace scatterlab {
@@ -86,6 +87,32 @@ std::unique_ptr<DensityModel> makeVdb(Params& p, const LoadContext& ctx) {
   }
 }
 
+std::unique_ptr<DensityModel> makeSog(Params& p, const LoadContext& ctx) {
+  const bool hasFile = p.has("file"), hasFrames = p.has("frames");
+  if (hasFile == hasFrames)
+    p.fail("file",
+           "give exactly one of 'file' (one .sog model) or 'frames' (a list of .sog "
+           "files, one per frame, chosen by 'time' and 'fps')");
+  if (hasFile) {
+    const std::string file = ctx.resolve(p.string("file")).string();
+    return std::make_unique<SogDensity>(readSog(file), file);
+  }
+  const Json& frames = p.raw("frames");
+  if (!frames.is_array() || frames.empty())
+    p.fail("frames", "expected a non-empty array of file names, got " + describeValue(frames));
+  for (size_t i = 0; i < frames.size(); ++i)
+    if (!frames[i].is_string())
+      p.fail("frames", "element " + std::to_string(i) + " = " + describeValue(frames[i]) +
+                           " is not a file name (string)");
+  const double time = p.number("time", 0.0, Interval::atLeast(0));
+  const double fps = p.number("fps", 24.0, Interval::above(0));
+  // Frame f covers times [f/fps, (f+1)/fps); past the last frame the last one holds.
+  const size_t frame = std::min(frames.size() - 1, size_t(std::floor(time * fps + 1e-9)));
+  const std::string file = ctx.resolve(frames[frame].get<std::string>()).string();
+  return std::make_unique<SogDensity>(readSog(file),
+                                      file + " (frame " + std::to_string(frame) + ")");
+}
+
 }  // namespace
 
 void registerMediaModels() {
@@ -96,6 +123,7 @@ void registerMediaModels() {
   r.add("height", makeHeight);
   r.add("grid", makeGrid);
   r.add("vdb", makeVdb);
+  r.add("sog", makeSog);
 }
 
 }  // namespace scatterlab
