@@ -39,7 +39,8 @@ int runFit(const FitArgs& a) {
   if (sequence && a.output.find("{frame}") == std::string::npos)
     throw ConfigError("fit: with " + std::to_string(a.inputs.size()) +
                       " input frames, -o must contain '{frame}' (replaced by 0000, 0001, ...); "
-                      "got '" + a.output + "'");
+                      "got '" +
+                      a.output + "'");
   // Check every input and output before the (slow) fitting, so a bad argument costs nothing.
   std::vector<std::string> outputs;
   for (size_t f = 0; f < a.inputs.size(); ++f) {
@@ -77,10 +78,11 @@ int runFit(const FitArgs& a) {
                 100.0 * double(m.fileBytes()) / denseBytes, denseBytes);
     std::printf("  rel. L2 D~       %.5f\n", rep.relL2Gaussians);
     std::printf("  rel. L2 D~ + F   %.5f\n", rep.relL2Model);
-    std::printf("  time             %.2f s (placement %.2f, refinement %.2f, weights %.2f, "
-                "residual %.2f)\n",
-                rep.secondsTotal, rep.secondsPlacement, rep.secondsRefinement, rep.secondsWeights,
-                rep.secondsResidual);
+    std::printf(
+        "  time             %.2f s (placement %.2f, refinement %.2f, weights %.2f, "
+        "residual %.2f)\n",
+        rep.secondsTotal, rep.secondsPlacement, rep.secondsRefinement, rep.secondsWeights,
+        rep.secondsResidual);
   }
   pending.commit();
   return 0;
@@ -101,8 +103,7 @@ Action addFit(CLI::App& app) {
   c->add_option("-n,--gaussians", a->gaussians, "Number of Gaussians")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
-  c->add_option("--threshold", a->threshold,
-                "Residual kept where |F| > threshold * max density")
+  c->add_option("--threshold", a->threshold, "Residual kept where |F| > threshold * max density")
       ->check(CLI::Range(0.0, 0.999))
       ->capture_default_str();
   c->add_option("--bits", a->bits, "Residual quantisation bits (8 or 16)")

@@ -47,9 +47,10 @@ TEST(MediaCli, FitWritesModelAndReportsErrors) {
   testing::TempDir tmp("cli_fit");
   const std::string out = tmp.file("dragon.sog");
   const CliRun r = run("fit " + kVdb + "dragon_with_xform.vdb -o " + out +
-                    " --gaussians 32 --fit-voxels 4096 --sweeps 1");
+                       " --gaussians 32 --fit-voxels 4096 --sweeps 1");
   ASSERT_EQ(r.code, 0) << r.out;
-  for (const char* key : {"gaussians", "hash entries", "bytes on disk", "rel. L2 D~ ", "rel. L2 D~ + F"})
+  for (const char* key :
+       {"gaussians", "hash entries", "bytes on disk", "rel. L2 D~ ", "rel. L2 D~ + F"})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
   ASSERT_TRUE(std::filesystem::exists(out));
   EXPECT_NO_THROW(readSog(out));
@@ -62,7 +63,7 @@ TEST(MediaCli, FitSequenceWritesEveryFrame) {
   testing::TempDir tmp("cli_fit");
   const std::string v = kVdb + "dragon_with_xform.vdb";
   const CliRun r = run("fit " + v + " " + v + " -o " + tmp.file("f_{frame}.sog") +
-                    " --gaussians 16 --fit-voxels 4096 --sweeps 0");
+                       " --gaussians 16 --fit-voxels 4096 --sweeps 0");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(std::filesystem::exists(tmp.file("f_0000.sog")));
   EXPECT_TRUE(std::filesystem::exists(tmp.file("f_0001.sog")));
