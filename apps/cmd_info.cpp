@@ -9,6 +9,8 @@
 #ifdef SCATTERLAB_HAS_GPU
 #include "gpu/context.h"
 #endif
+#include "media/sog.h"
+#include "media/vdb.h"
 
 namespace scatterlab::cli {
 
@@ -69,6 +71,50 @@ void printGpuInfo() {
 #endif
 }
 
+void printVdbInfo(const std::string& path) {
+  const auto grids = inspectVdb(path);
+  std::printf("OpenVDB file %s: %zu grid(s)\n", path.c_str(), grids.size());
+  for (const VdbGridInfo& g : grids) {
+    std::printf("  grid '%s': %s, %s%s%s\n", g.name.c_str(), g.valueType.c_str(),
+                g.gridClass.c_str(), g.savedAsHalf ? ", saved as half float" : "",
+                g.affine ? "" : ", NON-AFFINE transform");
+    std::printf("    voxel size   [%g %g %g]\n", g.voxelSize.x, g.voxelSize.y, g.voxelSize.z);
+    if (g.empty) {
+      std::printf("    (no active values)\n");
+      continue;
+    }
+    const IVec3 d = g.indexMax - g.indexMin + 1;
+    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x,
+                g.indexMin.y, g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y,
+                d.z);
+    std::printf("    world box    [%g %g %g]..[%g %g %g] (voxel cells, axis-aligned)\n",
+                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z,
+                g.worldBounds.max.x, g.worldBounds.max.y, g.worldBounds.max.z);
+    std::printf("    active       %llu voxels (%llu active tiles, %llu leaf nodes)\n",
+                (unsigned long long)g.activeVoxels, (unsigned long long)g.activeTiles,
+                (unsigned long long)g.leafNodes);
+    if (g.hasValueRange)
+      std::printf("    values       %g .. %g%s\n", g.valueMin, g.valueMax,
+                  g.valueType.rfind("vec", 0) == 0 ? " (length)" : "");
+  }
+}
+
+void printSogInfo(const std::string& path) {
+  const SogModel m = readSog(path);
+  const ResidualHash& h = m.residual;
+  const IVec3 n = h.dims();
+  std::printf("sum-of-Gaussians model %s (format version 1, %zu bytes)\n", path.c_str(),
+              m.fileBytes());
+  std::printf("  gaussians      %zu\n", m.gaussians.size());
+  std::printf("  lattice        [%g %g %g]..[%g %g %g], %dx%dx%d\n", h.bounds().min.x,
+              h.bounds().min.y, h.bounds().min.z, h.bounds().max.x, h.bounds().max.y,
+              h.bounds().max.z, n.x, n.y, n.z);
+  std::printf("  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
+              "threshold %g\n",
+              h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(),
+              double(h.step()), double(m.threshold));
+}
+
 Action addInfo(CLI::App& app) {
   auto file = std::make_shared<std::string>();
   auto gpuFlag = std::make_shared<bool>(false);
@@ -98,6 +144,8 @@ const std::vector<InfoHandler>& infoHandlers() {
   static const std::vector<InfoHandler> h = {
       {".json", "scene", printSceneInfo},
       {".exr", "OpenEXR image", printImageInfo},
+      {".vdb", "OpenVDB volume", printVdbInfo},
+      {".sog", "sum-of-Gaussians model", printSogInfo},
   };
   return h;
 }

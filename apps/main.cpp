@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   add(scatterlab::cli::addRender);
   add(scatterlab::cli::addCompare);
   add(scatterlab::cli::addInfo);
+  add(scatterlab::cli::addFit);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -5,21 +5,33 @@
 #include "core/error.h"
 #include "media/dense_grid.h"
 #include "media/procedural.h"
+#include "media/sog.h"
+#include "media/vdb.h"
 
 namespace scatterlab {
 namespace {
 
 const Interval kNonNegative = Interval::atLeast(0);
 
+/// Every procedural model reads `time` (default 0); see docs/media.md for what moves.
+float readTime(Params& p) {
+  return p.real("time", 0.0);
+}
+
 std::unique_ptr<DensityModel> makeUniform(Params& p, const LoadContext&) {
-  return std::make_unique<UniformDensity>(p.real("value", std::nullopt, kNonNegative));
+  const float value = p.real("value", std::nullopt, kNonNegative);
+  const float rate = p.real("rate", 0.0);  // density change per unit time
+  const float time = readTime(p);
+  return std::make_unique<UniformDensity>(std::max(0.0f, value + rate * time));
 }
 
 std::unique_ptr<DensityModel> makeGaussians(Params& p, const LoadContext&) {
   std::vector<GaussianBlob> blobs;
+  const float time = readTime(p);
   for (Params b : p.children("blobs", /*required=*/true)) {
     GaussianBlob g;
-    g.center = b.vec3("center");
+    // Blobs drift with their velocity (world units per unit time).
+    g.center = b.vec3("center") + b.vec3("velocity", Vec3(0.0f)) * time;
     g.radius = b.real("radius", std::nullopt, Interval::above(0));
     g.weight = b.real("weight", 1.0, kNonNegative);
     b.finish();
@@ -31,8 +43,26 @@ std::unique_ptr<DensityModel> makeGaussians(Params& p, const LoadContext&) {
 std::unique_ptr<DensityModel> makeHeight(Params& p, const LoadContext& ctx) {
   const float bottom = p.real("bottom", std::nullopt, kNonNegative);
   const float top = p.real("top", std::nullopt, kNonNegative);
+  const float rate = p.real("rate", 0.0);  // added to both ends per unit time
+  const float time = readTime(p);
   if (!ctx.mediumBounds) p.fail("type", "'height' needs medium.bounds");
-  return std::make_unique<HeightDensity>(*ctx.mediumBounds, bottom, top);
+  return std::make_unique<HeightDensity>(*ctx.mediumBounds, std::max(0.0f, bottom + rate * time),
+                                         std::max(0.0f, top + rate * time));
+}
+
+std::unique_ptr<DensityModel> makeDustyRoom(Params& p, const LoadContext& ctx) {
+  DustyRoomParams d;
+  d.floor = p.real("floor", d.floor, kNonNegative);
+  d.ceiling = p.real("ceiling", d.ceiling, kNonNegative);
+  d.amplitude = p.real("amplitude", d.amplitude, kNonNegative);
+  d.frequency = p.real("frequency", d.frequency, Interval::above(0));
+  d.octaves = int(p.integer("octaves", d.octaves, Interval::closed(0, 8)));
+  d.seed = std::uint32_t(p.integer("seed", 0, Interval::closed(0, 4294967295.0)));
+  d.time = readTime(p);
+  d.wind = p.vec3("wind", d.wind);
+  if (!ctx.mediumBounds)
+    p.fail("type", "'dusty-room' needs medium.bounds (floor = min.y, ceiling = max.y)");
+  return std::make_unique<DustyRoomDensity>(*ctx.mediumBounds, d);
 }
 
 std::unique_ptr<DensityModel> makeGrid(Params& p, const LoadContext& ctx) {
@@ -74,14 +104,55 @@ std::unique_ptr<DensityModel> makeGrid(Params& p, const LoadContext& ctx) {
   return std::make_unique<DenseGridDensity>(std::move(g), source);
 }
 
+std::unique_ptr<DensityModel> makeVdb(Params& p, const LoadContext& ctx) {
+  const std::string file = ctx.resolve(p.string("file")).string();
+  const std::string grid = p.string("grid", std::string("density"));
+  try {
+    return VdbDensity::load(file, grid);
+  } catch (const ConfigError& e) {
+    // Name the scene key too: the grid is chosen by `grid`.
+    throw ConfigError("'" + p.keyPath("grid") + "': " + e.what());
+  }
+}
+
+std::unique_ptr<DensityModel> makeSog(Params& p, const LoadContext& ctx) {
+  const bool hasFile = p.has("file"), hasFrames = p.has("frames");
+  if (hasFile == hasFrames)
+    p.fail("file",
+           "give exactly one of 'file' (one .sog model) or 'frames' (a list of .sog "
+           "files, one per frame, chosen by 'time' and 'fps')");
+  if (hasFile) {
+    const std::string file = ctx.resolve(p.string("file")).string();
+    return std::make_unique<SogDensity>(readSog(file), file);
+  }
+  const Json& frames = p.raw("frames");
+  if (!frames.is_array() || frames.empty())
+    p.fail("frames", "expected a non-empty array of file names, got " + describeValue(frames));
+  for (size_t i = 0; i < frames.size(); ++i)
+    if (!frames[i].is_string())
+      p.fail("frames", "element " + std::to_string(i) + " = " + describeValue(frames[i]) +
+                           " is not a file name (string)");
+  const double time = p.number("time", 0.0, Interval::atLeast(0));
+  const double fps = p.number("fps", 24.0, Interval::above(0));
+  // Frame f covers times [f/fps, (f+1)/fps); past the last frame the last one holds.
+  const size_t frame = std::min(frames.size() - 1, size_t(std::floor(time * fps + 1e-9)));
+  const std::string file = ctx.resolve(frames[frame].get<std::string>()).string();
+  return std::make_unique<SogDensity>(readSog(file),
+                                      file + " (frame " + std::to_string(frame) + ")");
+}
+
 }  // namespace
 
 void registerMediaModels() {
+  ensureOpenVdbInitialized();
   auto& r = densityModels();
   r.add("uniform", makeUniform);
   r.add("gaussians", makeGaussians);
   r.add("height", makeHeight);
   r.add("grid", makeGrid);
+  r.add("vdb", makeVdb);
+  r.add("sog", makeSog);
+  r.add("dusty-room", makeDustyRoom);
 }
 
 }  // namespace scatterlab

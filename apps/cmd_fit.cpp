@@ -1,0 +1,123 @@
+/// `scatterlab fit IN.vdb [IN2.vdb ...] -o OUT.sog`: sum-of-Gaussians + residual-hash models.
+
+#include <cstdio>
+#include <filesystem>
+
+#include "api/scatterlab.h"
+#include "apps/commands.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "media/sog_fit.h"
+#include "media/vdb.h"
+
+namespace scatterlab::cli {
+
+namespace {
+
+struct FitArgs {
+  std::vector<std::string> inputs;
+  std::string output;
+  std::string grid = "density";
+  int gaussians = 512;
+  double threshold = SogFitOptions{}.threshold;
+  int bits = 8;
+  long long fitVoxels = SogFitOptions{}.fitVoxels;
+  int sweeps = SogFitOptions{}.sweeps;
+  bool verbose = false;
+};
+
+std::string frameName(const std::string& pattern, size_t frame) {
+  char num[16];
+  std::snprintf(num, sizeof num, "%04zu", frame);
+  std::string s = pattern;
+  s.replace(s.find("{frame}"), 7, num);
+  return s;
+}
+
+int runFit(const FitArgs& a) {
+  const bool sequence = a.inputs.size() > 1;
+  if (sequence && a.output.find("{frame}") == std::string::npos)
+    throw ConfigError("fit: with " + std::to_string(a.inputs.size()) +
+                      " input frames, -o must contain '{frame}' (replaced by 0000, 0001, ...); "
+                      "got '" +
+                      a.output + "'");
+  // Check every input and output before the (slow) fitting, so a bad argument costs nothing.
+  std::vector<std::string> outputs;
+  for (size_t f = 0; f < a.inputs.size(); ++f) {
+    checkReadableFile(a.inputs[f], "VDB file");
+    outputs.push_back(sequence ? frameName(a.output, f) : a.output);
+    checkWritablePath(outputs.back());
+  }
+  SogFitOptions o;
+  o.gaussians = a.gaussians;
+  o.threshold = a.threshold;
+  o.bits = a.bits;
+  o.fitVoxels = a.fitVoxels;
+  o.sweeps = a.sweeps;
+  if (a.verbose) o.log = [](const std::string& s) { std::printf("  %s\n", s.c_str()); };
+  PendingOutputs pending;  // all frames appear together, or none
+  std::vector<GaussianBlob> previous;
+  for (size_t f = 0; f < a.inputs.size(); ++f) {
+    const DensityGrid D = loadVdbAsDense(a.inputs[f], a.grid);
+    const IVec3 n = D.dims();
+    // Frames after the first start from the previous frame's Gaussians (temporal coherence).
+    o.init = previous.empty() ? nullptr : &previous;
+    SogFitReport rep;
+    const SogModel m = fitSog(D, o, &rep);
+    previous = m.gaussians;
+    pending.stage(outputs[f], [&](const std::string& tmp) { writeSog(tmp, m); });
+    const double denseBytes = double(D.size()) * sizeof(float);
+    std::printf("%s -> %s\n", a.inputs[f].c_str(), outputs[f].c_str());
+    std::printf("  input grid       %dx%dx%d (%.0f cells, %.1f MB as dense float32)\n", n.x, n.y,
+                n.z, double(D.size()), denseBytes / 1e6);
+    std::printf("  gaussians        %d (working grid %dx%dx%d)\n", rep.gaussians, rep.fitDims.x,
+                rep.fitDims.y, rep.fitDims.z);
+    std::printf("  hash entries     %zu (%d-bit, |F| > %g)\n", rep.hashEntries, a.bits,
+                double(m.threshold));
+    std::printf("  bytes on disk    %zu (%.2f%% of the dense grid's %.0f)\n", m.fileBytes(),
+                100.0 * double(m.fileBytes()) / denseBytes, denseBytes);
+    std::printf("  rel. L2 D~       %.5f\n", rep.relL2Gaussians);
+    std::printf("  rel. L2 D~ + F   %.5f\n", rep.relL2Model);
+    std::printf(
+        "  time             %.2f s (placement %.2f, refinement %.2f, weights %.2f, "
+        "residual %.2f)\n",
+        rep.secondsTotal, rep.secondsPlacement, rep.secondsRefinement, rep.secondsWeights,
+        rep.secondsResidual);
+  }
+  pending.commit();
+  return 0;
+}
+
+}  // namespace
+
+Action addFit(CLI::App& app) {
+  auto a = std::make_shared<FitArgs>();
+  CLI::App* c = app.add_subcommand(
+      "fit", "Fit a sum-of-Gaussians + residual-hash model (.sog) to OpenVDB density frames");
+  c->add_option("inputs", a->inputs, "Input .vdb file(s); several = a sequence of frames")
+      ->required();
+  c->add_option("-o,--output", a->output,
+                "Output .sog file; for a sequence a pattern with {frame} (0000, 0001, ...)")
+      ->required();
+  c->add_option("--grid", a->grid, "Name of the float grid to read")->capture_default_str();
+  c->add_option("-n,--gaussians", a->gaussians, "Number of Gaussians")
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
+  c->add_option("--threshold", a->threshold, "Residual kept where |F| > threshold * max density")
+      ->check(CLI::Range(0.0, 0.999))
+      ->capture_default_str();
+  c->add_option("--bits", a->bits, "Residual quantisation bits (8 or 16)")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  c->add_option("--fit-voxels", a->fitVoxels,
+                "Cell budget of the working grid for placement and refinement")
+      ->check(CLI::Range(8LL, 512LL * 512 * 512))
+      ->capture_default_str();
+  c->add_option("--sweeps", a->sweeps, "Levenberg-Marquardt refinement sweeps")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
+  c->add_flag("-v,--verbose", a->verbose, "Print the fitting steps");
+  return [a]() { return runFit(*a); };
+}
+
+}  // namespace scatterlab::cli

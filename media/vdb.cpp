@@ -1,0 +1,326 @@
+#include "media/vdb.h"
+
+#include <tbb/parallel_for.h>
+
+#include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Count.h>
+#include <openvdb/tools/Dense.h>
+#include <openvdb/tools/Interpolation.h>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace scatterlab {
+
+void ensureOpenVdbInitialized() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+namespace {
+
+using openvdb::CoordBBox;
+using openvdb::FloatGrid;
+using openvdb::GridBase;
+using openvdb::Vec3d;
+
+bool startsWithVdbMagic(const std::string& path) {
+  // OpenVDB files start with the 64-bit magic number 0x56444220 ("VDB " little endian).
+  std::ifstream in(path, std::ios::binary);
+  unsigned char b[8] = {};
+  if (!in.read(reinterpret_cast<char*>(b), 8)) return false;
+  return b[0] == 0x20 && b[1] == 0x42 && b[2] == 0x44 && b[3] == 0x56;
+}
+
+/// Opens and fully reads every grid (no delayed loading, so a truncated file fails here and
+/// not later inside a sampler).
+openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
+  ensureOpenVdbInitialized();
+  checkReadableFile(path, "VDB file");
+  if (!startsWithVdbMagic(path))
+    throw IoError("'" + path + "' is not an OpenVDB file (no VDB magic number at its start)");
+  try {
+    // io::Stream over an ifstream that throws on a short read: OpenVDB itself does not check
+    // every read, and a truncated file would otherwise load as silently incomplete grids.
+    std::ifstream in(path, std::ios::binary);
+    in.exceptions(std::ios::failbit | std::ios::badbit);
+    openvdb::io::Stream stream(in, /*delayLoad=*/false);
+    openvdb::GridPtrVecPtr grids = stream.getGrids();
+    if (!grids) throw IoError("cannot read the grids of VDB file '" + path + "'");
+    return grids;
+  } catch (const openvdb::Exception& e) {
+    throw IoError("cannot read VDB file '" + path + "' (truncated or corrupt?): " + e.what());
+  } catch (const std::ios_base::failure& e) {
+    throw IoError("cannot read VDB file '" + path + "' (truncated or corrupt?): " + e.what());
+  } catch (const std::bad_alloc&) {
+    throw IoError("cannot read VDB file '" + path + "': corrupt sizes (allocation failed)");
+  }
+}
+
+std::string className(openvdb::GridClass c) {
+  switch (c) {
+    case openvdb::GRID_FOG_VOLUME:
+      return "fog volume";
+    case openvdb::GRID_LEVEL_SET:
+      return "level set";
+    case openvdb::GRID_STAGGERED:
+      return "staggered";
+    default:
+      return "unknown";
+  }
+}
+
+Box worldBoxOf(const openvdb::math::Transform& xf, const CoordBBox& bbox) {
+  // Cells of the index box: half a voxel beyond the outermost voxel centres.
+  const Vec3d lo = bbox.min().asVec3d() - 0.5, hi = bbox.max().asVec3d() + 0.5;
+  Vec3d wmin(std::numeric_limits<double>::max()), wmax(-std::numeric_limits<double>::max());
+  for (int c = 0; c < 8; ++c) {
+    const Vec3d p((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+    const Vec3d w = xf.indexToWorld(p);
+    wmin = openvdb::math::minComponent(wmin, w);
+    wmax = openvdb::math::maxComponent(wmax, w);
+  }
+  return Box{Vec3(float(wmin.x()), float(wmin.y()), float(wmin.z())),
+             Vec3(float(wmax.x()), float(wmax.y()), float(wmax.z()))};
+}
+
+VdbGridInfo describeGrid(const GridBase& g) {
+  VdbGridInfo info;
+  info.name = g.getName();
+  info.valueType = g.valueType();
+  info.gridClass = className(g.getGridClass());
+  info.affine = g.transform().isLinear();
+  info.savedAsHalf = g.saveFloatAsHalf();
+  const Vec3d vs = g.voxelSize();
+  info.voxelSize = glm::dvec3(vs.x(), vs.y(), vs.z());
+  const CoordBBox bbox = g.evalActiveVoxelBoundingBox();
+  info.empty = bbox.empty();
+  if (!info.empty) {
+    info.indexMin = IVec3(bbox.min().x(), bbox.min().y(), bbox.min().z());
+    info.indexMax = IVec3(bbox.max().x(), bbox.max().y(), bbox.max().z());
+    info.worldBounds = worldBoxOf(g.transform(), bbox);
+  }
+  info.activeVoxels = g.activeVoxelCount();
+  if (const auto* f = dynamic_cast<const FloatGrid*>(&g)) {
+    info.activeTiles = f->tree().activeTileCount();
+    info.leafNodes = f->tree().leafCount();
+    if (!info.empty) {
+      const auto mm = openvdb::tools::minMax(f->tree());
+      info.hasValueRange = true;
+      info.valueMin = mm.min();
+      info.valueMax = mm.max();
+    }
+  } else if (const auto* d = dynamic_cast<const openvdb::DoubleGrid*>(&g)) {
+    info.activeTiles = d->tree().activeTileCount();
+    info.leafNodes = d->tree().leafCount();
+    if (!info.empty) {
+      const auto mm = openvdb::tools::minMax(d->tree());
+      info.hasValueRange = true;
+      info.valueMin = mm.min();
+      info.valueMax = mm.max();
+    }
+  } else if (const auto* v = dynamic_cast<const openvdb::Vec3SGrid*>(&g)) {
+    info.activeTiles = v->tree().activeTileCount();
+    info.leafNodes = v->tree().leafCount();
+    double lo = std::numeric_limits<double>::max(), hi = -lo;
+    for (auto it = v->cbeginValueOn(); it; ++it) {
+      const double m = it->length();
+      lo = std::min(lo, m);
+      hi = std::max(hi, m);
+    }
+    if (!info.empty) {
+      info.hasValueRange = true;
+      info.valueMin = lo;
+      info.valueMax = hi;
+    }
+  }
+  return info;
+}
+
+Vec3d toVdb(const Vec3& v) {
+  return Vec3d(v.x, v.y, v.z);
+}
+
+}  // namespace
+
+std::vector<VdbGridInfo> inspectVdb(const std::string& path) {
+  const openvdb::GridPtrVecPtr grids = readAllGrids(path);
+  std::vector<VdbGridInfo> out;
+  for (const auto& g : *grids)
+    if (g) out.push_back(describeGrid(*g));
+  return out;
+}
+
+struct VdbDensity::Impl {
+  FloatGrid::Ptr grid;
+};
+
+VdbDensity::~VdbDensity() = default;
+
+std::unique_ptr<VdbDensity> VdbDensity::load(const std::string& path, const std::string& gridName) {
+  const openvdb::GridPtrVecPtr grids = readAllGrids(path);
+  GridBase::Ptr found;
+  std::string names;
+  for (const auto& g : *grids) {
+    if (!g) continue;
+    names += (names.empty() ? "'" : ", '") + g->getName() + "' (" + g->valueType() + ")";
+    if (g->getName() == gridName && !found) found = g;
+  }
+  if (!found)
+    throw ConfigError("VDB file '" + path + "' has no grid named '" + gridName +
+                      "'; grids in the file: " + (names.empty() ? "none" : names));
+  FloatGrid::Ptr fg = openvdb::gridPtrCast<FloatGrid>(found);
+  if (!fg) {
+    if (auto dg = openvdb::gridPtrCast<openvdb::DoubleGrid>(found)) {
+      // Convert to float: the working density volume is float anyway.
+      fg = FloatGrid::create(0.0f);
+      fg->setTransform(dg->transform().copy());
+      fg->setName(dg->getName());
+      fg->setGridClass(dg->getGridClass());
+      auto acc = fg->getAccessor();
+      for (auto it = dg->cbeginValueOn(); it; ++it) {
+        if (it.isVoxelValue())
+          acc.setValue(it.getCoord(), float(*it));
+        else
+          fg->tree().fill(it.getBoundingBox(), float(*it), true);
+      }
+    } else {
+      throw ConfigError("grid '" + gridName + "' of VDB file '" + path +
+                        "' holds values of type '" + found->valueType() +
+                        "'; a density grid must be 'float' or 'double'");
+    }
+  }
+  if (fg->getGridClass() == openvdb::GRID_LEVEL_SET)
+    throw ConfigError("grid '" + gridName + "' of VDB file '" + path +
+                      "' is a level set (signed distance), not a fog-volume density");
+  if (!fg->transform().isLinear())
+    throw ConfigError("grid '" + gridName + "' of VDB file '" + path + "' has a " +
+                      fg->transform().mapType() +
+                      " transform, which is not affine; only linear (affine) index-to-world "
+                      "transforms are supported");
+  std::unique_ptr<VdbDensity> d(new VdbDensity());
+  d->impl_ = std::make_unique<Impl>();
+  d->impl_->grid = fg;
+  d->info_ = describeGrid(*fg);
+  d->path_ = path;
+  if (d->info_.empty)
+    throw ConfigError("grid '" + gridName + "' of VDB file '" + path + "' has no active voxels");
+  d->bounds_ = d->info_.worldBounds;
+  return d;
+}
+
+float VdbDensity::eval(const Vec3& x) const {
+  // The tree itself is the accessor here: thread-safe, no accessor registration per call.
+  const FloatGrid& g = *impl_->grid;
+  openvdb::tools::GridSampler<FloatGrid::TreeType, openvdb::tools::BoxSampler> s(g.constTree(),
+                                                                                 g.transform());
+  return std::max(0.0f, s.wsSample(toVdb(x)));
+}
+
+void VdbDensity::build(DensityGrid& grid) const {
+  const FloatGrid& g = *impl_->grid;
+  const IVec3 n = grid.dims();
+  tbb::parallel_for(tbb::blocked_range<int>(0, n.z), [&](const tbb::blocked_range<int>& r) {
+    FloatGrid::ConstAccessor acc = g.getConstAccessor();
+    openvdb::tools::GridSampler<decltype(acc), openvdb::tools::BoxSampler> s(acc, g.transform());
+    for (int k = r.begin(); k < r.end(); ++k)
+      for (int j = 0; j < n.y; ++j)
+        for (int i = 0; i < n.x; ++i)
+          grid.at(i, j, k) = std::max(0.0f, s.wsSample(toVdb(grid.cellCenter(i, j, k))));
+  });
+}
+
+std::string VdbDensity::describe() const {
+  std::ostringstream os;
+  os << "OpenVDB grid '" << info_.name << "' of " << path_ << " (" << info_.activeVoxels
+     << " active voxels, index box [" << info_.indexMin.x << "," << info_.indexMin.y << ","
+     << info_.indexMin.z << "]..[" << info_.indexMax.x << "," << info_.indexMax.y << ","
+     << info_.indexMax.z << "], values " << info_.valueMin << ".." << info_.valueMax << ")";
+  return os.str();
+}
+
+IVec3 VdbDensity::nativeDims(std::int64_t maxVoxels) const {
+  const double v = std::min({info_.voxelSize.x, info_.voxelSize.y, info_.voxelSize.z});
+  const Vec3 e = bounds_.extent();
+  glm::dvec3 d(e.x / v, e.y / v, e.z / v);
+  for (int a = 0; a < 3; ++a)
+    d[a] = std::abs(d[a] - std::round(d[a])) < 1e-3 ? std::round(d[a]) : std::ceil(d[a]);
+  const double n = d.x * d.y * d.z;
+  if (n > double(maxVoxels)) d = glm::floor(d * std::cbrt(double(maxVoxels) / n));
+  return glm::max(IVec3(d), IVec3(1));
+}
+
+DensityGrid loadVdbAsDense(const std::string& path, const std::string& gridName,
+                           std::int64_t maxVoxels) {
+  const auto vdb = VdbDensity::load(path, gridName);
+  DensityGrid g(*vdb->naturalBounds(), vdb->nativeDims(maxVoxels));
+  vdb->build(g);
+  return g;
+}
+
+namespace {
+
+openvdb::math::Transform::Ptr cellTransform(const Box& bounds, IVec3 dims) {
+  const glm::dvec3 cell = (glm::dvec3(bounds.max) - glm::dvec3(bounds.min)) / glm::dvec3(dims);
+  openvdb::Mat4d m = openvdb::Mat4d::identity();
+  m.setToScale(Vec3d(cell.x, cell.y, cell.z));
+  m.setTranslation(
+      Vec3d(bounds.min.x + 0.5 * cell.x, bounds.min.y + 0.5 * cell.y, bounds.min.z + 0.5 * cell.z));
+  return openvdb::math::Transform::createLinearTransform(m);
+}
+
+void writeGrids(const std::string& path, openvdb::GridBase::Ptr grid) {
+  checkWritablePath(path);
+  writeAtomically(path, [&](const std::string& tmp) {
+    try {
+      openvdb::io::File file(tmp);
+      openvdb::GridPtrVec grids{grid};
+      file.write(grids);
+      file.close();
+    } catch (const openvdb::Exception& e) {
+      throw IoError("cannot write VDB file '" + path + "': " + e.what());
+    }
+  });
+}
+
+}  // namespace
+
+void writeVdb(const std::string& path, const DensityGrid& grid, const std::string& name) {
+  ensureOpenVdbInitialized();
+  const IVec3 n = grid.dims();
+  FloatGrid::Ptr g = FloatGrid::create(0.0f);
+  const CoordBBox bbox(openvdb::Coord(0, 0, 0), openvdb::Coord(n.x - 1, n.y - 1, n.z - 1));
+  // Dense wraps the grid's memory (x fastest, as ours); copyFromDense only reads it.
+  openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(
+      bbox, const_cast<float*>(grid.data().data()));
+  openvdb::tools::copyFromDense(dense, *g, 0.0f);
+  g->setTransform(cellTransform(grid.bounds(), n));
+  g->setName(name);
+  g->setGridClass(openvdb::GRID_FOG_VOLUME);
+  writeGrids(path, g);
+}
+
+void writeVdb(const std::string& path, const RadianceGrid& grid, const std::string& name) {
+  ensureOpenVdbInitialized();
+  const IVec3 n = grid.dims();
+  openvdb::Vec3SGrid::Ptr g = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+  std::vector<openvdb::Vec3s> values(grid.size());
+  for (size_t i = 0; i < values.size(); ++i)
+    values[i] = openvdb::Vec3s(grid.data()[i].x, grid.data()[i].y, grid.data()[i].z);
+  const CoordBBox bbox(openvdb::Coord(0, 0, 0), openvdb::Coord(n.x - 1, n.y - 1, n.z - 1));
+  openvdb::tools::Dense<openvdb::Vec3s, openvdb::tools::LayoutXYZ> dense(bbox, values.data());
+  openvdb::tools::copyFromDense(dense, *g, openvdb::Vec3s(0.0f));
+  g->setTransform(cellTransform(grid.bounds(), n));
+  g->setName(name);
+  g->setVectorType(openvdb::VEC_INVARIANT);
+  writeGrids(path, g);
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,92 @@
+#pragma once
+/// OpenVDB input and output (DESIGN.md §2: a VDB keeps its own index-to-world transform, which
+/// may rotate and scale; resampling into the medium box respects it). OpenVDB headers stay in
+/// vdb.cpp so that only one translation unit pays for them.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/density_model.h"
+
+namespace scatterlab {
+
+/// Calls openvdb::initialize() once (thread-safe). Every function below calls it itself.
+void ensureOpenVdbInitialized();
+
+/// What `scatterlab info FILE.vdb` prints about one grid.
+struct VdbGridInfo {
+  std::string name;
+  std::string valueType;  ///< OpenVDB's type name: "float", "vec3s", "int32", ...
+  std::string gridClass;  ///< "fog volume", "level set", "staggered", "unknown"
+  bool affine = true;     ///< the index-to-world map is linear (affine)
+  bool savedAsHalf = false;
+  glm::dvec3 voxelSize{0.0};
+  IVec3 indexMin{0}, indexMax{0};  ///< active voxel index bounding box (inclusive)
+  bool empty = true;               ///< no active values
+  Box worldBounds;                 ///< axis-aligned world box of the index box's cells
+  std::uint64_t activeVoxels = 0;
+  std::uint64_t activeTiles = 0;
+  std::uint64_t leafNodes = 0;
+  bool hasValueRange = false;  ///< scalar grids: min/max of active values; vector: of |v|
+  double valueMin = 0, valueMax = 0;
+};
+
+/// Reads every grid of a .vdb file (fully, no delayed loading). Throws IoError naming the file
+/// when it is missing, not a VDB, or truncated.
+std::vector<VdbGridInfo> inspectVdb(const std::string& path);
+
+/// Density from a float (or double, converted) grid of a .vdb file. Sampling goes through
+/// OpenVDB's tools::GridSampler with BoxSampler (trilinear in the grid's own index space), so
+/// rotated and scaled transforms, active tiles and half-float storage are honoured. Negative
+/// values (filter ringing in some fog volumes) read as 0.
+class VdbDensity : public DensityModel {
+ public:
+  /// Loads grid `gridName` of `path`. Throws IoError (missing / not a VDB / truncated file)
+  /// or ConfigError (no grid of that name: the message lists the grids present; a grid that
+  /// is not float/double; a level set; a transform that is not affine).
+  static std::unique_ptr<VdbDensity> load(const std::string& path, const std::string& gridName);
+  ~VdbDensity() override;
+
+  std::string type() const override { return "vdb"; }
+  float eval(const Vec3& x) const override;
+  /// Samples the grid at every cell centre (parallel over z slices, one accessor per task).
+  void build(DensityGrid& grid) const override;
+  /// The axis-aligned world box of the active index box (voxel cells, so half a voxel beyond
+  /// the outermost voxel centres), transformed corner by corner.
+  std::optional<Box> naturalBounds() const override { return bounds_; }
+  std::string describe() const override;
+
+  /// Dims of a dense grid over naturalBounds() whose cells have the grid's smallest voxel edge
+  /// (for an axis-aligned grid its cell centres are the VDB's voxel centres), each axis scaled
+  /// down so the total stays within `maxVoxels`.
+  IVec3 nativeDims(std::int64_t maxVoxels = kMaxGridVoxels) const;
+  const VdbGridInfo& info() const { return info_; }
+
+ private:
+  VdbDensity() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Box bounds_;
+  VdbGridInfo info_;
+  std::string path_;
+};
+
+/// Loads grid `gridName` and resamples it into a dense grid over its natural bounds at
+/// nativeDims(maxVoxels).
+DensityGrid loadVdbAsDense(const std::string& path, const std::string& gridName,
+                           std::int64_t maxVoxels = kMaxGridVoxels);
+
+/// Writes `grid` as a FloatGrid (fog volume, background 0, zeros inactive) named `name` whose
+/// voxel (i, j, k) is the grid's cell (i, j, k): index-to-world = scale by the cell size, then
+/// translate to the centre of cell 0. Written to a temporary and renamed (no partial file).
+void writeVdb(const std::string& path, const DensityGrid& grid,
+              const std::string& name = "density");
+
+/// Same for a source-radiance volume: a Vec3SGrid (RGB) named `name`.
+void writeVdb(const std::string& path, const RadianceGrid& grid,
+              const std::string& name = "radiance");
+
+}  // namespace scatterlab

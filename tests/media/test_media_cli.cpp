@@ -1,0 +1,108 @@
+// The `scatterlab fit` and `scatterlab info` commands on volumes: output, errors, no partial files.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "media/sog.h"
+#include "media/temp_dir.h"
+
+namespace scatterlab {
+namespace {
+
+const std::string kVdb = SCATTERLAB_SHARED_DATA "/vdb/";
+
+struct CliRun {
+  int code;
+  std::string out;  // stdout and stderr together
+};
+
+CliRun run(const std::string& args) {
+  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  CliRun r{-1, ""};
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+TEST(MediaCli, InfoVdbListsGrids) {
+  const CliRun r = run("info " + kVdb + "dragon_with_xform.vdb");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("grid 'density': float, fog volume"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[-70 1 -31]..[70 99 31] (141x99x63)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("156161 voxels (20 active tiles"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("world box"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("values"), std::string::npos) << r.out;
+}
+
+TEST(MediaCli, FitWritesModelAndReportsErrors) {
+  testing::TempDir tmp("cli_fit");
+  const std::string out = tmp.file("dragon.sog");
+  const CliRun r = run("fit " + kVdb + "dragon_with_xform.vdb -o " + out +
+                       " --gaussians 32 --fit-voxels 4096 --sweeps 1");
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* key :
+       {"gaussians", "hash entries", "bytes on disk", "rel. L2 D~ ", "rel. L2 D~ + F"})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
+  ASSERT_TRUE(std::filesystem::exists(out));
+  EXPECT_NO_THROW(readSog(out));
+  const CliRun info = run("info " + out);
+  EXPECT_EQ(info.code, 0) << info.out;
+  EXPECT_NE(info.out.find("residual hash"), std::string::npos) << info.out;
+}
+
+TEST(MediaCli, FitSequenceWritesEveryFrame) {
+  testing::TempDir tmp("cli_fit");
+  const std::string v = kVdb + "dragon_with_xform.vdb";
+  const CliRun r = run("fit " + v + " " + v + " -o " + tmp.file("f_{frame}.sog") +
+                       " --gaussians 16 --fit-voxels 4096 --sweeps 0");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(tmp.file("f_0000.sog")));
+  EXPECT_TRUE(std::filesystem::exists(tmp.file("f_0001.sog")));
+  const CliRun bad = run("fit " + v + " " + v + " -o " + tmp.file("nopattern.sog"));
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("{frame}"), std::string::npos) << bad.out;
+  EXPECT_FALSE(std::filesystem::exists(tmp.file("nopattern.sog")));
+}
+
+void expectFailure(const std::string& args, const std::string& needle, const std::string& out) {
+  const CliRun r = run(args);
+  EXPECT_NE(r.code, 0) << args << "\n" << r.out;
+  EXPECT_NE(r.out.find(needle), std::string::npos) << args << "\n" << r.out;
+  EXPECT_FALSE(std::filesystem::exists(out)) << out;
+}
+
+TEST(MediaCli, BadInputsFailWithMessageAndNoOutput) {
+  testing::TempDir tmp("cli_bad");
+  const std::string out = tmp.file("out.sog");
+  expectFailure("fit /nonexistent/x.vdb -o " + out, "/nonexistent/x.vdb", out);
+  const std::string text = tmp.file("text.vdb");
+  std::ofstream(text) << "hello";
+  expectFailure("fit " + text + " -o " + out, "not an OpenVDB file", out);
+  std::ifstream in(kVdb + "smoke1.vdb", std::ios::binary);
+  std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string cut = tmp.file("cut.vdb");
+  std::ofstream(cut, std::ios::binary).write(all.data(), std::streamsize(all.size() / 2));
+  expectFailure("fit " + cut + " -o " + out, "truncated", out);
+  expectFailure("fit " + kVdb + "smoke1.vdb --grid temperature -o " + out, "'density' (float)",
+                out);
+  expectFailure("fit " + kVdb + "smoke1.vdb -o " + out + " --gaussians 0", "gaussians", out);
+  expectFailure("fit " + kVdb + "smoke1.vdb -o /nonexistent-dir/out.sog", "/nonexistent-dir",
+                "/nonexistent-dir/out.sog");
+  // Foreign and truncated .sog files through `info`.
+  const std::string foreign = tmp.file("foreign.sog");
+  std::ofstream(foreign) << "not a model at all, just some text to fill the header........";
+  expectFailure("info " + foreign, "not a valid .sog model", out);
+  expectFailure("info " + cut, "truncated", out);
+}
+
+}  // namespace
+}  // namespace scatterlab
