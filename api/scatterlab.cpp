@@ -3,7 +3,11 @@
 #include <mutex>
 
 #include "media/register.h"
+#include "render/interpolation.h"
 #include "render/methods.h"
+#include "render/radiance_evaluator.h"
+#include "render/sampled_methods.h"
+#include "sampling/samplers.h"
 
 namespace scatterlab {
 
@@ -12,6 +16,10 @@ void initialize() {
   std::call_once(once, [] {
     registerMediaModels();
     registerReferenceMethods();
+    registerSamplers();
+    registerRadianceEvaluators();
+    registerReconstructions();
+    registerSampledMethods();
   });
 }
 
