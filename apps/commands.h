@@ -13,5 +13,6 @@ using Action = std::function<int()>;
 Action addRender(CLI::App& app);
 Action addCompare(CLI::App& app);
 Action addInfo(CLI::App& app);
+Action addExperiment(CLI::App& app);
 
 }  // namespace scatterlab::cli

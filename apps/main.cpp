@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   add(scatterlab::cli::addRender);
   add(scatterlab::cli::addCompare);
   add(scatterlab::cli::addInfo);
+  add(scatterlab::cli::addExperiment);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
