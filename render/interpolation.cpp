@@ -4,6 +4,7 @@
 
 #include <atomic>
 
+#include "render/gather_rows.h"
 #include "render/per_voxel.h"
 #include "render/radiance_evaluator.h"
 
@@ -109,6 +110,51 @@ Vec3 clampNonNegative(Vec3 v) {
   return glm::max(v, Vec3(0.0f));
 }
 
+/// VoxelOccupancy for every voxel of `out`, as a mask. When the radiance volume has the
+/// density volume's layout (the usual case) the 3x3x3 neighbourhood test is a separable
+/// dilation of (D > 0): three cheap passes instead of 27 loads per voxel.
+std::vector<char> occupancyMask(const DensityGrid& density, const RadianceGrid& out) {
+  const IVec3 n = out.dims();
+  const std::size_t nxy = std::size_t(n.x) * n.y;
+  std::vector<char> occ(out.size(), 0);
+  const bool sameLayout = n == density.dims() && out.bounds().min == density.bounds().min &&
+                          out.bounds().max == density.bounds().max;
+  if (!sameLayout) {
+    const VoxelOccupancy test(density, out);
+    tbb::parallel_for(0, n.z, [&](int k) {
+      for (int j = 0; j < n.y; ++j)
+        for (int i = 0; i < n.x; ++i) occ[out.index(i, j, k)] = test(i, j, k);
+    });
+    return occ;
+  }
+  std::vector<char> tmp(out.size(), 0);
+  const float* d = density.data().data();
+  // Pass 1 (x) into occ, pass 2 (y) into tmp, pass 3 (z) into occ.
+  tbb::parallel_for(0, n.z, [&](int k) {
+    for (int j = 0; j < n.y; ++j) {
+      const std::size_t row = std::size_t(k) * nxy + std::size_t(j) * n.x;
+      for (int i = 0; i < n.x; ++i)
+        occ[row + i] = d[row + i] > 0.0f || (i > 0 && d[row + i - 1] > 0.0f) ||
+                       (i + 1 < n.x && d[row + i + 1] > 0.0f);
+    }
+  });
+  tbb::parallel_for(0, n.z, [&](int k) {
+    for (int j = 0; j < n.y; ++j) {
+      const std::size_t row = std::size_t(k) * nxy + std::size_t(j) * n.x;
+      for (int i = 0; i < n.x; ++i)
+        tmp[row + i] =
+            occ[row + i] || (j > 0 && occ[row + i - n.x]) || (j + 1 < n.y && occ[row + i + n.x]);
+    }
+  });
+  tbb::parallel_for(0, n.z, [&](int k) {
+    for (std::size_t a = 0; a < nxy; ++a) {
+      const std::size_t v = std::size_t(k) * nxy + a;
+      occ[v] = tmp[v] || (k > 0 && tmp[v - nxy]) || (k + 1 < n.z && tmp[v + nxy]);
+    }
+  });
+  return occ;
+}
+
 }  // namespace
 
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
@@ -129,7 +175,7 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
   }
 
   const NearestIndex nearestIndex(samples);
-  const VoxelOccupancy occupied(density, out);
+  const std::vector<char> occupied = occupancyMask(density, out);
   std::atomic<long long> uncovered{0};
   const std::size_t nxy = std::size_t(n.x) * n.y;
 
@@ -160,27 +206,17 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
         float* __restrict b0 = ab.data() + row;
         float* __restrict w0 = den.data() + row;
         switch (kind) {
-          case Interpolation::Gradient: {
-            const Vec3 base = s.S + dy * s.dS[1] + dz * s.dS[2];
-            const Vec3 gx = s.dS[0];
-            const float eps = kSingularEps * R;
-            for (int i = i0; i <= i1; ++i) {
-              const float dx = (lo.x + (float(i) + 0.5f) * h.x) - p.x;
-              const float d2 = dx * dx + c;
-              const float w = d2 < R2 ? R / std::max(std::sqrt(d2), eps) : 0.0f;
-              r0[i] += w * (base.x + dx * gx.x);
-              g0[i] += w * (base.y + dx * gx.y);
-              b0[i] += w * (base.z + dx * gx.z);
-              w0[i] += w;
-            }
+          case Interpolation::Gradient:
+            gradientRow(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
+                        s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0]);
             break;
-          }
           case Interpolation::Rbf: {
             const float invR2 = 9.0f / R2;  // 1 / r², r = R/3
             for (int i = i0; i <= i1; ++i) {
               const float dx = (lo.x + (float(i) + 0.5f) * h.x) - p.x;
               const float d2 = dx * dx + c;
-              const float w = d2 < R2 ? s.weight * std::exp(-d2 * invR2) : 0.0f;
+              const float wAll = s.weight * std::exp(-d2 * invR2);
+              const float w = d2 < R2 ? wAll : 0.0f;
               r0[i] += w * s.S.x;
               g0[i] += w * s.S.y;
               b0[i] += w * s.S.z;
@@ -219,7 +255,7 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
             v = Vec3(ar[a], ag[a], ab[a]) / den[a];
             wsum = den[a];
           }
-        } else if (occupied(i, j, k)) {
+        } else if (occupied[out.index(i, j, k)]) {
           ++unc;
           const int m = nearestIndex.nearest(out.cellCenter(i, j, k));
           if (m >= 0) v = samples[std::size_t(m)].S;

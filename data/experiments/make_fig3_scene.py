@@ -65,7 +65,7 @@ scene = {
         "albedo": 0.6,
         "phase": {"type": "isotropic"},
     },
-    "lights": [{"type": "point", "position": LIGHT, "intensity": [10, 8, 6]}],
+    "lights": [{"type": "point", "position": LIGHT, "intensity": [30, 24, 18]}],
     "camera": {"position": [1, 1, -3.2], "look_at": [1, 1, 1], "up": [0, 1, 0],
                "fov_y_deg": 36, "width": 256, "height": 256},
     "background": [0, 0, 0],
