@@ -40,11 +40,14 @@ void BM_InterpPerVoxel128(benchmark::State& state) {
 }
 BENCHMARK(BM_InterpPerVoxel128)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-std::vector<RadianceSample> jittered(Fixture& f, long long count) {
-  const Json cfg{{"type", "jittered"}, {"count", count}};
+std::vector<RadianceSample> cellSamples(Fixture& f, const char* type, long long count) {
+  const Json cfg{{"type", type}, {"count", count}};
   Params sp(cfg, "render.sampler");
   sp.string("type");
-  return samplers().get("jittered", "type")(sp, f.scene)->generate(f.scene, f.density);
+  return samplers().get(type, "type")(sp, f.scene)->generate(f.scene, f.density);
+}
+std::vector<RadianceSample> jittered(Fixture& f, long long count) {
+  return cellSamples(f, "jittered", count);
 }
 
 /// Evaluation (S and ∇S by volume tracing) + Eq. 4 gather into the 128^3 volume: what
@@ -65,6 +68,29 @@ void BM_InterpGradient128(benchmark::State& state) {
   state.counters["uncovered"] = double(uncovered);
 }
 BENCHMARK(BM_InterpGradient128)
+    ->Arg(512)
+    ->Arg(2048)
+    ->Arg(8192)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+/// The same with grid samples: valid radius h instead of 1.75·h, so ~4 instead of ~22
+/// samples cover each voxel (the gather's cost is proportional to that overlap).
+void BM_InterpGradientGrid128(benchmark::State& state) {
+  Fixture& f = Fixture::get();
+  std::vector<RadianceSample> s = cellSamples(f, "grid", state.range(0));
+  const TracerSteps steps{f.scene.medium.voxelSize(), f.scene.medium.voxelSize()};
+  RadianceGrid out(f.scene.medium.bounds, IVec3(128));
+  long long uncovered = 0;
+  for (auto _ : state) {
+    evaluateSamples(f.scene, f.density, steps, s, true);
+    uncovered = interpolateSamples(Interpolation::Gradient, f.density, s, out).uncovered;
+    benchmark::DoNotOptimize(out.data().data());
+  }
+  state.counters["samples"] = double(s.size());
+  state.counters["uncovered"] = double(uncovered);
+}
+BENCHMARK(BM_InterpGradientGrid128)
     ->Arg(512)
     ->Arg(2048)
     ->Arg(8192)

@@ -111,6 +111,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
                              const std::vector<std::string>& extra, bool reference,
                              std::optional<double> paper) {
     std::vector<std::string> all = sets;
+    // A run's settings are validated by its own method: it becomes the scene's render.method.
+    if (!reference) all.push_back("render.method=" + method);
     all.insert(all.end(), extra.begin(), extra.end());
     const Scene scene = loadScene(scenePath, all);
     RenderResult r = createMethod(scene, method, "cpu")->render(scene, nullptr);
