@@ -103,7 +103,9 @@ TEST(GradientInterpolation, WeightsSumAsEq4) {
           if (d < m.radius) expect += m.radius / d;
         }
         ASSERT_NEAR(wsum.at(i, j, k), expect, 1e-4f * std::max(1.0f, expect));
-        if (expect > 0.0f) ASSERT_NEAR(out.at(i, j, k).x, 2.5f, 1e-5f);
+        if (expect > 0.0f) {
+          ASSERT_NEAR(out.at(i, j, k).x, 2.5f, 1e-5f);
+        }
       }
 }
 
@@ -234,13 +236,17 @@ TEST(SampledMethods, LightsInsideAndOutsideTheBox) {
       doc["render"] = {{"method", m}, {"sampler", {{"type", "grid"}, {"count", 512}}}};
       const RenderResult r = renderWith(doc);
       const double err = compareImages(r.image, ref.image).relL2;
-      for (const Vec3& px : r.image.pixels()) ASSERT_TRUE(std::isfinite(px.x + px.y + px.z));
+      for (const Vec3& px : r.image.pixels()) {
+        ASSERT_TRUE(std::isfinite(px.x + px.y + px.z));
+      }
       EXPECT_EQ(r.stats.extra["uncovered_voxels"].get<long long>(), 0) << m;
       // Loose bounds: a smoke test of each variant; the accuracy claims live in the Fig. 3
       // experiment. The light outside the box gives a smooth field.
       // Measured: light outside 1.9% (gradient), 5.9% (nearest), 5.7% (rbf).
       EXPECT_LT(err, light.y > 1.0f ? 0.08 : 0.5) << m << " light " << light.y;
-      if (std::string(m) == "gradient" && light.y > 1.0f) EXPECT_LT(err, 0.03);
+      if (std::string(m) == "gradient" && light.y > 1.0f) {
+        EXPECT_LT(err, 0.03);
+      }
     }
   }
 }
@@ -286,7 +292,8 @@ TEST(Reconstructions, RegisteredVariantsIncludingPerVoxel) {
   RadianceGrid ref(kUnit, IVec3(8));
   buildPerVoxelRadiance(scene, density, scene.medium.voxelSize(), ref, nullptr);
   for (const char* name : {"gradient", "rbf", "nearest", "per-voxel"}) {
-    Params p(Json::object(), "render");
+    const Json empty = Json::object();  // Params keeps a pointer: no temporaries
+    Params p(empty, "render");
     auto r = reconstructions().get(name, "reconstruction")(p, scene);
     RadianceGrid out(kUnit, IVec3(8));
     const ReconstructionStats st = r->reconstruct(scene, density, {}, out);
