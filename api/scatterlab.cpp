@@ -3,7 +3,11 @@
 #include <mutex>
 
 #include "media/register.h"
+#include "render/interpolation.h"
 #include "render/methods.h"
+#include "render/radiance_evaluator.h"
+#include "render/sampled_methods.h"
+#include "sampling/samplers.h"
 #ifdef SCATTERLAB_HAS_GPU
 #include "gpu/register.h"
 #endif
@@ -15,6 +19,10 @@ void initialize() {
   std::call_once(once, [] {
     registerMediaModels();
     registerReferenceMethods();
+    registerSamplers();
+    registerRadianceEvaluators();
+    registerReconstructions();
+    registerSampledMethods();
 #ifdef SCATTERLAB_HAS_GPU
     gpu::registerGpuStages();
 #endif

@@ -14,5 +14,6 @@ Action addRender(CLI::App& app);
 Action addCompare(CLI::App& app);
 Action addInfo(CLI::App& app);
 Action addFit(CLI::App& app);
+Action addExperiment(CLI::App& app);
 
 }  // namespace scatterlab::cli

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   add(scatterlab::cli::addCompare);
   add(scatterlab::cli::addInfo);
   add(scatterlab::cli::addFit);
+  add(scatterlab::cli::addExperiment);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -8,12 +8,20 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/grid.h"
 #include "core/params.h"
 #include "core/registry.h"
 
 namespace scatterlab {
+
+/// One Gaussian of a sum-of-Gaussians medium (paper Eq. 3): w·exp(−|x−c|²/r²).
+struct GaussianBlob {
+  Vec3 center{0.5f};
+  float radius = 0.1f;  ///< r in w·exp(−|x−c|²/r²) (the paper's convention, Eq. 3)
+  float weight = 1.0f;
+};
 
 class DensityModel {
  public:
@@ -34,6 +42,10 @@ class DensityModel {
 
   /// The box the model covers when the scene gives no medium.bounds (a VDB's world bounds).
   virtual std::optional<Box> naturalBounds() const { return std::nullopt; }
+
+  /// The Gaussians of a sum-of-Gaussians model (the paper's initial sample set, Sec. 4), or
+  /// null for models that have none. Owned by the model; valid while it lives.
+  virtual const std::vector<GaussianBlob>* gaussians() const { return nullptr; }
 
   /// One-line human-readable summary for `scatterlab info`.
   virtual std::string describe() const = 0;

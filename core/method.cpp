@@ -29,7 +29,7 @@ std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& meth
     // Validated for key checking only, on its own backend setting: the requested backend
     // applies to the overriding method, which may support it where the file's does not.
     Params own(scene.render, "render");
-    own.string("method");
+    own.string("method", "exact");
     methods().get(fileMethod, "render.method")(own, scene, backendOf(own, "auto"));
     own.finish();
     for (auto it = scene.render.begin(); it != scene.render.end(); ++it) p.allow(it.key());

@@ -28,6 +28,9 @@ struct RadianceSample {
   /// ∇S: dS[a] is the RGB derivative along world axis a (x, y, z), by central differences.
   Vec3 dS[3] = {Vec3(0.0f), Vec3(0.0f), Vec3(0.0f)};
   int level = 0;  ///< dynamic-sampling level (0 = initial set)
+  /// Kernel weight for RBF reconstruction: w_j of the Gaussian a gaussian-centres sample came
+  /// from (Zhou et al. 2007 weight their RBFs by it), 1 for other samplers.
+  float weight = 1.0f;
 
   /// First-order Taylor estimate of S at p (paper Eq. 4's bracket).
   Vec3 taylor(const Vec3& p) const {

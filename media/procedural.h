@@ -22,12 +22,6 @@ class UniformDensity : public DensityModel {
   float value_;
 };
 
-struct GaussianBlob {
-  Vec3 center{0.5f};
-  float radius = 0.1f;  ///< r in w·exp(−|x−c|²/r²) (the paper's convention, Eq. 3)
-  float weight = 1.0f;
-};
-
 /// D(x) = Σ w_j exp(−|x − c_j|²/r_j²), each blob culled beyond 3·r_j (the paper's culling
 /// radius: the dropped tail is below w·e⁻⁹ ≈ 1.2e-4·w).
 class GaussianDensity : public DensityModel {
@@ -39,6 +33,7 @@ class GaussianDensity : public DensityModel {
   void build(DensityGrid& grid) const override;
   std::string describe() const override;
   const std::vector<GaussianBlob>& blobs() const { return blobs_; }
+  const std::vector<GaussianBlob>* gaussians() const override { return &blobs_; }
 
   static constexpr float kCullRadius = 3.0f;  ///< in units of r
 

@@ -2,10 +2,45 @@
 /// The paper's baseline reconstruction (Kajiya & Von Herzen): trace S at every voxel centre of
 /// the radiance volume. Also the reference the interpolation schemes are compared with.
 
+#include "core/grid.h"
 #include "core/progress.h"
 #include "core/scene.h"
 
 namespace scatterlab {
+
+/// Whether a radiance voxel can influence the image: the density volume is non-zero somewhere
+/// in the trilinear support of the voxel (the marcher only looks S up where D > 0). Shared by
+/// the per-voxel baseline (which skips the others) and the interpolating reconstructions
+/// (which count occupied voxels no sample covers).
+class VoxelOccupancy {
+ public:
+  /// References must outlive this object.
+  VoxelOccupancy(const DensityGrid& density, const RadianceGrid& radiance)
+      : density_(density),
+        radiance_(radiance),
+        hr_(radiance.cellSize()),
+        scale_(density.indexScale()),
+        offset_(density.indexOffset()),
+        nd_(density.dims()) {}
+
+  bool operator()(int i, int j, int k) const {
+    const Vec3 c = radiance_.cellCenter(i, j, k);
+    // Density voxels whose trilinear support overlaps this voxel's support.
+    const IVec3 lo = glm::max(IVec3(glm::floor((c - hr_) * scale_ + offset_)), IVec3(0));
+    const IVec3 hi = glm::min(IVec3(glm::ceil((c + hr_) * scale_ + offset_)), nd_ - 1);
+    for (int kk = lo.z; kk <= hi.z; ++kk)
+      for (int jj = lo.y; jj <= hi.y; ++jj)
+        for (int ii = lo.x; ii <= hi.x; ++ii)
+          if (density_.at(ii, jj, kk) > 0.0f) return true;
+    return false;
+  }
+
+ private:
+  const DensityGrid& density_;
+  const RadianceGrid& radiance_;
+  Vec3 hr_, scale_, offset_;
+  IVec3 nd_;
+};
 
 struct PerVoxelStats {
   long long traced = 0;   ///< voxels whose S was traced

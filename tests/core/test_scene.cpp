@@ -178,3 +178,11 @@ TEST(Scene, MethodOverrideToleratesTheFilesOwnKeys) {
   d["render"]["bogus"] = 1;
   EXPECT_THROW(createMethod(sceneFromJson(d), "exact"), ConfigError);
 }
+
+TEST(Scene, MethodOverrideWithoutRenderObject) {
+  Json d = validDoc();
+  d.erase("render");
+  const Scene s = sceneFromJson(d);
+  EXPECT_NO_THROW(createMethod(s, "per-voxel"));
+  EXPECT_NO_THROW(createMethod(s));
+}

@@ -1,0 +1,20 @@
+#pragma once
+/// The innermost loop of the Eq. 4 gather (render/interpolation.cpp), in its own translation
+/// unit so that it alone is compiled with -ffast-math (see CMakeLists.txt): GCC then
+/// vectorises it with a reciprocal square root plus one Newton step instead of sqrt + divide.
+/// The body is written for that: only finite values (d² is clamped away from 0), no
+/// infinity or NaN tests, no reductions across voxels (so no reassociation of sums).
+
+#include "core/math.h"
+
+namespace scatterlab {
+
+/// Adds sample j's Eq. 4 terms to voxels i0..i1 of one row: voxel i at x = lox + (i + 1/2)·hx;
+/// px = x_j; c = dy² + dz² of the row; base = S_j + dy·∂S/∂y + dz·∂S/∂z; gx = ∂S/∂x; R = R_j.
+/// W = R / max(‖x − x_j‖, eps·R) where ‖x − x_j‖ < R, else 0. Accumulates W·Taylor into
+/// r0/g0/b0 and W into w0.
+void gradientRow(float* __restrict r0, float* __restrict g0, float* __restrict b0,
+                 float* __restrict w0, int i0, int i1, float lox, float hx, float px, float c,
+                 float R, float eps, Vec3 base, Vec3 gx);
+
+}  // namespace scatterlab

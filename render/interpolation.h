@@ -1,0 +1,61 @@
+#pragma once
+/// CPU reconstructions of the source-radiance volume from radiance samples (DESIGN.md §3,
+/// stage "reconstruction"), registered as "gradient", "rbf", "nearest" and "per-voxel".
+///
+/// The three interpolating ones share one gather: the paper's slice splatting (Sec. 4) done
+/// on the CPU. Each Z slice of the volume is one TBB task; a slice visits only the samples
+/// whose valid sphere reaches it, and for each of them only the voxel rows and the x-range
+/// inside the sphere, so the cost is proportional to the sphere/voxel overlap, not to
+/// samples × voxels. Sums run in sample order, so results are deterministic.
+///
+/// Uncovered voxels: an occupied voxel (VoxelOccupancy: density non-zero in its trilinear
+/// support) that no valid sphere contains is counted in ReconstructionStats::uncovered and
+/// gets S of the nearest sample (Euclidean). The zeroth-order value is used, not the Taylor
+/// estimate, because outside the valid sphere the first-order term is by definition not
+/// trusted. With no samples at all these voxels stay zero (and are all counted).
+/// Unoccupied, uncovered voxels are zero: the marcher never reads them.
+/// Every result is clamped to S >= 0 per channel (a first-order estimate can undershoot near a
+/// point light; negative source radiance is unphysical).
+
+#include "core/stages.h"
+
+namespace scatterlab {
+
+enum class Interpolation {
+  /// Paper Eq. 4: S(x) = Σ W_j(x)·(S_j + (x − x_j)·∇S_j) / Σ W_j(x) over {j : ‖x − x_j‖ < R_j},
+  /// W_j(x) = R_j / ‖x − x_j‖. Singularity: ‖x − x_j‖ is clamped below at kSingularEps·R_j,
+  /// so W_j <= 1e9; at x = x_j the sample's own value outweighs the others by that factor
+  /// (for coincident samples, their average).
+  Gradient,
+  /// S_j of the closest sample whose valid sphere contains x (ties: the first in order).
+  Nearest,
+  /// The normalised RBF interpolation of Zhou et al. 2007 (see interpolation.cpp):
+  /// S(x) = Σ w_j·exp(−‖x − x_j‖²/r_j²)·S_j / Σ w_j·exp(−‖x − x_j‖²/r_j²), r_j = R_j/3,
+  /// over {j : ‖x − x_j‖ < R_j} (R_j = 3 r_j is the Gaussian's culling radius).
+  Rbf,
+};
+
+inline constexpr float kSingularEps = 1e-9f;
+
+/// Fills `out` (bounds and dims preset) from the samples. `weightSum`, when given (it is reset
+/// to out's bounds and dims), receives the denominator at each voxel centre (Σ W_j for
+/// Gradient, Σ w_j·B_j for Rbf, 1 where covered for Nearest). No GL context.
+ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
+                                       std::span<const RadianceSample> samples, RadianceGrid& out,
+                                       Grid3<float>* weightSum = nullptr);
+
+/// Brute-force evaluation of the interpolation at one point, over all samples (no clamping,
+/// no uncovered rule): the formulas above executed literally, for tests and probes.
+struct PointEstimate {
+  Vec3 value{0.0f};        ///< numerator / denominator (0 when nothing covers x)
+  float weightSum = 0.0f;  ///< the denominator
+  int covering = 0;        ///< samples whose valid sphere contains x
+};
+PointEstimate interpolateAt(Interpolation kind, const Vec3& x,
+                            std::span<const RadianceSample> samples);
+
+/// Registers "gradient", "rbf", "nearest" and "per-voxel" (which ignores the samples and
+/// traces every occupied voxel with render.delta1) in reconstructions().
+void registerReconstructions();
+
+}  // namespace scatterlab

@@ -1,0 +1,27 @@
+#pragma once
+/// CPU radiance evaluator "volume-tracer" (paper Sec. 4): S(x_j) by volume tracing towards
+/// every light with step Δ1 (render.delta1), ∇S(x_j) by central differences with step Δ2
+/// (render.delta2) along world X, Y, Z. TBB-parallel over samples; no GL context.
+
+#include "core/stages.h"
+
+namespace scatterlab {
+
+/// Δ1 and Δ2 in world units (render keys delta1, delta2; both default to one voxel edge).
+struct TracerSteps {
+  float delta1 = 0.0f;
+  float delta2 = 0.0f;
+};
+TracerSteps parseTracerSteps(Params& render, const Scene& scene);
+
+/// Fills S (and dS when `gradients`) of every sample. The view direction at a point p is
+/// towards scene.camera.position from p itself, also at the six offset points, so ∇S is the
+/// gradient of the same field the per-voxel baseline traces (this matters only for HG phase).
+void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
+                     std::span<RadianceSample> samples, bool gradients);
+
+/// Registers "volume-tracer" in radianceEvaluators(); it reads delta1 and delta2 from the
+/// render object it is given.
+void registerRadianceEvaluators();
+
+}  // namespace scatterlab

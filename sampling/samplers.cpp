@@ -1,0 +1,193 @@
+#include "sampling/samplers.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+
+#include "core/error.h"
+
+namespace scatterlab {
+
+namespace {
+
+IVec3 dimsForLongAxis(const Vec3& ext, int nLong) {
+  const float h = std::max({ext.x, ext.y, ext.z}) / float(nLong);
+  IVec3 d;
+  for (int a = 0; a < 3; ++a) d[a] = std::max(1, int(std::ceil(ext[a] / h - 1e-4f)));
+  return d;
+}
+
+std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims, bool skipEmpty) {
+  const int n = dims.x * dims.y * dims.z;
+  std::vector<int> out;
+  if (!skipEmpty) {
+    out.resize(std::size_t(n));
+    std::iota(out.begin(), out.end(), 0);
+    return out;
+  }
+  std::vector<char> used(std::size_t(n), 0);
+  const IVec3 nd = g.dims();
+  // Voxel centre index u maps to cell floor((u + 0.5) / nd * dims).
+  std::vector<int> ci(std::size_t(nd.x)), cj(std::size_t(nd.y)), ck(std::size_t(nd.z));
+  for (int i = 0; i < nd.x; ++i) ci[i] = std::min(dims.x - 1, int((i + 0.5f) / nd.x * dims.x));
+  for (int j = 0; j < nd.y; ++j) cj[j] = std::min(dims.y - 1, int((j + 0.5f) / nd.y * dims.y));
+  for (int k = 0; k < nd.z; ++k) ck[k] = std::min(dims.z - 1, int((k + 0.5f) / nd.z * dims.z));
+  const float* d = g.data().data();
+  for (int k = 0; k < nd.z; ++k)
+    for (int j = 0; j < nd.y; ++j) {
+      const int rowCell = dims.x * (cj[j] + dims.y * ck[k]);
+      for (int i = 0; i < nd.x; ++i, ++d)
+        if (*d > 0.0f) used[std::size_t(rowCell + ci[i])] = 1;
+    }
+  for (int c = 0; c < n; ++c)
+    if (used[std::size_t(c)]) out.push_back(c);
+  return out;
+}
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+/// Uniform float in [0, 1) from the top 24 bits.
+float unitFloat(std::uint64_t bits) {
+  return float(bits >> 40) * (1.0f / 16777216.0f);
+}
+
+class GaussianCentresSampler : public Sampler {
+ public:
+  GaussianCentresSampler(std::optional<long long> count, float scale)
+      : count_(count), scale_(scale) {}
+  std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid&) override {
+    const std::vector<GaussianBlob>* blobs = scene.medium.density->gaussians();
+    if (!blobs) throw ConfigError("sampler 'gaussian-centres' needs a sum-of-Gaussians medium");
+    std::vector<std::size_t> keep(blobs->size());
+    std::iota(keep.begin(), keep.end(), std::size_t(0));
+    if (count_ && std::size_t(*count_) < keep.size()) {
+      const auto mass = [&](std::size_t i) {
+        const GaussianBlob& b = (*blobs)[i];
+        return double(b.weight) * b.radius * b.radius * b.radius;
+      };
+      std::stable_sort(keep.begin(), keep.end(),
+                       [&](std::size_t a, std::size_t b) { return mass(a) > mass(b); });
+      keep.resize(std::size_t(*count_));
+      std::sort(keep.begin(), keep.end());
+    }
+    std::vector<RadianceSample> out;
+    out.reserve(keep.size());
+    for (std::size_t i : keep) {
+      const GaussianBlob& b = (*blobs)[i];
+      RadianceSample s;
+      s.position = b.center;
+      s.radius = scale_ * b.radius;
+      s.weight = b.weight;
+      out.push_back(s);
+    }
+    return out;
+  }
+
+ private:
+  std::optional<long long> count_;
+  float scale_;
+};
+
+class CellSampler : public Sampler {
+ public:
+  CellSampler(bool jitter, long long count, float scale, std::uint64_t seed, bool skipEmpty)
+      : jitter_(jitter), count_(count), scale_(scale), seed_(seed), skipEmpty_(skipEmpty) {}
+  std::vector<RadianceSample> generate(const Scene&, const DensityGrid& density) override {
+    const SampleCells cells = chooseSampleCells(density, count_, skipEmpty_);
+    const float R = scale_ * std::max({cells.cell.x, cells.cell.y, cells.cell.z});
+    const Vec3 lo = density.bounds().min;
+    std::vector<RadianceSample> out(cells.occupied.size());
+    for (std::size_t n = 0; n < out.size(); ++n) {
+      const int c = cells.occupied[n];
+      const IVec3 ijk(c % cells.dims.x, (c / cells.dims.x) % cells.dims.y,
+                      c / (cells.dims.x * cells.dims.y));
+      Vec3 f(0.5f);
+      if (jitter_) {
+        std::uint64_t h = splitmix64(seed_ ^ splitmix64(std::uint64_t(c)));
+        for (int a = 0; a < 3; ++a) {
+          f[a] = unitFloat(h);
+          h = splitmix64(h);
+        }
+      }
+      out[n].position = lo + (Vec3(ijk) + f) * cells.cell;
+      out[n].radius = R;
+    }
+    return out;
+  }
+
+ private:
+  bool jitter_;
+  long long count_;
+  float scale_;
+  std::uint64_t seed_;
+  bool skipEmpty_;
+};
+
+const Interval kCount = Interval::closed(1, 1e8);
+
+}  // namespace
+
+SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty) {
+  const Vec3 ext = density.bounds().extent();
+  const IVec3 nd = density.dims();
+  // Cells no smaller than a voxel: below that, occupancy by voxel centres is meaningless.
+  const int maxLong = std::max({nd.x, nd.y, nd.z});
+  const auto occ = [&](int nLong) {
+    return (long long)occupiedCells(density, dimsForLongAxis(ext, nLong), skipEmpty).size();
+  };
+  int lo = 1, hi = maxLong;  // smallest nLong with occ >= count, by bisection
+  if (occ(hi) < count) {
+    lo = hi;
+  } else {
+    while (lo < hi) {
+      const int mid = (lo + hi) / 2;
+      if (occ(mid) >= count)
+        hi = mid;
+      else
+        lo = mid + 1;
+    }
+  }
+  int best = lo;
+  if (lo > 1 && std::llabs(occ(lo - 1) - count) < std::llabs(occ(lo) - count)) best = lo - 1;
+  SampleCells c;
+  c.dims = dimsForLongAxis(ext, best);
+  c.cell = ext / Vec3(c.dims);
+  c.occupied = occupiedCells(density, c.dims, skipEmpty);
+  return c;
+}
+
+void registerSamplers() {
+  samplers().add("gaussian-centres", [](Params& p, const Scene& scene) {
+    std::optional<long long> count;
+    if (p.has("count"))
+      count = p.integer("count", std::nullopt, kCount);
+    else
+      p.allow("count");
+    const float scale = p.real("radius_scale", 3.0, Interval::above(0));
+    if (!scene.medium.density || !scene.medium.density->gaussians())
+      p.fail("type",
+             "'gaussian-centres' needs a sum-of-Gaussians medium (one whose model "
+             "exposes Gaussians, e.g. medium.density.type 'gaussians'), got '" +
+                 (scene.medium.density ? scene.medium.density->type() : "none") + "'");
+    return std::unique_ptr<Sampler>(new GaussianCentresSampler(count, scale));
+  });
+  const auto cell = [](bool jitter) {
+    return [jitter](Params& p, const Scene&) {
+      const long long count = p.integer("count", 512, kCount);
+      const float scale = p.real("radius_scale", jitter ? 1.75 : 1.0, Interval::above(0));
+      const std::uint64_t seed =
+          jitter ? std::uint64_t(p.integer("seed", 0, Interval::atLeast(0))) : 0;
+      const bool skipEmpty = p.boolean("skip_empty", true);
+      return std::unique_ptr<Sampler>(new CellSampler(jitter, count, scale, seed, skipEmpty));
+    };
+  };
+  samplers().add("jittered", cell(true));
+  samplers().add("grid", cell(false));
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,39 @@
+#pragma once
+/// CPU samplers (DESIGN.md §3, stage "sampler"): where the source radiance is evaluated, and
+/// how far each sample may be used (its valid radius R_j, paper Sec. 4).
+///
+///  - "gaussian-centres": x_j = c_j, R_j = radius_scale·r_j (default 3, the paper's culling
+///    radius) for every Gaussian of a sum-of-Gaussians medium (DensityModel::gaussians()).
+///    Optional `count`: keep only the `count` Gaussians of largest mass w·r³.
+///  - "grid": one sample at the centre of every occupied cell of a regular grid over the medium
+///    box; "jittered": one uniformly jittered sample per occupied cell (stratified sampling,
+///    deterministic for a given `seed`). A cell is occupied when a density voxel centre inside
+///    it has D > 0 (`skip_empty: false` keeps every cell). The cell size is chosen so that the
+///    number of occupied cells is as close as possible to `count`; the actual number is what
+///    the render stats report as `samples`.
+///    Radius rule: R = radius_scale·h with h the largest cell edge. Defaults: grid 1.0 (the
+///    paper's rule for grid samples, Sec. 5: "valid radius equal to the grid interval"; every
+///    point of a cell is within its half-diagonal ≤ 0.87·h of the cell centre, so occupied
+///    cells are covered), jittered 1.75 (≥ √3: the cell diagonal, so a sample anywhere in its
+///    cell still covers the whole cell).
+
+#include "core/stages.h"
+
+namespace scatterlab {
+
+/// Registers "gaussian-centres", "jittered" and "grid" in samplers(). Each factory reads its
+/// keys from the render.sampler object ("type" is read by the caller) and rejects bad values
+/// with a ConfigError naming the key.
+void registerSamplers();
+
+/// Cell layout of the grid and jittered samplers, exposed for tests.
+struct SampleCells {
+  IVec3 dims{1};
+  Vec3 cell{1.0f};            ///< cell edge lengths (world units)
+  std::vector<int> occupied;  ///< linear indices (i + nx·(j + ny·k)) of the cells used, ascending
+};
+
+/// Chooses the cells for about `count` samples over `density`'s box (see file comment).
+SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty);
+
+}  // namespace scatterlab
