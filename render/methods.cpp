@@ -40,14 +40,7 @@ Image marchRadianceVolume(const Scene& scene, const DensityGrid& density,
   return marchImage(scene, density, lookup, march, progress);
 }
 
-namespace {
-
-void requireCpu(const std::string& method, const std::string& backend) {
-  if (backend == "gpu")
-    throw ConfigError("method '" + method + "' has no GPU variant yet; use --backend cpu");
-}
-
-void fillStats(RenderStats& st, const std::string& method, const Scene& scene) {
+void fillCpuStats(RenderStats& st, const std::string& method, const Scene& scene) {
   st.method = method;
   st.backend = "cpu";
   st.device = "CPU (TBB)";
@@ -55,12 +48,19 @@ void fillStats(RenderStats& st, const std::string& method, const Scene& scene) {
   st.height = scene.camera.height;
 }
 
+namespace {
+
+void requireCpu(const std::string& method, const std::string& backend) {
+  if (backend == "gpu")
+    throw ConfigError("method '" + method + "' has no GPU variant yet; use --backend cpu");
+}
+
 class ExactMethod : public Method {
  public:
   explicit ExactMethod(MarchParams mp) : mp_(mp) {}
   RenderResult render(const Scene& scene, Progress* progress) override {
     RenderResult r;
-    fillStats(r.stats, "exact", scene);
+    fillCpuStats(r.stats, "exact", scene);
     const DensityGrid density = buildDensityVolume(scene, r.stats);
     if (progress) progress->restart("exact", scene.camera.height);
     {
@@ -82,7 +82,7 @@ class PerVoxelMethod : public Method {
   PerVoxelMethod(MarchParams mp, IVec3 res) : mp_(mp), res_(res) {}
   RenderResult render(const Scene& scene, Progress* progress) override {
     RenderResult r;
-    fillStats(r.stats, "per-voxel", scene);
+    fillCpuStats(r.stats, "per-voxel", scene);
     const DensityGrid density = buildDensityVolume(scene, r.stats);
     RadianceGrid radiance(scene.medium.bounds, res_);
     PerVoxelStats pv;

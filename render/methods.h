@@ -22,6 +22,9 @@ IVec3 parseRadianceResolution(Params& render, const Scene& scene);
 /// Builds the medium's density volume at its resolution, timed as stage "density".
 DensityGrid buildDensityVolume(const Scene& scene, RenderStats& stats);
 
+/// Sets method, backend "cpu", device and image size of a CPU method's stats.
+void fillCpuStats(RenderStats& stats, const std::string& method, const Scene& scene);
+
 /// Marches the camera rays through `density` with S looked up trilinearly in `radiance`, timed
 /// as stage "march" (the integrator shared by every radiance-volume method on the CPU).
 Image marchRadianceVolume(const Scene& scene, const DensityGrid& density,

@@ -10,6 +10,9 @@ namespace scatterlab {
 
 namespace {
 
+/// density -> sampler -> evaluate() -> reconstruction -> the CPU marcher. `gradient`, `rbf` and
+/// `nearest` evaluate the sampler's samples; `adaptive` overrides evaluate() with dynamic
+/// sampling.
 class SampledMethod : public Method {
  public:
   SampledMethod(std::string name, std::string samplerType, MarchParams mp, IVec3 res,
@@ -26,21 +29,14 @@ class SampledMethod : public Method {
   RenderResult render(const Scene& scene, Progress* progress) override {
     RenderResult r;
     RenderStats& st = r.stats;
-    st.method = name_;
-    st.backend = "cpu";
-    st.device = "CPU (TBB)";
-    st.width = scene.camera.width;
-    st.height = scene.camera.height;
+    fillCpuStats(st, name_, scene);
     const DensityGrid density = buildDensityVolume(scene, st);
     std::vector<RadianceSample> samples;
     {
       ScopedTimer t(st, "sampling");
       samples = sampler_->generate(scene, density);
     }
-    {
-      ScopedTimer t(st, "evaluation");
-      evaluator_->evaluate(scene, density, samples, /*gradients=*/name_ == "gradient");
-    }
+    samples = evaluate(scene, density, std::move(samples), st);
     RadianceGrid radiance(scene.medium.bounds, res_);
     ReconstructionStats rs;
     {
@@ -49,16 +45,25 @@ class SampledMethod : public Method {
     }
     r.image = marchRadianceVolume(scene, density, radiance, mp_.march, st, progress);
     st.samples = (long long)samples.size();
-    r.samples = std::move(samples);
     st.extra["sampler"] = samplerType_;
     st.extra["uncovered_voxels"] = rs.uncovered;
     st.extra["radiance_resolution"] = {res_.x, res_.y, res_.z};
     st.extra["march_step"] = mp_.march.step;
     st.extra["delta1"] = mp_.delta1;
+    r.samples = std::move(samples);
     return r;
   }
 
- private:
+ protected:
+  /// Computes S (and ∇S for `gradient`) of the sampler's samples, timed as "evaluation".
+  virtual std::vector<RadianceSample> evaluate(const Scene& scene, const DensityGrid& density,
+                                               std::vector<RadianceSample> samples,
+                                               RenderStats& st) {
+    ScopedTimer t(st, "evaluation");
+    evaluator_->evaluate(scene, density, samples, /*gradients=*/name_ == "gradient");
+    return samples;
+  }
+
   std::string name_, samplerType_;
   MarchParams mp_;
   IVec3 res_;
@@ -67,50 +72,26 @@ class SampledMethod : public Method {
   std::unique_ptr<Reconstruction> reconstruction_;
 };
 
-/// `adaptive` (paper Sec. 5): initial samples -> dynamic sampling (recursive splitting by the
-/// local shading error, evaluating S and ∇S level by level) -> gradient reconstruction (Eq. 4)
-/// -> the CPU marcher.
-class AdaptiveMethod : public Method {
+/// `adaptive` (paper Sec. 5): the initial samples are split by dynamic sampling, which
+/// evaluates S and ∇S level by level, before the gradient reconstruction (Eq. 4).
+class AdaptiveMethod : public SampledMethod {
  public:
   AdaptiveMethod(std::string samplerType, MarchParams mp, IVec3 res, DynamicSamplingSettings ds,
                  std::unique_ptr<Sampler> sampler, std::unique_ptr<RadianceEvaluator> evaluator,
                  std::unique_ptr<Reconstruction> reconstruction)
-      : samplerType_(std::move(samplerType)),
-        mp_(mp),
-        res_(res),
-        ds_(std::move(ds)),
-        sampler_(std::move(sampler)),
-        evaluator_(std::move(evaluator)),
-        reconstruction_(std::move(reconstruction)) {}
+      : SampledMethod("adaptive", std::move(samplerType), mp, res, std::move(sampler),
+                      std::move(evaluator), std::move(reconstruction)),
+        ds_(std::move(ds)) {}
 
-  RenderResult render(const Scene& scene, Progress* progress) override {
-    RenderResult r;
-    RenderStats& st = r.stats;
-    st.method = "adaptive";
-    st.backend = "cpu";
-    st.device = "CPU (TBB)";
-    st.width = scene.camera.width;
-    st.height = scene.camera.height;
-    const DensityGrid density = buildDensityVolume(scene, st);
-    std::vector<RadianceSample> initial;
-    {
-      ScopedTimer t(st, "sampling");
-      initial = sampler_->generate(scene, density);
-    }
+ protected:
+  std::vector<RadianceSample> evaluate(const Scene& scene, const DensityGrid& density,
+                                       std::vector<RadianceSample> initial,
+                                       RenderStats& st) override {
     DynamicSamplingResult ds;
     {
       ScopedTimer t(st, "dynamic_sampling");
       ds = dynamicSampling(scene, density, std::move(initial), *evaluator_, ds_);
     }
-    RadianceGrid radiance(scene.medium.bounds, res_);
-    ReconstructionStats rs;
-    {
-      ScopedTimer t(st, "reconstruction");
-      rs = reconstruction_->reconstruct(scene, density, ds.samples, radiance);
-    }
-    r.image = marchRadianceVolume(scene, density, radiance, mp_.march, st, progress);
-
-    st.samples = (long long)ds.samples.size();
     std::vector<long long> perLevel(ds.levels.size(), 0);
     for (const auto& s : ds.samples) ++perLevel[std::size_t(s.level)];
     Json levels = Json::array();
@@ -129,23 +110,12 @@ class AdaptiveMethod : public Method {
     st.extra["levels"] = levels;
     st.extra["epsilon"] = ds_.epsilon;
     st.extra["tau"] = ds_.perSampleTau ? "sample" : "ancestor";
-    st.extra["sampler"] = samplerType_;
-    st.extra["uncovered_voxels"] = rs.uncovered;
-    st.extra["radiance_resolution"] = {res_.x, res_.y, res_.z};
-    st.extra["march_step"] = mp_.march.step;
-    st.extra["delta1"] = mp_.delta1;
-    r.samples = std::move(ds.samples);
-    return r;
+    st.extra["probes"] = ds_.probes;
+    return std::move(ds.samples);
   }
 
  private:
-  std::string samplerType_;
-  MarchParams mp_;
-  IVec3 res_;
   DynamicSamplingSettings ds_;
-  std::unique_ptr<Sampler> sampler_;
-  std::unique_ptr<RadianceEvaluator> evaluator_;
-  std::unique_ptr<Reconstruction> reconstruction_;
 };
 
 /// The render.sampler object (default: Gaussian centres when the medium has Gaussians, else
