@@ -16,8 +16,13 @@ namespace {
 std::string tempPathFor(const std::string& path) {
   static std::atomic<unsigned> counter{0};
   const fs::path p(path);
-  const std::string name = "." + p.filename().string() + ".tmp" + std::to_string(::getpid()) + "_" +
-                           std::to_string(counter++);
+  // Appended piecewise: GCC 12 reports a false -Wrestrict for "." + std::string.
+  std::string name(".");
+  name += p.filename().string();
+  name += ".tmp";
+  name += std::to_string(::getpid());
+  name += "_";
+  name += std::to_string(counter++);
   return (p.parent_path() / name).string();
 }
 
