@@ -4,6 +4,7 @@
 #include <chrono>
 #include <climits>
 
+#include "core/error.h"
 #include "gpu/context.h"
 #include "gpu/shaders.h"
 #include "gpu/stages.h"

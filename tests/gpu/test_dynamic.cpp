@@ -227,7 +227,7 @@ TEST(GpuPerVoxelMethod, GlowSceneWithinHalfAPercent) {
   const RenderResult gv = renderWith(scene, planes, "gpu");
   const double err = relL2(gpu.image, cpu.image), errPlanes = relL2(gv.image, cpu.image);
   std::printf("glow per-voxel gpu vs cpu: ray-steps %.3g, view-planes %.3g\n", err, errPlanes);
-  EXPECT_EQ(gpu.stats.extra["slicing"], "ray-steps");
+  EXPECT_EQ(gpu.stats.extra["slicing"].get<std::string>(), "ray-steps");
   EXPECT_LT(err, 0.005);
 }
 
