@@ -5,11 +5,13 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <random>
 
 #include "api/scatterlab.h"
 #include "gpu/context.h"
+#include "gpu/dynamic_sampling.h"
 #include "gpu/stages.h"
 #include "gpu/timer.h"
 #include "gpu/volume.h"
@@ -120,6 +122,89 @@ void BM_GpuSliceMarch800x600(benchmark::State& state) {
   state.counters["slices"] = slices;
 }
 
+/// Like gpuLoop, and adds each stage's mean GPU ms as a counter (per-stage times of a pipeline).
+template <class Body>
+void gpuStageLoop(benchmark::State& state, Body&& body) {
+  std::vector<std::pair<std::string, double>> sums;
+  int n = 0;
+  for (auto _ : state) {
+    gpu::StageTimer timer;
+    body(timer);
+    double ms = 0;
+    const auto res = timer.results();
+    for (const auto& [stage, t] : res) {
+      ms += t;
+      auto it = std::find_if(sums.begin(), sums.end(), [&](auto& p) { return p.first == stage; });
+      if (it == sums.end())
+        sums.emplace_back(stage, t);
+      else
+        it->second += t;
+    }
+    ++n;
+    state.SetIterationTime(ms * 1e-3);
+  }
+  for (const auto& [stage, t] : sums) state.counters[stage + " ms"] = t / std::max(n, 1);
+  state.SetLabel(gpu::context().info().renderer);
+}
+
+/// `gradient` on the GPU without density construction: 512 samples of the glow scene ->
+/// volume tracer (S, ∇S) -> gradient splat -> slice march (view planes, 800×600).
+void BM_GpuGradientPipeline512(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const gpu::Volume d = gpu::buildDensity(s);
+  const float vox = s.medium.voxelSize();
+  MarchSettings ms;
+  ms.step = vox;
+  gpuStageLoop(state, [&](gpu::StageTimer& t) {
+    auto samples = samples512(s);
+    gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, &t);
+    const gpu::Volume r =
+        gpu::GradientSplatGpu().reconstruct(d, samples, s.medium.bounds, s.medium.resolution,
+                                            nullptr, &t);
+    Image img = gpu::SliceMarcher(ms).integrate(s, d, r, &t);
+    benchmark::DoNotOptimize(img.pixels().data());
+  });
+}
+
+/// `adaptive` on the GPU on the spot-light shaft scene (data/scenes/shaft.json, uniform
+/// density): 541 grid samples -> GPU dynamic sampling (ε 1e-4, default levels 16, 32, 64 up to
+/// half the resolution) -> gradient splat -> slice march, 800×600.
+void BM_GpuAdaptivePipeline(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
+  const int res = int(state.range(0));
+  s.medium.resolution = IVec3(res);
+  s.camera.width = 800;
+  s.camera.height = 600;
+  const gpu::Volume d = gpu::buildDensity(s);
+  const DensityGrid hd = gpu::readDensity(d);
+  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
+  Params sp(samplerCfg, "sampler");
+  auto sampler = samplers().get("grid", "sampler")(sp, s);
+  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
+  const float vox = s.medium.voxelSize();
+  DynamicSamplingSettings ds;
+  ds.epsilon = 1e-4;
+  ds.levels.clear();
+  for (int l : {16, 32, 64})
+    if (l <= res / 2) ds.levels.push_back(l);
+  ds.delta1 = vox;
+  MarchSettings ms;
+  ms.step = vox;
+  std::size_t count = 0;
+  gpuStageLoop(state, [&](gpu::StageTimer& t) {
+    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds, &t);
+    count = r.samples.size();
+    const gpu::Volume rad = gpu::GradientSplatGpu().reconstruct(
+        d, r.samples, s.medium.bounds, s.medium.resolution, nullptr, &t);
+    Image img = gpu::SliceMarcher(ms).integrate(s, d, rad, &t);
+    benchmark::DoNotOptimize(img.pixels().data());
+  });
+  state.counters["samples"] = double(count);
+}
+
 /// Iterations are fixed small so the suite finishes on llvmpipe; on a real GPU set
 /// SCATTERLAB_GPU_BENCH_ITERS (e.g. 100) to run every GPU benchmark that many times.
 int iters(int n) {
@@ -146,6 +231,18 @@ BENCHMARK(BM_GpuGradientSplat512)
     ->Iterations(iters(2))
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GpuPerVoxel)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuGradientPipeline512)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseManualTime()
+    ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuAdaptivePipeline)
     ->Arg(64)
     ->Arg(128)
     ->UseManualTime()

@@ -6,6 +6,9 @@
 #include "gpu/methods.h"
 #include "gpu/stages.h"
 #include "render/methods.h"
+#include "render/radiance_evaluator.h"
+#include "render/sampled_methods.h"
+#include "sampling/dynamic_sampling.h"
 
 namespace scatterlab::gpu {
 
@@ -14,6 +17,24 @@ namespace {
 Interval stepRange(const Scene& scene) {
   const float ext = glm::length(scene.medium.bounds.extent());
   return Interval{ext * 1e-6, ext, true, false};
+}
+
+/// render.slicing of the GPU methods' slice marcher: "ray-steps" (default; the CPU marcher's
+/// sample points, so the image matches the CPU method) or "view-planes" (the paper's slabs
+/// perpendicular to the view axis).
+bool parseRaySteps(Params& p) {
+  return p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps";
+}
+
+SampledGpuConfig sampledConfig(Params& p, const Scene& scene, std::string note) {
+  SampledGpuConfig c;
+  c.mp = parseMarchParams(p, scene);
+  c.radianceResolution = parseRadianceResolution(p, scene);
+  c.delta2 = parseTracerSteps(p, scene).delta2;
+  c.raySteps = parseRaySteps(p);
+  c.sampler = makeSampler(p, scene, c.samplerType);
+  c.backendNote = std::move(note);
+  return c;
 }
 
 }  // namespace
@@ -63,7 +84,26 @@ void registerGpuStages() {
     const std::string b = resolveBackend(backend, &note);
     if (b == "cpu") return cpu(p, scene, "cpu");
     const MarchParams mp = parseMarchParams(p, scene);
-    return makePerVoxelGpuMethod(mp, parseRadianceResolution(p, scene), note);
+    const IVec3 res = parseRadianceResolution(p, scene);
+    return makePerVoxelGpuMethod(mp, res, parseRaySteps(p), note);
+  });
+
+  // gradient and adaptive: the same wrapping (the CPU factories stay for "cpu").
+  const MethodFactory cpuGradient = methods().get("gradient", "render.method");
+  methods().add("gradient", [cpuGradient](Params& p, const Scene& scene,
+                                          const std::string& backend) {
+    std::string note;
+    if (resolveBackend(backend, &note) == "cpu") return cpuGradient(p, scene, "cpu");
+    return makeGradientGpuMethod(sampledConfig(p, scene, note));
+  });
+  const MethodFactory cpuAdaptive = methods().get("adaptive", "render.method");
+  methods().add("adaptive", [cpuAdaptive](Params& p, const Scene& scene,
+                                          const std::string& backend) {
+    std::string note;
+    if (resolveBackend(backend, &note) == "cpu") return cpuAdaptive(p, scene, "cpu");
+    SampledGpuConfig c = sampledConfig(p, scene, note);
+    DynamicSamplingSettings ds = parseDynamicSampling(p, scene);
+    return makeAdaptiveGpuMethod(std::move(c), std::move(ds));
   });
 }
 

@@ -7,8 +7,10 @@
 namespace scatterlab::gpu {
 
 /// Adds "volume-tracer-gpu", "gradient-gpu", "per-voxel-gpu" and "slice-marcher" to the stage
-/// registries, and makes the `per-voxel` method dispatch to the GPU for backend "gpu" (and
-/// "auto" when a hardware GPU is present). Call after registerReferenceMethods().
+/// registries, and makes the `per-voxel`, `gradient` and `adaptive` methods dispatch to the GPU
+/// for backend "gpu" (and "auto" when a hardware GPU is present); their GPU variants read the
+/// extra render key `slicing` ("ray-steps" default | "view-planes"). Call after
+/// registerReferenceMethods() and registerSampledMethods().
 void registerGpuStages();
 
 /// Resolves backend "auto": "gpu" when a context can be made on a hardware GPU (not a

@@ -8,6 +8,22 @@
 
 namespace scatterlab {
 
+std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type) {
+  const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
+  Json defaultSampler = hasGaussians ? Json{{"type", "gaussian-centres"}}
+                                     : Json{{"type", "jittered"}, {"count", 512}};
+  std::unique_ptr<Sampler> sampler;
+  {
+    const bool given = p.has("sampler");
+    Params sp = given ? p.child("sampler") : Params(defaultSampler, p.keyPath("sampler"));
+    if (!given) p.allow("sampler");
+    type = sp.string("type", std::string(hasGaussians ? "gaussian-centres" : "jittered"));
+    sampler = samplers().get(type, sp.keyPath("type"))(sp, scene);
+    sp.finish();
+  }
+  return sampler;
+}
+
 namespace {
 
 /// density -> sampler -> evaluate() -> reconstruction -> the CPU marcher. `gradient`, `rbf` and
@@ -117,24 +133,6 @@ class AdaptiveMethod : public SampledMethod {
  private:
   DynamicSamplingSettings ds_;
 };
-
-/// The render.sampler object (default: Gaussian centres when the medium has Gaussians, else
-/// 512 jittered samples); `type` receives the sampler's name.
-std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type) {
-  const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
-  Json defaultSampler = hasGaussians ? Json{{"type", "gaussian-centres"}}
-                                     : Json{{"type", "jittered"}, {"count", 512}};
-  std::unique_ptr<Sampler> sampler;
-  {
-    const bool given = p.has("sampler");
-    Params sp = given ? p.child("sampler") : Params(defaultSampler, p.keyPath("sampler"));
-    if (!given) p.allow("sampler");
-    type = sp.string("type", std::string(hasGaussians ? "gaussian-centres" : "jittered"));
-    sampler = samplers().get(type, sp.keyPath("type"))(sp, scene);
-    sp.finish();
-  }
-  return sampler;
-}
 
 MethodFactory sampledFactory(const std::string& name) {
   return [name](Params& p, const Scene& scene, const std::string& backend) {

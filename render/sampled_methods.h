@@ -9,9 +9,18 @@
 /// Stats: samples, uncovered_voxels, timings density, sampling, evaluation, reconstruction,
 /// march.
 
+#include <memory>
+#include <string>
+
 #include "core/method.h"
+#include "core/params.h"
+#include "core/stages.h"
 
 namespace scatterlab {
+
+/// The render.sampler object (default: Gaussian centres when the medium has Gaussians, else
+/// 512 jittered samples); `type` receives the sampler's name. Shared with the GPU methods.
+std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type);
 
 /// Registers the three methods in methods(). Needs registerSamplers(),
 /// registerRadianceEvaluators() and registerReconstructions() to have run before rendering.

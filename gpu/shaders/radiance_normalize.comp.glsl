@@ -15,7 +15,8 @@ void main() {
   if (any(greaterThanEqual(v, uGridDims))) return;
   vec4 s = imageLoad(uSums, v);
   if (s.a > 0.0) {
-    imageStore(uRadiance, v, vec4(s.rgb / s.a, 0.0));
+    // clampNonNegative of the CPU twin: Taylor extrapolation can go below zero at a shaft edge.
+    imageStore(uRadiance, v, vec4(max(s.rgb / s.a, vec3(0.0)), 0.0));
   } else {
     imageStore(uRadiance, v, vec4(0.0));
     float D = uSameGrid ? texelFetch(uDensity, v, 0).r

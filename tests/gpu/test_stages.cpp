@@ -140,7 +140,8 @@ TEST(GpuGradientSplat, MatchesDirectEq4) {
           sum += W * s.taylor(x);
           wsum += W;
         }
-        const Vec3 want = wsum > 0 ? sum / wsum : Vec3(0.0f);
+        // Eq. 4, clamped to non-negative as the CPU reconstruction (clampNonNegative).
+        const Vec3 want = wsum > 0 ? glm::max(sum / wsum, Vec3(0.0f)) : Vec3(0.0f);
         if (wsum > 0)
           ++covered;
         else if (density.at(i, j, k) > 0)

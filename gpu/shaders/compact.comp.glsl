@@ -1,0 +1,27 @@
+// Dynamic sampling, compaction: every vertex of G_{k+1} in the set goes to slot offsets[v]
+// (exclusive scan of inSet) of the next level's sample list, with its position (the vertex,
+// as GridInfoBuffer::vertex), the level's valid radius and its ancestor. Ascending vertex order.
+layout(local_size_x = 256) in;
+
+layout(std430, binding = 7) readonly buffer InSet { uint inSet[]; };
+layout(std430, binding = 8) readonly buffer VertexAncestor { int vertexAncestor[]; };
+layout(std430, binding = 9) readonly buffer Offsets { uint offsets[]; };
+layout(std430, binding = 10) writeonly buffer NextSamples { vec4 nextSamples[]; };
+layout(std430, binding = 11) writeonly buffer NextAncestors { int nextAncestors[]; };
+
+uniform uint uVertexCount;
+uniform vec3 uGridMin;
+uniform vec3 uGridInterval;
+uniform ivec3 uGridDims;
+uniform float uRadius;
+
+void main() {
+  uint v = gl_GlobalInvocationID.x;
+  if (v >= uVertexCount || inSet[v] == 0u) return;
+  uint nx = uint(uGridDims.x), ny = uint(uGridDims.y);
+  uint i = v % nx, j = (v / nx) % ny, k = v / (nx * ny);
+  precise vec3 q = uGridMin + (vec3(float(i), float(j), float(k)) + 0.5) * uGridInterval;
+  uint o = offsets[v];
+  nextSamples[o] = vec4(q, uRadius);
+  nextAncestors[o] = vertexAncestor[v];
+}

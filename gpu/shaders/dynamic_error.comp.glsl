@@ -1,0 +1,76 @@
+// Dynamic sampling (paper Sec. 5), one invocation per sample of the current level: S and ∇S
+// (as volume_tracer.comp.glsl), the traced S and the density at the probes x_j + R_j·d_i,
+// τ to the viewer, the local shading error E_j of Eq. 5 and the split flag E_j > ε. Mirrors
+// sampling/dynamic_sampling.cpp (localShadingError, viewTransmittance) operation for operation.
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 1) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
+layout(std430, binding = 2) readonly buffer Ancestors { int ancestors[]; };
+layout(std430, binding = 3) buffer RootTau { float rootTau[]; };  // τ of every level-0 sample
+// Per sample four vec4: S, dS/dx, dS/dy, dS/dz (rgb).
+layout(std430, binding = 4) writeonly buffer Results { vec4 results[]; };
+layout(std430, binding = 5) writeonly buffer Errors { float errors[]; };
+layout(std430, binding = 6) writeonly buffer SplitFlags { uint splitFlags[]; };
+
+uniform uint uCount;
+uniform float uDelta2;
+uniform int uProbes;            // 6, 14 or 26
+uniform vec3 uProbeDirs[26];    // probeDirections() of the CPU, computed on the host
+uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
+uniform float uTauDelta1;       // step of the τ trace
+uniform float uEpsilon;
+uniform int uFinal;             // 1: finest level, S and ∇S only
+uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
+
+// DensityGrid::sample: 0 outside the (closed) box.
+float densityAt(vec3 p) {
+  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 0.0;
+  precise vec3 u = (p - uBoxMin) * uDensityInvCell - 0.5;
+  return densityAtIndex(u);
+}
+
+float viewTransmittance(vec3 x) { return exp(-uSigmaT * opticalDepth(x, uEye, uTauDelta1)); }
+
+void main() {
+  uint j = gl_GlobalInvocationID.x;
+  if (j >= uCount) return;
+  vec4 pr = samples[j];
+  vec3 x = pr.xyz;
+  float R = pr.w;
+  vec3 S = sourceTowardsEye(x);
+  vec3 dS[3];
+  for (int a = 0; a < 3; ++a) {
+    vec3 e = vec3(0.0);
+    e[a] = uDelta2;
+    dS[a] = (sourceTowardsEye(x + e) - sourceTowardsEye(x - e)) / (2.0 * uDelta2);
+  }
+  results[4u * j] = vec4(S, 0.0);
+  for (int a = 0; a < 3; ++a) results[4u * j + 1u + uint(a)] = vec4(dS[a], 0.0);
+  if (uFinal != 0) {
+    errors[j] = 0.0;
+    splitFlags[j] = 0u;
+    return;
+  }
+  float tau;
+  if (uTauMode == 0) {
+    tau = viewTransmittance(x);
+    rootTau[j] = tau;
+  } else if (uTauMode == 1) {
+    tau = rootTau[ancestors[j]];
+  } else {
+    tau = viewTransmittance(x);
+  }
+  precise float sum = 0.0;
+  for (int i = 0; i < uProbes; ++i) {
+    precise vec3 p = x + R * uProbeDirs[i];
+    vec3 Sp = sourceTowardsEye(p);
+    float D = densityAt(p);
+    precise vec3 d = p - x;
+    precise vec3 taylor = S + d.x * dS[0] + d.y * dS[1] + d.z * dS[2];
+    precise vec3 diff = abs(taylor - Sp);
+    sum += (diff.x + diff.y + diff.z) / 3.0 * D;
+  }
+  precise float E = R * R * R * sum / float(uProbes) * tau;
+  errors[j] = E;
+  splitFlags[j] = E > uEpsilon ? 1u : 0u;
+}

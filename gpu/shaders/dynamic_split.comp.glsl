@@ -1,0 +1,39 @@
+// Dynamic sampling, splitting: one invocation per sample of level k; a sample with its split
+// flag set marks every vertex of G_{k+1} strictly inside its valid sphere in the grid
+// information buffer (inSet = 1) and lowers the vertex's ancestor with atomicMin. Mirrors
+// GridInfoBuffer::markSphere; the index box is widened by one vertex on each side so that the
+// sphere test alone (same float operations as the CPU, `precise`) decides membership.
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 1) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
+layout(std430, binding = 2) readonly buffer Ancestors { int ancestors[]; };
+layout(std430, binding = 6) readonly buffer SplitFlags { uint splitFlags[]; };
+layout(std430, binding = 7) buffer InSet { uint inSet[]; };
+layout(std430, binding = 8) buffer VertexAncestor { int vertexAncestor[]; };  // INT_MAX = none
+
+uniform uint uCount;
+uniform vec3 uGridMin;
+uniform vec3 uGridInterval;
+uniform ivec3 uGridDims;
+
+void main() {
+  uint s = gl_GlobalInvocationID.x;
+  if (s >= uCount || splitFlags[s] == 0u) return;
+  vec3 c = samples[s].xyz;
+  float R = samples[s].w;
+  int anc = ancestors[s];
+  ivec3 lo = max(ivec3(ceil((c - R - uGridMin) / uGridInterval - 0.5)) - 1, ivec3(0));
+  ivec3 hi = min(ivec3(floor((c + R - uGridMin) / uGridInterval - 0.5)) + 1, uGridDims - 1);
+  precise float R2 = R * R;
+  for (int k = lo.z; k <= hi.z; ++k)
+    for (int j = lo.y; j <= hi.y; ++j)
+      for (int i = lo.x; i <= hi.x; ++i) {
+        precise vec3 q = uGridMin + (vec3(i, j, k) + 0.5) * uGridInterval;
+        precise vec3 d = q - c;
+        precise float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+        if (d2 >= R2) continue;
+        uint v = (uint(k) * uint(uGridDims.y) + uint(j)) * uint(uGridDims.x) + uint(i);
+        inSet[v] = 1u;
+        atomicMin(vertexAncestor[v], anc);
+      }
+}
