@@ -159,9 +159,8 @@ void BM_GpuGradientPipeline512(benchmark::State& state) {
   gpuStageLoop(state, [&](gpu::StageTimer& t) {
     auto samples = samples512(s);
     gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, &t);
-    const gpu::Volume r =
-        gpu::GradientSplatGpu().reconstruct(d, samples, s.medium.bounds, s.medium.resolution,
-                                            nullptr, &t);
+    const gpu::Volume r = gpu::GradientSplatGpu().reconstruct(d, samples, s.medium.bounds,
+                                                              s.medium.resolution, nullptr, &t);
     Image img = gpu::SliceMarcher(ms).integrate(s, d, r, &t);
     benchmark::DoNotOptimize(img.pixels().data());
   });
@@ -197,8 +196,8 @@ void BM_GpuAdaptivePipeline(benchmark::State& state) {
   gpuStageLoop(state, [&](gpu::StageTimer& t) {
     const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds, &t);
     count = r.samples.size();
-    const gpu::Volume rad = gpu::GradientSplatGpu().reconstruct(
-        d, r.samples, s.medium.bounds, s.medium.resolution, nullptr, &t);
+    const gpu::Volume rad = gpu::GradientSplatGpu().reconstruct(d, r.samples, s.medium.bounds,
+                                                                s.medium.resolution, nullptr, &t);
     Image img = gpu::SliceMarcher(ms).integrate(s, d, rad, &t);
     benchmark::DoNotOptimize(img.pixels().data());
   });

@@ -31,9 +31,8 @@ Buffer makeBuffer(std::size_t bytes, const void* data, std::string_view label) {
 }
 
 const Program& scanProgram() {
-  return cachedProgram("scan (block)", [] {
-    return computeProgram({"scan.comp.glsl"}, {}, "scan (block)");
-  });
+  return cachedProgram("scan (block)",
+                       [] { return computeProgram({"scan.comp.glsl"}, {}, "scan (block)"); });
 }
 const Program& scanAddProgram() {
   return cachedProgram("scan (add block sums)", [] {
@@ -105,14 +104,12 @@ std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
                                          std::vector<RadianceSample> initial,
                                          DynamicSamplingGpuSteps steps,
-                                         const DynamicSamplingSettings& settings,
-                                         StageTimer* timer,
+                                         const DynamicSamplingSettings& settings, StageTimer* timer,
                                          std::vector<std::vector<float>>* errorsOut) {
   using Clock = std::chrono::steady_clock;
   context();
   const Program& errorProgram = cachedProgram("dynamic sampling error", [] {
-    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {},
-                          "dynamic sampling error");
+    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {}, "dynamic sampling error");
   });
   const Program& splitProgram = cachedProgram("dynamic sampling split", [] {
     return computeProgram({"dynamic_split.comp.glsl"}, {}, "dynamic sampling split");
@@ -144,7 +141,8 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
       pr.insert(pr.end(), {s.position.x, s.position.y, s.position.z, s.radius});
       anc[i] = std::int32_t(i);
     }
-    samples = makeBuffer(pr.size() * sizeof(float), pr.data(), "dynamic sampling samples (level 0)");
+    samples =
+        makeBuffer(pr.size() * sizeof(float), pr.data(), "dynamic sampling samples (level 0)");
     ancestors = makeBuffer(anc.size() * sizeof(std::int32_t), anc.data(),
                            "dynamic sampling ancestors (level 0)");
   }
@@ -245,12 +243,12 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
         }
         checkGl("dynamic sampling: scan");
         const std::size_t next = scanTotal(inSet, offsets, GLuint(nv));
-        Buffer nextSamples = makeBuffer(next * 4 * sizeof(float), nullptr,
-                                        "dynamic sampling samples (level " +
-                                            std::to_string(level + 1) + ")");
-        Buffer nextAnc = makeBuffer(next * sizeof(std::int32_t), nullptr,
-                                    "dynamic sampling ancestors (level " +
-                                        std::to_string(level + 1) + ")");
+        Buffer nextSamples =
+            makeBuffer(next * 4 * sizeof(float), nullptr,
+                       "dynamic sampling samples (level " + std::to_string(level + 1) + ")");
+        Buffer nextAnc =
+            makeBuffer(next * sizeof(std::int32_t), nullptr,
+                       "dynamic sampling ancestors (level " + std::to_string(level + 1) + ")");
         {
           ScopedGpuTimer t(timer, "ds compact");
           compactProgram.use();

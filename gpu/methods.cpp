@@ -64,8 +64,8 @@ class PerVoxelGpuMethod : public Method {
     int slices = 0;
     {
       ScopedTimer t(st, "march");
-      r.image = SliceMarcher(mp_.march, raySteps_)
-                    .integrate(scene, density, radiance, &timer, &slices);
+      r.image =
+          SliceMarcher(mp_.march, raySteps_).integrate(scene, density, radiance, &timer, &slices);
     }
     st.extra["traced_voxels"] = pv.traced;
     st.extra["empty_voxels"] = pv.skipped;

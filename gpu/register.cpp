@@ -90,21 +90,21 @@ void registerGpuStages() {
 
   // gradient and adaptive: the same wrapping (the CPU factories stay for "cpu").
   const MethodFactory cpuGradient = methods().get("gradient", "render.method");
-  methods().add("gradient", [cpuGradient](Params& p, const Scene& scene,
-                                          const std::string& backend) {
-    std::string note;
-    if (resolveBackend(backend, &note) == "cpu") return cpuGradient(p, scene, "cpu");
-    return makeGradientGpuMethod(sampledConfig(p, scene, note));
-  });
+  methods().add("gradient",
+                [cpuGradient](Params& p, const Scene& scene, const std::string& backend) {
+                  std::string note;
+                  if (resolveBackend(backend, &note) == "cpu") return cpuGradient(p, scene, "cpu");
+                  return makeGradientGpuMethod(sampledConfig(p, scene, note));
+                });
   const MethodFactory cpuAdaptive = methods().get("adaptive", "render.method");
-  methods().add("adaptive", [cpuAdaptive](Params& p, const Scene& scene,
-                                          const std::string& backend) {
-    std::string note;
-    if (resolveBackend(backend, &note) == "cpu") return cpuAdaptive(p, scene, "cpu");
-    SampledGpuConfig c = sampledConfig(p, scene, note);
-    DynamicSamplingSettings ds = parseDynamicSampling(p, scene);
-    return makeAdaptiveGpuMethod(std::move(c), std::move(ds));
-  });
+  methods().add("adaptive",
+                [cpuAdaptive](Params& p, const Scene& scene, const std::string& backend) {
+                  std::string note;
+                  if (resolveBackend(backend, &note) == "cpu") return cpuAdaptive(p, scene, "cpu");
+                  SampledGpuConfig c = sampledConfig(p, scene, note);
+                  DynamicSamplingSettings ds = parseDynamicSampling(p, scene);
+                  return makeAdaptiveGpuMethod(std::move(c), std::move(ds));
+                });
 }
 
 }  // namespace scatterlab::gpu

@@ -39,27 +39,26 @@ TEST(GpuScan, EqualsCpuScanOnRandomFlags) {
 
 /// A uniform slab lit by a narrow spot light (a shaft), 24³, tiny image.
 Scene spotScene(int width = 32, int height = 24) {
-  const Json doc{
-      {"medium",
-       {{"bounds", {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}}},
-        {"density", {{"type", "uniform"}, {"value", 1.0}}},
-        {"resolution", 24},
-        {"sigma_t", 1.2},
-        {"albedo", 0.6},
-        {"phase", {{"type", "isotropic"}}}}},
-      {"lights", Json::array({{{"type", "spot"},
-                               {"position", {0.35, 1.15, 0.5}},
-                               {"direction", {0.3, -1, 0.05}},
-                               {"intensity", {14, 13, 11}},
-                               {"inner_deg", 9},
-                               {"outer_deg", 12}}})},
-      {"camera",
-       {{"position", {0.5, 0.5, -1.6}},
-        {"look_at", {0.5, 0.5, 0.5}},
-        {"fov_y_deg", 40},
-        {"width", width},
-        {"height", height}}},
-      {"render", {{"method", "adaptive"}}}};
+  const Json doc{{"medium",
+                  {{"bounds", {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}}},
+                   {"density", {{"type", "uniform"}, {"value", 1.0}}},
+                   {"resolution", 24},
+                   {"sigma_t", 1.2},
+                   {"albedo", 0.6},
+                   {"phase", {{"type", "isotropic"}}}}},
+                 {"lights", Json::array({{{"type", "spot"},
+                                          {"position", {0.35, 1.15, 0.5}},
+                                          {"direction", {0.3, -1, 0.05}},
+                                          {"intensity", {14, 13, 11}},
+                                          {"inner_deg", 9},
+                                          {"outer_deg", 12}}})},
+                 {"camera",
+                  {{"position", {0.5, 0.5, -1.6}},
+                   {"look_at", {0.5, 0.5, 0.5}},
+                   {"fov_y_deg", 40},
+                   {"width", width},
+                   {"height", height}}},
+                 {"render", {{"method", "adaptive"}}}};
   return sceneFromJson(doc);
 }
 
@@ -92,8 +91,7 @@ TEST(GpuDynamicSampling, SameSampleSetAsCpu) {
   const Json cfg{{"delta1", delta1}, {"delta2", delta2}};
   Params p(cfg, "evaluator");
   auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator")(p, scene);
-  const DynamicSamplingResult cpu =
-      dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
+  const DynamicSamplingResult cpu = dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
 
   const gpu::Volume d = gpu::uploadDensity(density);
   std::vector<std::vector<float>> errors;
@@ -216,9 +214,8 @@ TEST(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
 TEST(GpuPerVoxelMethod, GlowSceneWithinHalfAPercent) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
-  const Scene scene =
-      loadScene(std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/glow.json",
-                {"medium.resolution=32", "camera.width=80", "camera.height=60"});
+  const Scene scene = loadScene(std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/glow.json",
+                                {"medium.resolution=32", "camera.width=80", "camera.height=60"});
   const Json render{{"method", "per-voxel"}};
   const RenderResult cpu = renderWith(scene, render, "cpu");
   const RenderResult gpu = renderWith(scene, render, "gpu");
