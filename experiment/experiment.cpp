@@ -274,6 +274,18 @@ std::string nowIso() {
 
 }  // namespace
 
+std::string findPlotPython() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("SCATTERLAB_PYTHON")) candidates.push_back(env);
+  candidates.push_back("python3");
+  candidates.push_back("/usr/bin/python3");
+  for (const std::string& py : candidates) {
+    const std::string cmd = "'" + py + "' -c 'import matplotlib' >/dev/null 2>&1";
+    if (std::system(cmd.c_str()) == 0) return py;
+  }
+  return "";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Scenes with replicated lights
 
@@ -681,6 +693,7 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
       peakResettable ? "VmHWM of the process after resetting it (clear_refs 5) before the run"
                      : "getrusage ru_maxrss (peak of the whole process so far)";
 
+  const bool barOn = opt.progress && ::isatty(STDERR_FILENO) != 0;
   // References, rendered once per distinct (scene, reference overrides, reference method) and
   // cached on disk under DIR/references/<name>-<hash>.exr.
   std::map<std::string, Reference> refCache;
@@ -718,7 +731,7 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
         rc.ok = true;
         logLine("reference " + base + ": rendered in " + fmt(rr.stats.totalMs(), "%.1f") + " ms");
         if (opt.log)
-          std::fprintf(opt.log, "%s reference %-12s %9.1f ms\n", opt.progress ? "\r\033[K" : "",
+          std::fprintf(opt.log, "%sreference %-30s %9.1f ms\n", barOn ? "\r\033[K" : "",
                        ref.name.c_str(), rr.stats.totalMs());
       }
     } catch (const std::exception& e) {
@@ -728,7 +741,7 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
     return rc;
   };
 
-  SweepBar bar{opt.progress && ::isatty(STDERR_FILENO) != 0, int(plan.runs.size())};
+  SweepBar bar{barOn, int(plan.runs.size())};
   for (const RunSpec& r : plan.runs) {
     const MethodSpec& m = *r.spec;
     RunRecord rec;
@@ -1112,12 +1125,12 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
         env ? env : (fs::path(SCATTERLAB_SOURCE_DIR) / "experiment" / "plots.py").string();
     if (!fs::exists(script)) {
       res.plotsNote = "plot script '" + script + "' not found";
-    } else if (std::system("python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) {
+    } else if (const std::string py = findPlotPython(); py.empty()) {
       res.plotsNote =
-          "python3 with matplotlib not found (install python3-matplotlib, e.g. by "
-          "scripts/setup.sh); no plots made";
+          "no python3 with matplotlib found ($SCATTERLAB_PYTHON, python3 on the PATH, "
+          "/usr/bin/python3; install python3-matplotlib, e.g. by scripts/setup.sh)";
     } else {
-      const std::string cmd = "python3 '" + script + "' '" + outDir + "' >> '" +
+      const std::string cmd = "'" + py + "' '" + script + "' '" + outDir + "' >> '" +
                               out("log.txt") + "' 2>&1";
       if (std::system(cmd.c_str()) != 0)
         res.plotsNote = "the plot script failed; see log.txt";

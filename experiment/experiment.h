@@ -142,6 +142,10 @@ struct ExperimentResult {
 ExperimentResult runExperiment(const std::string& configPath, const std::string& outDir,
                                const ExperimentOptions& options = {});
 
+/// The python interpreter the plots use: the first of $SCATTERLAB_PYTHON, `python3` on the PATH
+/// and /usr/bin/python3 that can import matplotlib; "" when none can.
+std::string findPlotPython();
+
 /// FNV-1a 64-bit hash of `text`, as 16 hex digits (stable across runs and machines).
 std::string stableHash(const std::string& text);
 

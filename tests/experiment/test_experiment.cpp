@@ -195,7 +195,7 @@ TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
     EXPECT_NE(report.find("speed-up vs per-voxel"), std::string::npos);
     EXPECT_NE(report.find("## Gallery"), std::string::npos);
   }
-  if (std::system("python3 -c 'import matplotlib' >/dev/null 2>&1") == 0) {
+  if (!findPlotPython().empty()) {
     EXPECT_TRUE(r.plotsNote.empty()) << r.plotsNote;
     EXPECT_TRUE(fs::exists(out / "plots" / "error_vs_samples.png"));
     EXPECT_TRUE(fs::exists(out / "plots" / "time_vs_resolution.png"));
