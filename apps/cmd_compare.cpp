@@ -7,7 +7,8 @@ namespace scatterlab::cli {
 
 Action addCompare(CLI::App& app) {
   struct Opts {
-    std::string image, reference;
+    std::string image, reference, diff;
+    float diffScale = 0.0f;
     bool json = false;
   };
   auto o = std::make_shared<Opts>();
@@ -16,9 +17,22 @@ Action addCompare(CLI::App& app) {
   c->add_option("image", o->image, "Image to judge (OpenEXR)")->required();
   c->add_option("reference", o->reference, "Reference image (OpenEXR)")->required();
   c->add_flag("--json", o->json, "Print JSON instead of text");
+  c->add_option("--diff", o->diff,
+                "Also write a PNG of |image - reference| (per channel), scaled so the largest "
+                "difference is white unless --diff-scale is given");
+  c->add_option("--diff-scale", o->diffScale, "Multiplier for --diff (default: 1/max)");
   return [o]() {
     const Image a = readExr(o->image), b = readExr(o->reference);
     const ImageError e = compareImages(a, b);
+    if (!o->diff.empty()) {
+      Image d(a.width(), a.height());
+      for (size_t i = 0; i < d.pixels().size(); ++i)
+        d.pixels()[i] = glm::abs(a.pixels()[i] - b.pixels()[i]);
+      const float k =
+          o->diffScale > 0 ? o->diffScale : (e.maxAbs > 0 ? float(1.0 / e.maxAbs) : 1.0f);
+      for (Vec3& p : d.pixels()) p *= k;
+      writePng(d, o->diff);
+    }
     if (o->json) {
       Json j;
       j["image"] = o->image;

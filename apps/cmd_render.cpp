@@ -4,12 +4,13 @@
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "render/sample_view.h"
 
 namespace scatterlab::cli {
 
 Action addRender(CLI::App& app) {
   struct Opts {
-    std::string scene, out, png, method, backend = "auto", stats;
+    std::string scene, out, png, method, backend = "auto", stats, samplesPng;
     std::vector<std::string> sets;
     float exposure = 0.0f;
     bool quiet = false;
@@ -30,6 +31,9 @@ Action addRender(CLI::App& app) {
       ->take_all()
       ->allow_extra_args(false);
   c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)");
+  c->add_option("--samples-png", o->samplesPng,
+                "Also write a PNG of the radiance samples over the dimmed image, coloured by "
+                "level (white initial, green/yellow/red finer); sample-based methods only");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
     const Scene scene = loadScene(o->scene, o->sets);
@@ -38,6 +42,7 @@ Action addRender(CLI::App& app) {
     checkWritablePath(o->out);
     if (!o->png.empty()) checkWritablePath(o->png);
     if (!o->stats.empty()) checkWritablePath(o->stats);
+    if (!o->samplesPng.empty()) checkWritablePath(o->samplesPng);
 
     Progress progress("render", 1, !o->quiet);
     RenderResult r = method->render(scene, &progress);
@@ -53,6 +58,13 @@ Action addRender(CLI::App& app) {
         f << r.stats.toJson().dump(2) << "\n";
         if (!f) throw IoError("cannot write stats '" + o->stats + "'");
       });
+    if (!o->samplesPng.empty()) {
+      if (r.samples.empty())
+        throw ConfigError("--samples-png: method '" + r.stats.method +
+                          "' used no radiance samples");
+      const Image view = drawSamples(r.image, r.samples, scene.camera);
+      out.stage(o->samplesPng, [&](const std::string& tmp) { writePng(view, tmp, o->exposure); });
+    }
     out.commit();
     if (!o->quiet) {
       std::printf("%s (%s, %s): %dx%d in %.1f ms\n", r.stats.method.c_str(),
@@ -63,6 +75,7 @@ Action addRender(CLI::App& app) {
       std::printf("wrote %s", o->out.c_str());
       if (!o->png.empty()) std::printf(", %s", o->png.c_str());
       if (!o->stats.empty()) std::printf(", %s", o->stats.c_str());
+      if (!o->samplesPng.empty()) std::printf(", %s", o->samplesPng.c_str());
       std::printf("\n");
     }
     return 0;

@@ -10,6 +10,7 @@
 #include "core/progress.h"
 #include "core/registry.h"
 #include "core/scene.h"
+#include "core/stages.h"
 #include "core/stats.h"
 
 namespace scatterlab {
@@ -17,6 +18,9 @@ namespace scatterlab {
 struct RenderResult {
   Image image;
   RenderStats stats;
+  /// The radiance samples a sample-based method used (positions, radii, levels, S, ∇S);
+  /// empty for methods without samples. For pictures of the sampling and for tests.
+  std::vector<RadianceSample> samples;
 };
 
 class Method {

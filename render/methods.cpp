@@ -30,6 +30,16 @@ DensityGrid buildDensityVolume(const Scene& scene, RenderStats& stats) {
   return g;
 }
 
+Image marchRadianceVolume(const Scene& scene, const DensityGrid& density,
+                          const RadianceGrid& radiance, const MarchSettings& march,
+                          RenderStats& stats, Progress* progress) {
+  ScopedTimer t(stats, "march");
+  if (progress) progress->restart("march", scene.camera.height);
+  const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
+  const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
+  return marchImage(scene, density, lookup, march, progress);
+}
+
 namespace {
 
 void requireCpu(const std::string& method, const std::string& backend) {
@@ -81,15 +91,7 @@ class PerVoxelMethod : public Method {
       if (progress) progress->restart("per-voxel S", res_.z);
       pv = buildPerVoxelRadiance(scene, density, mp_.delta1, radiance, progress);
     }
-    {
-      ScopedTimer t(r.stats, "march");
-      if (progress) progress->restart("march", scene.camera.height);
-      const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
-      const auto lookup = [&](const Vec3& x, const Vec3&) {
-        return radiance.sampleIndex(x * s + o);
-      };
-      r.image = marchImage(scene, density, lookup, mp_.march, progress);
-    }
+    r.image = marchRadianceVolume(scene, density, radiance, mp_.march, r.stats, progress);
     r.stats.extra["traced_voxels"] = pv.traced;
     r.stats.extra["empty_voxels"] = pv.skipped;
     r.stats.extra["radiance_resolution"] = {res_.x, res_.y, res_.z};

@@ -22,6 +22,12 @@ IVec3 parseRadianceResolution(Params& render, const Scene& scene);
 /// Builds the medium's density volume at its resolution, timed as stage "density".
 DensityGrid buildDensityVolume(const Scene& scene, RenderStats& stats);
 
+/// Marches the camera rays through `density` with S looked up trilinearly in `radiance`, timed
+/// as stage "march" (the integrator shared by every radiance-volume method on the CPU).
+Image marchRadianceVolume(const Scene& scene, const DensityGrid& density,
+                          const RadianceGrid& radiance, const MarchSettings& march,
+                          RenderStats& stats, Progress* progress);
+
 /// Registers `exact` and `per-voxel` in methods().
 void registerReferenceMethods();
 

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 
@@ -44,25 +45,53 @@ void GridInfoBuffer::markSphere(const Vec3& c, float R, std::int32_t anc) {
       }
 }
 
-void probePoints(const RadianceSample& s, Vec3 out[6]) {
-  for (int a = 0; a < 3; ++a) {
-    Vec3 d(0.0f);
-    d[a] = s.radius;
-    out[2 * a] = s.position + d;
-    out[2 * a + 1] = s.position - d;
-  }
+namespace {
+
+/// Probe directions: the 6 axis directions of Eq. 5, then the 8 cube diagonals, then the 12
+/// edge diagonals (unit length).
+const std::array<Vec3, kMaxProbes>& probeDirections() {
+  static const std::array<Vec3, kMaxProbes> dirs = [] {
+    std::array<Vec3, kMaxProbes> d{};
+    int n = 0;
+    for (int a = 0; a < 3; ++a)
+      for (float sgn : {1.0f, -1.0f}) {
+        Vec3 v(0.0f);
+        v[a] = sgn;
+        d[n++] = v;
+      }
+    for (float x : {1.0f, -1.0f})
+      for (float y : {1.0f, -1.0f})
+        for (float z : {1.0f, -1.0f}) d[n++] = glm::normalize(Vec3(x, y, z));
+    for (int a = 0; a < 3; ++a)
+      for (float u : {1.0f, -1.0f})
+        for (float v : {1.0f, -1.0f}) {
+          Vec3 e(0.0f);
+          e[(a + 1) % 3] = u;
+          e[(a + 2) % 3] = v;
+          d[n++] = glm::normalize(e);
+        }
+    return d;
+  }();
+  return dirs;
 }
 
-float localShadingError(const RadianceSample& s, const Vec3 probeS[6], const float probeD[6],
-                        float tau) {
-  Vec3 p[6];
-  probePoints(s, p);
+}  // namespace
+
+void probePoints(const RadianceSample& s, Vec3* out, int count) {
+  const auto& dirs = probeDirections();
+  for (int i = 0; i < count; ++i) out[i] = s.position + s.radius * dirs[std::size_t(i)];
+}
+
+float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
+                        int count) {
+  Vec3 p[kMaxProbes];
+  probePoints(s, p, count);
   float sum = 0.0f;
-  for (int i = 0; i < 6; ++i) {
+  for (int i = 0; i < count; ++i) {
     const Vec3 diff = glm::abs(s.taylor(p[i]) - probeS[i]);
     sum += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
   }
-  return s.radius * s.radius * s.radius * sum / 6.0f * tau;
+  return s.radius * s.radius * s.radius * sum / float(count) * tau;
 }
 
 namespace {
@@ -119,27 +148,28 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
     }
 
     // Probes: S traced at x_j ± R_j along X, Y, Z (one batched evaluation).
-    std::vector<RadianceSample> probes(current.size() * 6);
+    const int np = settings.probes;
+    std::vector<RadianceSample> probes(current.size() * std::size_t(np));
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
-      Vec3 p[6];
-      probePoints(current[j], p);
-      for (int i = 0; i < 6; ++i) probes[6 * j + i].position = p[i];
+      Vec3 p[kMaxProbes];
+      probePoints(current[j], p, np);
+      for (int i = 0; i < np; ++i) probes[np * j + i].position = p[i];
     });
     evaluator.evaluate(scene, density, probes, /*gradients=*/false);
 
     std::vector<float> errors(current.size());
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
-      Vec3 S[6];
-      float D[6];
-      for (int i = 0; i < 6; ++i) {
-        S[i] = probes[6 * j + i].S;
-        D[i] = density.sample(probes[6 * j + i].position);
+      Vec3 S[kMaxProbes];
+      float D[kMaxProbes];
+      for (int i = 0; i < np; ++i) {
+        S[i] = probes[np * j + i].S;
+        D[i] = density.sample(probes[np * j + i].position);
       }
       const float tau =
           settings.perSampleTau && level > 0
               ? viewTransmittance(scene, density, current[j].position, settings.delta1)
               : rootTau[anc[j]];
-      errors[j] = localShadingError(current[j], S, D, tau);
+      errors[j] = localShadingError(current[j], S, D, tau, np);
     });
     ls.maxError = errors.empty() ? 0.0f : *std::max_element(errors.begin(), errors.end());
     ls.p90Error = quantile(errors, 0.9);
@@ -206,6 +236,12 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
                          " exceeds half the medium resolution (" + std::to_string(finestAllowed) +
                          ")");
   s.perSampleTau = p.choice("tau", {"ancestor", "sample"}, "ancestor") == "sample";
+  const long long probes = p.integer("probes", 6);
+  if (probes != 6 && probes != 14 && probes != 26)
+    p.fail("probes", "value " + std::to_string(probes) +
+                         " is not allowed; allowed: 6 (Eq. 5: "
+                         "x ± R along X, Y, Z), 14 (+ cube diagonals), 26 (+ edge diagonals)");
+  s.probes = int(probes);
   s.delta1 = p.real("delta1", scene.medium.voxelSize(),
                     Interval{glm::length(scene.medium.bounds.extent()) * 1e-6,
                              glm::length(scene.medium.bounds.extent()), true, false});

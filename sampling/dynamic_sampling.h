@@ -29,6 +29,10 @@ struct DynamicSamplingSettings {
   std::vector<int> levels{16, 32, 64};  ///< vertices per axis of G1, G2, ... (increasing)
   bool perSampleTau = false;            ///< τ from each sample instead of its level-0 ancestor
   float delta1 = 0.0f;                  ///< step for tracing τ to the viewer (world units)
+  /// Probe points per sample: 6 is Eq. 5 (x ± R along X, Y, Z). 14 and 26 add diagonal
+  /// directions: an extension for shading boundaries that pass between the axis probes (a
+  /// light shaft beside a large initial sphere), which Eq. 5 can miss.
+  int probes = 6;
 };
 
 /// Grid information buffer of one level: vertices of G_k at the cell centres of a regular
@@ -66,11 +70,17 @@ struct DynamicSamplingResult {
 
 /// E_j of Eq. 5 from the evaluated sample, the traced S at its six probes (order +X −X +Y −Y
 /// +Z −Z), the density there, and τ.
-float localShadingError(const RadianceSample& s, const Vec3 probeS[6], const float probeD[6],
-                        float tau);
+/// Most probe points a sample can have.
+inline constexpr int kMaxProbes = 26;
 
-/// The six probe points of a sample, in the order of localShadingError.
-void probePoints(const RadianceSample& s, Vec3 out[6]);
+/// E_j of Eq. 5 from the evaluated sample, the traced S at its `count` probes (in the order of
+/// probePoints), the density there, and τ. count = 6 is the paper's Eq. 5.
+float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
+                        int count = 6);
+
+/// The probe points x_j + R_j·d of a sample: d = +X −X +Y −Y +Z −Z (the paper's six), then the
+/// 8 cube diagonals, then the 12 edge diagonals (unit vectors). count is 6, 14 or 26.
+void probePoints(const RadianceSample& s, Vec3* out, int count = 6);
 
 /// Runs recursive splitting from `initial` (positions and radii; level 0). `evaluator` computes
 /// S and ∇S of the samples and S at the probes. Deterministic: the same input gives the same
@@ -80,7 +90,8 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings);
 
-/// Reads epsilon, levels, tau ("ancestor" | "sample") from the render object; levels must be
+/// Reads epsilon, levels, tau ("ancestor" | "sample"), probes (6 | 14 | 26) from the render
+/// object; levels must be
 /// increasing, each in [2, 1024], the finest at most half the medium resolution's largest axis.
 DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene);
 
