@@ -531,7 +531,10 @@ ExperimentPlan parseExperiment(const std::string& configPath,
             const AxisValue& v = *vals[k];
             r.axes[sw.axes[k].name] = v.value;
             r.sets.insert(r.sets.end(), v.sets.begin(), v.sets.end());
-            if (v.affectsReference) r.refSets.insert(r.refSets.end(), v.sets.begin(), v.sets.end());
+            if (v.affectsReference)
+              r.refSets.insert(r.refSets.end(), v.sets.begin(), v.sets.end());
+            else
+              r.axesAllAffectReference = false;
             if (v.lights) r.lights = r.refLights = v.lights;
             id += "__" + fileSafe(sw.axes[k].name) + "-" + fileSafe(valueLabel(v.value));
           }
@@ -697,7 +700,10 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
   // References, rendered once per distinct (scene, reference overrides, reference method) and
   // cached on disk under DIR/references/<name>-<hash>.exr.
   std::map<std::string, Reference> refCache;
-  const auto reference = [&](const RunSpec& r, const MethodSpec& ref) -> Reference& {
+  // `seed`: the image of a run that renders exactly the reference's configuration (same method,
+  // backend, settings and scene), used instead of rendering it once more.
+  const auto reference = [&](const RunSpec& r, const MethodSpec& ref,
+                             const RenderResult* seed = nullptr) -> Reference& {
     const Json key = {{"scene", stableHash(readText(r.sceneSpec->file))},
                       {"sets", r.refSets},
                       {"lights", r.refLights ? Json(*r.refLights) : Json()},
@@ -718,8 +724,13 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
       } else {
         std::vector<std::string> sets = r.refSets;
         sets.insert(sets.end(), ref.sets.begin(), ref.sets.end());
-        const Scene scene = buildRunScene(r.sceneSpec->file, sets, r.refLights);
-        RenderResult rr = createMethod(scene, ref.method, ref.backend)->render(scene, nullptr);
+        RenderResult rr;
+        if (seed) {
+          rr = *seed;
+        } else {
+          const Scene scene = buildRunScene(r.sceneSpec->file, sets, r.refLights);
+          rr = createMethod(scene, ref.method, ref.backend)->render(scene, nullptr);
+        }
         writeExr(rr.image, out(base + ".exr"));
         writePng(rr.image, out(base + ".png"), plan.exposure);
         Json j = rr.stats.toJson();
@@ -729,7 +740,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
         writeText(out(base + ".json"), j.dump(2) + "\n");
         rc.image = std::move(rr.image);
         rc.ok = true;
-        logLine("reference " + base + ": rendered in " + fmt(rr.stats.totalMs(), "%.1f") + " ms");
+        logLine("reference " + base + (seed ? ": taken from run " + r.id : ": rendered") + " in " +
+                fmt(rr.stats.totalMs(), "%.1f") + " ms");
         if (opt.log)
           std::fprintf(opt.log, "%sreference %-30s %9.1f ms\n", barOn ? "\r\033[K" : "",
                        ref.name.c_str(), rr.stats.totalMs());
@@ -822,7 +834,9 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
       writeExr(last.image, out("images/" + r.id + ".exr"));
       writePng(last.image, out(rec.image), plan.exposure);
       for (const MethodSpec& refSpec : plan.references) {
-        Reference& ref = reference(r, refSpec);
+        const bool same = r.axesAllAffectReference && refSpec.method == m.method &&
+                          refSpec.backend == m.backend && refSpec.sets == m.sets;
+        Reference& ref = reference(r, refSpec, same ? &last : nullptr);
         if (!ref.ok) throw Error("reference '" + refSpec.name + "' failed: " + ref.error);
         rec.errors.push_back(compareImages(last.image, ref.image));
       }

@@ -71,6 +71,7 @@ struct RunSpec {
   std::optional<int> lights;
   std::vector<std::string> refSets;   ///< the overrides the reference of this run uses
   std::optional<int> refLights;
+  bool axesAllAffectReference = true;  ///< no render.* axis: the reference sees the same scene
   std::string hash;                   ///< of everything that determines the result
   Json paperFps;                      ///< null when the config gives none
 };
