@@ -1,46 +1,153 @@
 #pragma once
-/// A minimal experiment runner (issue 4's Fig. 3 experiment; issue 7 generalises it): render
-/// reference methods and a list of runs on one scene, compare every image with every
-/// reference, and write images, a CSV and a Markdown table.
+/// The experiment harness behind `scatterlab experiment CONFIG.json -o DIR` (issue 7): scenes ×
+/// methods (with backend) × parameter sweeps, errors against a cached reference, per-stage
+/// times as the median of K repetitions after a warm-up, peak host memory, sample counts;
+/// results.csv, results.json, report.md, images, plots. Resumable: every finished run leaves
+/// DIR/runs/<id>.json (written atomically, keyed by a hash of its configuration) and is not
+/// rendered again while that record exists and its hash matches.
 ///
-/// Config (JSON, strict: unknown keys are errors naming the key):
-///   {"title": "...", "scene": "path relative to the config",
-///    "set": ["key=value", ...],             // overrides applied to every render
-///    "references": ["per-voxel", "exact"],  // methods; the first is the headline reference
-///    "exposure": 0,                         // PNG exposure in stops
-///    "runs": [{"name": "gradient", "method": "gradient", "set": ["..."],
-///              "paper_rel_error": 0.043}]}  // optional, copied into the table
-/// Outputs in the directory: <name>.exr and <name>.png per image, side_by_side.png
-/// (references then runs, left to right, in table order), results.csv, results.md,
-/// results.json.
+/// The config format is documented key by key in docs/harness.md. Strict: unknown keys are
+/// ConfigErrors naming the dotted key.
 
-#include <filesystem>
+#include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/image.h"
 #include "core/method.h"
+#include "core/params.h"
 
 namespace scatterlab {
 
-struct ExperimentRow {
-  std::string name, method;
-  bool reference = false;
-  RenderStats stats;
-  std::vector<ImageError> errors;  ///< one per reference, in config order
-  std::optional<double> paperRelError;
+/// A method as configured (a run's method or a reference).
+struct MethodSpec {
+  std::string name;     ///< label in tables and file names
+  std::string method;   ///< registered method name
+  std::string backend;  ///< "cpu", "gpu" or "auto"
+  std::vector<std::string> sets;
+  Json paper = Json::object();  ///< paper values copied into the results (e.g. rel_error)
+};
+
+struct SceneSpec {
+  std::string name, file;  ///< file: absolute or relative to the working directory
+  std::vector<std::string> sets;
+};
+
+/// One axis value: a label for tables ("128", "800x600") and what it does to the scene.
+struct AxisValue {
+  Json value;
+  std::vector<std::string> sets;  ///< scene overrides
+  std::optional<int> lights;      ///< replicate the first light on a ring into this many
+  bool affectsReference = true;   ///< false for render.* keys (sample budget, ε): shared reference
+};
+
+struct Axis {
+  std::string name;
+  std::vector<AxisValue> values;
+};
+
+struct SweepSpec {
+  std::string name;
+  std::vector<Axis> axes;            ///< the cartesian product of their values
+  std::vector<std::string> methods;  ///< names of MethodSpecs (all when the config gives none)
+  std::vector<std::string> scenes;   ///< names of SceneSpecs (all when none)
+  int repetitions = 3, warmup = 1;
+  std::string baseline;  ///< method name that speed-ups are measured against ("" = none)
+  /// method name -> paper value per sweep point (in product order), e.g. Table 2's fps.
+  Json paperFps = Json::object();
+};
+
+/// One planned render: a scene, a method and one point of a sweep.
+struct RunSpec {
+  std::string id;  ///< unique, file-name safe
+  std::string sweep, scene, method;
+  const MethodSpec* spec = nullptr;
+  const SceneSpec* sceneSpec = nullptr;
+  const SweepSpec* sweepSpec = nullptr;
+  int point = 0;                      ///< index of the sweep point (product order)
+  Json axes = Json::object();         ///< axis name -> value
+  std::vector<std::string> sets;      ///< all scene overrides, in order
+  std::optional<int> lights;
+  std::vector<std::string> refSets;   ///< the overrides the reference of this run uses
+  std::optional<int> refLights;
+  bool axesAllAffectReference = true;  ///< no render.* axis: the reference sees the same scene
+  std::string hash;                   ///< of everything that determines the result
+  Json paperFps;                      ///< null when the config gives none
+};
+
+struct ExperimentPlan {
+  std::string title, description;
+  std::vector<SceneSpec> scenes;
+  std::vector<MethodSpec> references;  ///< the first is the headline reference
+  std::vector<MethodSpec> methods;
+  std::vector<SweepSpec> sweeps;
+  float exposure = 0.0f;
+  std::vector<RunSpec> runs;
+};
+
+/// Parses and validates a config (ConfigError naming the key; IoError for missing files) and
+/// expands it into runs. `overrides` (the command line's --set) apply to every render.
+ExperimentPlan parseExperiment(const std::string& configPath,
+                               const std::vector<std::string>& overrides = {});
+
+/// Builds the scene of a run: the scene file, `sets` in order, then the first light replicated
+/// on a ring into `lights` lights (see docs/harness.md) when given.
+Scene buildRunScene(const std::string& sceneFile, const std::vector<std::string>& sets,
+                    std::optional<int> lights);
+
+struct RunRecord {
+  std::string id, sweep, scene, method, methodName, backend;
+  Json axes = Json::object();
+  int point = 0;
+  std::string hash;
+  std::string status;  ///< "ok" or "failed"
+  std::string error;   ///< the failure's message
+  bool resumed = false;  ///< loaded from DIR/runs/ instead of rendered
+  Json stats;            ///< RenderStats::toJson() of the last repetition, timings = medians
+  std::vector<std::pair<std::string, double>> medianMs;  ///< per stage, plus "total"
+  int repetitions = 0, warmup = 0;
+  std::vector<std::string> references;  ///< names, in order
+  std::vector<ImageError> errors;       ///< one per reference
+  double peakHostMiB = 0.0;    ///< VmHWM during the run (whole process)
+  double baseHostMiB = 0.0;    ///< VmRSS just before it
+  std::string memoryMethod;    ///< how peakHostMiB was measured
+  std::optional<long long> samples;
+  std::string image;  ///< PNG path relative to DIR
+  Json paper = Json::object();
+  Json config;  ///< the run's full configuration (logged with failures)
+
+  Json toJson() const;
+  static RunRecord fromJson(const Json& j);
+  double totalMs() const;
+};
+
+struct ExperimentOptions {
+  std::vector<std::string> overrides;  ///< --set, applied to every render
+  std::FILE* log = nullptr;            ///< one line per render (besides DIR/log.txt)
+  bool progress = true;                ///< progress bar with ETA when stderr is a terminal
+  bool plots = true;                   ///< call experiment/plots.py (python3 + matplotlib)
 };
 
 struct ExperimentResult {
-  std::string title;
-  std::vector<std::string> references;
-  std::vector<ExperimentRow> rows;
+  ExperimentPlan plan;
+  std::vector<RunRecord> runs;
+  int rendered = 0, resumed = 0, failed = 0;
+  std::string plotsNote;  ///< why plots are missing, or "" when they were made
 };
 
-/// Runs the experiment in `configPath` (extra `overrides` apply to every render, after the
-/// config's own), writing into `outDir` (created if missing). `log` gets one line per render
-/// when non-null. Throws ConfigError / IoError; outputs are written atomically one by one.
+/// Runs (or resumes) the experiment in `configPath`, writing into `outDir` (created if
+/// missing). A failing run is recorded (status "failed", its message and config, in the
+/// results and DIR/log.txt) and the sweep goes on. Throws ConfigError / IoError for a bad
+/// config before anything is rendered.
 ExperimentResult runExperiment(const std::string& configPath, const std::string& outDir,
-                               const std::vector<std::string>& overrides = {},
-                               std::FILE* log = nullptr);
+                               const ExperimentOptions& options = {});
+
+/// The python interpreter the plots use: the first of $SCATTERLAB_PYTHON, `python3` on the PATH
+/// and /usr/bin/python3 that can import matplotlib; "" when none can.
+std::string findPlotPython();
+
+/// FNV-1a 64-bit hash of `text`, as 16 hex digits (stable across runs and machines).
+std::string stableHash(const std::string& text);
 
 }  // namespace scatterlab

@@ -1,0 +1,268 @@
+// The experiment harness (experiment/experiment.h): config parser errors, a tiny sweep end to
+// end, resume, failing runs, light replication.
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "api/scatterlab.h"
+#include "experiment/experiment.h"
+#include "support/scenes.h"
+
+namespace scatterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+void writeJson(const fs::path& p, const Json& j) { std::ofstream(p) << j.dump(1); }
+
+class ExperimentTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    initialize();
+    dir = fs::temp_directory_path() /
+          ("scatterlab_test_harness_" +
+           std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    Json scene =
+        testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 1.3f, 0.6f), 1.0f, 32, 24, 16);
+    scene["render"] = {{"method", "per-voxel"}};
+    writeJson(dir / "scene.json", scene);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir);
+  }
+
+  /// A tiny config: per-voxel reference; gradient swept over two sample budgets and per-voxel,
+  /// over two resolutions.
+  Json tinyConfig() const {
+    return {{"title", "tiny"},
+            {"scene", "scene.json"},
+            {"references", {"per-voxel"}},
+            {"repetitions", 2},
+            {"warmup", 0},
+            {"methods",
+             {{{"name", "gradient"},
+               {"method", "gradient"},
+               {"set", {"render.sampler={\"type\": \"grid\"}"}}},
+              "per-voxel"}},
+            {"sweeps",
+             {{{"name", "budget"}, {"axes", {{"samples", {8, 64}}}}, {"methods", {"gradient"}}},
+              {{"name", "res"},
+               {"axes", {{"resolution", {12, 16}}}},
+               {"baseline", "per-voxel"}}}}};
+  }
+
+  std::string expectConfigError(const Json& cfg) {
+    writeJson(dir / "bad.json", cfg);
+    try {
+      parseExperiment((dir / "bad.json").string());
+    } catch (const ConfigError& e) {
+      return e.what();
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "expected ConfigError, got " << e.what();
+      return "";
+    }
+    ADD_FAILURE() << "expected ConfigError for " << cfg.dump();
+    return "";
+  }
+
+  fs::path dir;
+};
+
+TEST_F(ExperimentTest, ParserExpandsSweeps) {
+  writeJson(dir / "exp.json", tinyConfig());
+  const ExperimentPlan plan = parseExperiment((dir / "exp.json").string());
+  ASSERT_EQ(plan.runs.size(), 6u);  // 2 budgets × gradient + 2 resolutions × 2 methods
+  EXPECT_EQ(plan.runs[0].id, "budget__gradient__samples-8");
+  EXPECT_EQ(plan.runs[2].id, "res__gradient__resolution-12");
+  EXPECT_EQ(plan.runs[3].id, "res__per-voxel__resolution-12");
+  // The sample budget is a render.* key: the reference does not depend on it.
+  EXPECT_EQ(plan.runs[0].refSets, plan.runs[1].refSets);
+  EXPECT_NE(plan.runs[0].hash, plan.runs[1].hash);
+  EXPECT_NE(plan.runs[2].refSets, plan.runs[4].refSets);
+}
+
+TEST_F(ExperimentTest, BadConfigsNameTheKey) {
+  Json c = tinyConfig();
+  c["colour"] = 1;
+  EXPECT_NE(expectConfigError(c).find("colour"), std::string::npos);
+
+  c = tinyConfig();
+  c["sweeps"][0]["axes"] = {{"sample", {1, 2}}};
+  std::string e = expectConfigError(c);
+  EXPECT_NE(e.find("sweeps[0].axes.sample"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown sweep axis"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c["sweeps"][0]["axes"] = {{"samples", Json::array()}};
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("sweeps[0].axes.samples"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c["sweeps"][0]["axes"] = {{"resolution", {32, -1}}};
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("resolution"), std::string::npos) << e;
+  EXPECT_NE(e.find("-1"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c["methods"][1] = "per-voxle";
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("methods[1]"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown method 'per-voxle'"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c["sweeps"][0]["methods"] = {"gradiant"};
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("sweeps[0].methods"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c["methods"][0]["backend"] = "tpu";
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("methods[0].backend"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c.erase("references");
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("references"), std::string::npos) << e;
+
+  c = tinyConfig();
+  c["sweeps"][1]["paper_fps"] = {{"per-voxel", {1.0}}};
+  e = expectConfigError(c);
+  EXPECT_NE(e.find("paper_fps.per-voxel"), std::string::npos) << e;
+
+  // A missing scene file is an IoError naming it.
+  c = tinyConfig();
+  c["scene"] = "nowhere.json";
+  writeJson(dir / "bad.json", c);
+  try {
+    parseExperiment((dir / "bad.json").string());
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& err) {
+    EXPECT_NE(std::string(err.what()).find("nowhere.json"), std::string::npos) << err.what();
+  }
+}
+
+TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
+  writeJson(dir / "exp.json", tinyConfig());
+  ExperimentOptions opt;
+  opt.progress = false;
+  const fs::path out = dir / "out";
+  ExperimentResult r = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  ASSERT_EQ(r.runs.size(), 6u);
+  EXPECT_EQ(r.rendered, 6);
+  EXPECT_EQ(r.resumed, 0);
+  EXPECT_EQ(r.failed, 0);
+  for (const RunRecord& rec : r.runs) {
+    EXPECT_EQ(rec.status, "ok") << rec.id << ": " << rec.error;
+    ASSERT_EQ(rec.errors.size(), 1u);
+    EXPECT_LT(rec.errors[0].relL2, 0.2) << rec.id;
+    EXPECT_GT(rec.totalMs(), 0.0);
+    EXPECT_GT(rec.peakHostMiB, 0.0);
+    EXPECT_EQ(rec.repetitions, 2);
+    EXPECT_TRUE(fs::exists(out / rec.image)) << rec.image;
+    EXPECT_TRUE(fs::exists(out / "runs" / (rec.id + ".json")));
+  }
+  EXPECT_EQ(*r.runs[0].samples, 8);  // 2³ grid cells: the budget is met on a full box
+  EXPECT_EQ(r.runs[3].errors[0].relL2, 0.0);  // per-voxel against itself
+  for (const char* f : {"results.csv", "results.json", "report.md", "log.txt"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  // One reference per distinct scene configuration: the budget sweep's two runs share one (the
+  // sample budget does not change the reference), plus one per resolution -> 3 images.
+  int refs = 0;
+  for (const auto& e : fs::directory_iterator(out / "references"))
+    refs += e.path().extension() == ".exr";
+  EXPECT_EQ(refs, 3);
+  {
+    std::ifstream csv(out / "results.csv");
+    std::string header, line;
+    std::getline(csv, header);
+    for (const char* col : {"axis_samples", "axis_resolution", "total_ms", "rel_l2_vs_per-voxel",
+                            "speedup_vs_baseline", "peak_host_mib", "sampling_ms"})
+      EXPECT_NE(header.find(col), std::string::npos) << col << " in " << header;
+    int rows = 0;
+    while (std::getline(csv, line)) ++rows;
+    EXPECT_EQ(rows, 6);
+    const Json j = readJsonFile((out / "results.json").string());
+    EXPECT_EQ(j["runs"].size(), 6u);
+    EXPECT_TRUE(j["runs"][2].contains("speedup_vs_baseline"));
+    std::ifstream md(out / "report.md");
+    const std::string report((std::istreambuf_iterator<char>(md)), {});
+    EXPECT_NE(report.find("## Sweep `res`"), std::string::npos);
+    EXPECT_NE(report.find("speed-up vs per-voxel"), std::string::npos);
+    EXPECT_NE(report.find("## Gallery"), std::string::npos);
+  }
+  if (!findPlotPython().empty()) {
+    EXPECT_TRUE(r.plotsNote.empty()) << r.plotsNote;
+    EXPECT_TRUE(fs::exists(out / "plots" / "error_vs_samples.png"));
+    EXPECT_TRUE(fs::exists(out / "plots" / "time_vs_resolution.png"));
+    EXPECT_TRUE(fs::exists(out / "plots" / "stage_breakdown.png"));
+  } else {
+    EXPECT_FALSE(r.plotsNote.empty());
+  }
+
+  // Resume: delete one record; only that run is rendered again (plots are slow to import).
+  opt.plots = false;
+  fs::remove(out / "runs" / "res__gradient__resolution-16.json");
+  r = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  EXPECT_EQ(r.rendered, 1);
+  EXPECT_EQ(r.resumed, 5);
+  for (const RunRecord& rec : r.runs)
+    EXPECT_EQ(rec.resumed, rec.id != "res__gradient__resolution-16") << rec.id;
+  EXPECT_EQ(r.runs.size(), 6u);
+
+  // A changed configuration (another repetition count) invalidates every record.
+  Json c = tinyConfig();
+  c["sweeps"][0]["repetitions"] = 1;
+  writeJson(dir / "exp.json", c);
+  r = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  EXPECT_EQ(r.rendered, 2);  // the budget sweep's two runs
+  EXPECT_EQ(r.resumed, 4);
+}
+
+TEST_F(ExperimentTest, FailingRunIsLoggedAndTheSweepGoesOn) {
+  Json c = tinyConfig();
+  c.erase("sweeps");
+  // A sampler type the gradient method does not know: fails at createMethod, per run.
+  c["methods"][0]["set"] = {"render.sampler={\"type\": \"nonsense\"}"};
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const ExperimentResult r = runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  ASSERT_EQ(r.runs.size(), 2u);
+  EXPECT_EQ(r.failed, 1);
+  EXPECT_EQ(r.runs[0].status, "failed");
+  EXPECT_NE(r.runs[0].error.find("nonsense"), std::string::npos) << r.runs[0].error;
+  EXPECT_EQ(r.runs[1].status, "ok");
+  std::ifstream log(dir / "out" / "log.txt");
+  const std::string text((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(text.find("gradient: FAILED"), std::string::npos) << text;
+  EXPECT_NE(text.find("render.sampler"), std::string::npos) << "config logged: " << text;
+  // A failed run is retried on resume.
+  const ExperimentResult again =
+      runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  EXPECT_EQ(again.resumed, 1);
+  EXPECT_EQ(again.failed, 1);
+}
+
+TEST_F(ExperimentTest, LightsAxisReplicatesOnARing) {
+  const Scene one = buildRunScene((dir / "scene.json").string(), {}, std::nullopt);
+  const Scene four = buildRunScene((dir / "scene.json").string(), {}, 4);
+  ASSERT_EQ(one.lights.size(), 1u);
+  ASSERT_EQ(four.lights.size(), 4u);
+  // Same total intensity; each light at the template's distance from the box centre.
+  const Vec3 c(0.5f);
+  const float r0 = glm::length(one.lights[0].position - c);
+  for (const Light& l : four.lights) {
+    EXPECT_NEAR(glm::length(l.position - c), r0, 1e-4f);
+    EXPECT_NEAR(l.intensity.x, one.lights[0].intensity.x / 4, 1e-6f);
+  }
+  EXPECT_NEAR(glm::length(four.lights[0].position - one.lights[0].position), 0.0f, 1e-5f);
+}
+
+}  // namespace
+}  // namespace scatterlab
