@@ -137,26 +137,7 @@ class SampledGpuMethod : public Method {
     st.samples = (long long)samples.size();
     st.extra["sampler"] = c_.samplerType;
     st.extra["uncovered_voxels"] = rs.uncovered;
-    if (adaptive) {
-      std::vector<long long> perLevel(dsr.levels.size(), 0);
-      for (const auto& s : samples) ++perLevel[std::size_t(s.level)];
-      Json levels = Json::array();
-      for (std::size_t l = 0; l < dsr.levels.size(); ++l) {
-        const LevelStats& ls = dsr.levels[l];
-        levels.push_back({{"grid", ls.resolution},
-                          {"evaluated", ls.samples},
-                          {"split", ls.split},
-                          {"kept", perLevel[l]},
-                          {"max_error", ls.maxError},
-                          {"p90_error", ls.p90Error},
-                          {"ms", ls.ms}});
-      }
-      st.extra["samples_per_level"] = perLevel;
-      st.extra["initial_samples"] = dsr.levels.empty() ? 0 : dsr.levels[0].samples;
-      st.extra["levels"] = levels;
-      st.extra["epsilon"] = ds_->epsilon;
-      st.extra["tau"] = ds_->perSampleTau ? "sample" : "ancestor";
-    }
+    if (adaptive) addDynamicSamplingStats(st, dsr.levels, samples, *ds_);
     finishStats(st, timer, ctx, c_.mp, c_.radianceResolution, splatted, c_.raySteps, slices,
                 c_.backendNote);
     r.samples = std::move(samples);

@@ -108,25 +108,7 @@ class AdaptiveMethod : public SampledMethod {
       ScopedTimer t(st, "dynamic_sampling");
       ds = dynamicSampling(scene, density, std::move(initial), *evaluator_, ds_);
     }
-    std::vector<long long> perLevel(ds.levels.size(), 0);
-    for (const auto& s : ds.samples) ++perLevel[std::size_t(s.level)];
-    Json levels = Json::array();
-    for (std::size_t l = 0; l < ds.levels.size(); ++l) {
-      const LevelStats& ls = ds.levels[l];
-      levels.push_back({{"grid", ls.resolution},
-                        {"evaluated", ls.samples},
-                        {"split", ls.split},
-                        {"kept", perLevel[l]},
-                        {"max_error", ls.maxError},
-                        {"p90_error", ls.p90Error},
-                        {"ms", ls.ms}});
-    }
-    st.extra["samples_per_level"] = perLevel;
-    st.extra["initial_samples"] = ds.levels.empty() ? 0 : ds.levels[0].samples;
-    st.extra["levels"] = levels;
-    st.extra["epsilon"] = ds_.epsilon;
-    st.extra["tau"] = ds_.perSampleTau ? "sample" : "ancestor";
-    st.extra["probes"] = ds_.probes;
+    addDynamicSamplingStats(st, ds.levels, ds.samples, ds_);
     return std::move(ds.samples);
   }
 

@@ -207,6 +207,31 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
   return result;
 }
 
+void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& levelStats,
+                             const std::vector<RadianceSample>& samples,
+                             const DynamicSamplingSettings& settings) {
+  std::vector<long long> perLevel(levelStats.size(), 0);
+  for (const auto& s : samples)
+    if (std::size_t(s.level) < perLevel.size()) ++perLevel[std::size_t(s.level)];
+  Json levels = Json::array();
+  for (std::size_t l = 0; l < levelStats.size(); ++l) {
+    const LevelStats& ls = levelStats[l];
+    levels.push_back({{"grid", ls.resolution},
+                      {"evaluated", ls.samples},
+                      {"split", ls.split},
+                      {"kept", perLevel[l]},
+                      {"max_error", ls.maxError},
+                      {"p90_error", ls.p90Error},
+                      {"ms", ls.ms}});
+  }
+  st.extra["samples_per_level"] = perLevel;
+  st.extra["initial_samples"] = levelStats.empty() ? 0 : levelStats[0].samples;
+  st.extra["levels"] = levels;
+  st.extra["epsilon"] = settings.epsilon;
+  st.extra["tau"] = settings.perSampleTau ? "sample" : "ancestor";
+  st.extra["probes"] = settings.probes;
+}
+
 DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
   DynamicSamplingSettings s;
   s.epsilon = p.number("epsilon", 1e-4, Interval::atLeast(0));

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/stages.h"
+#include "core/stats.h"
 
 namespace scatterlab {
 
@@ -89,6 +90,13 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
                                       std::vector<RadianceSample> initial,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings);
+
+/// Adds the dynamic-sampling facts to render stats (shared by the CPU and GPU `adaptive`):
+/// samples_per_level (final samples per level), initial_samples, levels (per level: grid,
+/// evaluated, split, kept, max_error, p90_error, ms), epsilon, tau, probes.
+void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& levels,
+                             const std::vector<RadianceSample>& samples,
+                             const DynamicSamplingSettings& settings);
 
 /// Reads epsilon, levels, tau ("ancestor" | "sample"), probes (6 | 14 | 26) from the render
 /// object; levels must be
