@@ -110,51 +110,6 @@ Vec3 clampNonNegative(Vec3 v) {
   return glm::max(v, Vec3(0.0f));
 }
 
-/// VoxelOccupancy for every voxel of `out`, as a mask. When the radiance volume has the
-/// density volume's layout (the usual case) the 3x3x3 neighbourhood test is a separable
-/// dilation of (D > 0): three cheap passes instead of 27 loads per voxel.
-std::vector<char> occupancyMask(const DensityGrid& density, const RadianceGrid& out) {
-  const IVec3 n = out.dims();
-  const std::size_t nxy = std::size_t(n.x) * n.y;
-  std::vector<char> occ(out.size(), 0);
-  const bool sameLayout = n == density.dims() && out.bounds().min == density.bounds().min &&
-                          out.bounds().max == density.bounds().max;
-  if (!sameLayout) {
-    const VoxelOccupancy test(density, out);
-    tbb::parallel_for(0, n.z, [&](int k) {
-      for (int j = 0; j < n.y; ++j)
-        for (int i = 0; i < n.x; ++i) occ[out.index(i, j, k)] = test(i, j, k);
-    });
-    return occ;
-  }
-  std::vector<char> tmp(out.size(), 0);
-  const float* d = density.data().data();
-  // Pass 1 (x) into occ, pass 2 (y) into tmp, pass 3 (z) into occ.
-  tbb::parallel_for(0, n.z, [&](int k) {
-    for (int j = 0; j < n.y; ++j) {
-      const std::size_t row = std::size_t(k) * nxy + std::size_t(j) * n.x;
-      for (int i = 0; i < n.x; ++i)
-        occ[row + i] = d[row + i] > 0.0f || (i > 0 && d[row + i - 1] > 0.0f) ||
-                       (i + 1 < n.x && d[row + i + 1] > 0.0f);
-    }
-  });
-  tbb::parallel_for(0, n.z, [&](int k) {
-    for (int j = 0; j < n.y; ++j) {
-      const std::size_t row = std::size_t(k) * nxy + std::size_t(j) * n.x;
-      for (int i = 0; i < n.x; ++i)
-        tmp[row + i] =
-            occ[row + i] || (j > 0 && occ[row + i - n.x]) || (j + 1 < n.y && occ[row + i + n.x]);
-    }
-  });
-  tbb::parallel_for(0, n.z, [&](int k) {
-    for (std::size_t a = 0; a < nxy; ++a) {
-      const std::size_t v = std::size_t(k) * nxy + a;
-      occ[v] = tmp[v] || (k > 0 && tmp[v - nxy]) || (k + 1 < n.z && tmp[v + nxy]);
-    }
-  });
-  return occ;
-}
-
 }  // namespace
 
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,

@@ -2,7 +2,9 @@
 /// The paper's baseline reconstruction (Kajiya & Von Herzen): trace S at every voxel centre of
 /// the radiance volume. Also the reference the interpolation schemes are compared with.
 
+#include <vector>
 #include "core/grid.h"
+
 #include "core/progress.h"
 #include "core/scene.h"
 
@@ -25,9 +27,12 @@ class VoxelOccupancy {
 
   bool operator()(int i, int j, int k) const {
     const Vec3 c = radiance_.cellCenter(i, j, k);
-    // Density voxels whose trilinear support overlaps this voxel's support.
-    const IVec3 lo = glm::max(IVec3(glm::floor((c - hr_) * scale_ + offset_)), IVec3(0));
-    const IVec3 hi = glm::min(IVec3(glm::ceil((c + hr_) * scale_ + offset_)), nd_ - 1);
+    // Density voxels whose trilinear support overlaps this voxel's support: open intervals,
+    // so the range is shrunk by 1e-4 voxel (a voxel exactly two centres away does not count,
+    // whatever the rounding); on equal layouts this is the 3x3x3 neighbourhood.
+    const IVec3 lo =
+        glm::max(IVec3(glm::floor((c - hr_) * scale_ + offset_ + 1e-4f)), IVec3(0));
+    const IVec3 hi = glm::min(IVec3(glm::ceil((c + hr_) * scale_ + offset_ - 1e-4f)), nd_ - 1);
     for (int kk = lo.z; kk <= hi.z; ++kk)
       for (int jj = lo.y; jj <= hi.y; ++jj)
         for (int ii = lo.x; ii <= hi.x; ++ii)
@@ -41,6 +46,11 @@ class VoxelOccupancy {
   Vec3 hr_, scale_, offset_;
   IVec3 nd_;
 };
+
+/// VoxelOccupancy of every voxel of `radiance`, as a mask indexed like the grid (1 = occupied).
+/// When the radiance volume has the density volume's layout (the usual case) the 3x3x3
+/// neighbourhood test is a separable dilation of (D > 0). TBB-parallel.
+std::vector<char> occupancyMask(const DensityGrid& density, const RadianceGrid& radiance);
 
 struct PerVoxelStats {
   long long traced = 0;   ///< voxels whose S was traced

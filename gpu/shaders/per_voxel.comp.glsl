@@ -13,8 +13,10 @@ void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(v, uRadDims))) return;
   vec3 c = uRadMin + (vec3(v) + 0.5) * uRadCell;
-  ivec3 lo = max(ivec3(floor((c - uRadCell) * uDensityScale + uDensityOffset)), ivec3(0));
-  ivec3 hi = min(ivec3(ceil((c + uRadCell) * uDensityScale + uDensityOffset)), uDensityDims - 1);
+  // Same rule as VoxelOccupancy (render/per_voxel.h), 1e-4 voxel inside against rounding.
+  ivec3 lo = max(ivec3(floor((c - uRadCell) * uDensityScale + uDensityOffset + 1e-4)), ivec3(0));
+  ivec3 hi = min(ivec3(ceil((c + uRadCell) * uDensityScale + uDensityOffset - 1e-4)),
+                 uDensityDims - 1);
   bool occupied = false;
   for (int k = lo.z; k <= hi.z && !occupied; ++k)
     for (int j = lo.y; j <= hi.y && !occupied; ++j)
