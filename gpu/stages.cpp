@@ -138,37 +138,12 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   const Buffer counter(sizeof(GLuint), &zeroCount, 0, "uncovered voxel count");
   const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums");
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)");
-  const Framebuffer fbo("radiance splat target");
-  const VertexArray vao("attribute-less");
   const Vec3 cell = bounds.extent() / Vec3(dims);
   {
     ScopedGpuTimer t(timer, "radiance splat");
     splat.use();
-    setVec3(splat, "uGridMin", bounds.min);
-    setVec3(splat, "uGridCell", cell);
-    setIVec3(splat, "uGridDims", dims);
-    const GLint sliceLoc = splat.uniform("uSliceZ");
     sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-    glBindVertexArray(vao.id());
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
-    glViewport(0, 0, dims.x, dims.y);
-    glDisable(GL_DEPTH_TEST);
-    glDisable(GL_SCISSOR_TEST);
-    glEnable(GL_BLEND);
-    glBlendEquation(GL_FUNC_ADD);
-    glBlendFunc(GL_ONE, GL_ONE);
-    const float zero[4] = {0, 0, 0, 0};
-    for (int k = 0; k < dims.z; ++k) {
-      glNamedFramebufferTextureLayer(fbo.id(), GL_COLOR_ATTACHMENT0, sums.id(), 0, k);
-      if (k == 0 &&
-          glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        throw GpuError("radiance splat: RGBA32F 3D texture layer is not a complete framebuffer");
-      glClearBufferfv(GL_COLOR, 0, zero);
-      glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);
-      if (!samples.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(samples.size()));
-    }
-    glDisable(GL_BLEND);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    splatSlices(splat, sums, bounds, dims, GLsizei(samples.size()), "radiance splat");
   }
   checkGl("radiance splat");
   {

@@ -68,6 +68,37 @@ RadianceGrid readRadiance(const Volume& v) {
   return g;
 }
 
+void splatSlices(const Program& program, const Texture& target, const Box& bounds, IVec3 dims,
+                 GLsizei instances, const char* pass) {
+  const Vec3 cell = bounds.extent() / Vec3(dims);
+  glUniform3fv(program.uniform("uGridMin"), 1, &bounds.min.x);
+  glUniform3fv(program.uniform("uGridCell"), 1, &cell.x);
+  glUniform3i(program.uniform("uGridDims"), dims.x, dims.y, dims.z);
+  const GLint sliceLoc = program.uniform("uSliceZ");
+  const Framebuffer fbo(std::string(pass) + " target");
+  const VertexArray vao("attribute-less");
+  glBindVertexArray(vao.id());
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+  glViewport(0, 0, dims.x, dims.y);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFunc(GL_ONE, GL_ONE);
+  const float zero[4] = {0, 0, 0, 0};
+  for (int k = 0; k < dims.z; ++k) {
+    glNamedFramebufferTextureLayer(fbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0, k);
+    if (k == 0 &&
+        glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GpuError(std::string(pass) + ": 3D texture layer is not a complete framebuffer");
+    glClearBufferfv(GL_COLOR, 0, zero);
+    glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);
+    if (instances > 0) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, instances);
+  }
+  glDisable(GL_BLEND);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
 Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
                       StageTimer* timer) {
   context();
@@ -84,38 +115,11 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
   for (const GaussianBlob& b : blobs)
     packed.insert(packed.end(), {b.center.x, b.center.y, b.center.z, b.radius, b.weight, 0, 0, 0});
   const Buffer blobBuf(packed.size() * sizeof(float), packed.data(), 0, "gaussian blobs");
-  const Framebuffer fbo("density splat target");
-  const VertexArray vao("attribute-less");
-  const Vec3 cell = v.cellSize();
-
   ScopedGpuTimer t(timer, "density splat");
   program.use();
-  glUniform3fv(program.uniform("uGridMin"), 1, &bounds.min.x);
-  glUniform3fv(program.uniform("uGridCell"), 1, &cell.x);
-  glUniform3i(program.uniform("uGridDims"), dims.x, dims.y, dims.z);
   glUniform1f(program.uniform("uCull"), GaussianDensity::kCullRadius);
-  const GLint sliceLoc = program.uniform("uSliceZ");
   blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-  glBindVertexArray(vao.id());
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
-  glViewport(0, 0, dims.x, dims.y);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_SCISSOR_TEST);
-  glEnable(GL_BLEND);
-  glBlendEquation(GL_FUNC_ADD);
-  glBlendFunc(GL_ONE, GL_ONE);
-  const float zero[4] = {0, 0, 0, 0};
-  for (int k = 0; k < dims.z; ++k) {
-    glNamedFramebufferTextureLayer(fbo.id(), GL_COLOR_ATTACHMENT0, v.texture.id(), 0, k);
-    if (k == 0 &&
-        glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-      throw GpuError("density splat: R32F 3D texture layer is not a complete framebuffer");
-    glClearBufferfv(GL_COLOR, 0, zero);
-    glUniform1f(sliceLoc, bounds.min.z + (float(k) + 0.5f) * cell.z);
-    if (!blobs.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(blobs.size()));
-  }
-  glDisable(GL_BLEND);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  splatSlices(program, v.texture, bounds, dims, GLsizei(blobs.size()), "density splat");
   checkGl("density splat");
   return v;
 }

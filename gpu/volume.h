@@ -37,6 +37,16 @@ Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label)
 /// Density construction by splatting (paper Sec. 6; GPU twin of GaussianDensity::build): for
 /// each z slice, one quad per blob bounding the blob's culling sphere (3r) cut by the slice,
 /// blended additively (in blob order) into that layer of an R32F 3D texture.
+/// Additive slice splatting, the mechanism shared by density construction (paper Sec. 6) and
+/// radiance splatting (Sec. 4): for every Z layer of the 3D float texture `target` (`dims`
+/// voxels over `bounds`) the layer is cleared, uniform uSliceZ is set to the layer centre's z,
+/// and `instances` bounding quads (4-vertex triangle strips, attribute-less) are drawn with
+/// GL_ONE/GL_ONE blending. Sets uGridMin, uGridCell, uGridDims; `program` must be bound with its
+/// own uniforms and buffers. Needs the GL context; throws GpuError naming `pass` when a layer is
+/// not a complete framebuffer.
+void splatSlices(const Program& program, const Texture& target, const Box& bounds, IVec3 dims,
+                 GLsizei instances, const char* pass);
+
 Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
                       StageTimer* timer = nullptr);
 
