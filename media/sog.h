@@ -103,6 +103,8 @@ class SogDensity : public DensityModel {
   void build(DensityGrid& grid) const override { model_.splat(grid); }
   /// The lattice box of the fitted grid.
   std::optional<Box> naturalBounds() const override { return model_.residual.bounds(); }
+  /// The fitted Gaussians: the paper's initial radiance samples (gaussian-centres sampler).
+  const std::vector<GaussianBlob>* gaussians() const override { return &model_.gaussians; }
   std::string describe() const override;
   const SogModel& model() const { return model_; }
 

@@ -225,5 +225,22 @@ TEST(SogScene, LoadsFileAndFrames) {
                IoError);
 }
 
+TEST(SogDensity, GaussianCentresAreTheInitialSamplesOfGradient) {
+  testing::TempDir tmp("sogsamples");
+  const std::string file = tmp.file("m.sog");
+  writeSog(file, smallModel());
+  Json doc = testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 1.3f, 0.5f), 2.0f, 16, 12, 16);
+  doc["medium"]["density"] = {{"type", "sog"}, {"file", file}};
+  doc["render"] = {{"method", "gradient"}};
+  const Scene scene = testing::sceneFromJson(doc);
+  ASSERT_NE(scene.medium.density->gaussians(), nullptr);
+  EXPECT_EQ(scene.medium.density->gaussians()->size(), 3u);
+  const RenderResult r = createMethod(scene)->render(scene, nullptr);
+  EXPECT_EQ(r.stats.extra["sampler"], "gaussian-centres");
+  ASSERT_EQ(r.samples.size(), 3u);
+  EXPECT_EQ(r.samples[1].position, Vec3(0.6f, 0.5f, 0.4f));
+  EXPECT_FLOAT_EQ(r.samples[1].radius, 3.0f * 0.2f);
+}
+
 }  // namespace
 }  // namespace scatterlab
