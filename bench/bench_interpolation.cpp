@@ -40,22 +40,23 @@ void BM_InterpPerVoxel128(benchmark::State& state) {
 }
 BENCHMARK(BM_InterpPerVoxel128)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-std::vector<RadianceSample> cellSamples(Fixture& f, const char* type, long long count) {
-  const Json cfg{{"type", type}, {"count", count}};
+/// Positions and radii from the named sampler (`count` omitted when 0: all Gaussian centres).
+std::vector<RadianceSample> samplesOf(Fixture& f, const char* type, long long count) {
+  Json cfg{{"type", type}};
+  if (count > 0) cfg["count"] = count;
   Params sp(cfg, "render.sampler");
   sp.string("type");
   return samplers().get(type, "type")(sp, f.scene)->generate(f.scene, f.density);
 }
 std::vector<RadianceSample> jittered(Fixture& f, long long count) {
-  return cellSamples(f, "jittered", count);
+  return samplesOf(f, "jittered", count);
 }
 
 /// Evaluation (S and ∇S by volume tracing) + Eq. 4 gather into the 128^3 volume: what
 /// replaces the per-voxel tracing. Sample positions are generated outside the loop (the
 /// sampler is a stage of its own, timed by BM_InterpJitteredSampler).
-void BM_InterpGradient128(benchmark::State& state) {
-  Fixture& f = Fixture::get();
-  std::vector<RadianceSample> s = jittered(f, state.range(0));
+/// Evaluation + Eq. 4 gather of `s` into a 128³ volume, timed per iteration.
+void gradientVolume(benchmark::State& state, Fixture& f, std::vector<RadianceSample> s) {
   const TracerSteps steps{f.scene.medium.voxelSize(), f.scene.medium.voxelSize()};
   RadianceGrid out(f.scene.medium.bounds, IVec3(128));
   long long uncovered = 0;
@@ -66,6 +67,11 @@ void BM_InterpGradient128(benchmark::State& state) {
   }
   state.counters["samples"] = double(s.size());
   state.counters["uncovered"] = double(uncovered);
+}
+
+void BM_InterpGradient128(benchmark::State& state) {
+  Fixture& f = Fixture::get();
+  gradientVolume(state, f, jittered(f, state.range(0)));
 }
 BENCHMARK(BM_InterpGradient128)
     ->Arg(512)
@@ -78,17 +84,7 @@ BENCHMARK(BM_InterpGradient128)
 /// samples cover each voxel (the gather's cost is proportional to that overlap).
 void BM_InterpGradientGrid128(benchmark::State& state) {
   Fixture& f = Fixture::get();
-  std::vector<RadianceSample> s = cellSamples(f, "grid", state.range(0));
-  const TracerSteps steps{f.scene.medium.voxelSize(), f.scene.medium.voxelSize()};
-  RadianceGrid out(f.scene.medium.bounds, IVec3(128));
-  long long uncovered = 0;
-  for (auto _ : state) {
-    evaluateSamples(f.scene, f.density, steps, s, true);
-    uncovered = interpolateSamples(Interpolation::Gradient, f.density, s, out).uncovered;
-    benchmark::DoNotOptimize(out.data().data());
-  }
-  state.counters["samples"] = double(s.size());
-  state.counters["uncovered"] = double(uncovered);
+  gradientVolume(state, f, samplesOf(f, "grid", state.range(0)));
 }
 BENCHMARK(BM_InterpGradientGrid128)
     ->Arg(512)
@@ -100,19 +96,7 @@ BENCHMARK(BM_InterpGradientGrid128)
 /// The same with the Gaussian centres of the scene (800 samples, R = 3r).
 void BM_InterpGradientGaussianCentres128(benchmark::State& state) {
   Fixture& f = Fixture::get();
-  const Json cfg{{"type", "gaussian-centres"}};
-  Params sp(cfg, "render.sampler");
-  sp.string("type");
-  std::vector<RadianceSample> s =
-      samplers().get("gaussian-centres", "type")(sp, f.scene)->generate(f.scene, f.density);
-  const TracerSteps steps{f.scene.medium.voxelSize(), f.scene.medium.voxelSize()};
-  RadianceGrid out(f.scene.medium.bounds, IVec3(128));
-  for (auto _ : state) {
-    evaluateSamples(f.scene, f.density, steps, s, true);
-    interpolateSamples(Interpolation::Gradient, f.density, s, out);
-    benchmark::DoNotOptimize(out.data().data());
-  }
-  state.counters["samples"] = double(s.size());
+  gradientVolume(state, f, samplesOf(f, "gaussian-centres", 0));
 }
 BENCHMARK(BM_InterpGradientGaussianCentres128)->Unit(benchmark::kMillisecond)->UseRealTime();
 
