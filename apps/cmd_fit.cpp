@@ -27,7 +27,7 @@ struct FitArgs {
 };
 
 std::string frameName(const std::string& pattern, size_t frame) {
-  char num[16];
+  char num[24];  // room for any size_t
   std::snprintf(num, sizeof num, "%04zu", frame);
   std::string s = pattern;
   s.replace(s.find("{frame}"), 7, num);
