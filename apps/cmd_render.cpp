@@ -4,13 +4,15 @@
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "media/vdb.h"
 #include "render/sample_view.h"
 
 namespace scatterlab::cli {
 
 Action addRender(CLI::App& app) {
   struct Opts {
-    std::string scene, out, png, method, backend = "auto", stats, samplesPng;
+    std::string scene, out, png, method, backend = "auto", stats, samplesPng, densityVdb,
+                                         radianceVdb;
     std::vector<std::string> sets;
     float exposure = 0.0f;
     bool quiet = false;
@@ -34,6 +36,12 @@ Action addRender(CLI::App& app) {
   c->add_option("--samples-png", o->samplesPng,
                 "Also write a PNG of the radiance samples over the dimmed image, coloured by "
                 "level (white initial, green/yellow/red finer); sample-based methods only");
+  c->add_option("--density-vdb", o->densityVdb,
+                "Also write the density volume the method marched through as an OpenVDB file "
+                "(FloatGrid 'density'; for Houdini, Blender); CPU methods");
+  c->add_option("--radiance-vdb", o->radianceVdb,
+                "Also write the source-radiance volume S as an OpenVDB file (Vec3SGrid "
+                "'radiance'); CPU methods that build one (not exact)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
     const Scene scene = loadScene(o->scene, o->sets);
@@ -43,6 +51,8 @@ Action addRender(CLI::App& app) {
     if (!o->png.empty()) checkWritablePath(o->png);
     if (!o->stats.empty()) checkWritablePath(o->stats);
     if (!o->samplesPng.empty()) checkWritablePath(o->samplesPng);
+    if (!o->densityVdb.empty()) checkWritablePath(o->densityVdb);
+    if (!o->radianceVdb.empty()) checkWritablePath(o->radianceVdb);
 
     Progress progress("render", 1, !o->quiet);
     RenderResult r = method->render(scene, &progress);
@@ -65,6 +75,19 @@ Action addRender(CLI::App& app) {
       const Image view = drawSamples(r.image, r.samples, scene.camera);
       out.stage(o->samplesPng, [&](const std::string& tmp) { writePng(view, tmp, o->exposure); });
     }
+    const auto noVolume = [&](const char* option, const char* what) {
+      return ConfigError(std::string(option) + ": method '" + r.stats.method + "' (" +
+                         r.stats.backend + ") has no " + what +
+                         " volume on the host; use a CPU method that builds one");
+    };
+    if (!o->densityVdb.empty()) {
+      if (!r.density) throw noVolume("--density-vdb", "density");
+      out.stage(o->densityVdb, [&](const std::string& tmp) { writeVdb(tmp, *r.density); });
+    }
+    if (!o->radianceVdb.empty()) {
+      if (!r.radiance) throw noVolume("--radiance-vdb", "source-radiance");
+      out.stage(o->radianceVdb, [&](const std::string& tmp) { writeVdb(tmp, *r.radiance); });
+    }
     out.commit();
     if (!o->quiet) {
       std::printf("%s (%s, %s): %dx%d in %.1f ms\n", r.stats.method.c_str(),
@@ -75,7 +98,8 @@ Action addRender(CLI::App& app) {
       std::printf("wrote %s", o->out.c_str());
       if (!o->png.empty()) std::printf(", %s", o->png.c_str());
       if (!o->stats.empty()) std::printf(", %s", o->stats.c_str());
-      if (!o->samplesPng.empty()) std::printf(", %s", o->samplesPng.c_str());
+      for (const std::string* extra : {&o->samplesPng, &o->densityVdb, &o->radianceVdb})
+        if (!extra->empty()) std::printf(", %s", extra->c_str());
       std::printf("\n");
     }
     return 0;

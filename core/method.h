@@ -21,6 +21,11 @@ struct RenderResult {
   /// The radiance samples a sample-based method used (positions, radii, levels, S, ∇S);
   /// empty for methods without samples. For pictures of the sampling and for tests.
   std::vector<RadianceSample> samples;
+  /// The volumes the method built, for export (`render --density-vdb / --radiance-vdb`) and
+  /// tests: the density volume (CPU methods), the source-radiance volume S (CPU methods that
+  /// build one; `exact` has none). Null where a method has none or keeps it on the GPU.
+  std::shared_ptr<const DensityGrid> density;
+  std::shared_ptr<const RadianceGrid> radiance;
 };
 
 class Method {

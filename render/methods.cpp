@@ -61,7 +61,8 @@ class ExactMethod : public Method {
   RenderResult render(const Scene& scene, Progress* progress) override {
     RenderResult r;
     fillCpuStats(r.stats, "exact", scene);
-    const DensityGrid density = buildDensityVolume(scene, r.stats);
+    r.density = std::make_shared<const DensityGrid>(buildDensityVolume(scene, r.stats));
+    const DensityGrid& density = *r.density;
     if (progress) progress->restart("exact", scene.camera.height);
     {
       ScopedTimer t(r.stats, "march");
@@ -83,15 +84,17 @@ class PerVoxelMethod : public Method {
   RenderResult render(const Scene& scene, Progress* progress) override {
     RenderResult r;
     fillCpuStats(r.stats, "per-voxel", scene);
-    const DensityGrid density = buildDensityVolume(scene, r.stats);
-    RadianceGrid radiance(scene.medium.bounds, res_);
+    r.density = std::make_shared<const DensityGrid>(buildDensityVolume(scene, r.stats));
+    const DensityGrid& density = *r.density;
+    auto radiance = std::make_shared<RadianceGrid>(scene.medium.bounds, res_);
     PerVoxelStats pv;
     {
       ScopedTimer t(r.stats, "radiance");
       if (progress) progress->restart("per-voxel S", res_.z);
-      pv = buildPerVoxelRadiance(scene, density, mp_.delta1, radiance, progress);
+      pv = buildPerVoxelRadiance(scene, density, mp_.delta1, *radiance, progress);
     }
-    r.image = marchRadianceVolume(scene, density, radiance, mp_.march, r.stats, progress);
+    r.image = marchRadianceVolume(scene, density, *radiance, mp_.march, r.stats, progress);
+    r.radiance = std::move(radiance);
     r.stats.extra["traced_voxels"] = pv.traced;
     r.stats.extra["empty_voxels"] = pv.skipped;
     r.stats.extra["radiance_resolution"] = {res_.x, res_.y, res_.z};

@@ -46,20 +46,22 @@ class SampledMethod : public Method {
     RenderResult r;
     RenderStats& st = r.stats;
     fillCpuStats(st, name_, scene);
-    const DensityGrid density = buildDensityVolume(scene, st);
+    r.density = std::make_shared<const DensityGrid>(buildDensityVolume(scene, st));
+    const DensityGrid& density = *r.density;
     std::vector<RadianceSample> samples;
     {
       ScopedTimer t(st, "sampling");
       samples = sampler_->generate(scene, density);
     }
     samples = evaluate(scene, density, std::move(samples), st);
-    RadianceGrid radiance(scene.medium.bounds, res_);
+    auto radiance = std::make_shared<RadianceGrid>(scene.medium.bounds, res_);
     ReconstructionStats rs;
     {
       ScopedTimer t(st, "reconstruction");
-      rs = reconstruction_->reconstruct(scene, density, samples, radiance);
+      rs = reconstruction_->reconstruct(scene, density, samples, *radiance);
     }
-    r.image = marchRadianceVolume(scene, density, radiance, mp_.march, st, progress);
+    r.image = marchRadianceVolume(scene, density, *radiance, mp_.march, st, progress);
+    r.radiance = std::move(radiance);
     st.samples = (long long)samples.size();
     st.extra["sampler"] = samplerType_;
     st.extra["uncovered_voxels"] = rs.uncovered;

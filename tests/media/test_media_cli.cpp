@@ -7,8 +7,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include "api/scatterlab.h"
 #include "media/sog.h"
 #include "media/temp_dir.h"
+#include "media/vdb.h"
 
 namespace scatterlab {
 namespace {
@@ -102,6 +104,42 @@ TEST(MediaCli, BadInputsFailWithMessageAndNoOutput) {
   std::ofstream(foreign) << "not a model at all, just some text to fill the header........";
   expectFailure("info " + foreign, "not a valid .sog model", out);
   expectFailure("info " + cut, "truncated", out);
+}
+
+TEST(MediaCli, RenderExportsDensityAndRadianceVolumesAsVdb) {
+  testing::TempDir tmp("exportvdb");
+  const std::string scene = std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/glow.json";
+  const std::string sets =
+      " --set medium.resolution=16 --set camera.width=16 --set camera.height=12 -q";
+  const CliRun r =
+      run("render " + scene + " -o " + tmp.file("a.exr") + " --method per-voxel" +
+          " --density-vdb " + tmp.file("d.vdb") + " --radiance-vdb " + tmp.file("s.vdb") + sets);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto d = inspectVdb(tmp.file("d.vdb"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].name, "density");
+  EXPECT_EQ(d[0].valueType, "float");
+  const auto s = inspectVdb(tmp.file("s.vdb"));
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_EQ(s[0].name, "radiance");
+  EXPECT_EQ(s[0].valueType, "vec3s");
+  // The exported density is the volume the renderer built, voxel for voxel.
+  initialize();
+  const Scene sc = loadScene(scene, {"medium.resolution=16"});
+  DensityGrid expected(sc.medium.bounds, sc.medium.resolution);
+  sc.medium.density->build(expected);
+  const DensityGrid back = loadVdbAsDense(tmp.file("d.vdb"), "density");
+  ASSERT_EQ(back.dims(), expected.dims());
+  for (std::size_t i = 0; i < back.size(); ++i)
+    ASSERT_NEAR(back.data()[i], expected.data()[i], 1e-6f) << i;
+
+  // `exact` builds no radiance volume: a clear error and no output at all.
+  const CliRun bad = run("render " + scene + " -o " + tmp.file("b.exr") + " --method exact" +
+                         " --radiance-vdb " + tmp.file("b.vdb") + sets);
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("--radiance-vdb"), std::string::npos) << bad.out;
+  EXPECT_FALSE(std::filesystem::exists(tmp.file("b.exr")));
+  EXPECT_FALSE(std::filesystem::exists(tmp.file("b.vdb")));
 }
 
 }  // namespace
