@@ -1,5 +1,8 @@
 #include "media/procedural.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <sstream>
 
 #include "core/error.h"
@@ -14,34 +17,47 @@ std::string UniformDensity::describe() const {
   return "uniform density " + std::to_string(value_);
 }
 
-float GaussianDensity::eval(const Vec3& x) const {
+float evalGaussians(std::span<const GaussianBlob> blobs, const Vec3& x) {
   float d = 0.0f;
-  for (const GaussianBlob& b : blobs_) {
+  for (const GaussianBlob& b : blobs) {
     const Vec3 v = x - b.center;
     const float r2 = b.radius * b.radius, q = glm::dot(v, v);
-    if (q < kCullRadius * kCullRadius * r2) d += b.weight * std::exp(-q / r2);
+    const float R = GaussianDensity::kCullRadius * b.radius;
+    if (q < R * R) d += b.weight * std::exp(-q / r2);
   }
   return d;
 }
 
-void GaussianDensity::build(DensityGrid& grid) const {
-  // Splatting (paper Sec. 6, CPU variant): each blob touches only the voxels within 3r.
-  // Serial over blobs keeps the sum order (and so the result) deterministic.
-  std::fill(grid.data().begin(), grid.data().end(), 0.0f);
+void splatGaussians(std::span<const GaussianBlob> blobs, DensityGrid& grid) {
   const IVec3 n = grid.dims();
-  const Vec3 cell = grid.cellSize(), lo = grid.bounds().min;
-  for (const GaussianBlob& b : blobs_) {
-    const float R = kCullRadius * b.radius, r2 = b.radius * b.radius;
-    const IVec3 i0 = glm::max(IVec3(glm::ceil((b.center - R - lo) / cell - 0.5f)), IVec3(0));
-    const IVec3 i1 = glm::min(IVec3(glm::floor((b.center + R - lo) / cell - 0.5f)), n - 1);
-    for (int k = i0.z; k <= i1.z; ++k)
-      for (int j = i0.y; j <= i1.y; ++j)
-        for (int i = i0.x; i <= i1.x; ++i) {
-          const Vec3 v = grid.cellCenter(i, j, k) - b.center;
-          const float q = glm::dot(v, v);
-          if (q < R * R) grid.at(i, j, k) += b.weight * std::exp(-q / r2);
-        }
-  }
+  const Vec3 cell = grid.cellSize(), lo = grid.bounds().min, nf(n);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n.z, 4), [&](const tbb::blocked_range<int>& r) {
+    for (const GaussianBlob& b : blobs) {
+      const float R = GaussianDensity::kCullRadius * b.radius, r2 = b.radius * b.radius;
+      // One extra cell each side so float rounding never drops a cell; q < R² culls.
+      IVec3 i0 = IVec3(glm::clamp(glm::floor((b.center - R - lo) / cell - 0.5f), Vec3(0), nf));
+      IVec3 i1 =
+          IVec3(glm::clamp(glm::ceil((b.center + R - lo) / cell - 0.5f), Vec3(-1), nf - 1.0f));
+      i0.z = std::max(i0.z, r.begin());
+      i1.z = std::min(i1.z, r.end() - 1);
+      for (int k = i0.z; k <= i1.z; ++k)
+        for (int j = i0.y; j <= i1.y; ++j)
+          for (int i = i0.x; i <= i1.x; ++i) {
+            const Vec3 v = grid.cellCenter(i, j, k) - b.center;
+            const float q = glm::dot(v, v);
+            if (q < R * R) grid.at(i, j, k) += b.weight * std::exp(-q / r2);
+          }
+    }
+  });
+}
+
+float GaussianDensity::eval(const Vec3& x) const {
+  return evalGaussians(blobs_, x);
+}
+
+void GaussianDensity::build(DensityGrid& grid) const {
+  std::fill(grid.data().begin(), grid.data().end(), 0.0f);
+  splatGaussians(blobs_, grid);
 }
 
 std::string GaussianDensity::describe() const {

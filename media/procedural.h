@@ -2,6 +2,7 @@
 /// Procedural density models: uniform, Gaussian blobs, height gradient.
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/density_model.h"
@@ -21,6 +22,15 @@ class UniformDensity : public DensityModel {
  private:
   float value_;
 };
+
+/// Σ_j w_j exp(−|x − c_j|²/r_j²) over `blobs`, each culled beyond 3·r_j.
+float evalGaussians(std::span<const GaussianBlob> blobs, const Vec3& x);
+
+/// Density construction by splatting (paper Sec. 6, CPU): adds each blob's w·exp(−|x−c|²/r²)
+/// to the cell centres of `grid` within its culling radius (3r). Parallel over z slabs; every
+/// cell sums the same terms in the same order as evalGaussians(), so splatting equals
+/// evaluation and the result is deterministic.
+void splatGaussians(std::span<const GaussianBlob> blobs, DensityGrid& grid);
 
 /// D(x) = Σ w_j exp(−|x − c_j|²/r_j²), each blob culled beyond 3·r_j (the paper's culling
 /// radius: the dropped tail is below w·e⁻⁹ ≈ 1.2e-4·w).

@@ -118,45 +118,19 @@ std::vector<float> ResidualHash::decode() const {
 // ---------------------------------------------------------------- model
 
 float SogModel::evalGaussians(const Vec3& x) const {
-  float d = 0.0f;
-  for (const GaussianBlob& b : gaussians) {
-    const Vec3 v = x - b.center;
-    const float r2 = b.radius * b.radius, q = glm::dot(v, v);
-    const float R = GaussianDensity::kCullRadius * b.radius;
-    if (q < R * R) d += b.weight * std::exp(-q / r2);
-  }
-  return d;
+  return scatterlab::evalGaussians(gaussians, x);
 }
 
 void SogModel::splat(DensityGrid& grid, bool withResidual) const {
   const IVec3 n = grid.dims();
-  const Vec3 cell = grid.cellSize(), lo = grid.bounds().min;
   std::fill(grid.data().begin(), grid.data().end(), 0.0f);
   std::vector<float> dense;
   const bool useF = withResidual && residual.size() > 0;
   if (useF) dense = residual.decode();
   const IVec3 rn = residual.dims();
-  // Parallel over z slabs; within a slab the Gaussians are visited in model order, so every
-  // cell sums the same terms in the same order as evalGaussians().
+  splatGaussians(gaussians, grid);
+  if (!withResidual) return;
   tbb::parallel_for(tbb::blocked_range<int>(0, n.z, 4), [&](const tbb::blocked_range<int>& r) {
-    for (const GaussianBlob& b : gaussians) {
-      const float R = GaussianDensity::kCullRadius * b.radius, r2 = b.radius * b.radius;
-      // One extra cell each side so float rounding never drops a cell; q < R² culls.
-      const Vec3 nf(n);
-      IVec3 i0 = IVec3(glm::clamp(glm::floor((b.center - R - lo) / cell - 0.5f), Vec3(0), nf));
-      IVec3 i1 =
-          IVec3(glm::clamp(glm::ceil((b.center + R - lo) / cell - 0.5f), Vec3(-1), nf - 1.0f));
-      i0.z = std::max(i0.z, r.begin());
-      i1.z = std::min(i1.z, r.end() - 1);
-      for (int k = i0.z; k <= i1.z; ++k)
-        for (int j = i0.y; j <= i1.y; ++j)
-          for (int i = i0.x; i <= i1.x; ++i) {
-            const Vec3 v = grid.cellCenter(i, j, k) - b.center;
-            const float q = glm::dot(v, v);
-            if (q < R * R) grid.at(i, j, k) += b.weight * std::exp(-q / r2);
-          }
-    }
-    if (!withResidual) return;
     const auto get = [&](int i, int j, int k) {
       return dense[(std::size_t(k) * rn.y + j) * rn.x + i];
     };
