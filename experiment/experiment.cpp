@@ -64,8 +64,9 @@ bool safeName(const std::string& s) {
 
 void checkName(Params& p, const std::string& key, const std::string& name) {
   if (!safeName(name))
-    p.fail(key, "'" + name + "' must be non-empty and use only letters, digits, '-', '_' and '.' "
-                "(it names files)");
+    p.fail(key, "'" + name +
+                    "' must be non-empty and use only letters, digits, '-', '_' and '.' "
+                    "(it names files)");
 }
 
 std::string fmt(double v, const char* f = "%.4g") {
@@ -303,7 +304,8 @@ Scene buildRunScene(const std::string& sceneFile, const std::vector<std::string>
     throw ConfigError(sceneFile + ": " + e.what());
   }
   if (!doc.contains("lights") || !doc["lights"].is_array() || doc["lights"].empty())
-    throw ConfigError(sceneFile + ": the 'lights' sweep axis needs at least one light to replicate");
+    throw ConfigError(sceneFile +
+                      ": the 'lights' sweep axis needs at least one light to replicate");
   const Json tmpl = doc["lights"][0];
   const Vec3 c = first.medium.bounds.center();
   const int n = *lights;
@@ -380,8 +382,7 @@ ExperimentPlan parseExperiment(const std::string& configPath,
   {
     std::set<std::string> seen;
     for (const SceneSpec& s : plan.scenes) {
-      if (!seen.insert(s.name).second)
-        p.fail("scenes", "two scenes are named '" + s.name + "'");
+      if (!seen.insert(s.name).second) p.fail("scenes", "two scenes are named '" + s.name + "'");
       checkReadableFile(s.file, "scene file");
     }
   }
@@ -493,8 +494,8 @@ ExperimentPlan parseExperiment(const std::string& configPath,
                           std::to_string(points) + " numbers (one per sweep point), got " +
                           describeValue(vals));
     for (const SceneSpec& sc : plan.scenes) {
-      if (!sw.scenes.empty() && std::find(sw.scenes.begin(), sw.scenes.end(), sc.name) ==
-                                    sw.scenes.end())
+      if (!sw.scenes.empty() &&
+          std::find(sw.scenes.begin(), sw.scenes.end(), sc.name) == sw.scenes.end())
         continue;
       const std::string sceneHash = stableHash(readText(sc.file));
       for (std::size_t pt = 0; pt < points; ++pt) {
@@ -542,9 +543,13 @@ ExperimentPlan parseExperiment(const std::string& configPath,
           if (!ids.insert(id).second)
             throw ConfigError("two runs get the id '" + id + "'; give methods distinct names");
           r.paperFps = sw.paperFps.contains(m.name) ? sw.paperFps[m.name][pt] : Json(nullptr);
-          Json key = {{"scene", sceneHash}, {"sets", r.sets}, {"backend", m.backend},
-                      {"method", m.method}, {"repetitions", sw.repetitions},
-                      {"warmup", sw.warmup}, {"lights", r.lights ? Json(*r.lights) : Json()}};
+          Json key = {{"scene", sceneHash},
+                      {"sets", r.sets},
+                      {"backend", m.backend},
+                      {"method", m.method},
+                      {"repetitions", sw.repetitions},
+                      {"warmup", sw.warmup},
+                      {"lights", r.lights ? Json(*r.lights) : Json()}};
           Json refs = Json::array();
           for (const MethodSpec& ref : plan.references)
             refs.push_back({ref.method, ref.backend, ref.sets});
@@ -618,7 +623,7 @@ RunRecord RunRecord::fromJson(const Json& j) {
   r.error = j.value("error", "");
   r.stats = j.value("stats", Json::object());
   const Json median = j.value("median_ms", Json::object());  // a named copy: items() of a
-  for (const auto& [s, ms] : median.items())                   // temporary dangles
+  for (const auto& [s, ms] : median.items())                 // temporary dangles
     r.medianMs.emplace_back(s, ms.is_number() ? ms.get<double>() : NAN);
   r.repetitions = j.value("repetitions", 0);
   r.warmup = j.value("warmup", 0);
@@ -655,8 +660,8 @@ struct SweepBar {
     const int left = total - done;
     const double eta = rendered > 0 ? renderedSeconds / rendered * left : 0.0;
     const int width = 24, filled = total ? done * width / total : width;
-    std::fprintf(stderr, "\r\033[K[%.*s%*s] %d/%d runs, %.0fs elapsed, ETA %s  %s",
-                 filled, "########################", width - filled, "", done, total, el,
+    std::fprintf(stderr, "\r\033[K[%.*s%*s] %d/%d runs, %.0fs elapsed, ETA %s  %s", filled,
+                 "########################", width - filled, "", done, total, el,
                  rendered ? (fmt(eta, "%.0f") + "s").c_str() : "?", what.substr(0, 60).c_str());
     std::fflush(stderr);
   }
@@ -765,12 +770,15 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
     rec.backend = m.backend;
     rec.axes = r.axes;
     rec.point = r.point;
-    rec.hash = rec.hash = r.hash;
+    rec.hash = r.hash;
     rec.paper = m.paper;
     if (!r.paperFps.is_null()) rec.paper["fps"] = r.paperFps;
-    rec.config = {{"scene", r.sceneSpec->file}, {"sets", r.sets},
-                  {"lights", r.lights ? Json(*r.lights) : Json()}, {"method", m.method},
-                  {"backend", m.backend}, {"repetitions", r.sweepSpec->repetitions},
+    rec.config = {{"scene", r.sceneSpec->file},
+                  {"sets", r.sets},
+                  {"lights", r.lights ? Json(*r.lights) : Json()},
+                  {"method", m.method},
+                  {"backend", m.backend},
+                  {"repetitions", r.sweepSpec->repetitions},
                   {"warmup", r.sweepSpec->warmup}};
     for (const MethodSpec& ref : plan.references) rec.references.push_back(ref.name);
     const std::string recordPath = out("runs/" + r.id + ".json");
@@ -910,8 +918,7 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
     if (rec.method == baseMethod) return nullptr;
     const RunRecord *same = nullptr, *entry = nullptr;
     for (const RunRecord& o : res.runs) {
-      if (o.sweep != rec.sweep || o.scene != rec.scene || o.point != rec.point ||
-          o.status != "ok")
+      if (o.sweep != rec.sweep || o.scene != rec.scene || o.point != rec.point || o.status != "ok")
         continue;
       if (o.methodName == sw->baseline) entry = &o;
       if (o.method == baseMethod && o.backend == rec.backend && !same) same = &o;
@@ -926,7 +933,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
         bm = ms;
         best = s;
       }
-    return best.empty() ? std::string() : best + " (" + fmt(100 * bm / std::max(total, 1e-9), "%.0f") + "%)";
+    return best.empty() ? std::string()
+                        : best + " (" + fmt(100 * bm / std::max(total, 1e-9), "%.0f") + "%)";
   };
 
   std::ostringstream csv;
@@ -934,8 +942,10 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
   for (const auto& a : axisNames) csv << ",axis_" << a;
   csv << ",status,samples,width,height,repetitions,total_ms,fps";
   for (const auto& s : stages) csv << "," << s << "_ms";
-  for (const auto& r : plan.references) csv << ",rel_l2_vs_" << r.name << ",rel_l1_vs_" << r.name << ",psnr_vs_" << r.name;
-  csv << ",speedup_vs_baseline,dominant_stage,peak_host_mib,paper_rel_error,paper_fps,paper_samples,resumed,error\n";
+  for (const auto& r : plan.references)
+    csv << ",rel_l2_vs_" << r.name << ",rel_l1_vs_" << r.name << ",psnr_vs_" << r.name;
+  csv << ",speedup_vs_baseline,dominant_stage,peak_host_mib,paper_rel_error,paper_fps,paper_"
+         "samples,resumed,error\n";
   Json jres;
   jres["title"] = plan.title;
   jres["config"] = fs::absolute(configPath).lexically_normal().string();
@@ -965,8 +975,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
       csv << "," << csvField(rec.axes.contains(a) ? valueLabel(rec.axes[a]) : "");
     csv << "," << rec.status << "," << (rec.samples ? std::to_string(*rec.samples) : "") << ","
         << (ok ? std::to_string(rec.stats.value("width", 0)) : "") << ","
-        << (ok ? std::to_string(rec.stats.value("height", 0)) : "") << "," << rec.repetitions
-        << "," << (ok ? fmt(rec.totalMs(), "%.2f") : "") << ","
+        << (ok ? std::to_string(rec.stats.value("height", 0)) : "") << "," << rec.repetitions << ","
+        << (ok ? fmt(rec.totalMs(), "%.2f") : "") << ","
         << (ok ? fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.3f") : "");
     for (const auto& s : stages) {
       const auto v = stageOf(rec, s);
@@ -982,8 +992,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
     const RunRecord* b = ok ? baselineOf(rec) : nullptr;
     // A plain double (valid when b): GCC 12 warns falsely about std::optional<double> here.
     const double speedup = b ? b->totalMs() / std::max(rec.totalMs(), 1e-9) : 0.0;
-    csv << "," << (b ? fmt(speedup, "%.3f") : "") << "," << csvField(ok ? dominant(rec) : "")
-        << "," << (ok ? fmt(rec.peakHostMiB, "%.1f") : "") << ","
+    csv << "," << (b ? fmt(speedup, "%.3f") : "") << "," << csvField(ok ? dominant(rec) : "") << ","
+        << (ok ? fmt(rec.peakHostMiB, "%.1f") : "") << ","
         << paperStr(rec.paper, "rel_error", "%.4f") << "," << paperStr(rec.paper, "fps", "%.2f")
         << "," << paperStr(rec.paper, "samples", "%.0f") << "," << (rec.resumed ? 1 : 0) << ","
         << csvField(rec.error) << "\n";
@@ -1038,8 +1048,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
         continue;
       }
       md << " " << (rec.samples ? std::to_string(*rec.samples) : "—") << " | "
-         << fmt(rec.totalMs(), "%.1f") << " | " << fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.2f")
-         << " |";
+         << fmt(rec.totalMs(), "%.1f") << " | "
+         << fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.2f") << " |";
       if (!sw.paperFps.empty()) md << " " << paperStr(rec.paper, "fps", "%.1f") << " |";
       if (!sw.baseline.empty()) {
         const RunRecord* b = baselineOf(rec);
@@ -1049,9 +1059,10 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
       for (std::size_t k = 0; k < plan.references.size(); ++k)
         md << " " << (k < rec.errors.size() ? fmt(100 * rec.errors[k].relL2, "%.2f") + "%" : "—")
            << " |";
-      md << " " << (rec.paper.contains("rel_error")
-                        ? fmt(100 * rec.paper["rel_error"].get<double>(), "%.1f") + "%"
-                        : "—")
+      md << " "
+         << (rec.paper.contains("rel_error")
+                 ? fmt(100 * rec.paper["rel_error"].get<double>(), "%.1f") + "%"
+                 : "—")
          << " | " << dominant(rec) << " | " << fmt(rec.peakHostMiB, "%.0f") << " |\n";
     }
     md << "\n";
@@ -1107,9 +1118,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
       for (const RunRecord* rec : groups[g])
         if (rec->status == "ok" && fs::exists(out("images/" + rec->id + ".exr"))) {
           imgs.push_back(readExr(out("images/" + rec->id + ".exr")));
-          names.push_back(rec->methodName + (rec->samples ? " (" + std::to_string(*rec->samples) +
-                                                                " samples)"
-                                                          : ""));
+          names.push_back(rec->methodName +
+                          (rec->samples ? " (" + std::to_string(*rec->samples) + " samples)" : ""));
         }
       if (imgs.empty()) continue;
       // Keep strips a sensible size: at most 12 images.
@@ -1117,7 +1127,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
         imgs.resize(12);
         names.resize(12);
       }
-      const std::string file = groupOrder.size() == 1 ? "side_by_side.png" : "gallery/" + g + ".png";
+      const std::string file =
+          groupOrder.size() == 1 ? "side_by_side.png" : "gallery/" + g + ".png";
       if (groupOrder.size() > 1) fs::create_directories(out("gallery"));
       writePng(sideBySide(imgs), out(file), plan.exposure);
       std::string caption;
@@ -1144,10 +1155,9 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
           "no python3 with matplotlib found ($SCATTERLAB_PYTHON, python3 on the PATH, "
           "/usr/bin/python3; install python3-matplotlib, e.g. by scripts/setup.sh)";
     } else {
-      const std::string cmd = "'" + py + "' '" + script + "' '" + outDir + "' >> '" +
-                              out("log.txt") + "' 2>&1";
-      if (std::system(cmd.c_str()) != 0)
-        res.plotsNote = "the plot script failed; see log.txt";
+      const std::string cmd =
+          "'" + py + "' '" + script + "' '" + outDir + "' >> '" + out("log.txt") + "' 2>&1";
+      if (std::system(cmd.c_str()) != 0) res.plotsNote = "the plot script failed; see log.txt";
     }
   } else {
     res.plotsNote = "plots not requested (--no-plots)";

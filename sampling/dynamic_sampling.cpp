@@ -16,7 +16,6 @@ GridInfoBuffer::GridInfoBuffer(const Box& b, int resolution)
     : bounds(b), dims(resolution), interval(b.extent() / float(resolution)) {
   const std::size_t n = std::size_t(resolution) * resolution * resolution;
   inSet.assign(n, 0);
-  error.assign(n, 0.0f);
   ancestor.assign(n, -1);
 }
 

@@ -38,13 +38,13 @@ struct DynamicSamplingSettings {
 
 /// Grid information buffer of one level: vertices of G_k at the cell centres of a regular
 /// N³ partition of the medium box (vertex (i,j,k) at min + (i + ½, j + ½, k + ½)·h), each with
-/// its membership in Q^k, its local shading error and the level-0 sample whose τ it inherits.
+/// its membership in Q^k and the level-0 sample whose τ it inherits. (The local shading errors
+/// stay with the sample list of the level, which the scan compaction orders by vertex.)
 struct GridInfoBuffer {
   Box bounds;
   IVec3 dims{0};
   Vec3 interval{0.0f};                 ///< h per axis
   std::vector<std::uint8_t> inSet;     ///< 1 when the vertex is in Q^k
-  std::vector<float> error;            ///< E of the vertex's sample (0 when not evaluated)
   std::vector<std::int32_t> ancestor;  ///< index of the level-0 ancestor, or -1
 
   GridInfoBuffer(const Box& b, int resolution);
