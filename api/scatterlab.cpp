@@ -3,10 +3,11 @@
 #include <mutex>
 
 #include "media/register.h"
+#include "methods/register.h"
+#include "render/integrators.h"
 #include "render/interpolation.h"
-#include "render/methods.h"
 #include "render/radiance_evaluator.h"
-#include "render/sampled_methods.h"
+#include "sampling/dynamic_sampling.h"
 #include "sampling/samplers.h"
 #ifdef SCATTERLAB_HAS_GPU
 #include "gpu/register.h"
@@ -17,15 +18,18 @@ namespace scatterlab {
 void initialize() {
   static std::once_flag once;
   std::call_once(once, [] {
+    // Stage variants first (CPU, then the GPU ones beside them), then the methods that
+    // compose them.
     registerMediaModels();
-    registerReferenceMethods();
     registerSamplers();
     registerRadianceEvaluators();
+    registerRefiners();
     registerReconstructions();
-    registerSampledMethods();
+    registerIntegrators();
 #ifdef SCATTERLAB_HAS_GPU
     gpu::registerGpuStages();
 #endif
+    registerMethods();
   });
 }
 

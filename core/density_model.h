@@ -17,6 +17,9 @@
 namespace scatterlab {
 
 /// One Gaussian of a sum-of-Gaussians medium (paper Eq. 3): w·exp(−|x−c|²/r²).
+/// Blobs are culled at this many radii r (exp(−9) ≈ 1.2e-4 of the peak), by every backend.
+inline constexpr float kGaussianCullRadius = 3.0f;
+
 struct GaussianBlob {
   Vec3 center{0.5f};
   float radius = 0.1f;  ///< r in w·exp(−|x−c|²/r²) (the paper's convention, Eq. 3)
@@ -46,6 +49,10 @@ class DensityModel {
   /// The Gaussians of a sum-of-Gaussians model (the paper's initial sample set, Sec. 4), or
   /// null for models that have none. Owned by the model; valid while it lives.
   virtual const std::vector<GaussianBlob>* gaussians() const { return nullptr; }
+
+  /// True when the Gaussians of gaussians() are the whole density (no residual), so a device
+  /// can build the volume by splatting them (paper Sec. 6) instead of uploading build()'s.
+  virtual bool isSumOfGaussians() const { return false; }
 
   /// One-line human-readable summary for `scatterlab info`.
   virtual std::string describe() const = 0;

@@ -1,17 +1,42 @@
 #include "core/method.h"
 
+#include <algorithm>
+
 namespace scatterlab {
 
-Registry<MethodFactory>& methods() {
-  static Registry<MethodFactory> r("method");
+Registry<MethodEntry>& methods() {
+  static Registry<MethodEntry> r("method");
   return r;
 }
 
 namespace {
 
-std::string backendOf(Params& p, const std::string& requested) {
-  const std::string fromFile = p.choice("backend", {"cpu", "gpu", "auto"}, "auto");
-  return requested.empty() || requested == "auto" ? fromFile : requested;
+/// The backend a method runs on: "cpu" and "gpu" as asked (an error where the method or this
+/// build has no such variant), "auto" the GPU when its backend prefers itself now (a hardware
+/// GPU) and the method runs there, else the CPU. `note` says why, for "auto".
+Backend chooseBackend(const std::string& name, const MethodEntry& m, const std::string& asked,
+                      std::string* note) {
+  const BackendEntry& gpu = backends()[int(Backend::Gpu)];
+  if (asked == "cpu") {
+    if (!m.runsOn(Backend::Cpu))
+      throw ConfigError("method '" + name + "' has no CPU variant; use --backend gpu");
+    return Backend::Cpu;
+  }
+  if (asked == "gpu") {
+    if (!gpu.makeFrame) throw ConfigError("this build of scatterlab has no GPU backend");
+    if (!m.runsOn(Backend::Gpu))
+      throw ConfigError("method '" + name + "' has no GPU variant; use --backend cpu");
+    return Backend::Gpu;
+  }
+  if (!m.runsOn(Backend::Gpu)) {
+    *note = "auto: method '" + name + "' runs on the CPU only";
+    return Backend::Cpu;
+  }
+  if (!gpu.preferred) {
+    *note = "auto: no GPU backend in this build; using the CPU";
+    return Backend::Cpu;
+  }
+  return gpu.preferred(note) ? Backend::Gpu : Backend::Cpu;
 }
 
 }  // namespace
@@ -19,22 +44,30 @@ std::string backendOf(Params& p, const std::string& requested) {
 std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& methodOverride,
                                      const std::string& backend) {
   Params p(scene.render, "render");
-  const std::string fileMethod = p.string("method", "exact");
-  const std::string b = backendOf(p, backend);
-  const std::string name = methodOverride.empty() ? fileMethod : methodOverride;
-  auto method =
-      methods().get(name, methodOverride.empty() ? "render.method" : "--method")(p, scene, b);
-  if (name != fileMethod && methods().contains(fileMethod)) {
-    // Validate the file's own settings with its own method, then accept its keys here.
-    // Validated for key checking only, on its own backend setting: the requested backend
-    // applies to the overriding method, which may support it where the file's does not.
-    Params own(scene.render, "render");
-    own.string("method", "exact");
-    methods().get(fileMethod, "render.method")(own, scene, backendOf(own, "auto"));
-    own.finish();
-    for (auto it = scene.render.begin(); it != scene.render.end(); ++it) p.allow(it.key());
+  std::string name = p.string("method", "exact");
+  if (!methodOverride.empty()) name = methodOverride;
+  const std::string fromFile = p.choice("backend", {"cpu", "gpu", "auto"}, "auto");
+  const std::string asked = backend.empty() || backend == "auto" ? fromFile : backend;
+  const MethodEntry& entry =
+      methods().get(name, methodOverride.empty() ? "render.method" : "--method");
+  std::string note;
+  const Backend b = chooseBackend(name, entry, asked, &note);
+  auto method = entry.create(p, scene, b, note);
+  // Keys of other registered methods are tolerated (and reported); the rest is an error.
+  std::vector<std::string> ignored;
+  for (auto it = scene.render.begin(); it != scene.render.end(); ++it) {
+    if (std::find(entry.keys.begin(), entry.keys.end(), it.key()) != entry.keys.end()) continue;
+    for (const std::string& other : methods().names()) {
+      const auto& keys = methods().get(other, "render.method").keys;
+      if (std::find(keys.begin(), keys.end(), it.key()) != keys.end()) {
+        ignored.push_back(p.keyPath(it.key()));
+        p.allow(it.key());
+        break;
+      }
+    }
   }
   p.finish();
+  method->ignoredKeys = std::move(ignored);
   return method;
 }
 

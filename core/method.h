@@ -32,21 +32,41 @@ class Method {
  public:
   virtual ~Method() = default;
   /// Renders `scene` (whose `render` settings this method was created from). `progress` may be
-  /// null. Throws scatterlab::Error on failure. CPU methods need no GL context.
+  /// null. Throws scatterlab::Error on failure. Needs no current GL context (GPU methods make
+  /// their own).
   virtual RenderResult render(const Scene& scene, Progress* progress) = 0;
+
+  /// Keys of the render object that only other registered methods read, ignored by this one
+  /// (dotted paths, e.g. "render.sampler"); set by createMethod. The tool lists them once on
+  /// stderr.
+  std::vector<std::string> ignoredKeys;
 };
 
-/// Reads the method's own keys from the scene's render object ("method" and "backend" are
-/// read by the caller) and validates them against `scene`. Must not call finish().
-using MethodFactory = std::function<std::unique_ptr<Method>(Params& render, const Scene& scene,
-                                                            const std::string& backend)>;
+/// A registered method (methods/register.cpp registers each built-in one once).
+struct MethodEntry {
+  /// One line for listings.
+  std::string summary;
+  /// The render keys the method reads (top-level names, e.g. "sampler", "delta1"), the same on
+  /// every backend; "method" and "backend" are read by createMethod.
+  std::vector<std::string> keys;
+  /// Whether the method has a variant of every stage on `backend`.
+  std::function<bool(Backend backend)> runsOn;
+  /// Reads the method's keys from the render object (whichever backend runs) and returns the
+  /// method for `backend`, which runsOn. Must not call finish(); throws ConfigError.
+  std::function<std::unique_ptr<Method>(Params& render, const Scene& scene, Backend backend,
+                                        const std::string& backendNote)>
+      create;
+};
 
-Registry<MethodFactory>& methods();
+Registry<MethodEntry>& methods();
 
 /// Creates the method the scene's render object names (default "exact"), or `methodOverride`
-/// when non-empty. backend: "cpu", "gpu" or "auto". Keys of the render object that belong to
-/// the scene's own method are tolerated when `methodOverride` replaces it (so that a reference
-/// can be rendered from any scene); any other unknown key is a ConfigError.
+/// when non-empty — exactly as if render.method were set to it. backend: "cpu", "gpu" or
+/// "auto" (a hardware GPU when one is there and the method runs on it, else the CPU); the
+/// render object's `backend` applies when this is "auto". Keys that only other registered
+/// methods read are tolerated and listed in Method::ignoredKeys (so a reference can be rendered
+/// from any scene); any other unknown key is a ConfigError naming it, and so is a backend the
+/// method has no variant on.
 std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& methodOverride = "",
                                      const std::string& backend = "auto");
 

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/grid.h"
 
 namespace scatterlab {
 namespace {
@@ -47,10 +48,15 @@ std::string describeValue(const Json& v) {
   return s;
 }
 
-Params::Params(const Json& j, std::string path) : j_(&j), path_(std::move(path)) {
-  if (!j.is_object())
+Params::Params(const Json& j, std::string path)
+    : Params(std::make_shared<const Json>(j), nullptr, std::move(path)) {}
+
+Params::Params(std::shared_ptr<const Json> root, const Json* j, std::string path)
+    : root_(std::move(root)), j_(j ? j : root_.get()), path_(std::move(path)) {
+  if (!j_->is_object())
     throw ConfigError((path_.empty() ? std::string("document") : "'" + path_ + "'") +
-                      " must be a JSON object, got " + typeName(j) + " " + describeValue(j));
+                      " must be a JSON object, got " + typeName(*j_) + " " +
+                      describeValue(*j_));
 }
 
 std::string Params::keyPath(const std::string& key) const {
@@ -180,8 +186,30 @@ Vec3 Params::rgb(const std::string& key, std::optional<Vec3> def, const Interval
   return vec3(key, def, range);
 }
 
+IVec3 Params::resolution(const std::string& key, std::optional<IVec3> def) {
+  const Interval range = Interval::closed(1, 4096);
+  IVec3 r;
+  if (has(key) && (*j_)[key].is_array()) {
+    const Vec3 v = vec3(key, std::nullopt, range);
+    for (int i = 0; i < 3; ++i) {
+      if (v[i] != std::floor(v[i]))
+        fail(key, "expected integers, got " + describeValue((*j_)[key]));
+      r[i] = int(v[i]);
+    }
+  } else {
+    r = IVec3(int(integer(key, def ? std::optional<long long>(def->x) : std::nullopt, range)));
+    if (!has(key) && def) r = *def;
+  }
+  const long long n = (long long)r.x * r.y * r.z;
+  if (n > kMaxGridVoxels)
+    fail(key, std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) +
+                  " = " + std::to_string(n) + " voxels is above the memory bound of " +
+                  std::to_string(kMaxGridVoxels) + " voxels (512^3)");
+  return r;
+}
+
 Params Params::child(const std::string& key) {
-  return Params(require(key, "an object"), keyPath(key));
+  return Params(root_, &require(key, "an object"), keyPath(key));
 }
 
 std::vector<Params> Params::children(const std::string& key, bool required) {
@@ -193,8 +221,10 @@ std::vector<Params> Params::children(const std::string& key, bool required) {
   }
   const Json& j = (*j_)[key];
   if (!j.is_array()) fail(key, std::string("expected an array, got ") + typeName(j));
-  for (size_t i = 0; i < j.size(); ++i)
-    out.emplace_back(j[i], keyPath(key) + "[" + std::to_string(i) + "]");
+  for (size_t i = 0; i < j.size(); ++i) {
+    const std::string path = keyPath(key) + "[" + std::to_string(i) + "]";
+    out.push_back(Params(root_, &j[i], path));
+  }
   return out;
 }
 
@@ -208,6 +238,10 @@ void Params::finish() const {
   for (const auto& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
   throw ConfigError("unknown key " + unknown + "; allowed keys" +
                     (path_.empty() ? std::string() : " in '" + path_ + "'") + ": " + allowed);
+}
+
+Interval stepRange(float diagonal) {
+  return Interval{double(diagonal) * 1e-6, double(diagonal), true, false};
 }
 
 void applyOverride(Json& doc, const std::string& assignment) {

@@ -4,10 +4,12 @@
 /// error names the dotted key path, the value and what is allowed.
 
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/math.h"
@@ -32,6 +34,19 @@ struct Interval {
   std::string describe() const;
 };
 
+/// One row of a settings key table (Mitsuba-plugin style), kept at the top of the code that
+/// reads the keys: the reader's reference, the list of keys a method knows, and what
+/// tests/core/test_key_docs.cpp checks docs/scene-format.md against.
+struct KeyDoc {
+  std::string_view name;     ///< key in its object, e.g. "delta1"
+  std::string_view type;     ///< "number", "int or [nx,ny,nz]", ...
+  std::string_view def;      ///< default, in words
+  std::string_view range;    ///< allowed values, in words
+  std::string_view meaning;  ///< one line
+};
+
+/// Reads one JSON object. A Params shares ownership of the document it reads (the constructor
+/// copies `j` once; children share that copy), so it never points at JSON that is gone.
 class Params {
  public:
   /// `path` is the dotted location of `j` in its document ("" for the root); `j` must be an
@@ -61,6 +76,9 @@ class Params {
   /// A string from a fixed set; the message lists the set.
   std::string choice(const std::string& key, const std::vector<std::string>& allowed,
                      std::optional<std::string> def = std::nullopt);
+  /// A voxel resolution: an integer n (meaning n³) or [nx, ny, nz] of integers, each in
+  /// [1, 4096], at most 512³ voxels in all (the one rule for every resolution key).
+  IVec3 resolution(const std::string& key, std::optional<IVec3> def = std::nullopt);
   /// Array of 3 numbers, each within `range`.
   Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt,
             const Interval& range = {});
@@ -72,6 +90,9 @@ class Params {
   /// Array of objects (possibly empty); missing gives an empty list when `required` is false.
   std::vector<Params> children(const std::string& key, bool required = false);
 
+  /// The keys read or allowed so far, sorted.
+  std::vector<std::string> knownKeys() const { return {known_.begin(), known_.end()}; }
+
   /// Throws ConfigError naming every key present but never read, with the allowed keys.
   void finish() const;
 
@@ -79,12 +100,20 @@ class Params {
   [[noreturn]] void fail(const std::string& key, const std::string& why) const;
 
  private:
+  /// `j` points into *root (null: the root itself).
+  Params(std::shared_ptr<const Json> root, const Json* j, std::string path);
   const Json& require(const std::string& key, const char* expected);
 
-  const Json* j_;
+  std::shared_ptr<const Json> root_;  ///< keeps the document alive
+  const Json* j_;                     ///< this object, inside *root_
   std::string path_;
   std::set<std::string> known_;
 };
+
+/// The allowed range of a step length (march_step, delta1, delta2) in a medium whose box
+/// diagonal is `diagonal`: (diagonal·1e-6, diagonal], so that no ray takes more than ~10^6
+/// steps. One definition for every step key.
+Interval stepRange(float diagonal);
 
 /// Applies `--set a.b.c=VALUE`: VALUE is parsed as JSON where it parses, else taken as a
 /// string; missing objects on the way are created; a non-object on the way is an error.

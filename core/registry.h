@@ -18,6 +18,8 @@ class Registry {
 
   /// Adds or replaces an entry.
   void add(const std::string& name, Factory f) { entries_[name] = std::move(f); }
+  /// The entry `name`, default-constructed on first use.
+  Factory& entry(const std::string& name) { return entries_[name]; }
   bool contains(const std::string& name) const { return entries_.count(name) != 0; }
 
   /// Throws ConfigError naming `key` (a dotted path for the message) and the known names.

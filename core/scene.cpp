@@ -15,27 +15,6 @@ float Medium::voxelSize() const {
 
 namespace {
 
-IVec3 parseResolution(Params& p, const std::string& key, IVec3 def) {
-  const Interval range = Interval::closed(1, 4096);
-  IVec3 r = def;
-  if (p.has(key) && p.json()[key].is_array()) {
-    const Vec3 v = p.vec3(key, std::nullopt, range);
-    for (int i = 0; i < 3; ++i) {
-      if (v[i] != std::floor(v[i]))
-        p.fail(key, "expected integers, got " + describeValue(p.json()[key]));
-      r[i] = int(v[i]);
-    }
-  } else {
-    r = IVec3(int(p.integer(key, def.x, range)));
-  }
-  const long long n = (long long)r.x * r.y * r.z;
-  if (n > kMaxGridVoxels)
-    p.fail(key, std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) +
-                    " = " + std::to_string(n) + " voxels is above the memory bound of " +
-                    std::to_string(kMaxGridVoxels) + " voxels (512^3)");
-  return r;
-}
-
 Phase parsePhase(Params p) {
   Phase ph;
   const std::string t = p.choice("type", {"isotropic", "henyey-greenstein", "hg"});
@@ -124,7 +103,7 @@ Medium parseMedium(Params p, LoadContext ctx) {
       p.fail("bounds", "required for density type '" + m.density->type() +
                            "' (expected {\"min\": [x,y,z], \"max\": [x,y,z]})");
   }
-  m.resolution = parseResolution(p, "resolution", IVec3(128));
+  m.resolution = p.resolution("resolution", IVec3(128));
   m.sigmaT = p.real("sigma_t", 1.0, Interval::atLeast(0));
   m.albedo = p.real("albedo", 1.0, Interval::closed(0, 1));
   if (p.has("phase"))

@@ -2,20 +2,44 @@
 
 namespace scatterlab {
 
+const char* backendName(Backend b) {
+  return b == Backend::Gpu ? "gpu" : "cpu";
+}
+
+void HostFrame::buildDensity(const Scene& scene) {
+  density = std::make_shared<DensityGrid>(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(*density);
+}
+
+void HostFrame::report(RenderStats& stats) {
+  stats.backend = "cpu";
+  stats.device = "CPU (TBB)";
+}
+
+std::array<BackendEntry, kBackendCount>& backends() {
+  static std::array<BackendEntry, kBackendCount> b = [] {
+    std::array<BackendEntry, kBackendCount> a;
+    a[int(Backend::Cpu)].makeFrame = [] { return std::unique_ptr<Frame>(new HostFrame()); };
+    a[int(Backend::Cpu)].preferred = [](std::string*) { return false; };
+    return a;
+  }();
+  return b;
+}
+
 Registry<StageFactory<Sampler>>& samplers() {
   static Registry<StageFactory<Sampler>> r("sampler");
   return r;
 }
-Registry<StageFactory<RadianceEvaluator>>& radianceEvaluators() {
-  static Registry<StageFactory<RadianceEvaluator>> r("radiance evaluator");
+StageRegistry<EvaluatorMaker>& radianceEvaluators() {
+  static StageRegistry<EvaluatorMaker> r("radiance evaluator");
   return r;
 }
-Registry<StageFactory<Reconstruction>>& reconstructions() {
-  static Registry<StageFactory<Reconstruction>> r("reconstruction");
+StageRegistry<ReconstructionMaker>& reconstructions() {
+  static StageRegistry<ReconstructionMaker> r("reconstruction");
   return r;
 }
-Registry<StageFactory<Integrator>>& integrators() {
-  static Registry<StageFactory<Integrator>> r("integrator");
+StageRegistry<IntegratorMaker>& integrators() {
+  static StageRegistry<IntegratorMaker> r("integrator");
   return r;
 }
 

@@ -1,10 +1,14 @@
 #pragma once
-/// Stage interfaces of the sample-based pipelines (DESIGN.md §3): sampler -> radiance
+/// Stage interfaces of the volume pipelines (DESIGN.md §3): density -> sampler -> radiance
 /// evaluator -> reconstruction -> integrator. Each is a small abstract class with one virtual
-/// call per pass; variants are registered by name (CPU ones in sampling/ and render/, GPU ones
-/// in gpu/). GPU variants hand their results back to host memory through the same signatures,
-/// so one test body serves both.
+/// call per pass. The volumes a frame's stages share live in a Frame of the backend that runs
+/// them (host grids on the CPU, 3D textures in gpu/), so a GPU pipeline never goes through the
+/// host. A stage is registered once by name, with a variant per backend: CPU variants by
+/// render/ and sampling/, GPU ones beside them by gpu/. Every variant is built from the same
+/// PipelineSettings, parsed once by the method layer (methods/settings.h), so a key valid on
+/// one backend is valid on the other.
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <span>
@@ -14,11 +18,18 @@
 #include "core/grid.h"
 #include "core/image.h"
 #include "core/params.h"
+#include "core/progress.h"
 #include "core/registry.h"
 #include "core/scene.h"
 #include "core/stats.h"
 
 namespace scatterlab {
+
+/// Where a stage runs. Every backend has the same keys; not every stage has every backend.
+enum class Backend { Cpu = 0, Gpu = 1 };
+inline constexpr int kBackendCount = 2;
+/// "cpu" or "gpu".
+const char* backendName(Backend b);
 
 /// A radiance sample (paper Sec. 4): point, valid radius, source radiance S and its gradient.
 struct RadianceSample {
@@ -39,6 +50,82 @@ struct RadianceSample {
   }
 };
 
+/// View-ray marching settings (render keys march_step, min_transmittance).
+struct MarchSettings {
+  float step = 0.0f;  ///< view-ray step in world units
+  /// March stops when transmittance falls below this (its share of the result is below it).
+  float minTransmittance = 1e-6f;
+};
+
+/// How the GPU marcher lays its slices (render key slicing; the CPU marcher steps along each
+/// ray and has no slices).
+enum class Slicing {
+  RaySteps,    ///< layer k = step k of each pixel's own ray: the CPU marcher's sample points
+  ViewPlanes,  ///< the paper's slabs perpendicular to the view axis
+};
+
+/// The settings every stage variant is built from, whichever backend runs it. Parsed once,
+/// with its key table, by parsePipelineSettings (methods/settings.h).
+struct PipelineSettings {
+  MarchSettings march;
+  Slicing slicing = Slicing::RaySteps;
+  bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)
+  float delta1 = 0.0f;        ///< volume-tracing step towards the lights (the paper's Δ1)
+  float delta2 = 0.0f;        ///< central-difference step of ∇S (the paper's Δ2)
+  IVec3 radianceResolution{0};
+};
+
+/// The volumes of one frame, kept where the backend that renders the frame keeps them. The
+/// method layer creates one per render (backendFrames()) and hands it to every stage; a stage
+/// variant casts it to its own backend's frame type (stages and frame share a backend by
+/// construction).
+class Frame {
+ public:
+  virtual ~Frame() = default;
+  virtual Backend backend() const = 0;
+  /// Builds the scene's density volume over medium.bounds at medium.resolution.
+  virtual void buildDensity(const Scene& scene) = 0;
+  /// The density volume in host memory (the samplers run on the CPU); read back once where
+  /// the volume lives on a device.
+  virtual const DensityGrid& hostDensity() = 0;
+  /// Waits until the work queued so far is done, so that a stage's wall time is its own.
+  virtual void sync() {}
+  /// Writes the backend's facts into `stats`: device, and e.g. per-pass device times.
+  virtual void report(RenderStats& stats) = 0;
+  /// The density and source-radiance volumes in host memory, for export; null where they
+  /// live on a device (or were not built).
+  virtual std::shared_ptr<const DensityGrid> exportDensity() const { return nullptr; }
+  virtual std::shared_ptr<const RadianceGrid> exportRadiance() const { return nullptr; }
+};
+
+/// The CPU backend's frame: the volumes as host grids. No GL context.
+class HostFrame : public Frame {
+ public:
+  HostFrame() = default;
+  /// A frame over an existing density volume (tests and benchmarks).
+  explicit HostFrame(DensityGrid density)
+      : density(std::make_shared<DensityGrid>(std::move(density))) {}
+  Backend backend() const override { return Backend::Cpu; }
+  void buildDensity(const Scene& scene) override;
+  const DensityGrid& hostDensity() override { return *density; }
+  void report(RenderStats& stats) override;
+  std::shared_ptr<const DensityGrid> exportDensity() const override { return density; }
+  std::shared_ptr<const RadianceGrid> exportRadiance() const override { return radiance; }
+
+  std::shared_ptr<DensityGrid> density;
+  std::shared_ptr<RadianceGrid> radiance;  ///< set by the reconstruction
+};
+
+/// A backend: makes the frames its stage variants work in.
+struct BackendEntry {
+  std::function<std::unique_ptr<Frame>()> makeFrame;
+  /// For backend "auto": whether this backend should be chosen now (e.g. a hardware GPU is
+  /// present), with a sentence saying what was found. May create a GL context.
+  std::function<bool(std::string* why)> preferred;
+};
+/// Indexed by Backend; the CPU entry is always there, the GPU one when gpu/ registered it.
+std::array<BackendEntry, kBackendCount>& backends();
+
 /// Chooses sample points and valid radii (S and dS left zero).
 class Sampler {
  public:
@@ -50,42 +137,79 @@ class Sampler {
 
 /// Computes S (and ∇S when `gradients`) at each sample's position, by volume tracing with step
 /// delta1 and central differences with step delta2 (paper Sec. 4). The view direction at x is
-/// towards scene.camera.position.
+/// towards scene.camera.position. Samples are host data (uploaded and read back by device
+/// variants); the density is the frame's.
 class RadianceEvaluator {
  public:
   virtual ~RadianceEvaluator() = default;
-  virtual void evaluate(const Scene& scene, const DensityGrid& density,
-                        std::span<RadianceSample> samples, bool gradients) = 0;
+  virtual void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
+                        bool gradients) = 0;
 };
 
 /// What a reconstruction did.
 struct ReconstructionStats {
   long long uncovered = 0;  ///< voxels with density but no covering sample
+  long long traced = 0;     ///< voxels whose S was traced (per-voxel)
+  long long skipped = 0;    ///< voxels left at 0: no density in their neighbourhood (per-voxel)
 };
 
-/// Builds the source-radiance volume `out` (bounds and dims preset by the caller) from samples.
+/// Builds the frame's source-radiance volume (over medium.bounds with `dims` voxels) from the
+/// samples, or by tracing (per-voxel, which takes no samples).
 class Reconstruction {
  public:
   virtual ~Reconstruction() = default;
-  virtual ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
-                                          std::span<const RadianceSample> samples,
-                                          RadianceGrid& out) = 0;
+  /// Whether the samples need ∇S (the evaluator computes it only then).
+  virtual bool needsGradients() const = 0;
+  /// False for reconstructions that trace S themselves (no sampler runs before them).
+  virtual bool usesSamples() const { return true; }
+  virtual ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
+                                          std::span<const RadianceSample> samples, IVec3 dims,
+                                          Progress* progress) = 0;
 };
 
-/// Marches camera rays through density and source-radiance volumes into an image.
+/// Marches camera rays through the frame's density (and radiance) volumes into an image.
 class Integrator {
  public:
   virtual ~Integrator() = default;
-  virtual Image integrate(const Scene& scene, const DensityGrid& density,
-                          const RadianceGrid& radiance) = 0;
+  /// False for integrators that trace S themselves at every step (`exact`).
+  virtual bool needsRadiance() const { return true; }
+  virtual Image integrate(Frame& frame, const Scene& scene, Progress* progress) = 0;
+  /// Adds the integrator's facts to the stats (slices, keys it did not use, ...).
+  virtual void describe(RenderStats& stats) const {}
 };
 
+/// Builds one backend's variant of a stage. `Args` are what the variant is built from.
+template <class Stage, class... Args>
+using StageMaker = std::function<std::unique_ptr<Stage>(Args...)>;
+
+/// A registered stage: one maker per backend, empty where that backend has no variant.
+template <class Maker>
+struct StageVariants {
+  std::array<Maker, kBackendCount> on;
+  bool has(Backend b) const { return bool(on[int(b)]); }
+};
+
+/// Name -> per-backend variants. addVariant() fills one backend's slot of an entry, creating
+/// the entry on first use, so gpu/ adds its variants beside the CPU ones.
+template <class Maker>
+class StageRegistry : public Registry<StageVariants<Maker>> {
+ public:
+  using Registry<StageVariants<Maker>>::Registry;
+  void addVariant(const std::string& name, Backend b, Maker make) {
+    this->entry(name).on[int(b)] = std::move(make);
+  }
+};
+
+/// Samplers run on the host for every backend and read their own keys (render.sampler.*).
 template <class Stage>
 using StageFactory = std::function<std::unique_ptr<Stage>(Params& params, const Scene& scene)>;
+using EvaluatorMaker = StageMaker<RadianceEvaluator, const PipelineSettings&>;
+using ReconstructionMaker = StageMaker<Reconstruction, const PipelineSettings&>;
+using IntegratorMaker = StageMaker<Integrator, const PipelineSettings&>;
 
 Registry<StageFactory<Sampler>>& samplers();
-Registry<StageFactory<RadianceEvaluator>>& radianceEvaluators();
-Registry<StageFactory<Reconstruction>>& reconstructions();
-Registry<StageFactory<Integrator>>& integrators();
+StageRegistry<EvaluatorMaker>& radianceEvaluators();
+StageRegistry<ReconstructionMaker>& reconstructions();
+StageRegistry<IntegratorMaker>& integrators();
 
 }  // namespace scatterlab

@@ -1,110 +1,76 @@
 #include "gpu/register.h"
 
-#include "core/method.h"
 #include "core/stages.h"
 #include "gpu/context.h"
-#include "gpu/methods.h"
+#include "gpu/dynamic_sampling.h"
+#include "gpu/frame.h"
 #include "gpu/stages.h"
-#include "render/methods.h"
-#include "render/radiance_evaluator.h"
-#include "render/sampled_methods.h"
 #include "sampling/dynamic_sampling.h"
 
 namespace scatterlab::gpu {
 
 namespace {
 
-Interval stepRange(const Scene& scene) {
-  const float ext = glm::length(scene.medium.bounds.extent());
-  return Interval{ext * 1e-6, ext, true, false};
-}
+/// "dynamic" on the GPU: dynamicSamplingGpu's passes on the frame's density (the pipeline's
+/// evaluator is not used: the passes trace S, ∇S and the probes themselves).
+class GpuRefiner : public SampleRefiner {
+ public:
+  GpuRefiner(DynamicSamplingSettings s, DynamicSamplingGpuSteps steps)
+      : s_(std::move(s)), steps_(steps) {}
+  DynamicSamplingResult refine(Frame& frame, const Scene& scene,
+                               std::vector<RadianceSample> initial,
+                               RadianceEvaluator&) override {
+    GpuFrame& f = static_cast<GpuFrame&>(frame);
+    return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer);
+  }
 
-/// render.slicing of the GPU methods' slice marcher: "ray-steps" (default; the CPU marcher's
-/// sample points, so the image matches the CPU method) or "view-planes" (the paper's slabs
-/// perpendicular to the view axis).
-bool parseRaySteps(Params& p) {
-  return p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps";
-}
+ private:
+  DynamicSamplingSettings s_;
+  DynamicSamplingGpuSteps steps_;
+};
 
-SampledGpuConfig sampledConfig(Params& p, const Scene& scene, std::string note) {
-  SampledGpuConfig c;
-  c.mp = parseMarchParams(p, scene);
-  c.radianceResolution = parseRadianceResolution(p, scene);
-  c.delta2 = parseTracerSteps(p, scene).delta2;
-  c.raySteps = parseRaySteps(p);
-  c.sampler = makeSampler(p, scene, c.samplerType);
-  c.backendNote = std::move(note);
-  return c;
+/// Backend "auto" picks the GPU only on real hardware: llvmpipe runs the GL passes on the CPU,
+/// slower than the CPU variants.
+bool preferGpu(std::string* why) {
+  std::string reason;
+  Context* ctx = tryContext(&reason);
+  if (!ctx) {
+    *why = "auto: no GPU context (" + reason + "); using the CPU";
+    return false;
+  }
+  if (!ctx->info().hardware) {
+    *why = "auto: only a software rasteriser ('" + ctx->info().renderer + "'); using the CPU";
+    return false;
+  }
+  *why = "auto: GPU '" + ctx->info().renderer + "' found; using it";
+  return true;
 }
 
 }  // namespace
 
-std::string resolveBackend(const std::string& backend, std::string* why) {
-  if (backend != "auto") return backend;
-  std::string reason;
-  Context* ctx = tryContext(&reason);
-  if (!ctx) {
-    if (why) *why = "auto: no GPU context (" + reason + "); using the CPU";
-    return "cpu";
-  }
-  if (!ctx->info().hardware) {
-    if (why)
-      *why = "auto: only a software rasteriser ('" + ctx->info().renderer + "'); using the CPU";
-    return "cpu";
-  }
-  if (why) *why = "auto: GPU '" + ctx->info().renderer + "' found; using it";
-  return "gpu";
-}
-
 void registerGpuStages() {
-  radianceEvaluators().add("volume-tracer-gpu", [](Params& p, const Scene& scene) {
-    const float voxel = scene.medium.voxelSize();
-    const float d1 = p.real("delta1", voxel, stepRange(scene));
-    const float d2 = p.real("delta2", voxel, stepRange(scene));
-    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(d1, d2));
+  backends()[int(Backend::Gpu)] = BackendEntry{
+      [] { return std::unique_ptr<Frame>(new GpuFrame()); }, preferGpu};
+  radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(s.delta1, s.delta2));
   });
-  reconstructions().add("gradient-gpu", [](Params&, const Scene&) {
+  reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings&) {
     return std::unique_ptr<Reconstruction>(new GradientSplatGpu());
   });
-  reconstructions().add("per-voxel-gpu", [](Params& p, const Scene& scene) {
-    const float d1 = p.real("delta1", scene.medium.voxelSize(), stepRange(scene));
-    return std::unique_ptr<Reconstruction>(new PerVoxelGpu(d1));
+  reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1));
   });
-  integrators().add("slice-marcher", [](Params& p, const Scene& scene) {
-    MarchSettings ms;
-    ms.step = p.real("march_step", scene.medium.voxelSize(), stepRange(scene));
-    const std::string slicing = p.choice("slicing", {"view-planes", "ray-steps"}, "view-planes");
-    return std::unique_ptr<Integrator>(new SliceMarcher(ms, slicing == "ray-steps"));
+  integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(
+        new SliceMarcher(s.march, s.slicing == Slicing::RaySteps));
   });
-
-  // per-voxel: keep the CPU factory for "cpu", dispatch to the GPU method otherwise.
-  const MethodFactory cpu = methods().get("per-voxel", "render.method");
-  methods().add("per-voxel", [cpu](Params& p, const Scene& scene, const std::string& backend) {
-    std::string note;
-    const std::string b = resolveBackend(backend, &note);
-    if (b == "cpu") return cpu(p, scene, "cpu");
-    const MarchParams mp = parseMarchParams(p, scene);
-    const IVec3 res = parseRadianceResolution(p, scene);
-    return makePerVoxelGpuMethod(mp, res, parseRaySteps(p), note);
-  });
-
-  // gradient and adaptive: the same wrapping (the CPU factories stay for "cpu").
-  const MethodFactory cpuGradient = methods().get("gradient", "render.method");
-  methods().add("gradient",
-                [cpuGradient](Params& p, const Scene& scene, const std::string& backend) {
-                  std::string note;
-                  if (resolveBackend(backend, &note) == "cpu") return cpuGradient(p, scene, "cpu");
-                  return makeGradientGpuMethod(sampledConfig(p, scene, note));
-                });
-  const MethodFactory cpuAdaptive = methods().get("adaptive", "render.method");
-  methods().add("adaptive",
-                [cpuAdaptive](Params& p, const Scene& scene, const std::string& backend) {
-                  std::string note;
-                  if (resolveBackend(backend, &note) == "cpu") return cpuAdaptive(p, scene, "cpu");
-                  SampledGpuConfig c = sampledConfig(p, scene, note);
-                  DynamicSamplingSettings ds = parseDynamicSampling(p, scene);
-                  return makeAdaptiveGpuMethod(std::move(c), std::move(ds));
-                });
+  refiners().addVariant("dynamic", Backend::Gpu,
+                        [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
+                          DynamicSamplingSettings s = ds;
+                          s.delta1 = ps.delta1;
+                          return std::unique_ptr<SampleRefiner>(
+                              new GpuRefiner(std::move(s), {ps.delta1, ps.delta2}));
+                        });
 }
 
 }  // namespace scatterlab::gpu

@@ -1,21 +1,13 @@
 #pragma once
-/// Registration of the GPU variants (called from scatterlab::initialize() when the library is
+/// Registration of the GPU backend (called from scatterlab::initialize() when the library is
 /// built with SCATTERLAB_GPU). Needs no GL context: contexts are made when a stage first runs.
-
-#include <string>
 
 namespace scatterlab::gpu {
 
-/// Adds "volume-tracer-gpu", "gradient-gpu", "per-voxel-gpu" and "slice-marcher" to the stage
-/// registries, and makes the `per-voxel`, `gradient` and `adaptive` methods dispatch to the GPU
-/// for backend "gpu" (and "auto" when a hardware GPU is present); their GPU variants read the
-/// extra render key `slicing` ("ray-steps" default | "view-planes"). Call after
-/// registerReferenceMethods() and registerSampledMethods().
+/// Registers the GPU backend's frame (backends()) and the GPU variants beside the CPU ones:
+/// evaluator "volume-tracer", reconstructions "gradient" and "per-voxel", integrator
+/// "ray-marcher" (the slice marcher; slicing from PipelineSettings), refiner "dynamic". Backend
+/// "auto" prefers the GPU only on hardware (not a software rasteriser).
 void registerGpuStages();
-
-/// Resolves backend "auto": "gpu" when a context can be made on a hardware GPU (not a
-/// software rasteriser), else "cpu"; "cpu" and "gpu" pass through. `why` says what was found.
-/// May create the GL context.
-std::string resolveBackend(const std::string& backend, std::string* why = nullptr);
 
 }  // namespace scatterlab::gpu

@@ -185,7 +185,7 @@ ReconstructionStats PerVoxelGpu::reconstruct(const Scene& scene, const DensityGr
 }
 
 Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
-                          PerVoxelStats* stats, StageTimer* timer) {
+                          ReconstructionStats* stats, StageTimer* timer) {
   context();
   const Program& program = cachedProgram("per-voxel S", [] {
     return computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "per-voxel S");

@@ -3,18 +3,16 @@
 /// and registered by name in gpu/register.cpp:
 ///   radiance evaluator "volume-tracer-gpu", reconstructions "gradient-gpu" and
 ///   "per-voxel-gpu", integrator "slice-marcher".
-/// The interface methods take and return host data (they upload and read back), so one test
-/// body serves the CPU and GPU variants. The Volume overloads keep data on the GPU for whole
-/// pipelines. Every member function needs a GL context (gpu::context(), created on demand);
-/// constructors do not.
+/// The interface overrides work in a GpuFrame (gpu/frame.h; data stays on the GPU); the
+/// host-data overloads upload and read back, for tests that compare with the CPU variants;
+/// the Volume overloads are the passes themselves. Every member function needs a GL context
+/// (gpu::context(), created on demand); constructors do not.
 
 #include <span>
 
 #include "core/stages.h"
 #include "gpu/timer.h"
 #include "gpu/volume.h"
-#include "render/per_voxel.h"
-#include "render/ray_marcher.h"
 
 namespace scatterlab::gpu {
 
@@ -40,8 +38,10 @@ class VolumeTracerGpu : public RadianceEvaluator {
  public:
   /// delta1: tracing step towards the lights; delta2: central-difference step (world units).
   VolumeTracerGpu(float delta1, float delta2) : delta1_(delta1), delta2_(delta2) {}
-  void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
+  void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override;
+  void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
+                bool gradients);
   void evaluate(const Scene& scene, const Volume& density, std::span<RadianceSample> samples,
                 bool gradients, StageTimer* timer);
 
@@ -55,9 +55,12 @@ class VolumeTracerGpu : public RadianceEvaluator {
 /// pass normalises into the source-radiance volume. Voxels no sphere covers get S = 0.
 class GradientSplatGpu : public Reconstruction {
  public:
+  bool needsGradients() const override { return true; }
+  ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
+                                  std::span<const RadianceSample> samples, IVec3 dims,
+                                  Progress* progress) override;
   ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
-                                  std::span<const RadianceSample> samples,
-                                  RadianceGrid& out) override;
+                                  std::span<const RadianceSample> samples, RadianceGrid& out);
   /// Splats into a new volume over `bounds` with `dims`.
   Volume reconstruct(const Volume& density, std::span<const RadianceSample> samples,
                      const Box& bounds, IVec3 dims, ReconstructionStats* stats, StageTimer* timer);
@@ -69,11 +72,16 @@ class GradientSplatGpu : public Reconstruction {
 class PerVoxelGpu : public Reconstruction {
  public:
   explicit PerVoxelGpu(float delta1) : delta1_(delta1) {}
+  bool needsGradients() const override { return false; }
+  bool usesSamples() const override { return false; }
+  ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
+                                  std::span<const RadianceSample> samples, IVec3 dims,
+                                  Progress* progress) override;
   ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
-                                  std::span<const RadianceSample> samples,
-                                  RadianceGrid& out) override;
+                                  std::span<const RadianceSample> samples, RadianceGrid& out);
+  /// `stats` receives traced and skipped.
   Volume build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
-               PerVoxelStats* stats, StageTimer* timer);
+               ReconstructionStats* stats, StageTimer* timer);
 
  private:
   float delta1_;
@@ -91,14 +99,17 @@ class SliceMarcher : public Integrator {
  public:
   explicit SliceMarcher(MarchSettings settings, bool raySteps = false)
       : settings_(settings), raySteps_(raySteps) {}
-  Image integrate(const Scene& scene, const DensityGrid& density,
-                  const RadianceGrid& radiance) override;
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
+  /// slicing and the number of slices of the last integrate().
+  void describe(RenderStats& stats) const override;
+  Image integrate(const Scene& scene, const DensityGrid& density, const RadianceGrid& radiance);
   Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
                   StageTimer* timer, int* slices = nullptr);
 
  private:
   MarchSettings settings_;
   bool raySteps_;
+  int slices_ = 0;
 };
 
 }  // namespace scatterlab::gpu

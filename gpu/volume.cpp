@@ -117,7 +117,7 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
   const Buffer blobBuf(packed.size() * sizeof(float), packed.data(), 0, "gaussian blobs");
   ScopedGpuTimer t(timer, "density splat");
   program.use();
-  glUniform1f(program.uniform("uCull"), GaussianDensity::kCullRadius);
+  glUniform1f(program.uniform("uCull"), kGaussianCullRadius);
   blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
   splatSlices(program, v.texture, bounds, dims, GLsizei(blobs.size()), "density splat");
   checkGl("density splat");
@@ -126,9 +126,9 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
 
 Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted) {
   const Medium& m = scene.medium;
-  if (const auto* g = dynamic_cast<const GaussianDensity*>(m.density.get())) {
+  if (m.density->isSumOfGaussians()) {
     if (splatted) *splatted = true;
-    return splatGaussians(g->blobs(), m.bounds, m.resolution, timer);
+    return splatGaussians(*m.density->gaussians(), m.bounds, m.resolution, timer);
   }
   if (splatted) *splatted = false;
   DensityGrid grid(m.bounds, m.resolution);

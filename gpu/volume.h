@@ -9,7 +9,7 @@
 #include "core/scene.h"
 #include "gpu/gl.h"
 #include "gpu/timer.h"
-#include "media/procedural.h"
+#include "core/density_model.h"
 
 namespace scatterlab::gpu {
 

@@ -44,8 +44,9 @@ class GaussianDensity : public DensityModel {
   std::string describe() const override;
   const std::vector<GaussianBlob>& blobs() const { return blobs_; }
   const std::vector<GaussianBlob>* gaussians() const override { return &blobs_; }
+  bool isSumOfGaussians() const override { return true; }
 
-  static constexpr float kCullRadius = 3.0f;  ///< in units of r
+  static constexpr float kCullRadius = kGaussianCullRadius;  ///< in units of r
 
  private:
   std::vector<GaussianBlob> blobs_;

@@ -6,7 +6,6 @@
 
 #include "render/gather_rows.h"
 #include "render/per_voxel.h"
-#include "render/radiance_evaluator.h"
 
 // The RBF baseline. Zhou, Ren, Lin, Bao, Guo, Shum, "Real-time smoke rendering using
 // compensated ray marching" (2007; the paper's [Zhou et al. 2007b]) represent the density as
@@ -265,13 +264,22 @@ PointEstimate interpolateAt(Interpolation kind, const Vec3& x,
 
 namespace {
 
+/// The frame's radiance volume, new over the medium box with `dims` voxels.
+RadianceGrid& newRadiance(Frame& frame, const Scene& scene, IVec3 dims) {
+  HostFrame& f = static_cast<HostFrame&>(frame);
+  f.radiance = std::make_shared<RadianceGrid>(scene.medium.bounds, dims);
+  return *f.radiance;
+}
+
 class InterpolatingReconstruction : public Reconstruction {
  public:
   explicit InterpolatingReconstruction(Interpolation k) : kind_(k) {}
-  ReconstructionStats reconstruct(const Scene&, const DensityGrid& density,
-                                  std::span<const RadianceSample> samples,
-                                  RadianceGrid& out) override {
-    return interpolateSamples(kind_, density, samples, out);
+  bool needsGradients() const override { return kind_ == Interpolation::Gradient; }
+  ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
+                                  std::span<const RadianceSample> samples, IVec3 dims,
+                                  Progress*) override {
+    return interpolateSamples(kind_, frame.hostDensity(), samples,
+                              newRadiance(frame, scene, dims));
   }
 
  private:
@@ -281,10 +289,18 @@ class InterpolatingReconstruction : public Reconstruction {
 class PerVoxelReconstruction : public Reconstruction {
  public:
   explicit PerVoxelReconstruction(float delta1) : delta1_(delta1) {}
-  ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
-                                  std::span<const RadianceSample>, RadianceGrid& out) override {
-    buildPerVoxelRadiance(scene, density, delta1_, out, nullptr);
-    return {};
+  bool needsGradients() const override { return false; }
+  bool usesSamples() const override { return false; }
+  ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
+                                  std::span<const RadianceSample>, IVec3 dims,
+                                  Progress* progress) override {
+    if (progress) progress->restart("per-voxel S", dims.z);
+    const PerVoxelStats pv = buildPerVoxelRadiance(scene, frame.hostDensity(), delta1_,
+                                                   newRadiance(frame, scene, dims), progress);
+    ReconstructionStats st;
+    st.traced = pv.traced;
+    st.skipped = pv.skipped;
+    return st;
   }
 
  private:
@@ -295,16 +311,15 @@ class PerVoxelReconstruction : public Reconstruction {
 
 void registerReconstructions() {
   const auto interp = [](Interpolation k) {
-    return [k](Params&, const Scene&) {
+    return [k](const PipelineSettings&) {
       return std::unique_ptr<Reconstruction>(new InterpolatingReconstruction(k));
     };
   };
-  reconstructions().add("gradient", interp(Interpolation::Gradient));
-  reconstructions().add("rbf", interp(Interpolation::Rbf));
-  reconstructions().add("nearest", interp(Interpolation::Nearest));
-  reconstructions().add("per-voxel", [](Params& p, const Scene& scene) {
-    return std::unique_ptr<Reconstruction>(
-        new PerVoxelReconstruction(parseTracerSteps(p, scene).delta1));
+  reconstructions().addVariant("gradient", Backend::Cpu, interp(Interpolation::Gradient));
+  reconstructions().addVariant("rbf", Backend::Cpu, interp(Interpolation::Rbf));
+  reconstructions().addVariant("nearest", Backend::Cpu, interp(Interpolation::Nearest));
+  reconstructions().addVariant("per-voxel", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Reconstruction>(new PerVoxelReconstruction(s.delta1));
   });
 }
 

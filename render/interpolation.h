@@ -54,8 +54,8 @@ struct PointEstimate {
 PointEstimate interpolateAt(Interpolation kind, const Vec3& x,
                             std::span<const RadianceSample> samples);
 
-/// Registers "gradient", "rbf", "nearest" and "per-voxel" (which ignores the samples and
-/// traces every occupied voxel with render.delta1) in reconstructions().
+/// Registers the CPU variants of "gradient", "rbf", "nearest" and "per-voxel" (which takes no
+/// samples and traces every occupied voxel with delta1) in reconstructions().
 void registerReconstructions();
 
 }  // namespace scatterlab

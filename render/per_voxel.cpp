@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <atomic>
 
-#include "render/volume_tracer.h"
+#include "core/transport.h"
 
 namespace scatterlab {
 

@@ -3,19 +3,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "render/volume_tracer.h"
+#include "core/transport.h"
 
 namespace scatterlab {
-
-TracerSteps parseTracerSteps(Params& p, const Scene& scene) {
-  const float voxel = scene.medium.voxelSize();
-  const float ext = glm::length(scene.medium.bounds.extent());
-  const Interval range{ext * 1e-6, ext, true, false};  // same bounds as parseMarchParams
-  TracerSteps s;
-  s.delta1 = p.real("delta1", voxel, range);
-  s.delta2 = p.real("delta2", voxel, range);
-  return s;
-}
 
 void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
                      std::span<RadianceSample> samples, bool gradients) {
@@ -50,9 +40,9 @@ namespace {
 class VolumeTracerEvaluator : public RadianceEvaluator {
  public:
   explicit VolumeTracerEvaluator(TracerSteps s) : steps_(s) {}
-  void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
+  void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override {
-    evaluateSamples(scene, density, steps_, samples, gradients);
+    evaluateSamples(scene, frame.hostDensity(), steps_, samples, gradients);
   }
 
  private:
@@ -62,10 +52,11 @@ class VolumeTracerEvaluator : public RadianceEvaluator {
 }  // namespace
 
 void registerRadianceEvaluators() {
-  radianceEvaluators().add("volume-tracer", [](Params& p, const Scene& scene) {
-    return std::unique_ptr<RadianceEvaluator>(
-        new VolumeTracerEvaluator(parseTracerSteps(p, scene)));
-  });
+  radianceEvaluators().addVariant(
+      "volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
+        return std::unique_ptr<RadianceEvaluator>(
+            new VolumeTracerEvaluator(TracerSteps{s.delta1, s.delta2}));
+      });
 }
 
 }  // namespace scatterlab

@@ -7,12 +7,11 @@
 
 namespace scatterlab {
 
-/// Δ1 and Δ2 in world units (render keys delta1, delta2; both default to one voxel edge).
+/// Δ1 and Δ2 in world units (PipelineSettings::delta1, delta2).
 struct TracerSteps {
   float delta1 = 0.0f;
   float delta2 = 0.0f;
 };
-TracerSteps parseTracerSteps(Params& render, const Scene& scene);
 
 /// Fills S (and dS when `gradients`) of every sample. The view direction at a point p is
 /// towards scene.camera.position from p itself, also at the six offset points, so ∇S is the
@@ -20,8 +19,8 @@ TracerSteps parseTracerSteps(Params& render, const Scene& scene);
 void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
                      std::span<RadianceSample> samples, bool gradients);
 
-/// Registers "volume-tracer" in radianceEvaluators(); it reads delta1 and delta2 from the
-/// render object it is given.
+/// Registers the CPU variant of "volume-tracer" in radianceEvaluators() (delta1, delta2 from
+/// the pipeline settings).
 void registerRadianceEvaluators();
 
 }  // namespace scatterlab

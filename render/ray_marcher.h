@@ -11,14 +11,9 @@
 #include "core/image.h"
 #include "core/progress.h"
 #include "core/scene.h"
+#include "core/stages.h"
 
 namespace scatterlab {
-
-struct MarchSettings {
-  float step = 0.0f;  ///< view-ray step in world units
-  /// March stops when transmittance falls below this (its share of the result is below it).
-  float minTransmittance = 1e-6f;
-};
 
 template <class Source>
 Image marchImage(const Scene& scene, const DensityGrid& density, const Source& source,

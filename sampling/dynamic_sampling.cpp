@@ -7,7 +7,7 @@
 #include <atomic>
 #include <chrono>
 
-#include "render/volume_tracer.h"
+#include "core/transport.h"
 #include "sampling/scan.h"
 
 namespace scatterlab {
@@ -110,11 +110,12 @@ float viewTransmittance(const Scene& scene, const DensityGrid& density, const Ve
 
 }  // namespace
 
-DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
+DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
                                       std::vector<RadianceSample> current,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings) {
   using Clock = std::chrono::steady_clock;
+  const DensityGrid& density = frame.hostDensity();
   DynamicSamplingResult result;
   // τ of every level-0 sample; descendants index it through their ancestor.
   std::vector<float> rootTau(current.size());
@@ -131,7 +132,7 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
     ls.resolution = level == 0 ? 0 : settings.levels[level - 1];
     ls.samples = (long long)current.size();
     for (auto& s : current) s.level = int(level);
-    evaluator.evaluate(scene, density, current, /*gradients=*/true);
+    evaluator.evaluate(frame, scene, current, /*gradients=*/true);
 
     if (level == nLevels || current.empty()) {
       // The finest level is not split further.
@@ -154,7 +155,7 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
       probePoints(current[j], p, np);
       for (int i = 0; i < np; ++i) probes[np * j + i].position = p[i];
     });
-    evaluator.evaluate(scene, density, probes, /*gradients=*/false);
+    evaluator.evaluate(frame, scene, probes, /*gradients=*/false);
 
     std::vector<float> errors(current.size());
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
@@ -231,6 +232,20 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
   st.extra["probes"] = settings.probes;
 }
 
+const std::vector<KeyDoc>& dynamicSamplingKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"epsilon", "number", "1e-4", ">= 0", "split a sample when its error E_j (Eq. 5) is above"},
+      {"levels", "array of int", "[16, 32, 64] (those <= half the medium resolution)",
+       "increasing, each 2…1024, finest <= half the medium resolution",
+       "vertices per axis of the split grids G1, G2, …"},
+      {"tau", "string", "ancestor", "ancestor, sample",
+       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper) or the sample itself"},
+      {"probes", "int", "6", "6, 14, 26",
+       "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals"},
+  };
+  return keys;
+}
+
 DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
   DynamicSamplingSettings s;
   s.epsilon = p.number("epsilon", 1e-4, Interval::atLeast(0));
@@ -266,10 +281,39 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
                          " is not allowed; allowed: 6 (Eq. 5: "
                          "x ± R along X, Y, Z), 14 (+ cube diagonals), 26 (+ edge diagonals)");
   s.probes = int(probes);
-  s.delta1 = p.real("delta1", scene.medium.voxelSize(),
-                    Interval{glm::length(scene.medium.bounds.extent()) * 1e-6,
-                             glm::length(scene.medium.bounds.extent()), true, false});
+  s.delta1 = scene.medium.voxelSize();
   return s;
+}
+
+namespace {
+
+class CpuRefiner : public SampleRefiner {
+ public:
+  explicit CpuRefiner(DynamicSamplingSettings s) : s_(std::move(s)) {}
+  DynamicSamplingResult refine(Frame& frame, const Scene& scene,
+                               std::vector<RadianceSample> initial,
+                               RadianceEvaluator& evaluator) override {
+    return dynamicSampling(frame, scene, std::move(initial), evaluator, s_);
+  }
+
+ private:
+  DynamicSamplingSettings s_;
+};
+
+}  // namespace
+
+StageRegistry<RefinerMaker>& refiners() {
+  static StageRegistry<RefinerMaker> r("sample refiner");
+  return r;
+}
+
+void registerRefiners() {
+  refiners().addVariant("dynamic", Backend::Cpu,
+                        [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
+                          DynamicSamplingSettings s = ds;
+                          s.delta1 = ps.delta1;
+                          return std::unique_ptr<SampleRefiner>(new CpuRefiner(std::move(s)));
+                        });
 }
 
 }  // namespace scatterlab

@@ -83,13 +83,31 @@ float localShadingError(const RadianceSample& s, const Vec3* probeS, const float
 /// 8 cube diagonals, then the 12 edge diagonals (unit vectors). count is 6, 14 or 26.
 void probePoints(const RadianceSample& s, Vec3* out, int count = 6);
 
-/// Runs recursive splitting from `initial` (positions and radii; level 0). `evaluator` computes
-/// S and ∇S of the samples and S at the probes. Deterministic: the same input gives the same
-/// samples in the same order (level by level, ascending vertex index).
-DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
+/// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's
+/// density. `evaluator` (of the frame's backend) computes S and ∇S of the samples and S at the
+/// probes. Deterministic: the same input gives the same samples in the same order (level by
+/// level, ascending vertex index).
+DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
                                       std::vector<RadianceSample> initial,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings);
+
+/// Stage: dynamic sampling between the sampler and the reconstruction (method `adaptive`).
+/// Returns the final sample set with S and ∇S evaluated. The CPU variant is dynamicSampling()
+/// with the pipeline's evaluator; the GPU one (gpu/) runs its own passes.
+class SampleRefiner {
+ public:
+  virtual ~SampleRefiner() = default;
+  virtual DynamicSamplingResult refine(Frame& frame, const Scene& scene,
+                                       std::vector<RadianceSample> initial,
+                                       RadianceEvaluator& evaluator) = 0;
+};
+using RefinerMaker =
+    StageMaker<SampleRefiner, const DynamicSamplingSettings&, const PipelineSettings&>;
+/// "dynamic": the paper's recursive splitting.
+StageRegistry<RefinerMaker>& refiners();
+/// Registers the CPU variant of "dynamic".
+void registerRefiners();
 
 /// Adds the dynamic-sampling facts to render stats (shared by the CPU and GPU `adaptive`):
 /// samples_per_level (final samples per level), initial_samples, levels (per level: grid,
@@ -98,9 +116,12 @@ void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& 
                              const std::vector<RadianceSample>& samples,
                              const DynamicSamplingSettings& settings);
 
-/// Reads epsilon, levels, tau ("ancestor" | "sample"), probes (6 | 14 | 26) from the render
-/// object; levels must be
-/// increasing, each in [2, 1024], the finest at most half the medium resolution's largest axis.
+/// Reads the dynamic-sampling keys of the render object (table in dynamic_sampling.cpp):
+/// epsilon, levels, tau, probes. delta1 is not read here (the pipeline's Δ1 is used; this
+/// sets it to one voxel edge for callers without a pipeline).
 DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene);
+
+/// The key table of parseDynamicSampling (render keys of method `adaptive`).
+const std::vector<KeyDoc>& dynamicSamplingKeys();
 
 }  // namespace scatterlab

@@ -10,7 +10,7 @@
 #include "media/procedural.h"
 #include "render/per_voxel.h"
 #include "render/ray_marcher.h"
-#include "render/volume_tracer.h"
+#include "core/transport.h"
 
 namespace scatterlab::testing {
 namespace {

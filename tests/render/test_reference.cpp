@@ -5,7 +5,7 @@
 #include <functional>
 
 #include "media/procedural.h"
-#include "render/volume_tracer.h"
+#include "core/transport.h"
 #include "support/scenes.h"
 
 using namespace scatterlab;

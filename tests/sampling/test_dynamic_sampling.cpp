@@ -5,7 +5,7 @@
 #include <functional>
 #include <random>
 
-#include "render/volume_tracer.h"
+#include "core/transport.h"
 #include "sampling/dynamic_sampling.h"
 #include "sampling/scan.h"
 #include "support/scenes.h"

@@ -1,0 +1,150 @@
+#include "methods/pipeline.h"
+
+#include <optional>
+
+#include "core/error.h"
+
+namespace scatterlab {
+
+namespace {
+
+/// The variant of `name` in `registry` for `b`; a ConfigError naming `key` when the name is
+/// unknown or has no variant there.
+template <class Maker>
+const Maker& variant(const StageRegistry<Maker>& registry, const std::string& name, Backend b,
+                     const std::string& key, const std::string& what) {
+  const auto& entry = registry.get(name, key);
+  if (!entry.has(b))
+    throw ConfigError("'" + key + "': " + what + " '" + name + "' has no " + backendName(b) +
+                      " variant; use --backend " + backendName(Backend(1 - int(b))));
+  return entry.on[int(b)];
+}
+
+class PipelineMethod : public Method {
+ public:
+  PipelineMethod(MethodDesc desc, Backend backend, PipelineSettings settings, std::string note)
+      : desc_(std::move(desc)),
+        backend_(backend),
+        settings_(settings),
+        note_(std::move(note)) {}
+
+  std::unique_ptr<Sampler> sampler;
+  std::string samplerType;
+  std::unique_ptr<RadianceEvaluator> evaluator;
+  std::unique_ptr<SampleRefiner> refiner;
+  std::optional<DynamicSamplingSettings> dynamic;
+  std::unique_ptr<Reconstruction> reconstruction;
+  std::unique_ptr<Integrator> integrator;
+
+  RenderResult render(const Scene& scene, Progress* progress) override {
+    RenderResult r;
+    RenderStats& st = r.stats;
+    st.method = desc_.name;
+    st.backend = backendName(backend_);
+    st.width = scene.camera.width;
+    st.height = scene.camera.height;
+    std::unique_ptr<Frame> frame = backends()[int(backend_)].makeFrame();
+    // Every stage: a progress phase, and a wall time that ends when the backend's work is done.
+    const auto stage = [&](const char* name, const auto& body) {
+      if (progress) progress->restart(name, 1);
+      ScopedTimer t(st, name);
+      body();
+      frame->sync();
+    };
+    stage("density", [&] { frame->buildDensity(scene); });
+    std::vector<RadianceSample> samples;
+    if (sampler) stage("sampling", [&] { samples = sampler->generate(scene, frame->hostDensity()); });
+    if (refiner) {
+      DynamicSamplingResult ds;
+      stage("dynamic_sampling",
+            [&] { ds = refiner->refine(*frame, scene, std::move(samples), *evaluator); });
+      samples = std::move(ds.samples);
+      addDynamicSamplingStats(st, ds.levels, samples, *dynamic);
+    } else if (sampler) {
+      stage("evaluation", [&] {
+        evaluator->evaluate(*frame, scene, samples, reconstruction->needsGradients());
+      });
+    }
+    if (reconstruction) {
+      const bool fromSamples = reconstruction->usesSamples();
+      ReconstructionStats rs;
+      stage(fromSamples ? "reconstruction" : "radiance", [&] {
+        rs = reconstruction->reconstruct(*frame, scene, samples, settings_.radianceResolution,
+                                         progress);
+      });
+      if (fromSamples) {
+        st.extra["uncovered_voxels"] = rs.uncovered;
+      } else {
+        st.extra["traced_voxels"] = rs.traced;
+        st.extra["empty_voxels"] = rs.skipped;
+      }
+      const IVec3 res = settings_.radianceResolution;
+      st.extra["radiance_resolution"] = {res.x, res.y, res.z};
+    }
+    stage("march", [&] { r.image = integrator->integrate(*frame, scene, progress); });
+
+    frame->report(st);
+    integrator->describe(st);
+    if (sampler) {
+      st.samples = (long long)samples.size();
+      st.extra["sampler"] = samplerType;
+    }
+    st.extra["march_step"] = settings_.march.step;
+    st.extra["delta1"] = settings_.delta1;
+    if (!note_.empty()) st.extra["backend_choice"] = note_;
+    if (!ignoredKeys.empty()) st.extra["ignored_keys"] = ignoredKeys;
+    r.density = frame->exportDensity();
+    r.radiance = frame->exportRadiance();
+    r.samples = std::move(samples);
+    return r;
+  }
+
+ private:
+  MethodDesc desc_;
+  Backend backend_;
+  PipelineSettings settings_;
+  std::string note_;
+};
+
+}  // namespace
+
+bool pipelineRunsOn(const MethodDesc& d, Backend b) {
+  if (!backends()[int(b)].makeFrame) return false;
+  const auto has = [b](const auto& registry, const std::string& name) {
+    return registry.contains(name) && registry.get(name, name).has(b);
+  };
+  if (d.sampler && !has(radianceEvaluators(), "volume-tracer")) return false;
+  if (!d.refiner.empty() && !has(refiners(), d.refiner)) return false;
+  if (d.radianceVolume() && !has(reconstructions(), d.reconstruction)) return false;
+  return has(integrators(), d.integrator);
+}
+
+std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const Scene& scene,
+                                           Backend b, std::string note) {
+  // Every key is read before any backend-specific choice, so a scene valid on one backend is
+  // valid on the other.
+  const PipelineSettings settings = parsePipelineSettings(p, scene, d);
+  auto m = std::make_unique<PipelineMethod>(d, b, settings, std::move(note));
+  std::string evaluatorName, integratorName = d.integrator;
+  if (d.sampler) {
+    m->sampler = makeSampler(p, scene, m->samplerType);
+    evaluatorName = p.string("evaluator", "volume-tracer");
+  }
+  if (!d.refiner.empty()) m->dynamic = parseDynamicSampling(p, scene);
+  if (d.integratorSelectable) integratorName = p.string("integrator", d.integrator);
+
+  if (d.sampler)
+    m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
+                           "radiance evaluator")(settings);
+  if (!d.refiner.empty())
+    m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"),
+                         "sample refiner")(*m->dynamic, settings);
+  if (d.radianceVolume())
+    m->reconstruction = variant(reconstructions(), d.reconstruction, b, p.keyPath("method"),
+                                "reconstruction")(settings);
+  m->integrator =
+      variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(settings);
+  return m;
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,72 @@
+#include "methods/settings.h"
+
+#include "sampling/dynamic_sampling.h"
+
+namespace scatterlab {
+
+const std::vector<KeyDoc>& pipelineKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
+       "view-ray step (world units)"},
+      {"min_transmittance", "number", "1e-6", "[0, 1]",
+       "a view ray stops when its transmittance falls below this"},
+      {"delta1", "number", "one voxel edge", "(diag·1e-6, diag]",
+       "volume-tracing step towards the lights (the paper's Δ1)"},
+      {"delta2", "number", "one voxel edge", "(diag·1e-6, diag]",
+       "central-difference step of ∇S (the paper's Δ2); methods with samples"},
+      {"radiance_resolution", "int or [nx,ny,nz]", "medium.resolution",
+       "1…4096 per axis, integers, at most 512³ voxels",
+       "voxels of the source-radiance volume; methods that build one"},
+      {"slicing", "string", "ray-steps", "ray-steps, view-planes",
+       "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
+       "slabs; accepted and reported unused on the CPU"},
+      {"evaluator", "string", "volume-tracer", "a registered radiance evaluator",
+       "how S and ∇S are computed at the samples; methods with samples"},
+      {"integrator", "string", "ray-marcher", "a registered integrator",
+       "how the image is marched from the volumes; methods with a radiance volume"},
+  };
+  return keys;
+}
+
+PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const MethodDesc& d) {
+  PipelineSettings s;
+  const float voxel = scene.medium.voxelSize();
+  const Interval steps = stepRange(glm::length(scene.medium.bounds.extent()));
+  s.march.step = p.real("march_step", voxel, steps);
+  s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
+  s.delta1 = p.real("delta1", voxel, steps);
+  if (d.sampler) s.delta2 = p.real("delta2", voxel, steps);
+  if (d.radianceVolume()) {
+    s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution);
+    s.slicingGiven = p.has("slicing");
+    s.slicing = p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps"
+                    ? Slicing::RaySteps
+                    : Slicing::ViewPlanes;
+  }
+  return s;
+}
+
+std::vector<std::string> methodKeys(const MethodDesc& d) {
+  std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
+  if (d.sampler) k.insert(k.end(), {"delta2", "sampler", "evaluator"});
+  if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
+  if (d.integratorSelectable) k.push_back("integrator");
+  if (!d.refiner.empty())
+    for (const KeyDoc& key : dynamicSamplingKeys()) k.emplace_back(key.name);
+  return k;
+}
+
+std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type) {
+  const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
+  const Json defaultSampler = hasGaussians ? Json{{"type", "gaussian-centres"}}
+                                           : Json{{"type", "jittered"}, {"count", 512}};
+  const bool given = p.has("sampler");
+  Params sp = given ? p.child("sampler") : Params(defaultSampler, p.keyPath("sampler"));
+  if (!given) p.allow("sampler");
+  type = sp.string("type", std::string(hasGaussians ? "gaussian-centres" : "jittered"));
+  std::unique_ptr<Sampler> sampler = samplers().get(type, sp.keyPath("type"))(sp, scene);
+  sp.finish();
+  return sampler;
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,49 @@
+#pragma once
+/// The settings of the volume pipelines, read from a scene's render object in one place, the
+/// same whichever backend runs (methods/settings.cpp holds the key table). Which keys a method
+/// reads follows from its stages (MethodDesc).
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/params.h"
+#include "core/scene.h"
+#include "core/stages.h"
+
+namespace scatterlab {
+
+/// One method: which stages it runs (by registered name), each with a variant per backend.
+/// Registered once in methods/register.cpp; a PipelineMethod runs it.
+struct MethodDesc {
+  std::string name;
+  std::string summary;              ///< one line
+  bool sampler = false;             ///< a sampler and the radiance evaluator run (samples)
+  std::string refiner;              ///< a SampleRefiner between them ("dynamic"), or empty
+  std::string reconstruction;       ///< reconstructions() entry, or empty (no radiance volume)
+  std::string integrator;           ///< default integrators() entry (render.integrator)
+  bool integratorSelectable = true; ///< whether render.integrator may replace it
+
+  /// Whether the method builds a source-radiance volume (and reads its keys).
+  bool radianceVolume() const { return !reconstruction.empty(); }
+};
+
+/// Key table of the pipeline settings (render keys; sampler.* and the refiner's keys have
+/// their own tables in sampling/).
+const std::vector<KeyDoc>& pipelineKeys();
+
+/// Reads the keys `desc`'s stages use from the render object: march_step, min_transmittance,
+/// delta1 always; delta2 with samples; radiance_resolution and slicing with a radiance volume.
+/// Must not call finish().
+PipelineSettings parsePipelineSettings(Params& render, const Scene& scene, const MethodDesc& desc);
+
+/// The top-level render keys a method with `desc` reads (for createMethod's tolerance of other
+/// methods' keys): the pipeline keys above, "sampler", "evaluator", "integrator" and the
+/// refiner's keys, as its stages need them.
+std::vector<std::string> methodKeys(const MethodDesc& desc);
+
+/// The render.sampler object (default: Gaussian centres when the medium has Gaussians, else
+/// 512 jittered samples); `type` receives the sampler's name.
+std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type);
+
+}  // namespace scatterlab

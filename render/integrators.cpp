@@ -1,0 +1,59 @@
+#include "render/integrators.h"
+
+#include "core/stages.h"
+#include "core/transport.h"
+#include "render/ray_marcher.h"
+
+namespace scatterlab {
+
+namespace {
+
+class RayMarcher : public Integrator {
+ public:
+  explicit RayMarcher(const PipelineSettings& s) : march_(s.march), slicingGiven_(s.slicingGiven) {}
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    const HostFrame& f = static_cast<const HostFrame&>(frame);
+    const RadianceGrid& radiance = *f.radiance;
+    if (progress) progress->restart("march", scene.camera.height);
+    const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
+    const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
+    return marchImage(scene, *f.density, lookup, march_, progress);
+  }
+  void describe(RenderStats& stats) const override {
+    // The CPU marcher steps along each ray: a slicing the scene asks for has no meaning here.
+    if (slicingGiven_) stats.extra["unused_keys"] = {"render.slicing"};
+  }
+
+ private:
+  MarchSettings march_;
+  bool slicingGiven_;
+};
+
+class ExactIntegrator : public Integrator {
+ public:
+  explicit ExactIntegrator(const PipelineSettings& s) : march_(s.march), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    const DensityGrid& density = frame.hostDensity();
+    if (progress) progress->restart("exact", scene.camera.height);
+    const SourceRadiance source(scene, density, delta1_);
+    return marchImage(scene, density, source, march_, progress);
+  }
+
+ private:
+  MarchSettings march_;
+  float delta1_;
+};
+
+}  // namespace
+
+void registerIntegrators() {
+  integrators().addVariant("ray-marcher", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new RayMarcher(s));
+  });
+  integrators().addVariant("exact", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new ExactIntegrator(s));
+  });
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,14 @@
+#pragma once
+/// CPU integrators (render/ray_marcher.h's march), registered in integrators():
+///   "ray-marcher" — S looked up trilinearly in the frame's radiance volume at each step (the
+///                   integrator of every radiance-volume method; its GPU variant is the slice
+///                   marcher in gpu/);
+///   "exact"       — S traced at each step towards every light with step delta1 (no radiance
+///                   volume): the reference.
+
+namespace scatterlab {
+
+/// Registers the CPU variants of "ray-marcher" and "exact".
+void registerIntegrators();
+
+}  // namespace scatterlab
