@@ -6,7 +6,6 @@
 #include <benchmark/benchmark.h>
 
 #include "api/scatterlab.h"
-#include "render/methods.h"
 #include "sampling/dynamic_sampling.h"
 
 using namespace scatterlab;
@@ -24,10 +23,10 @@ void BM_DynamicSampling_Shaft128(benchmark::State& state) {
   Params sp(scene.render["sampler"], "render.sampler");
   sp.string("type");
   auto sampler = samplers().get("grid", "type")(sp, scene);
-  Params ep(scene.render, "render");
-  auto evaluator = radianceEvaluators().get("volume-tracer", "evaluator")(ep, scene);
-  RenderStats st;
-  const DensityGrid density = buildDensityVolume(scene, st);
+  PipelineSettings ps;
+  ps.delta1 = ps.delta2 = scene.medium.voxelSize();
+  auto evaluator = radianceEvaluators().get("volume-tracer", "").on[int(Backend::Cpu)](ps);
+  const DensityGrid density = buildDensityVolume(scene);
   const std::vector<RadianceSample> initial = sampler->generate(scene, density);
   DynamicSamplingResult r;
   for (auto _ : state) r = dynamicSampling(scene, density, initial, *evaluator, ds);

@@ -8,7 +8,6 @@
 #include "api/scatterlab.h"
 #include "core/stages.h"
 #include "render/interpolation.h"
-#include "render/methods.h"
 #include "render/per_voxel.h"
 #include "render/radiance_evaluator.h"
 
@@ -21,8 +20,7 @@ struct Fixture {
   Fixture() {
     initialize();
     scene = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
-    RenderStats st;
-    density = buildDensityVolume(scene, st);
+    density = buildDensityVolume(scene);
   }
   static Fixture& get() {
     static Fixture f;

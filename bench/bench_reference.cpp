@@ -5,7 +5,6 @@
 #include <benchmark/benchmark.h>
 
 #include "api/scatterlab.h"
-#include "render/methods.h"
 #include "render/per_voxel.h"
 
 using namespace scatterlab;
@@ -27,8 +26,7 @@ Scene uniformFog(int resolution) {
 }
 
 void perVoxelRadiance(benchmark::State& state, const Scene& scene) {
-  RenderStats st;
-  const DensityGrid density = buildDensityVolume(scene, st);
+  const DensityGrid density = buildDensityVolume(scene);
   RadianceGrid radiance(scene.medium.bounds, scene.medium.resolution);
   PerVoxelStats pv;
   for (auto _ : state)

@@ -1,13 +1,15 @@
 /// Registry-driven stage micro-benchmarks (issue 7): one benchmark per registered name and
 /// volume size, generated at start-up by iterating the registries (benchmark::RegisterBenchmark),
 /// so a newly registered variant is benchmarked without editing this file:
-///   Stage/sampler/<name>/<res>, Stage/evaluator/<name>/<res>, Stage/reconstruction/<name>/<res>,
-///   Stage/integrator/<name>/<res>, Stage/method/<name>/<res>
+///   Stage/sampler/<name>/<res>, Stage/evaluator/<name>/<backend>/<res>,
+///   Stage/reconstruction/<name>/<backend>/<res>, Stage/integrator/<name>/<backend>/<res>,
+///   Stage/method/<name>/<res>
 /// Scene: data/scenes/glow.json (five Gaussian blobs, one point light) at res³ voxels and a
 /// 400×300 image; 512 samples from the `jittered` sampler feed the evaluators and
-/// reconstructions. GPU variants (names ending in "-gpu", and "slice-marcher") are timed with GL
-/// timer queries around the call and reported as manual time (so the CPU-side readback to host
-/// memory is excluded); they are skipped with a reason when there is no EGL context.
+/// reconstructions. Each stage runs in a frame of its backend (the density built there, the
+/// integrators' radiance volume by that backend's "gradient"). GPU variants are timed with GL
+/// timer queries around the call and reported as manual time (so the CPU-side readback of
+/// samples is excluded); they are skipped with a reason when there is no EGL context.
 /// Iterations are kept small (SCATTERLAB_STAGE_BENCH_ITERS overrides) so the whole set finishes
 /// on the 2-core machine; docs/harness.md shows the JSON output.
 /// Density models are not here: each type needs its own parameters (bench_media.cpp has them).
@@ -23,7 +25,6 @@
 #include "core/stages.h"
 #include "gpu/context.h"
 #include "gpu/timer.h"
-#include "render/methods.h"
 
 namespace scatterlab {
 namespace {
@@ -38,9 +39,19 @@ Scene stageScene(int res) {
   return s;
 }
 
-bool isGpuVariant(const std::string& name) {
-  return (name.size() > 4 && name.compare(name.size() - 4, 4, "-gpu") == 0) ||
-         name == "slice-marcher";
+/// A frame of backend `b` with the scene's density built in it.
+std::unique_ptr<Frame> frameWithDensity(Backend b, const Scene& scene) {
+  std::unique_ptr<Frame> f = backends()[int(b)].makeFrame();
+  f->buildDensity(scene);
+  return f;
+}
+
+/// Settings as the method layer would parse them from an empty render object.
+PipelineSettings defaultSettings(const Scene& scene) {
+  PipelineSettings s;
+  s.march.step = s.delta1 = s.delta2 = scene.medium.voxelSize();
+  s.radianceResolution = scene.medium.resolution;
+  return s;
 }
 
 int iters(int n) {
@@ -53,7 +64,6 @@ struct Inputs {
   Scene scene;
   DensityGrid density;
   std::vector<RadianceSample> samples;
-  RadianceGrid radiance;
 };
 
 const Inputs& inputs(int res) {
@@ -62,19 +72,14 @@ const Inputs& inputs(int res) {
   if (it != cache.end()) return it->second;
   Inputs in;
   in.scene = stageScene(res);
-  RenderStats st;
-  in.density = buildDensityVolume(in.scene, st);
+  in.density = buildDensityVolume(in.scene);
   Json sp = {{"count", 512}};
   Params p(sp, "sampler");
   in.samples = samplers().get("jittered", "sampler")(p, in.scene)->generate(in.scene, in.density);
-  Json ep = Json::object();
-  Params pe(ep, "render");
-  radianceEvaluators().get("volume-tracer", "evaluator")(pe, in.scene)
-      ->evaluate(in.scene, in.density, in.samples, true);
-  in.radiance = RadianceGrid(in.scene.medium.bounds, in.scene.medium.resolution);
-  Params pr(ep, "render");
-  reconstructions().get("gradient", "reconstruction")(pr, in.scene)
-      ->reconstruct(in.scene, in.density, in.samples, in.radiance);
+  const PipelineSettings ps = defaultSettings(in.scene);
+  HostFrame frame(in.density);
+  radianceEvaluators().get("volume-tracer", "").on[int(Backend::Cpu)](ps)->evaluate(
+      frame, in.scene, in.samples, true);
   return cache.emplace(res, std::move(in)).first->second;
 }
 
@@ -112,7 +117,7 @@ bool registerAll() {
   initialize();
   for (const std::string& name : samplers().names())
     for (int res : kSizes)
-      registerOne("Stage/sampler/" + name + "/" + std::to_string(res), isGpuVariant(name), 5,
+      registerOne("Stage/sampler/" + name + "/" + std::to_string(res), false, 5,
                   [name, res](benchmark::State& state) {
                     const Inputs& in = inputs(res);
                     Json j = {{"count", 512}};
@@ -120,7 +125,7 @@ bool registerAll() {
                     try {
                       auto s = samplers().get(name, "sampler")(p, in.scene);
                       long long n = 0;
-                      timeLoop(state, isGpuVariant(name), [&] {
+                      timeLoop(state, false, [&] {
                         n = (long long)s->generate(in.scene, in.density).size();
                       });
                       state.counters["samples"] = double(n);
@@ -128,56 +133,69 @@ bool registerAll() {
                       state.SkipWithError(e.what());
                     }
                   });
-  for (const std::string& name : radianceEvaluators().names())
-    for (int res : kSizes)
-      registerOne("Stage/evaluator/" + name + "/" + std::to_string(res), isGpuVariant(name), 3,
-                  [name, res](benchmark::State& state) {
-                    const Inputs& in = inputs(res);
-                    Json j = Json::object();
-                    Params p(j, "render");
-                    try {
-                      auto ev = radianceEvaluators().get(name, "evaluator")(p, in.scene);
-                      std::vector<RadianceSample> s = in.samples;
-                      timeLoop(state, isGpuVariant(name),
-                               [&] { ev->evaluate(in.scene, in.density, s, true); });
-                      state.counters["samples"] = double(s.size());
-                    } catch (const std::exception& e) {
-                      state.SkipWithError(e.what());
-                    }
-                  });
-  for (const std::string& name : reconstructions().names())
-    for (int res : kSizes)
-      registerOne("Stage/reconstruction/" + name + "/" + std::to_string(res), isGpuVariant(name),
-                  name.rfind("per-voxel", 0) == 0 ? 1 : 3, [name, res](benchmark::State& state) {
-                    const Inputs& in = inputs(res);
-                    Json j = Json::object();
-                    Params p(j, "render");
-                    try {
-                      auto rc = reconstructions().get(name, "reconstruction")(p, in.scene);
-                      RadianceGrid out(in.scene.medium.bounds, in.scene.medium.resolution);
-                      timeLoop(state, isGpuVariant(name),
-                               [&] { rc->reconstruct(in.scene, in.density, in.samples, out); });
-                    } catch (const std::exception& e) {
-                      state.SkipWithError(e.what());
-                    }
-                  });
-  for (const std::string& name : integrators().names())
-    for (int res : kSizes)
-      registerOne("Stage/integrator/" + name + "/" + std::to_string(res), isGpuVariant(name), 2,
-                  [name, res](benchmark::State& state) {
-                    const Inputs& in = inputs(res);
-                    Json j = Json::object();
-                    Params p(j, "render");
-                    try {
-                      auto ig = integrators().get(name, "integrator")(p, in.scene);
-                      timeLoop(state, isGpuVariant(name), [&] {
-                        Image img = ig->integrate(in.scene, in.density, in.radiance);
-                        benchmark::DoNotOptimize(img.pixels().data());
-                      });
-                    } catch (const std::exception& e) {
-                      state.SkipWithError(e.what());
-                    }
-                  });
+  for (const Backend b : {Backend::Cpu, Backend::Gpu}) {
+    if (!backends()[int(b)].makeFrame) continue;
+    const bool gpu = b == Backend::Gpu;
+    const std::string on = std::string("/") + backendName(b) + "/";
+    for (const std::string& name : radianceEvaluators().names()) {
+      if (!radianceEvaluators().get(name, "").has(b)) continue;
+      for (int res : kSizes)
+        registerOne("Stage/evaluator/" + name + on + std::to_string(res), gpu, 3,
+                    [name, res, b, gpu](benchmark::State& state) {
+                      const Inputs& in = inputs(res);
+                      try {
+                        auto frame = frameWithDensity(b, in.scene);
+                        auto ev = radianceEvaluators().get(name, "").on[int(b)](
+                            defaultSettings(in.scene));
+                        std::vector<RadianceSample> s = in.samples;
+                        timeLoop(state, gpu, [&] { ev->evaluate(*frame, in.scene, s, true); });
+                        state.counters["samples"] = double(s.size());
+                      } catch (const std::exception& e) {
+                        state.SkipWithError(e.what());
+                      }
+                    });
+    }
+    for (const std::string& name : reconstructions().names()) {
+      if (!reconstructions().get(name, "").has(b)) continue;
+      for (int res : kSizes)
+        registerOne("Stage/reconstruction/" + name + on + std::to_string(res), gpu,
+                    name == "per-voxel" ? 1 : 3, [name, res, b, gpu](benchmark::State& state) {
+                      const Inputs& in = inputs(res);
+                      try {
+                        auto frame = frameWithDensity(b, in.scene);
+                        auto rc = reconstructions().get(name, "").on[int(b)](
+                            defaultSettings(in.scene));
+                        timeLoop(state, gpu, [&] {
+                          rc->reconstruct(*frame, in.scene, in.samples,
+                                          in.scene.medium.resolution, nullptr);
+                        });
+                      } catch (const std::exception& e) {
+                        state.SkipWithError(e.what());
+                      }
+                    });
+    }
+    for (const std::string& name : integrators().names()) {
+      if (!integrators().get(name, "").has(b)) continue;
+      for (int res : kSizes)
+        registerOne("Stage/integrator/" + name + on + std::to_string(res), gpu, 2,
+                    [name, res, b, gpu](benchmark::State& state) {
+                      const Inputs& in = inputs(res);
+                      try {
+                        const PipelineSettings ps = defaultSettings(in.scene);
+                        auto frame = frameWithDensity(b, in.scene);
+                        reconstructions().get("gradient", "").on[int(b)](ps)->reconstruct(
+                            *frame, in.scene, in.samples, in.scene.medium.resolution, nullptr);
+                        auto ig = integrators().get(name, "").on[int(b)](ps);
+                        timeLoop(state, gpu, [&] {
+                          Image img = ig->integrate(*frame, in.scene, nullptr);
+                          benchmark::DoNotOptimize(img.pixels().data());
+                        });
+                      } catch (const std::exception& e) {
+                        state.SkipWithError(e.what());
+                      }
+                    });
+    }
+  }
   // Whole methods on the CPU (the GPU ones are in bench_gpu.cpp), at the two smaller sizes.
   for (const std::string& name : methods().names())
     for (int res : {32, 64})

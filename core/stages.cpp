@@ -7,8 +7,13 @@ const char* backendName(Backend b) {
 }
 
 void HostFrame::buildDensity(const Scene& scene) {
-  density = std::make_shared<DensityGrid>(scene.medium.bounds, scene.medium.resolution);
-  scene.medium.density->build(*density);
+  density = std::make_shared<DensityGrid>(buildDensityVolume(scene));
+}
+
+DensityGrid buildDensityVolume(const Scene& scene) {
+  DensityGrid g(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(g);
+  return g;
 }
 
 void HostFrame::report(RenderStats& stats) {

@@ -116,6 +116,10 @@ class HostFrame : public Frame {
   std::shared_ptr<RadianceGrid> radiance;  ///< set by the reconstruction
 };
 
+/// The scene's density volume on the host (medium.bounds, medium.resolution): what
+/// HostFrame::buildDensity builds, for tests and benchmarks.
+DensityGrid buildDensityVolume(const Scene& scene);
+
 /// A backend: makes the frames its stage variants work in.
 struct BackendEntry {
   std::function<std::unique_ptr<Frame>()> makeFrame;

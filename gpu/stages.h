@@ -1,8 +1,8 @@
 #pragma once
 /// GL variants of the pipeline stages (DESIGN.md §3), behind the interfaces of core/stages.h
-/// and registered by name in gpu/register.cpp:
-///   radiance evaluator "volume-tracer-gpu", reconstructions "gradient-gpu" and
-///   "per-voxel-gpu", integrator "slice-marcher".
+/// and registered in gpu/register.cpp as the GPU variants beside the CPU ones: radiance
+/// evaluator "volume-tracer", reconstructions "gradient" and "per-voxel", integrator
+/// "ray-marcher" (the slice marcher).
 /// The interface overrides work in a GpuFrame (gpu/frame.h; data stays on the GPU); the
 /// host-data overloads upload and read back, for tests that compare with the CPU variants;
 /// the Volume overloads are the passes themselves. Every member function needs a GL context

@@ -207,6 +207,14 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
   return result;
 }
 
+DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
+                                      std::vector<RadianceSample> initial,
+                                      RadianceEvaluator& evaluator,
+                                      const DynamicSamplingSettings& settings) {
+  HostFrame frame(density);
+  return dynamicSampling(frame, scene, std::move(initial), evaluator, settings);
+}
+
 void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& levelStats,
                              const std::vector<RadianceSample>& samples,
                              const DynamicSamplingSettings& settings) {

@@ -92,6 +92,12 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings);
 
+/// The same on a host density volume (copied into a HostFrame): for tests and benchmarks.
+DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
+                                      std::vector<RadianceSample> initial,
+                                      RadianceEvaluator& evaluator,
+                                      const DynamicSamplingSettings& settings);
+
 /// Stage: dynamic sampling between the sampler and the reconstruction (method `adaptive`).
 /// Returns the final sample set with S and ∇S evaluated. The CPU variant is dynamicSampling()
 /// with the pipeline's evaluator; the GPU one (gpu/) runs its own passes.

@@ -88,9 +88,10 @@ TEST(GpuDynamicSampling, SameSampleSetAsCpu) {
   // below on the GPU errors), so float differences between CPU and GPU cannot flip a flag.
   ds.epsilon = 2e-4;
   const float delta1 = 1.0f / 24, delta2 = 1.0f / 24;
-  const Json cfg{{"delta1", delta1}, {"delta2", delta2}};
-  Params p(cfg, "evaluator");
-  auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator")(p, scene);
+  PipelineSettings ps;
+  ps.delta1 = delta1;
+  ps.delta2 = delta2;
+  auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
   const DynamicSamplingResult cpu = dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
 
   const gpu::Volume d = gpu::uploadDensity(density);

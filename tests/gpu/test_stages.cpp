@@ -4,6 +4,7 @@
 #include <random>
 
 #include "core/stages.h"
+#include "gpu/frame.h"
 #include "gpu/stages.h"
 #include "gpu/volume.h"
 #include "gpu_support.h"
@@ -71,14 +72,15 @@ TEST(GpuVolumeTracer, SAndGradientMatchCpuTracing) {
   DensityGrid density(scene.medium.bounds, scene.medium.resolution);
   scene.medium.density->build(density);
   const float delta1 = 1.0f / 16, delta2 = 1.0f / 32;
-  const Json cfg{{"delta1", delta1}, {"delta2", delta2}};
-  Params p(cfg, "evaluator");
-  auto eval = radianceEvaluators().get("volume-tracer-gpu", "evaluator")(p, scene);
-  p.finish();
+  PipelineSettings ps;
+  ps.delta1 = delta1;
+  ps.delta2 = delta2;
+  auto eval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Gpu)](ps);
+  gpu::GpuFrame frame(density);
   std::vector<RadianceSample> samples = randomSamples(48, 7, false);
   samples[0].position = Vec3(0.0f, 0.5f, 1.0f);  // on the box surface
   samples[1].position = Vec3(0.5f, 1.2f, 0.5f);  // outside the box, inside the spot cone
-  eval->evaluate(scene, density, samples, true);
+  eval->evaluate(frame, scene, samples, true);
   expectNoGlError();
 
   const SourceRadiance source(scene, density, delta1);
@@ -106,7 +108,7 @@ TEST(GpuVolumeTracer, SAndGradientMatchCpuTracing) {
   }
   // S only: gradients left zero.
   std::vector<RadianceSample> only = samples;
-  eval->evaluate(scene, density, only, false);
+  eval->evaluate(frame, scene, only, false);
   EXPECT_TRUE(close3(only[3].S, cs[3], 1e-3f, 1e-3f * sMax));
   EXPECT_EQ(only[3].dS[1], Vec3(0.0f));
 }
@@ -118,11 +120,10 @@ TEST(GpuGradientSplat, MatchesDirectEq4) {
   DensityGrid density(scene.medium.bounds, dims);
   scene.medium.density->build(density);
   const std::vector<RadianceSample> samples = randomSamples(40, 11, true);
-  const Json cfg = Json::object();
-  Params p(cfg, "reconstruction");
-  auto rec = reconstructions().get("gradient-gpu", "reconstruction")(p, scene);
-  RadianceGrid out(scene.medium.bounds, dims);
-  const ReconstructionStats st = rec->reconstruct(scene, density, samples, out);
+  auto rec = reconstructions().get("gradient", "reconstruction").on[int(Backend::Gpu)]({});
+  gpu::GpuFrame frame(density);
+  const ReconstructionStats st = rec->reconstruct(frame, scene, samples, dims, nullptr);
+  const RadianceGrid out = gpu::readRadiance(frame.radiance);
   expectNoGlError();
 
   long long uncovered = 0, covered = 0;
@@ -163,7 +164,7 @@ TEST(GpuPerVoxel, MatchesCpuPerVoxelRadiance) {
   const float delta1 = 1.0f / 16;
   RadianceGrid cpu(scene.medium.bounds, IVec3(16, 14, 12));
   const PerVoxelStats cst = buildPerVoxelRadiance(scene, density, delta1, cpu, nullptr);
-  PerVoxelStats gst;
+  ReconstructionStats gst;
   const gpu::Volume d = gpu::uploadDensity(density);
   const gpu::Volume v =
       gpu::PerVoxelGpu(delta1).build(scene, d, cpu.bounds(), cpu.dims(), &gst, nullptr);
@@ -204,11 +205,13 @@ double sliceVsCpu(bool lightInside, float stepVoxels, const char* slicing = "vie
   const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
   const Image cpu = marchImage(scene, density, lookup, ms, nullptr);
 
-  const Json cfg{{"march_step", ms.step}, {"slicing", slicing}};
-  Params p(cfg, "integrator");
-  auto integ = integrators().get("slice-marcher", "integrator")(p, scene);
-  p.finish();
-  const Image g = integ->integrate(scene, density, radiance);
+  PipelineSettings ps;
+  ps.march = ms;
+  ps.slicing = std::string(slicing) == "ray-steps" ? Slicing::RaySteps : Slicing::ViewPlanes;
+  auto integ = integrators().get("ray-marcher", "integrator").on[int(Backend::Gpu)](ps);
+  gpu::GpuFrame frame(density);
+  frame.radiance = gpu::uploadRadiance(radiance);
+  const Image g = integ->integrate(frame, scene, nullptr);
   expectNoGlError();
   EXPECT_EQ(g.width(), 32);
   EXPECT_EQ(g.height(), 24);

@@ -5,7 +5,6 @@
 
 #include "core/stages.h"
 #include "render/interpolation.h"
-#include "render/methods.h"
 #include "render/per_voxel.h"
 #include "render/radiance_evaluator.h"
 #include "support/scenes.h"
@@ -181,14 +180,15 @@ TEST(VolumeTracerEvaluator, GradientMatchesAnalyticPointLightInHomogeneousMedium
   Json doc = testing::homogeneousBoxDoc(rho, sigmaT, 0.6f, light, I, 8, 6, 16);
   doc["render"] = {{"method", "gradient"}, {"delta1", 0.002}, {"delta2", 0.001}};
   const Scene scene = testing::sceneFromJson(doc);
-  Params p(scene.render, "render");
-  auto ev = radianceEvaluators().get("volume-tracer", "evaluator")(p, scene);
-  RenderStats rs;
-  const DensityGrid density = buildDensityVolume(scene, rs);
+  PipelineSettings ps;
+  ps.delta1 = 0.002f;
+  ps.delta2 = 0.001f;
+  auto ev = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
+  HostFrame frame(buildDensityVolume(scene));
   std::vector<RadianceSample> s = {makeSample(Vec3(0.2f, 0.3f, 0.7f), 0.1f, Vec3(0)),
                                    makeSample(Vec3(0.8f, 0.5f, 0.5f), 0.1f, Vec3(0)),
                                    makeSample(Vec3(0.45f, 0.9f, 0.1f), 0.1f, Vec3(0))};
-  ev->evaluate(scene, density, s, true);
+  ev->evaluate(frame, scene, s, true);
   for (const auto& x : s) {
     const Vec3 v = x.position - light;
     const float d = glm::length(v);
@@ -200,7 +200,7 @@ TEST(VolumeTracerEvaluator, GradientMatchesAnalyticPointLightInHomogeneousMedium
       EXPECT_NEAR(x.dS[a].y, grad[a], 2e-3f * glm::length(grad)) << "axis " << a;
   }
   // Without gradients, dS is zero.
-  ev->evaluate(scene, density, s, false);
+  ev->evaluate(frame, scene, s, false);
   EXPECT_EQ(s[0].dS[1], Vec3(0.0f));
 }
 
@@ -287,18 +287,19 @@ TEST(SampledMethods, BadParametersNameTheKey) {
 TEST(Reconstructions, RegisteredVariantsIncludingPerVoxel) {
   Json doc = testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 1.3f, 0.6f), 1.0f, 8, 6, 8);
   const Scene scene = testing::sceneFromJson(doc);
-  RenderStats rs;
-  const DensityGrid density = buildDensityVolume(scene, rs);
+  const DensityGrid density = buildDensityVolume(scene);
   RadianceGrid ref(kUnit, IVec3(8));
   buildPerVoxelRadiance(scene, density, scene.medium.voxelSize(), ref, nullptr);
   for (const char* name : {"gradient", "rbf", "nearest", "per-voxel"}) {
-    const Json empty = Json::object();  // Params keeps a pointer: no temporaries
-    Params p(empty, "render");
-    auto r = reconstructions().get(name, "reconstruction")(p, scene);
-    RadianceGrid out(kUnit, IVec3(8));
-    const ReconstructionStats st = r->reconstruct(scene, density, {}, out);
+    PipelineSettings ps;
+    ps.delta1 = scene.medium.voxelSize();
+    auto r = reconstructions().get(name, "reconstruction").on[int(Backend::Cpu)](ps);
+    HostFrame frame(density);
+    const ReconstructionStats st = r->reconstruct(frame, scene, {}, IVec3(8), nullptr);
+    const RadianceGrid& out = *frame.radiance;
     if (std::string(name) == "per-voxel") {
       EXPECT_EQ(st.uncovered, 0);
+      EXPECT_EQ(st.traced + st.skipped, 512);
       EXPECT_EQ(out.data(), ref.data());
     } else {
       EXPECT_EQ(st.uncovered, 512);

@@ -21,7 +21,7 @@ class AnalyticEvaluator : public RadianceEvaluator {
  public:
   std::function<Vec3(const Vec3&)> S;
   std::function<void(const Vec3&, Vec3[3])> grad;
-  void evaluate(const Scene&, const DensityGrid&, std::span<RadianceSample> samples,
+  void evaluate(Frame&, const Scene&, std::span<RadianceSample> samples,
                 bool gradients) override {
     for (auto& s : samples) {
       s.S = S(s.position);
@@ -33,10 +33,10 @@ class AnalyticEvaluator : public RadianceEvaluator {
 /// Traced S and central-difference ∇S (Δ2 = half a voxel) through SourceRadiance.
 class TracingEvaluator : public RadianceEvaluator {
  public:
-  void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
+  void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override {
     const float d1 = scene.medium.voxelSize(), d2 = 0.5f * d1;
-    const SourceRadiance src(scene, density, d1);
+    const SourceRadiance src(scene, frame.hostDensity(), d1);
     const auto S = [&](const Vec3& p) { return src(p, glm::normalize(scene.camera.position - p)); };
     for (auto& s : samples) {
       s.S = S(s.position);

@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include "core/stages.h"
-#include "render/methods.h"
 #include "sampling/samplers.h"
 #include "support/scenes.h"
 
@@ -27,7 +26,7 @@ std::vector<RadianceSample> sample(const Scene& scene, const Json& samplerParams
   auto s = samplers().get(type, p.keyPath("type"))(p, scene);
   p.finish();
   RenderStats st;
-  const DensityGrid d = buildDensityVolume(scene, st);
+  const DensityGrid d = buildDensityVolume(scene);
   return s->generate(scene, d);
 }
 
@@ -113,7 +112,7 @@ TEST(CellSamplers, SkipsEmptyCellsAndAimsAtTheCount) {
   EXPECT_GT(s.size(), 140u);
   EXPECT_LT(s.size(), 260u);
   RenderStats st;
-  const DensityGrid d = buildDensityVolume(scene, st);
+  const DensityGrid d = buildDensityVolume(scene);
   for (const auto& x : s) EXPECT_GT(d.sample(x.position) + 1e-3f, 0.0f);
   const auto all = sample(scene, {{"type", "grid"}, {"count", 200}, {"skip_empty", false}});
   EXPECT_GE(all.size(), s.size());
