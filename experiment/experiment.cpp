@@ -14,9 +14,8 @@ namespace scatterlab {
 
 namespace {
 
-/// Everything after the runs. The gallery comes before results.json because it may render a
-/// reference that a failed run never got; plots.py reads results.json, and the report lists
-/// the plots, so the report is written last.
+/// Everything after the runs: plots.py reads results.json, so the tables are written before it
+/// runs; the report lists the plots, so it is written last.
 void writeOutputs(ExperimentResult& res, const std::string& configPath, detail::OutputDir& out,
                   detail::ReferenceCache& refs, const std::string& memoryMethod,
                   const ExperimentOptions& opt) {
