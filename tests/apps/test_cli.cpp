@@ -2,6 +2,7 @@
 /// message, a non-zero exit code, and no output file.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -33,9 +34,11 @@ RunResult run(const std::string& args) {
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
+    // The pid: several worktrees on one machine share /tmp and may run these tests at once.
     dir_ = fs::temp_directory_path() /
            ("scatterlab_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -116,7 +119,8 @@ TEST_F(Cli, CompareReportsErrorsAsJson) {
   ASSERT_EQ(r.code, 0) << r.output;
   j = Json::parse(r.output);
   EXPECT_GT(j["rel_l2"].get<double>(), 0.0);
-  EXPECT_LT(j["rel_l2"].get<double>(), 0.2);
+  // Per-voxel against exact on the tiny scene: measured 0.00627 (2026-11-23); ×1.5.
+  EXPECT_LT(j["rel_l2"].get<double>(), 0.0094);
   r = run("compare " + out("pv.exr") + " " + out("missing.exr"));
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("missing.exr"), std::string::npos);

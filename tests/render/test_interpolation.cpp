@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "core/stages.h"
 #include "render/interpolation.h"
 #include "render/per_voxel.h"
@@ -228,6 +230,17 @@ TEST(SampledMethods, GradientWithASampleAtEveryVoxelReproducesPerVoxel) {
 }
 
 TEST(SampledMethods, LightsInsideAndOutsideTheBox) {
+  // Relative L2 against per-voxel with 512 grid samples, measured 2026-11-23; ×1.5. The light
+  // inside the box puts the 1/d² peak between samples, so the errors there are large; outside,
+  // the field is smooth and the gradient variant is three times better than the others.
+  const std::map<std::pair<std::string, bool>, double> maxRelL2 = {
+      {{"gradient", false}, 0.36},  // inside: measured 0.2428
+      {{"rbf", false}, 0.69},       // inside: measured 0.4628
+      {{"nearest", false}, 0.70},   // inside: measured 0.4679
+      {{"gradient", true}, 0.026},  // outside: measured 0.0176
+      {{"rbf", true}, 0.074},       // outside: measured 0.0491
+      {{"nearest", true}, 0.075},   // outside: measured 0.0502
+  };
   for (const Vec3 light : {Vec3(0.5f, 0.5f, 0.5f), Vec3(0.5f, 1.3f, 0.6f)}) {
     Json doc = testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, light, 1.0f, 24, 18, 24);
     doc["render"] = {{"method", "per-voxel"}};
@@ -240,13 +253,7 @@ TEST(SampledMethods, LightsInsideAndOutsideTheBox) {
         ASSERT_TRUE(std::isfinite(px.x + px.y + px.z));
       }
       EXPECT_EQ(r.stats.extra["uncovered_voxels"].get<long long>(), 0) << m;
-      // Loose bounds: a smoke test of each variant; the accuracy claims live in the Fig. 3
-      // experiment. The light outside the box gives a smooth field.
-      // Measured: light outside 1.9% (gradient), 5.9% (nearest), 5.7% (rbf).
-      EXPECT_LT(err, light.y > 1.0f ? 0.08 : 0.5) << m << " light " << light.y;
-      if (std::string(m) == "gradient" && light.y > 1.0f) {
-        EXPECT_LT(err, 0.03);
-      }
+      EXPECT_LT(err, maxRelL2.at({m, light.y > 1.0f})) << m << " light " << light.y;
     }
   }
 }

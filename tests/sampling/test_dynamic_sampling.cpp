@@ -5,7 +5,7 @@
 #include <functional>
 #include <random>
 
-#include "core/transport.h"
+#include "render/radiance_evaluator.h"
 #include "sampling/dynamic_sampling.h"
 #include "sampling/scan.h"
 #include "support/scenes.h"
@@ -30,23 +30,14 @@ class AnalyticEvaluator : public RadianceEvaluator {
   }
 };
 
-/// Traced S and central-difference ∇S (Δ2 = half a voxel) through SourceRadiance.
+/// The CPU radiance evaluator itself (render/radiance_evaluator.h): traced S with Δ1 = one voxel
+/// and central-difference ∇S with Δ2 = half a voxel.
 class TracingEvaluator : public RadianceEvaluator {
  public:
   void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override {
-    const float d1 = scene.medium.voxelSize(), d2 = 0.5f * d1;
-    const SourceRadiance src(scene, frame.hostDensity(), d1);
-    const auto S = [&](const Vec3& p) { return src(p, glm::normalize(scene.camera.position - p)); };
-    for (auto& s : samples) {
-      s.S = S(s.position);
-      if (!gradients) continue;
-      for (int a = 0; a < 3; ++a) {
-        Vec3 e(0.0f);
-        e[a] = d2;
-        s.dS[a] = (S(s.position + e) - S(s.position - e)) / (2 * d2);
-      }
-    }
+    const float d1 = scene.medium.voxelSize();
+    evaluateSamples(scene, frame.hostDensity(), TracerSteps{d1, 0.5f * d1}, samples, gradients);
   }
 };
 

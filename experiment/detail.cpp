@@ -1,0 +1,87 @@
+// The experiment harness's shared helpers (declared in experiment/detail.h): formatting, text
+// files, labels and the output directory with its log.
+
+#include "experiment/detail.h"
+
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace scatterlab::detail {
+
+namespace fs = std::filesystem;
+
+std::string fmt(double v, const char* format) {
+  char b[64];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::ostringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  writeAtomically(path, [&](const std::string& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    f << text;
+    f.close();
+    if (!f) throw IoError("cannot write '" + path + "'");
+  });
+}
+
+std::string fileSafe(std::string s) {
+  for (char& c : s)
+    if (!std::isalnum((unsigned char)c) && c != '-' && c != '_' && c != '.') c = '_';
+  return s;
+}
+
+std::string valueLabel(const Json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_array()) {
+    std::string s;
+    for (const Json& e : v) {
+      if (!s.empty()) s += 'x';
+      s += valueLabel(e);
+    }
+    return s;
+  }
+  if (v.is_number_float()) {
+    const double d = v.get<double>();
+    if (d == std::floor(d) && std::fabs(d) < 1e15) return std::to_string((long long)d);
+    return fmt(d, "%g");
+  }
+  return v.dump();
+}
+
+std::string nowIso() {
+  const std::time_t t = std::time(nullptr);
+  char b[64];
+  std::strftime(b, sizeof b, "%Y-%m-%d %H:%M:%S", std::localtime(&t));
+  return b;
+}
+
+OutputDir::OutputDir(const std::string& dir) : dir_(dir) {
+  fs::create_directories(fs::path(dir) / "runs");
+  fs::create_directories(fs::path(dir) / "images");
+  fs::create_directories(fs::path(dir) / "references");
+  log_.open(path("log.txt"), std::ios::app);
+}
+
+std::string OutputDir::path(const std::string& file) const {
+  return (fs::path(dir_) / file).string();
+}
+
+void OutputDir::log(const std::string& line) {
+  log_ << "[" << nowIso() << "] " << line << "\n";
+  log_.flush();
+}
+
+}  // namespace scatterlab::detail

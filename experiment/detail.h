@@ -1,0 +1,156 @@
+#pragma once
+/// Internal to the experiment harness (included only by experiment/*.cpp; apps and tests use
+/// experiment/experiment.h): what its source files share — text and file helpers, the output
+/// directory with its log, the reference cache, the run loop's entry point and the facts that
+/// both the tables and the report derive from the finished runs.
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "experiment/experiment.h"
+
+namespace scatterlab::detail {
+
+// ---- Text and files (detail.cpp) -------------------------------------------------------------
+
+/// `v` through snprintf with `format`.
+std::string fmt(double v, const char* format = "%.4g");
+
+/// The whole file; "" when it cannot be read (callers have checked it is readable).
+std::string readText(const std::string& path);
+
+/// Writes atomically, so that an interrupted run never leaves a truncated table or record.
+void writeText(const std::string& path, const std::string& text);
+
+/// `s` with every character other than letters, digits, '-', '_' and '.' replaced by '_'.
+std::string fileSafe(std::string s);
+
+/// An axis value as tables and ids show it: "128", "800x600", "0.5".
+std::string valueLabel(const Json& v);
+
+/// Local time as "YYYY-MM-DD HH:MM:SS".
+std::string nowIso();
+
+/// The output directory: creates runs/, images/ and references/, and appends time-stamped lines
+/// to log.txt (appended to, so that resumed experiments keep their history).
+class OutputDir {
+ public:
+  explicit OutputDir(const std::string& dir);
+  const std::string& dir() const { return dir_; }
+  /// `file` (relative to the directory) as a path.
+  std::string path(const std::string& file) const;
+  void log(const std::string& line);
+
+ private:
+  std::string dir_;
+  std::ofstream log_;
+};
+
+// ---- References (references.cpp) -------------------------------------------------------------
+
+struct Reference {
+  std::string name;
+  Image image;
+  bool ok = false;
+  std::string error;  ///< why it could not be rendered or read
+};
+
+/// References, rendered once per distinct (scene, reference overrides, reference method) and
+/// cached on disk under DIR/references/<name>-<hash>.exr, so that a resumed experiment and
+/// every sample budget of a sweep point share one.
+class ReferenceCache {
+ public:
+  /// `console`: where a rendered reference gets a line (nullptr: nowhere); `clearLine`: the
+  /// progress bar is on, so such a line first erases it.
+  ReferenceCache(const ExperimentPlan& plan, OutputDir& out, std::FILE* console, bool clearLine)
+      : plan_(plan), out_(out), console_(console), clearLine_(clearLine) {}
+
+  /// The reference `ref` of run `r`. `seed`: the image of a run that renders exactly the
+  /// reference's configuration (same method, backend, settings and scene), used instead of
+  /// rendering it once more. A failure is recorded in the returned Reference, not thrown.
+  Reference& get(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed = nullptr);
+
+ private:
+  void render(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed, const Json& key,
+              const std::string& base, Reference& rc);
+
+  const ExperimentPlan& plan_;
+  OutputDir& out_;
+  std::FILE* console_;
+  bool clearLine_;
+  std::map<std::string, Reference> cache_;
+};
+
+// ---- Run loop (run.cpp) ----------------------------------------------------------------------
+
+/// How the runs measure peak host memory, chosen once: VmHWM after resetting it where the
+/// kernel allows that (Linux >= 4.0), else the process's lifetime peak from getrusage.
+struct MemoryMeasure {
+  bool resettable = false;
+  std::string method;  ///< in words, for the tables and the report
+};
+/// Tries the reset (which also starts the first measurement).
+MemoryMeasure chooseMemoryMeasure();
+
+/// Renders (or resumes from DIR/runs/) every run of res.plan in order, appending to res.runs
+/// and counting into res.rendered / resumed / failed.
+void runAll(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
+            const ExperimentOptions& opt, bool progressBar);
+
+// ---- Tables (tables.cpp) ---------------------------------------------------------------------
+
+/// What the tables and the report derive from the finished runs.
+struct ResultFacts {
+  ResultFacts(const ExperimentPlan& plan, const std::vector<RunRecord>& runs);
+
+  const ExperimentPlan& plan;
+  const std::vector<RunRecord>& runs;
+  std::vector<std::string> stages;     ///< union over the runs, first-seen order, no "total"
+  std::vector<std::string> axisNames;  ///< union over the runs, first-seen order
+
+  /// The median of `stage` in `rec`; none when the run has no such stage.
+  static std::optional<double> stageMs(const RunRecord& rec, const std::string& stage);
+  /// The run `rec`'s speed-up is measured against (nullptr: none).
+  const RunRecord* baselineOf(const RunRecord& rec) const;
+  /// The slowest stage with its share of the total, e.g. "march (61%)"; "" without stages.
+  static std::string dominantStage(const RunRecord& rec);
+};
+
+/// A paper value of a record formatted with `format`; "" when the config gave none.
+std::string paperValue(const Json& paper, const char* key, const char* format);
+
+/// results.csv: one row per run.
+std::string resultsCsv(const ResultFacts& facts);
+/// results.json: the records plus what the CSV derives (fps, speed-up, dominant stage).
+Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
+                 const std::string& configPath, const std::string& memoryMethod);
+
+// ---- Report (report.cpp) ---------------------------------------------------------------------
+
+/// report.md's title, summary and conventions.
+void reportHeader(std::ostream& md, const ExperimentResult& res, const std::string& configPath,
+                  const std::string& memoryMethod);
+/// One sweep's results table and per-stage breakdown.
+void reportSweep(std::ostream& md, const ResultFacts& facts, const SweepSpec& sweep);
+/// The plots (from DIR/plots/) or why there are none.
+void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out);
+/// The failed runs with their configurations; nothing when none failed.
+void reportFailures(std::ostream& md, const ExperimentResult& res);
+
+// ---- Gallery and plots (gallery.cpp) ---------------------------------------------------------
+
+/// Writes one side-by-side strip per (sweep, scene, point), the references then the runs, and
+/// appends the gallery section to `md`.
+void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
+                  ReferenceCache& refs, OutputDir& out);
+
+/// Calls experiment/plots.py on the output directory (when `opt.plots`); returns why there are
+/// no plots, or "" when they were made.
+std::string makePlots(const ExperimentOptions& opt, const OutputDir& out);
+
+}  // namespace scatterlab::detail

@@ -1,0 +1,146 @@
+// The experiment's pictures: side-by-side strips of the references and the runs of each sweep
+// point (report.md's gallery), and the plots made by experiment/plots.py.
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+
+#include "experiment/detail.h"
+
+#ifndef SCATTERLAB_SOURCE_DIR
+#define SCATTERLAB_SOURCE_DIR "."
+#endif
+
+namespace scatterlab {
+
+std::string findPlotPython() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("SCATTERLAB_PYTHON")) candidates.push_back(env);
+  candidates.push_back("python3");
+  candidates.push_back("/usr/bin/python3");
+  for (const std::string& py : candidates) {
+    const std::string cmd = "'" + py + "' -c 'import matplotlib' >/dev/null 2>&1";
+    if (std::system(cmd.c_str()) == 0) return py;
+  }
+  return "";
+}
+
+namespace detail {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Images side by side, left to right, with a 4-pixel black gap.
+Image sideBySide(const std::vector<Image>& imgs) {
+  int w = 0, h = 0;
+  for (const Image& i : imgs) {
+    w += i.width() + 4;
+    h = std::max(h, i.height());
+  }
+  Image out(std::max(0, w - 4), h);
+  int x0 = 0;
+  for (const Image& i : imgs) {
+    for (int y = 0; y < i.height(); ++y)
+      for (int x = 0; x < i.width(); ++x) out.at(x0 + x, y) = i.at(x, y);
+    x0 += i.width() + 4;
+  }
+  return out;
+}
+
+/// The runs grouped by (sweep, scene, point) ignoring the render.* axes (sample budget, ε),
+/// which share a reference; groups in first-seen order.
+struct Groups {
+  std::map<std::string, std::vector<const RunRecord*>> runs;
+  std::vector<std::string> order;
+};
+
+Groups groupRuns(const std::vector<RunRecord>& runs) {
+  Groups g;
+  for (const RunRecord& rec : runs) {
+    std::string key = rec.sweep + "__" + rec.scene;
+    for (const auto& [a, v] : rec.axes.items())
+      if (a != "samples" && a != "epsilon" && a.rfind("render.", 0) != 0)
+        key += "__" + fileSafe(a) + "-" + fileSafe(valueLabel(v));
+    if (!g.runs.count(key)) g.order.push_back(key);
+    g.runs[key].push_back(&rec);
+  }
+  return g;
+}
+
+/// Writes the strip of group `g` to `file` and appends its entry to `md`; nothing when it has
+/// no image.
+void writeStrip(std::ostream& md, const ExperimentPlan& plan, const std::string& g,
+                const std::vector<const RunRecord*>& group, ReferenceCache& refs, OutputDir& out,
+                const std::string& file) {
+  std::vector<Image> imgs;
+  std::vector<std::string> names;
+  // The references of the group's first run, from the cache.
+  const RunSpec* spec = nullptr;
+  for (const RunSpec& r : plan.runs)
+    if (r.id == group.front()->id) spec = &r;
+  if (spec)
+    for (const MethodSpec& ref : plan.references) {
+      Reference& rc = refs.get(*spec, ref);
+      if (rc.ok) {
+        imgs.push_back(rc.image);
+        names.push_back(ref.name + " (reference)");
+      }
+    }
+  for (const RunRecord* rec : group)
+    if (rec->status == "ok" && fs::exists(out.path("images/" + rec->id + ".exr"))) {
+      imgs.push_back(readExr(out.path("images/" + rec->id + ".exr")));
+      names.push_back(rec->methodName +
+                      (rec->samples ? " (" + std::to_string(*rec->samples) + " samples)" : ""));
+    }
+  if (imgs.empty()) return;
+  // Keep strips a sensible size: at most 12 images.
+  if (imgs.size() > 12) {
+    imgs.resize(12);
+    names.resize(12);
+  }
+  if (file.rfind("gallery/", 0) == 0) fs::create_directories(out.path("gallery"));
+  writePng(sideBySide(imgs), out.path(file), plan.exposure);
+  std::string caption;
+  for (const auto& n : names) caption += (caption.empty() ? "" : ", ") + n;
+  md << "**" << g << "** — " << caption << "\n\n![" << g << "](" << file << ")\n\n";
+}
+
+}  // namespace
+
+void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
+                  ReferenceCache& refs, OutputDir& out) {
+  md << "## Gallery\n\nEach strip: the reference(s), then the runs of that sweep point, left to "
+        "right (PNG, exposure "
+     << plan.exposure << ").\n\n";
+  const Groups groups = groupRuns(runs);
+  for (const std::string& g : groups.order) {
+    const std::string file =
+        groups.order.size() == 1 ? "side_by_side.png" : "gallery/" + g + ".png";
+    try {
+      writeStrip(md, plan, g, groups.runs.at(g), refs, out, file);
+    } catch (const std::exception& e) {
+      md << "**" << g << "** — gallery strip failed: " << e.what() << "\n\n";
+    }
+  }
+}
+
+std::string makePlots(const ExperimentOptions& opt, const OutputDir& out) {
+  if (!opt.plots) return "plots not requested (--no-plots)";
+  const char* env = std::getenv("SCATTERLAB_PLOTS_SCRIPT");
+  const std::string script =
+      env ? env : (fs::path(SCATTERLAB_SOURCE_DIR) / "experiment" / "plots.py").string();
+  if (!fs::exists(script)) return "plot script '" + script + "' not found";
+  const std::string py = findPlotPython();
+  if (py.empty())
+    return "no python3 with matplotlib found ($SCATTERLAB_PYTHON, python3 on the PATH, "
+           "/usr/bin/python3; install python3-matplotlib, e.g. by scripts/setup.sh)";
+  const std::string cmd =
+      "'" + py + "' '" + script + "' '" + out.dir() + "' >> '" + out.path("log.txt") + "' 2>&1";
+  if (std::system(cmd.c_str()) != 0) return "the plot script failed; see log.txt";
+  return "";
+}
+
+}  // namespace detail
+
+}  // namespace scatterlab

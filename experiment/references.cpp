@@ -1,0 +1,68 @@
+// The experiment's reference images: keyed by everything that determines them, rendered (or
+// taken from a run that renders the same configuration) once, cached in memory and on disk
+// under DIR/references/, and reused from disk by a resumed experiment.
+
+#include <filesystem>
+
+#include "core/scene.h"
+#include "experiment/detail.h"
+
+namespace scatterlab::detail {
+
+namespace fs = std::filesystem;
+
+Reference& ReferenceCache::get(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed) {
+  const Json key = {{"scene", stableHash(readText(r.sceneSpec->file))},
+                    {"sets", r.refSets},
+                    {"lights", r.refLights ? Json(*r.refLights) : Json()},
+                    {"method", ref.method},
+                    {"backend", ref.backend},
+                    {"ref_sets", ref.sets}};
+  const std::string base = "references/" + ref.name + "-" + stableHash(key.dump());
+  auto it = cache_.find(base);
+  if (it != cache_.end()) return it->second;
+  Reference& rc = cache_[base];
+  rc.name = ref.name;
+  try {
+    if (fs::exists(out_.path(base + ".exr")) && fs::exists(out_.path(base + ".json"))) {
+      rc.image = readExr(out_.path(base + ".exr"));
+      rc.ok = true;
+      out_.log("reference " + base + ": reused from disk");
+    } else {
+      render(r, ref, seed, key, base, rc);
+    }
+  } catch (const std::exception& e) {
+    rc.error = e.what();
+    out_.log("reference " + base + " FAILED: " + rc.error);
+  }
+  return rc;
+}
+
+void ReferenceCache::render(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed,
+                            const Json& key, const std::string& base, Reference& rc) {
+  std::vector<std::string> sets = r.refSets;
+  sets.insert(sets.end(), ref.sets.begin(), ref.sets.end());
+  RenderResult rr;
+  if (seed) {
+    rr = *seed;
+  } else {
+    const Scene scene = buildRunScene(r.sceneSpec->file, sets, r.refLights);
+    rr = createMethod(scene, ref.method, ref.backend)->render(scene, nullptr);
+  }
+  writeExr(rr.image, out_.path(base + ".exr"));
+  writePng(rr.image, out_.path(base + ".png"), plan_.exposure);
+  Json j = rr.stats.toJson();
+  j["scene"] = r.sceneSpec->file;
+  j["sets"] = sets;
+  j["key"] = key;
+  writeText(out_.path(base + ".json"), j.dump(2) + "\n");
+  rc.image = std::move(rr.image);
+  rc.ok = true;
+  out_.log("reference " + base + (seed ? ": taken from run " + r.id : ": rendered") + " in " +
+           fmt(rr.stats.totalMs(), "%.1f") + " ms");
+  if (console_)
+    std::fprintf(console_, "%sreference %-30s %9.1f ms\n", clearLine_ ? "\r\033[K" : "",
+                 ref.name.c_str(), rr.stats.totalMs());
+}
+
+}  // namespace scatterlab::detail

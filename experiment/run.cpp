@@ -1,0 +1,270 @@
+// The experiment's run loop: for each planned run, resume its record from DIR/runs/ or render
+// it (warm-up, timed repetitions, peak host memory, images, errors against every reference),
+// record failures and go on, with a progress bar and one log line per run.
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/error.h"
+#include "core/scene.h"
+#include "experiment/detail.h"
+
+namespace scatterlab::detail {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct SweepBar {
+  bool enabled;
+  int total, done = 0;
+  double renderedSeconds = 0.0;
+  int rendered = 0;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+
+  void draw(const std::string& what) const {
+    if (!enabled) return;
+    const double el =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int left = total - done;
+    const double eta = rendered > 0 ? renderedSeconds / rendered * left : 0.0;
+    const int width = 24, filled = total ? done * width / total : width;
+    std::fprintf(stderr, "\r\033[K[%.*s%*s] %d/%d runs, %.0fs elapsed, ETA %s  %s", filled,
+                 "########################", width - filled, "", done, total, el,
+                 rendered ? (fmt(eta, "%.0f") + "s").c_str() : "?", what.substr(0, 60).c_str());
+    std::fflush(stderr);
+  }
+  void finish() const {
+    if (enabled) std::fprintf(stderr, "\n");
+  }
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// "VmHWM" / "VmRSS" of this process in MiB (0 when unreadable).
+double procStatusMiB(const char* field) {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  const std::string prefix = std::string(field) + ":";
+  while (std::getline(f, line))
+    if (line.rfind(prefix, 0) == 0) return std::atof(line.c_str() + prefix.size()) / 1024.0;
+  return 0.0;
+}
+
+/// Resets the peak-RSS mark (Linux ≥ 4.0: writing 5 to clear_refs sets VmHWM to VmRSS).
+bool resetPeakRss() {
+  std::ofstream f("/proc/self/clear_refs");
+  if (!f) return false;
+  f << "5";
+  f.close();
+  return bool(f);
+}
+
+/// A run's record before it is rendered: what it is and how it is configured.
+RunRecord newRecord(const RunSpec& r, const ExperimentPlan& plan) {
+  const MethodSpec& m = *r.spec;
+  RunRecord rec;
+  rec.id = r.id;
+  rec.sweep = r.sweep;
+  rec.scene = r.scene;
+  rec.method = m.method;
+  rec.methodName = m.name;
+  rec.backend = m.backend;
+  rec.axes = r.axes;
+  rec.point = r.point;
+  rec.hash = r.hash;
+  rec.paper = m.paper;
+  if (!r.paperFps.is_null()) rec.paper["fps"] = r.paperFps;
+  rec.config = {{"scene", r.sceneSpec->file},
+                {"sets", r.sets},
+                {"lights", r.lights ? Json(*r.lights) : Json()},
+                {"method", m.method},
+                {"backend", m.backend},
+                {"repetitions", r.sweepSpec->repetitions},
+                {"warmup", r.sweepSpec->warmup}};
+  for (const MethodSpec& ref : plan.references) rec.references.push_back(ref.name);
+  return rec;
+}
+
+class Runner {
+ public:
+  Runner(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
+         const ExperimentOptions& opt, bool progressBar)
+      : res_(res),
+        plan_(res.plan),
+        out_(out),
+        refs_(refs),
+        mem_(mem),
+        opt_(opt),
+        bar_{progressBar, int(res.plan.runs.size())} {}
+
+  void runAll() {
+    for (const RunSpec& r : plan_.runs) {
+      const std::string recordPath = out_.path("runs/" + r.id + ".json");
+      if (resume(r, recordPath)) continue;
+      bar_.draw(r.id);
+      const auto t0 = std::chrono::steady_clock::now();
+      RunRecord rec = newRecord(r, plan_);
+      try {
+        render(r, rec);
+        writeText(recordPath, rec.toJson().dump(2) + "\n");
+        ++res_.rendered;
+        logDone(r, rec);
+      } catch (const std::exception& e) {
+        fail(rec, recordPath, e.what());
+      }
+      bar_.renderedSeconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      ++bar_.rendered;
+      ++bar_.done;
+      res_.runs.push_back(std::move(rec));
+    }
+    bar_.draw("done");
+    bar_.finish();
+  }
+
+ private:
+  /// A finished run with the same configuration hash is not rendered again: true when the
+  /// record in DIR/runs/ was taken.
+  bool resume(const RunSpec& r, const std::string& recordPath) {
+    if (!fs::exists(recordPath)) return false;
+    try {
+      RunRecord old = RunRecord::fromJson(readJsonFile(recordPath));
+      if (old.hash == r.hash && old.status == "ok") {
+        old.resumed = true;
+        res_.runs.push_back(std::move(old));
+        ++res_.resumed;
+        ++bar_.done;
+        bar_.draw(r.id + " (done before)");
+        return true;
+      }
+      out_.log(r.id + ": record in runs/ has another configuration hash or failed; redoing it");
+    } catch (const std::exception& e) {
+      out_.log(r.id + ": unreadable record in runs/ (" + std::string(e.what()) + "); redoing it");
+    }
+    return false;
+  }
+
+  /// Warm-up, then the timed repetitions; per-stage medians, memory, images and errors into
+  /// `rec`. Throws on any failure, references included.
+  void render(const RunSpec& r, RunRecord& rec) {
+    const MethodSpec& m = *r.spec;
+    const Scene scene = buildRunScene(r.sceneSpec->file, r.sets, r.lights);
+    std::unique_ptr<Method> method = createMethod(scene, m.method, m.backend);
+    const int reps = r.sweepSpec->repetitions, warm = r.sweepSpec->warmup;
+    rec.baseHostMiB = procStatusMiB("VmRSS");
+    resetPeakRss();
+    for (int i = 0; i < warm; ++i) method->render(scene, nullptr);
+    std::map<std::string, std::vector<double>> times;
+    std::vector<std::string> order;
+    RenderResult last;
+    for (int i = 0; i < reps; ++i) {
+      last = method->render(scene, nullptr);
+      for (const auto& [s, ms] : last.stats.timingsMs) {
+        if (!times.count(s)) order.push_back(s);
+        times[s].push_back(ms);
+      }
+      times["total"].push_back(last.stats.totalMs());
+    }
+    rec.peakHostMiB = peakHostMiB();
+    rec.memoryMethod = mem_.method;
+    order.push_back("total");
+    for (const std::string& s : order) rec.medianMs.emplace_back(s, median(times[s]));
+    RenderStats st = last.stats;
+    st.timingsMs.clear();
+    for (const auto& [s, ms] : rec.medianMs)
+      if (s != "total") st.timingsMs.emplace_back(s, ms);
+    rec.stats = st.toJson();
+    rec.samples = last.stats.samples;
+    rec.repetitions = reps;
+    rec.warmup = warm;
+    rec.image = "images/" + r.id + ".png";
+    writeExr(last.image, out_.path("images/" + r.id + ".exr"));
+    writePng(last.image, out_.path(rec.image), plan_.exposure);
+    for (const MethodSpec& refSpec : plan_.references) {
+      const bool same = r.axesAllAffectReference && refSpec.method == m.method &&
+                        refSpec.backend == m.backend && refSpec.sets == m.sets;
+      Reference& ref = refs_.get(r, refSpec, same ? &last : nullptr);
+      if (!ref.ok) throw Error("reference '" + refSpec.name + "' failed: " + ref.error);
+      rec.errors.push_back(compareImages(last.image, ref.image));
+    }
+    rec.status = "ok";
+  }
+
+  double peakHostMiB() const {
+    if (mem_.resettable) return procStatusMiB("VmHWM");
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return double(ru.ru_maxrss) / 1024.0;
+  }
+
+  void logDone(const RunSpec& r, const RunRecord& rec) {
+    std::string line = r.id + ": ok, median " + fmt(rec.totalMs(), "%.1f") + " ms over " +
+                       std::to_string(rec.repetitions) + " (+" + std::to_string(rec.warmup) +
+                       " warm-up)";
+    if (!rec.errors.empty())
+      line += ", rel L2 vs " + plan_.references[0].name + " " +
+              fmt(100 * rec.errors[0].relL2, "%.2f") + "%";
+    out_.log(line);
+    if (opt_.log)
+      std::fprintf(opt_.log, "%s%-40s %-10s %9.1f ms%s%s\n", bar_.enabled ? "\r\033[K" : "",
+                   r.id.c_str(), rec.method.c_str(), rec.totalMs(),
+                   rec.samples ? (", " + std::to_string(*rec.samples) + " samples").c_str() : "",
+                   rec.errors.empty()
+                       ? ""
+                       : (", rel L2 " + fmt(100 * rec.errors[0].relL2, "%.2f") + "%").c_str());
+  }
+
+  /// Records the failure (status, message, the run's config in log.txt) and its record, so
+  /// that the sweep goes on and a resume retries the run.
+  void fail(RunRecord& rec, const std::string& recordPath, const std::string& what) {
+    rec.status = "failed";
+    rec.error = what;
+    rec.errors.clear();
+    ++res_.failed;
+    out_.log(rec.id + ": FAILED: " + rec.error + "; config: " + rec.config.dump());
+    if (opt_.log)
+      std::fprintf(opt_.log, "%s%s: FAILED: %s\n", bar_.enabled ? "\r\033[K" : "", rec.id.c_str(),
+                   rec.error.c_str());
+    try {
+      writeText(recordPath, rec.toJson().dump(2) + "\n");
+    } catch (const std::exception&) {
+      // The failure is in the results and the log already; a missing record only means the
+      // run is retried on resume, as a failed one would be.
+    }
+  }
+
+  ExperimentResult& res_;
+  const ExperimentPlan& plan_;
+  OutputDir& out_;
+  ReferenceCache& refs_;
+  const MemoryMeasure& mem_;
+  const ExperimentOptions& opt_;
+  SweepBar bar_;
+};
+
+}  // namespace
+
+MemoryMeasure chooseMemoryMeasure() {
+  MemoryMeasure m;
+  m.resettable = resetPeakRss();
+  m.method = m.resettable ? "VmHWM of the process after resetting it (clear_refs 5) before the run"
+                          : "getrusage ru_maxrss (peak of the whole process so far)";
+  return m;
+}
+
+void runAll(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
+            const ExperimentOptions& opt, bool progressBar) {
+  Runner(res, out, refs, mem, opt, progressBar).runAll();
+}
+
+}  // namespace scatterlab::detail

@@ -1,0 +1,268 @@
+// The experiment's tables: a run's record to and from JSON (DIR/runs/<id>.json), what the
+// tables derive from the records (stages, speed-up against the baseline, dominant stage), and
+// results.csv / results.json.
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "experiment/detail.h"
+
+namespace scatterlab {
+
+namespace {
+
+Json errorJson(const ImageError& e) {
+  return {{"rel_l2", e.relL2},
+          {"rel_l1", e.relL1},
+          {"psnr", std::isfinite(e.psnr) ? Json(e.psnr) : Json(nullptr)},
+          {"max_abs", e.maxAbs}};
+}
+
+/// A number from a record; `def` when missing or null (NaN and ±inf are written as null).
+double num(const Json& j, const char* key, double def) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : def;
+}
+
+ImageError errorFromJson(const Json& j) {
+  ImageError e;
+  e.relL2 = num(j, "rel_l2", NAN);
+  e.relL1 = num(j, "rel_l1", NAN);
+  e.psnr = num(j, "psnr", INFINITY);
+  e.maxAbs = num(j, "max_abs", NAN);
+  return e;
+}
+
+}  // namespace
+
+double RunRecord::totalMs() const {
+  for (const auto& [s, ms] : medianMs)
+    if (s == "total") return ms;
+  return 0.0;
+}
+
+Json RunRecord::toJson() const {
+  Json j;
+  j["id"] = id;
+  j["sweep"] = sweep;
+  j["scene"] = scene;
+  j["method"] = methodName;
+  j["registered_method"] = method;
+  j["backend"] = backend;
+  j["axes"] = axes;
+  j["point"] = point;
+  j["config_hash"] = hash;
+  j["status"] = status;
+  if (!error.empty()) j["error"] = error;
+  j["stats"] = stats;
+  Json t = Json::object();
+  for (const auto& [s, ms] : medianMs) t[s] = ms;
+  j["median_ms"] = t;
+  j["repetitions"] = repetitions;
+  j["warmup"] = warmup;
+  Json e = Json::object();
+  for (std::size_t k = 0; k < errors.size() && k < references.size(); ++k)
+    e[references[k]] = errorJson(errors[k]);
+  j["errors"] = e;
+  j["references"] = references;
+  j["peak_host_mib"] = peakHostMiB;
+  j["base_host_mib"] = baseHostMiB;
+  j["memory_method"] = memoryMethod;
+  if (samples) j["samples"] = *samples;
+  j["image"] = image;
+  j["paper"] = paper;
+  j["config"] = config;
+  return j;
+}
+
+RunRecord RunRecord::fromJson(const Json& j) {
+  RunRecord r;
+  r.id = j.value("id", "");
+  r.sweep = j.value("sweep", "");
+  r.scene = j.value("scene", "");
+  r.methodName = j.value("method", "");
+  r.method = j.value("registered_method", "");
+  r.backend = j.value("backend", "");
+  r.axes = j.value("axes", Json::object());
+  r.point = j.value("point", 0);
+  r.hash = j.value("config_hash", "");
+  r.status = j.value("status", "");
+  r.error = j.value("error", "");
+  r.stats = j.value("stats", Json::object());
+  const Json median = j.value("median_ms", Json::object());  // a named copy: items() of a
+  for (const auto& [s, ms] : median.items())                 // temporary dangles
+    r.medianMs.emplace_back(s, ms.is_number() ? ms.get<double>() : NAN);
+  r.repetitions = j.value("repetitions", 0);
+  r.warmup = j.value("warmup", 0);
+  r.references = j.value("references", std::vector<std::string>{});
+  const Json e = j.value("errors", Json::object());
+  for (const std::string& ref : r.references)
+    r.errors.push_back(e.contains(ref) ? errorFromJson(e[ref]) : ImageError{});
+  r.peakHostMiB = num(j, "peak_host_mib", 0.0);
+  r.baseHostMiB = num(j, "base_host_mib", 0.0);
+  r.memoryMethod = j.value("memory_method", "");
+  if (j.contains("samples")) r.samples = j["samples"].get<long long>();
+  r.image = j.value("image", "");
+  r.paper = j.value("paper", Json::object());
+  r.config = j.value("config", Json::object());
+  return r;
+}
+
+namespace detail {
+
+namespace fs = std::filesystem;
+
+ResultFacts::ResultFacts(const ExperimentPlan& plan, const std::vector<RunRecord>& runs)
+    : plan(plan), runs(runs) {
+  for (const RunRecord& rec : runs) {
+    for (const auto& [s, ms] : rec.medianMs)
+      if (s != "total" && std::find(stages.begin(), stages.end(), s) == stages.end())
+        stages.push_back(s);
+    for (const auto& [a, v] : rec.axes.items())
+      if (std::find(axisNames.begin(), axisNames.end(), a) == axisNames.end())
+        axisNames.push_back(a);
+  }
+}
+
+std::optional<double> ResultFacts::stageMs(const RunRecord& rec, const std::string& stage) {
+  for (const auto& [n, ms] : rec.medianMs)
+    if (n == stage) return ms;
+  return std::nullopt;
+}
+
+// Speed-up against the sweep's baseline at the same scene and point: the run of the baseline's
+// registered method on the same backend when there is one (per-voxel GPU for a GPU run), else
+// the baseline entry itself.
+const RunRecord* ResultFacts::baselineOf(const RunRecord& rec) const {
+  const SweepSpec* sw = nullptr;
+  for (const SweepSpec& s : plan.sweeps)
+    if (s.name == rec.sweep) sw = &s;
+  if (!sw || sw->baseline.empty()) return nullptr;
+  std::string baseMethod;
+  for (const MethodSpec& ms : plan.methods)
+    if (ms.name == sw->baseline) baseMethod = ms.method;
+  if (rec.method == baseMethod) return nullptr;
+  const RunRecord *same = nullptr, *entry = nullptr;
+  for (const RunRecord& o : runs) {
+    if (o.sweep != rec.sweep || o.scene != rec.scene || o.point != rec.point || o.status != "ok")
+      continue;
+    if (o.methodName == sw->baseline) entry = &o;
+    if (o.method == baseMethod && o.backend == rec.backend && !same) same = &o;
+  }
+  return same ? same : entry;
+}
+
+std::string ResultFacts::dominantStage(const RunRecord& rec) {
+  std::string best;
+  double bm = -1, total = rec.totalMs();
+  for (const auto& [s, ms] : rec.medianMs)
+    if (s != "total" && ms > bm) {
+      bm = ms;
+      best = s;
+    }
+  return best.empty() ? std::string()
+                      : best + " (" + fmt(100 * bm / std::max(total, 1e-9), "%.0f") + "%)";
+}
+
+std::string paperValue(const Json& p, const char* key, const char* format) {
+  return p.contains(key) && p[key].is_number() ? fmt(p[key].get<double>(), format) : std::string();
+}
+
+namespace {
+
+std::string csvField(std::string s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+  return o + "\"";
+}
+
+void csvHeader(std::ostream& csv, const ResultFacts& facts) {
+  csv << "id,sweep,scene,method,registered_method,backend";
+  for (const auto& a : facts.axisNames) csv << ",axis_" << a;
+  csv << ",status,samples,width,height,repetitions,total_ms,fps";
+  for (const auto& s : facts.stages) csv << "," << s << "_ms";
+  for (const auto& r : facts.plan.references)
+    csv << ",rel_l2_vs_" << r.name << ",rel_l1_vs_" << r.name << ",psnr_vs_" << r.name;
+  csv << ",speedup_vs_baseline,dominant_stage,peak_host_mib,paper_rel_error,paper_fps,paper_"
+         "samples,resumed,error\n";
+}
+
+void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
+  const bool ok = rec.status == "ok";
+  csv << rec.id << "," << rec.sweep << "," << rec.scene << "," << rec.methodName << ","
+      << rec.method << "," << rec.backend;
+  for (const auto& a : facts.axisNames)
+    csv << "," << csvField(rec.axes.contains(a) ? valueLabel(rec.axes[a]) : "");
+  csv << "," << rec.status << "," << (rec.samples ? std::to_string(*rec.samples) : "") << ","
+      << (ok ? std::to_string(rec.stats.value("width", 0)) : "") << ","
+      << (ok ? std::to_string(rec.stats.value("height", 0)) : "") << "," << rec.repetitions << ","
+      << (ok ? fmt(rec.totalMs(), "%.2f") : "") << ","
+      << (ok ? fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.3f") : "");
+  for (const auto& s : facts.stages) {
+    const auto v = ResultFacts::stageMs(rec, s);
+    csv << "," << (v ? fmt(*v, "%.2f") : "");
+  }
+  for (std::size_t k = 0; k < facts.plan.references.size(); ++k) {
+    if (ok && k < rec.errors.size())
+      csv << "," << fmt(rec.errors[k].relL2, "%.6f") << "," << fmt(rec.errors[k].relL1, "%.6f")
+          << "," << (std::isfinite(rec.errors[k].psnr) ? fmt(rec.errors[k].psnr, "%.2f") : "inf");
+    else
+      csv << ",,,";
+  }
+  const RunRecord* b = ok ? facts.baselineOf(rec) : nullptr;
+  // A plain double (valid when b): GCC 12 warns falsely about std::optional<double> here.
+  const double speedup = b ? b->totalMs() / std::max(rec.totalMs(), 1e-9) : 0.0;
+  csv << "," << (b ? fmt(speedup, "%.3f") : "") << ","
+      << csvField(ok ? ResultFacts::dominantStage(rec) : "") << ","
+      << (ok ? fmt(rec.peakHostMiB, "%.1f") : "") << ","
+      << paperValue(rec.paper, "rel_error", "%.4f") << "," << paperValue(rec.paper, "fps", "%.2f")
+      << "," << paperValue(rec.paper, "samples", "%.0f") << "," << (rec.resumed ? 1 : 0) << ","
+      << csvField(rec.error) << "\n";
+}
+
+}  // namespace
+
+std::string resultsCsv(const ResultFacts& facts) {
+  std::ostringstream csv;
+  csvHeader(csv, facts);
+  for (const RunRecord& rec : facts.runs) csvRow(csv, facts, rec);
+  return csv.str();
+}
+
+Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
+                 const std::string& configPath, const std::string& memoryMethod) {
+  const ExperimentPlan& plan = facts.plan;
+  Json jres;
+  jres["title"] = plan.title;
+  jres["config"] = fs::absolute(configPath).lexically_normal().string();
+  jres["references"] = Json::array();
+  for (const auto& r : plan.references) jres["references"].push_back(r.name);
+  jres["axes"] = facts.axisNames;
+  jres["stages"] = facts.stages;
+  jres["runs"] = Json::array();
+  jres["rendered"] = res.rendered;
+  jres["resumed"] = res.resumed;
+  jres["failed"] = res.failed;
+  jres["memory_method"] = memoryMethod;
+  for (const RunRecord& rec : facts.runs) {
+    const bool ok = rec.status == "ok";
+    const RunRecord* b = ok ? facts.baselineOf(rec) : nullptr;
+    Json jr = rec.toJson();
+    jr["resumed"] = rec.resumed;
+    if (ok) jr["fps"] = 1000.0 / std::max(rec.totalMs(), 1e-9);
+    if (b) {
+      jr["speedup_vs_baseline"] = b->totalMs() / std::max(rec.totalMs(), 1e-9);
+      jr["baseline"] = b->methodName;
+    }
+    if (ok) jr["dominant_stage"] = ResultFacts::dominantStage(rec);
+    jres["runs"].push_back(jr);
+  }
+  return jres;
+}
+
+}  // namespace detail
+
+}  // namespace scatterlab
