@@ -3,32 +3,19 @@
 #include <algorithm>
 #include <chrono>
 #include <climits>
+#include <string>
 
 #include "core/error.h"
+#include "gpu/bindings.h"
 #include "gpu/context.h"
+#include "gpu/dispatch.h"
 #include "gpu/shaders.h"
-#include "gpu/stages.h"
 
 namespace scatterlab::gpu {
 
 namespace {
 
 constexpr GLuint kScanBlock = 512;  // elements per workgroup of scan.comp.glsl
-
-void setVec3(const Program& p, const char* name, const Vec3& v) {
-  glUniform3f(p.uniform(name), v.x, v.y, v.z);
-}
-void setIVec3(const Program& p, const char* name, const IVec3& v) {
-  glUniform3i(p.uniform(name), v.x, v.y, v.z);
-}
-GLuint groups(std::size_t n, GLuint size) {
-  return GLuint((n + size - 1) / size);
-}
-/// A buffer of at least 4 bytes (GL refuses empty storage).
-Buffer makeBuffer(std::size_t bytes, const void* data, std::string_view label) {
-  if (bytes == 0) return Buffer(4, nullptr, 0, label);
-  return Buffer(bytes, data, 0, label);
-}
 
 const Program& scanProgram() {
   return cachedProgram("scan (block)",
@@ -45,24 +32,24 @@ const Program& scanAddProgram() {
 void scanBuffer(const Buffer& in, const Buffer& out, GLuint n, bool flags) {
   if (n == 0) return;
   const GLuint blocks = groups(n, kScanBlock);
-  const Buffer sums = makeBuffer(blocks * sizeof(GLuint), nullptr, "scan block sums");
+  const Buffer sums(blocks * sizeof(GLuint), nullptr, 0, "scan block sums");
   const Program& scan = scanProgram();
   scan.use();
   glUniform1ui(scan.uniform("uCount"), n);
   glUniform1i(scan.uniform("uFlags"), flags ? 1 : 0);
-  in.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
-  out.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-  sums.bindBase(GL_SHADER_STORAGE_BUFFER, 2);
+  in.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanIn);
+  out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
+  sums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanBlockSums);
   glDispatchCompute(blocks, 1, 1);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   if (blocks > 1) {
-    const Buffer scanned = makeBuffer(blocks * sizeof(GLuint), nullptr, "scanned block sums");
+    const Buffer scanned(blocks * sizeof(GLuint), nullptr, 0, "scanned block sums");
     scanBuffer(sums, scanned, blocks, false);
     const Program& add = scanAddProgram();
     add.use();
     glUniform1ui(add.uniform("uCount"), n);
-    out.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-    scanned.bindBase(GL_SHADER_STORAGE_BUFFER, 3);
+    out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
+    scanned.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanScannedSums);
     glDispatchCompute(blocks, 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
@@ -77,11 +64,48 @@ std::uint32_t scanTotal(const Buffer& flags, const Buffer& offsets, GLuint n) {
   return last + (flag != 0 ? 1u : 0u);
 }
 
-float quantile(std::vector<float> v, double q) {
-  if (v.empty()) return 0.0f;
-  const std::size_t k = std::min(v.size() - 1, std::size_t(q * double(v.size())));
-  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
-  return v[k];
+/// The grid of G_{k+1} as split and compact read it (GridInfoBuffer::vertex's convention).
+void setGridUniforms(const Program& p, const GridInfoBuffer& grid) {
+  setVec3(p, "uGridMin", grid.bounds.min);
+  setVec3(p, "uGridInterval", grid.interval);
+  setIVec3(p, "uGridDims", grid.dims);
+}
+
+std::string levelLabel(const char* what, std::size_t level) {
+  return std::string("dynamic sampling ") + what + " (level " + std::to_string(level) + ")";
+}
+
+/// Level 0 on the GPU: the initial positions and radii, each sample its own ancestor.
+DynamicLevelGpu uploadInitialLevel(const std::vector<RadianceSample>& initial) {
+  DynamicLevelGpu l;
+  l.count = initial.size();
+  std::vector<GpuSamplePoint> points;
+  points.reserve(l.count);
+  std::vector<std::int32_t> anc(l.count);
+  for (std::size_t i = 0; i < l.count; ++i) {
+    points.push_back({initial[i].position, initial[i].radius});
+    anc[i] = std::int32_t(i);
+  }
+  l.samples =
+      Buffer(points.size() * sizeof(GpuSamplePoint), points.data(), 0, levelLabel("samples", 0));
+  l.ancestors =
+      Buffer(anc.size() * sizeof(std::int32_t), anc.data(), 0, levelLabel("ancestors", 0));
+  return l;
+}
+
+/// Appends the samples of `eval` that stay (all of them on the final level) to `out`, in
+/// evaluation order: the CPU's order.
+void appendKept(const LevelEvaluationGpu& eval, std::size_t level, bool final,
+                std::vector<RadianceSample>& out) {
+  for (std::size_t j = 0; j < eval.samples.size(); ++j) {
+    if (!final && eval.splitFlags[j]) continue;
+    RadianceSample s;
+    s.position = eval.samples[j].position;
+    s.radius = eval.samples[j].radius;
+    s.level = int(level);
+    unpackRadiance(eval.radiance[j], s);
+    out.push_back(s);
+  }
 }
 
 }  // namespace
@@ -93,12 +117,139 @@ std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
   const GLuint n = GLuint(flags.size());
   if (n == 0) return 0;
   const std::vector<GLuint> wide(flags.begin(), flags.end());
-  const Buffer in = makeBuffer(n * sizeof(GLuint), wide.data(), "scan flags");
-  const Buffer out = makeBuffer(n * sizeof(GLuint), nullptr, "scan offsets");
+  const Buffer in(n * sizeof(GLuint), wide.data(), 0, "scan flags");
+  const Buffer out(n * sizeof(GLuint), nullptr, 0, "scan offsets");
   scanBuffer(in, out, n, true);
   checkGl("scan");
   out.read(offsets.data(), n * sizeof(GLuint));
   return scanTotal(in, out, n);
+}
+
+LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
+                                    const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
+                                    float delta2, const DynamicSamplingSettings& settings,
+                                    StageTimer* timer) {
+  context();
+  const Program& program = cachedProgram("dynamic sampling error", [] {
+    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {}, "dynamic sampling error");
+  });
+  const std::size_t count = level.count;
+  LevelEvaluationGpu e;
+  e.samples.resize(count);
+  e.radiance.resize(count);
+  e.errors.resize(count);
+  e.splitFlags.resize(count);
+  if (count == 0) return e;
+  // The CPU's probe directions: probe points of a unit sphere at the origin.
+  RadianceSample unit;
+  unit.position = Vec3(0.0f);
+  unit.radius = 1.0f;
+  Vec3 dirs[kMaxProbes];
+  probePoints(unit, dirs, kMaxProbes);
+  const Buffer results(count * sizeof(GpuRadianceRecord), nullptr, 0, "dynamic sampling S");
+  const Buffer errors(count * sizeof(float), nullptr, 0, "dynamic sampling E");
+  e.flags = Buffer(count * sizeof(GLuint), nullptr, 0, "split flags");
+  {
+    ScopedGpuTimer t(timer, "ds evaluate+error");
+    program.use();
+    inputs.apply(program);
+    glUniform1ui(program.uniform("uCount"), GLuint(count));
+    glUniform1f(program.uniform("uDelta2"), delta2);
+    glUniform1i(program.uniform("uProbes"), settings.probes);
+    glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
+    glUniform1i(program.uniform("uTauMode"),
+                level.level == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
+    glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
+    glUniform1f(program.uniform("uEpsilon"), float(settings.epsilon));
+    glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
+    setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
+    level.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    level.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
+    rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRootTau);
+    results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+    errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+    e.flags.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplitFlags);
+    glDispatchCompute(groups(count, 64), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+  checkGl("dynamic sampling: evaluate and error");
+  level.samples.read(e.samples.data(), count * sizeof(GpuSamplePoint));
+  results.read(e.radiance.data(), count * sizeof(GpuRadianceRecord));
+  errors.read(e.errors.data(), count * sizeof(float));
+  e.flags.read(e.splitFlags.data(), count * sizeof(std::uint32_t));
+  return e;
+}
+
+GridInfoGpu splitLevelGpu(const DynamicLevelGpu& level, const LevelEvaluationGpu& eval,
+                          const Box& bounds, int resolution, LevelStats& stats, StageTimer* timer) {
+  context();
+  const Program& program = cachedProgram("dynamic sampling split", [] {
+    return computeProgram({"dynamic_split.comp.glsl"}, {}, "dynamic sampling split");
+  });
+  for (std::uint32_t f : eval.splitFlags) stats.split += f != 0 ? 1 : 0;
+  if (!eval.errors.empty()) {
+    stats.maxError = *std::max_element(eval.errors.begin(), eval.errors.end());
+    stats.p90Error = quantile(eval.errors, 0.9);
+  }
+  GridInfoGpu g{GridInfoBuffer(bounds, resolution), Buffer(), Buffer()};
+  const std::size_t nv = g.grid.inSet.size();
+  const std::vector<GLuint> zeros(nv, 0u);
+  const std::vector<std::int32_t> none(nv, INT_MAX);
+  g.inSet = Buffer(nv * sizeof(GLuint), zeros.data(), 0, "grid info: in set");
+  g.vertexAncestors = Buffer(nv * sizeof(std::int32_t), none.data(), 0, "grid info: ancestor");
+  if (level.count == 0) return g;
+  {
+    ScopedGpuTimer t(timer, "ds split");
+    program.use();
+    glUniform1ui(program.uniform("uCount"), GLuint(level.count));
+    setGridUniforms(program, g.grid);
+    level.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    level.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
+    eval.flags.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplitFlags);
+    g.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    g.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
+    glDispatchCompute(groups(level.count, 64), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+  checkGl("dynamic sampling: split");
+  return g;
+}
+
+DynamicLevelGpu compactLevelGpu(const GridInfoGpu& grid, std::size_t level, StageTimer* timer) {
+  context();
+  const Program& program = cachedProgram("dynamic sampling compact", [] {
+    return computeProgram({"compact.comp.glsl"}, {}, "dynamic sampling compact");
+  });
+  const std::size_t nv = grid.grid.inSet.size();
+  const Buffer offsets(nv * sizeof(GLuint), nullptr, 0, "grid info: offsets");
+  {
+    ScopedGpuTimer t(timer, "ds scan");
+    scanBuffer(grid.inSet, offsets, GLuint(nv), true);
+  }
+  checkGl("dynamic sampling: scan");
+  DynamicLevelGpu next;
+  next.level = level;
+  next.count = scanTotal(grid.inSet, offsets, GLuint(nv));
+  next.samples =
+      Buffer(next.count * sizeof(GpuSamplePoint), nullptr, 0, levelLabel("samples", level));
+  next.ancestors =
+      Buffer(next.count * sizeof(std::int32_t), nullptr, 0, levelLabel("ancestors", level));
+  {
+    ScopedGpuTimer t(timer, "ds compact");
+    program.use();
+    glUniform1ui(program.uniform("uVertexCount"), GLuint(nv));
+    setGridUniforms(program, grid.grid);
+    glUniform1f(program.uniform("uRadius"), grid.grid.radius());
+    grid.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    grid.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
+    offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+    next.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
+    next.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextAncestors);
+    glDispatchCompute(groups(nv, 256), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+  checkGl("dynamic sampling: compact");
+  return next;
 }
 
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
@@ -108,167 +259,27 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
                                          std::vector<std::vector<float>>* errorsOut) {
   using Clock = std::chrono::steady_clock;
   context();
-  const Program& errorProgram = cachedProgram("dynamic sampling error", [] {
-    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {}, "dynamic sampling error");
-  });
-  const Program& splitProgram = cachedProgram("dynamic sampling split", [] {
-    return computeProgram({"dynamic_split.comp.glsl"}, {}, "dynamic sampling split");
-  });
-  const Program& compactProgram = cachedProgram("dynamic sampling compact", [] {
-    return computeProgram({"compact.comp.glsl"}, {}, "dynamic sampling compact");
-  });
   DynamicSamplingResult result;
-  const int np = settings.probes;
-  // The CPU's probe directions: probe points of a unit sphere at the origin.
-  RadianceSample unit;
-  unit.position = Vec3(0.0f);
-  unit.radius = 1.0f;
-  Vec3 dirs[kMaxProbes];
-  probePoints(unit, dirs, kMaxProbes);
   const TracingInputs inputs(scene, density, steps.delta1);
-  const Box& bounds = scene.medium.bounds;
-  const Vec3 densityInvCell = Vec3(1.0f) / density.cellSize();
-
-  // Level 0 on the GPU: positions and radii, ancestors 0..n-1, τ of each root.
-  std::size_t count = initial.size();
-  Buffer samples, ancestors;
-  {
-    std::vector<float> pr;
-    pr.reserve(count * 4);
-    std::vector<std::int32_t> anc(count);
-    for (std::size_t i = 0; i < count; ++i) {
-      const RadianceSample& s = initial[i];
-      pr.insert(pr.end(), {s.position.x, s.position.y, s.position.z, s.radius});
-      anc[i] = std::int32_t(i);
-    }
-    samples =
-        makeBuffer(pr.size() * sizeof(float), pr.data(), "dynamic sampling samples (level 0)");
-    ancestors = makeBuffer(anc.size() * sizeof(std::int32_t), anc.data(),
-                           "dynamic sampling ancestors (level 0)");
-  }
-  const Buffer rootTau = makeBuffer(count * sizeof(float), nullptr, "dynamic sampling root tau");
+  DynamicLevelGpu current = uploadInitialLevel(initial);
+  const Buffer rootTau(current.count * sizeof(float), nullptr, 0, "dynamic sampling root tau");
 
   const std::size_t nLevels = settings.levels.size();
   for (std::size_t level = 0; level <= nLevels; ++level) {
     const auto t0 = Clock::now();
     LevelStats ls;
     ls.resolution = level == 0 ? 0 : settings.levels[level - 1];
-    ls.samples = (long long)count;
-    const bool final = level == nLevels || count == 0;
-    std::vector<float> pr(count * 4), res(count * 16), errors(count);
-    std::vector<GLuint> flags(count);
-    if (count > 0) {
-      const Buffer results = makeBuffer(count * 16 * sizeof(float), nullptr, "dynamic sampling S");
-      const Buffer errorBuf = makeBuffer(count * sizeof(float), nullptr, "dynamic sampling E");
-      const Buffer flagBuf = makeBuffer(count * sizeof(GLuint), nullptr, "split flags");
-      {
-        ScopedGpuTimer t(timer, "ds evaluate+error");
-        errorProgram.use();
-        inputs.apply(errorProgram);
-        glUniform1ui(errorProgram.uniform("uCount"), GLuint(count));
-        glUniform1f(errorProgram.uniform("uDelta2"), steps.delta2);
-        glUniform1i(errorProgram.uniform("uProbes"), np);
-        glUniform3fv(errorProgram.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
-        glUniform1i(errorProgram.uniform("uTauMode"),
-                    level == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
-        glUniform1f(errorProgram.uniform("uTauDelta1"), settings.delta1);
-        glUniform1f(errorProgram.uniform("uEpsilon"), float(settings.epsilon));
-        glUniform1i(errorProgram.uniform("uFinal"), final ? 1 : 0);
-        setVec3(errorProgram, "uDensityInvCell", densityInvCell);
-        samples.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-        ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, 2);
-        rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, 3);
-        results.bindBase(GL_SHADER_STORAGE_BUFFER, 4);
-        errorBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 5);
-        flagBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 6);
-        glDispatchCompute(groups(count, 64), 1, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-      }
-      checkGl("dynamic sampling: evaluate and error");
-      samples.read(pr.data(), pr.size() * sizeof(float));
-      results.read(res.data(), res.size() * sizeof(float));
-      errorBuf.read(errors.data(), errors.size() * sizeof(float));
-      flagBuf.read(flags.data(), flags.size() * sizeof(GLuint));
-
-      // Kept samples (all of them on the finest level), in the CPU's order.
-      for (std::size_t j = 0; j < count; ++j) {
-        if (!final && flags[j]) {
-          ++ls.split;
-          continue;
-        }
-        RadianceSample s;
-        s.position = Vec3(pr[4 * j], pr[4 * j + 1], pr[4 * j + 2]);
-        s.radius = pr[4 * j + 3];
-        s.level = int(level);
-        const float* q = &res[16 * j];
-        s.S = Vec3(q[0], q[1], q[2]);
-        for (int a = 0; a < 3; ++a) s.dS[a] = Vec3(q[4 + 4 * a], q[5 + 4 * a], q[6 + 4 * a]);
-        result.samples.push_back(s);
-      }
+    ls.samples = (long long)current.count;
+    const bool final = level == nLevels || current.count == 0;
+    if (current.count > 0) {
+      const LevelEvaluationGpu eval =
+          evaluateLevelGpu(inputs, density, current, rootTau, final, steps.delta2, settings, timer);
+      appendKept(eval, level, final, result.samples);
       if (!final) {
-        ls.maxError = *std::max_element(errors.begin(), errors.end());
-        ls.p90Error = quantile(errors, 0.9);
-        if (errorsOut) errorsOut->push_back(errors);
-      }
-
-      if (!final) {
-        // Grid information buffer of G_{k+1}.
-        const GridInfoBuffer grid(bounds, settings.levels[level]);
-        const std::size_t nv = grid.inSet.size();
-        const std::vector<GLuint> zeros(nv, 0u);
-        const std::vector<std::int32_t> none(nv, INT_MAX);
-        const Buffer inSet = makeBuffer(nv * sizeof(GLuint), zeros.data(), "grid info: in set");
-        const Buffer vertexAnc =
-            makeBuffer(nv * sizeof(std::int32_t), none.data(), "grid info: ancestor");
-        {
-          ScopedGpuTimer t(timer, "ds split");
-          splitProgram.use();
-          glUniform1ui(splitProgram.uniform("uCount"), GLuint(count));
-          setVec3(splitProgram, "uGridMin", grid.bounds.min);
-          setVec3(splitProgram, "uGridInterval", grid.interval);
-          setIVec3(splitProgram, "uGridDims", grid.dims);
-          samples.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-          ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, 2);
-          flagBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 6);
-          inSet.bindBase(GL_SHADER_STORAGE_BUFFER, 7);
-          vertexAnc.bindBase(GL_SHADER_STORAGE_BUFFER, 8);
-          glDispatchCompute(groups(count, 64), 1, 1);
-          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        }
-        checkGl("dynamic sampling: split");
-        const Buffer offsets = makeBuffer(nv * sizeof(GLuint), nullptr, "grid info: offsets");
-        {
-          ScopedGpuTimer t(timer, "ds scan");
-          scanBuffer(inSet, offsets, GLuint(nv), true);
-        }
-        checkGl("dynamic sampling: scan");
-        const std::size_t next = scanTotal(inSet, offsets, GLuint(nv));
-        Buffer nextSamples =
-            makeBuffer(next * 4 * sizeof(float), nullptr,
-                       "dynamic sampling samples (level " + std::to_string(level + 1) + ")");
-        Buffer nextAnc =
-            makeBuffer(next * sizeof(std::int32_t), nullptr,
-                       "dynamic sampling ancestors (level " + std::to_string(level + 1) + ")");
-        {
-          ScopedGpuTimer t(timer, "ds compact");
-          compactProgram.use();
-          glUniform1ui(compactProgram.uniform("uVertexCount"), GLuint(nv));
-          setVec3(compactProgram, "uGridMin", grid.bounds.min);
-          setVec3(compactProgram, "uGridInterval", grid.interval);
-          setIVec3(compactProgram, "uGridDims", grid.dims);
-          glUniform1f(compactProgram.uniform("uRadius"), grid.radius());
-          inSet.bindBase(GL_SHADER_STORAGE_BUFFER, 7);
-          vertexAnc.bindBase(GL_SHADER_STORAGE_BUFFER, 8);
-          offsets.bindBase(GL_SHADER_STORAGE_BUFFER, 9);
-          nextSamples.bindBase(GL_SHADER_STORAGE_BUFFER, 10);
-          nextAnc.bindBase(GL_SHADER_STORAGE_BUFFER, 11);
-          glDispatchCompute(groups(nv, 256), 1, 1);
-          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-        }
-        checkGl("dynamic sampling: compact");
-        samples = std::move(nextSamples);
-        ancestors = std::move(nextAnc);
-        count = next;
+        if (errorsOut) errorsOut->push_back(eval.errors);
+        const GridInfoGpu grid =
+            splitLevelGpu(current, eval, scene.medium.bounds, settings.levels[level], ls, timer);
+        current = compactLevelGpu(grid, level + 1, timer);
       }
     }
     ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

@@ -3,6 +3,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "gpu/bindings.h"
 
 namespace scatterlab::gpu {
 
@@ -18,6 +19,8 @@ std::string_view shaderSource(std::string_view file) {
 Shader compileShader(GLenum stage, const std::vector<std::string>& files,
                      const std::vector<std::string>& defines) {
   std::string src = "#version 450 core\n";
+  for (const BindingDefine& b : kBindingDefines)
+    src += "#define " + std::string(b.name) + " " + std::to_string(b.value) + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
   std::string names;
   for (size_t i = 0; i < files.size(); ++i) {

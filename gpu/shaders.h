@@ -1,9 +1,10 @@
 #pragma once
 /// Shaders embedded at build time from gpu/shaders/*.glsl (gpu/embed_shaders.cmake), and
-/// programs built from them. A program's source is "#version 450 core", then the variant's
-/// #defines, then the listed files in order, each preceded by `#line 1 <index>` so that the
-/// info log's "index:line" points into the right file; a failure throws GpuError naming the
-/// files and quoting the log.
+/// programs built from them. A program's source is "#version 450 core", then the binding
+/// points of gpu/bindings.h as #defines (BINDING_LIGHTS 0, ...), then the variant's #defines,
+/// then the listed files in order, each preceded by `#line 1 <index>` so that the info log's
+/// "index:line" points into the right file; a failure throws GpuError naming the files and
+/// quoting the log.
 
 #include <functional>
 #include <string>

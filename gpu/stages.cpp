@@ -3,44 +3,26 @@
 #include <vector>
 
 #include "core/error.h"
+#include "gpu/bindings.h"
 #include "gpu/context.h"
+#include "gpu/dispatch.h"
+#include "gpu/records.h"
 #include "gpu/shaders.h"
 
 namespace scatterlab::gpu {
 
-namespace {
-
-void setVec3(const Program& p, const char* name, const Vec3& v) {
-  glUniform3f(p.uniform(name), v.x, v.y, v.z);
-}
-void setIVec3(const Program& p, const char* name, const IVec3& v) {
-  glUniform3i(p.uniform(name), v.x, v.y, v.z);
-}
-
-GLuint groups(int n, int size) {
-  return GLuint((n + size - 1) / size);
-}
-
-}  // namespace
-
 TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1)
     : scene_(scene), density_(density), delta1_(delta1) {
-  std::vector<float> packed;
-  for (const Light& l : scene.lights) {
-    const float type = l.type == Light::Type::Point  ? 0.0f
-                       : l.type == Light::Type::Spot ? 1.0f
-                                                     : 2.0f;
-    packed.insert(packed.end(), {l.position.x, l.position.y, l.position.z, type, l.direction.x,
-                                 l.direction.y, l.direction.z, l.cosInner, l.intensity.x,
-                                 l.intensity.y, l.intensity.z, l.cosOuter});
-  }
-  lights_ = Buffer(packed.size() * sizeof(float), packed.data(), 0, "lights");
+  std::vector<GpuLight> packed;
+  packed.reserve(scene.lights.size());
+  for (const Light& l : scene.lights) packed.push_back(packLight(l));
+  lights_ = Buffer(packed.size() * sizeof(GpuLight), packed.data(), 0, "lights");
 }
 
 void TracingInputs::apply(const Program& p) const {
   const Medium& m = scene_.medium;
-  lights_.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
-  glBindTextureUnit(0, density_.texture.id());
+  lights_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
+  glBindTextureUnit(binding::kDensityTexture, density_.texture.id());
   glUniform1i(p.uniform("uLightCount"), GLint(scene_.lights.size()));
   glUniform1i(p.uniform("uPhaseType"), m.phase.type == Phase::Type::Isotropic ? 0 : 1);
   glUniform1f(p.uniform("uPhaseG"), m.phase.g);
@@ -73,12 +55,12 @@ void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
     if (gradients) defines.push_back("SL_GRADIENTS");
     return computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, defines, key);
   });
-  std::vector<float> pos;
-  pos.reserve(samples.size() * 4);
-  for (const RadianceSample& s : samples)
-    pos.insert(pos.end(), {s.position.x, s.position.y, s.position.z, 0.0f});
-  const Buffer positions(pos.size() * sizeof(float), pos.data(), 0, "sample positions");
-  const Buffer results(samples.size() * 16 * sizeof(float), nullptr, 0, "sample S and grad S");
+  std::vector<GpuSamplePoint> pos;
+  pos.reserve(samples.size());
+  for (const RadianceSample& s : samples) pos.push_back({s.position});
+  const Buffer positions(pos.size() * sizeof(GpuSamplePoint), pos.data(), 0, "sample positions");
+  const Buffer results(samples.size() * sizeof(GpuRadianceRecord), nullptr, 0,
+                       "sample S and grad S");
   const TracingInputs inputs(scene, density, delta1_);
   {
     ScopedGpuTimer t(timer, "radiance evaluation");
@@ -86,20 +68,16 @@ void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
     inputs.apply(program);
     glUniform1ui(program.uniform("uCount"), GLuint(samples.size()));
     glUniform1f(program.uniform("uDelta2"), delta2_);
-    positions.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-    results.bindBase(GL_SHADER_STORAGE_BUFFER, 2);
-    glDispatchCompute(groups(int(samples.size()), 64), 1, 1);
+    positions.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+    glDispatchCompute(groups(samples.size(), 64), 1, 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   }
   checkGl("radiance evaluation");
-  std::vector<float> r(samples.size() * 16);
-  results.read(r.data(), r.size() * sizeof(float));
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const float* q = &r[16 * i];
-    samples[i].S = Vec3(q[0], q[1], q[2]);
-    for (int a = 0; a < 3; ++a)
-      samples[i].dS[a] = gradients ? Vec3(q[4 + 4 * a], q[5 + 4 * a], q[6 + 4 * a]) : Vec3(0.0f);
-  }
+  std::vector<GpuRadianceRecord> r(samples.size());
+  results.read(r.data(), r.size() * sizeof(GpuRadianceRecord));
+  // Without SL_GRADIENTS the shader writes ∇S = 0, so the records unpack as they are.
+  for (size_t i = 0; i < samples.size(); ++i) unpackRadiance(r[i], samples[i]);
 }
 
 // ---------------------------------------------------------------- gradient splatting
@@ -125,15 +103,12 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   const Program& normalize = cachedProgram("radiance normalize", [] {
     return computeProgram({"radiance_normalize.comp.glsl"}, {}, "radiance normalize");
   });
-  std::vector<float> packed;
-  packed.reserve(samples.size() * 20);
-  for (const RadianceSample& s : samples) {
-    packed.insert(packed.end(),
-                  {s.position.x, s.position.y, s.position.z, s.radius, s.S.x, s.S.y, s.S.z, 0.0f});
-    for (int a = 0; a < 3; ++a)
-      packed.insert(packed.end(), {s.dS[a].x, s.dS[a].y, s.dS[a].z, 0.0f});
-  }
-  const Buffer sampleBuf(packed.size() * sizeof(float), packed.data(), 0, "radiance samples");
+  std::vector<GpuSplatSample> packed;
+  packed.reserve(samples.size());
+  for (const RadianceSample& s : samples)
+    packed.push_back({{s.position, s.radius}, packRadiance(s)});
+  const Buffer sampleBuf(packed.size() * sizeof(GpuSplatSample), packed.data(), 0,
+                         "radiance samples");
   const GLuint zeroCount = 0;
   const Buffer counter(sizeof(GLuint), &zeroCount, 0, "uncovered voxel count");
   const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums");
@@ -142,7 +117,7 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   {
     ScopedGpuTimer t(timer, "radiance splat");
     splat.use();
-    sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+    sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
     splatSlices(splat, sums, bounds, dims, GLsizei(samples.size()), "radiance splat");
   }
   checkGl("radiance splat");
@@ -150,10 +125,11 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     ScopedGpuTimer t(timer, "radiance normalize");
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
     normalize.use();
-    glBindImageTexture(0, sums.id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
-    glBindImageTexture(1, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    glBindTextureUnit(0, density.texture.id());
-    counter.bindBase(GL_SHADER_STORAGE_BUFFER, 3);
+    glBindImageTexture(binding::kSumsImage, sums.id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    counter.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     setIVec3(normalize, "uGridDims", dims);
     // radiance voxel index v -> density texture coordinate (u + 0.5) / dims_density.
     const Vec3 dd = Vec3(density.dims), ds = density.indexScale(), dof = density.indexOffset();
@@ -191,15 +167,16 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
     return computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "per-voxel S");
   });
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)");
-  const GLuint zeros[2] = {0, 0};
-  const Buffer counters(sizeof zeros, zeros, 0, "per-voxel counters");
+  const GpuPerVoxelCounters zeros;
+  const Buffer counters(sizeof zeros, &zeros, 0, "per-voxel counters");
   const TracingInputs inputs(scene, density, delta1_);
   {
     ScopedGpuTimer t(timer, "per-voxel S");
     program.use();
     inputs.apply(program);
-    glBindImageTexture(0, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    counters.bindBase(GL_SHADER_STORAGE_BUFFER, 3);
+    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    counters.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     setIVec3(program, "uRadDims", dims);
     setVec3(program, "uRadMin", bounds.min);
     setVec3(program, "uRadCell", bounds.extent() / Vec3(dims));
@@ -208,10 +185,10 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
   }
   checkGl("per-voxel S");
   if (stats) {
-    GLuint n[2] = {0, 0};
-    counters.read(n, sizeof n);
-    stats->traced = n[0];
-    stats->skipped = n[1];
+    GpuPerVoxelCounters n;
+    counters.read(&n, sizeof n);
+    stats->traced = n.traced;
+    stats->skipped = n.skipped;
   }
   return out;
 }
@@ -274,7 +251,7 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
     glClearBufferfv(GL_COLOR, 0, clear);
     program.use();
     inputs.apply(program);
-    glBindTextureUnit(1, radiance.texture.id());
+    glBindTextureUnit(binding::kRadianceTexture, radiance.texture.id());
     setVec3(program, "uRadScale", radiance.indexScale());
     setVec3(program, "uRadOffset", radiance.indexOffset());
     setIVec3(program, "uRadDims", radiance.dims);

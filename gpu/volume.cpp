@@ -3,7 +3,10 @@
 #include <vector>
 
 #include "core/error.h"
+#include "gpu/bindings.h"
 #include "gpu/context.h"
+#include "gpu/dispatch.h"
+#include "gpu/records.h"
 #include "gpu/shaders.h"
 
 namespace scatterlab::gpu {
@@ -71,9 +74,9 @@ RadianceGrid readRadiance(const Volume& v) {
 void splatSlices(const Program& program, const Texture& target, const Box& bounds, IVec3 dims,
                  GLsizei instances, const char* pass) {
   const Vec3 cell = bounds.extent() / Vec3(dims);
-  glUniform3fv(program.uniform("uGridMin"), 1, &bounds.min.x);
-  glUniform3fv(program.uniform("uGridCell"), 1, &cell.x);
-  glUniform3i(program.uniform("uGridDims"), dims.x, dims.y, dims.z);
+  setVec3(program, "uGridMin", bounds.min);
+  setVec3(program, "uGridCell", cell);
+  setIVec3(program, "uGridDims", dims);
   const GLint sliceLoc = program.uniform("uSliceZ");
   const Framebuffer fbo(std::string(pass) + " target");
   const VertexArray vao("attribute-less");
@@ -110,15 +113,14 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
   v.bounds = bounds;
   v.dims = dims;
   v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (splatted)");
-  std::vector<float> packed;
-  packed.reserve(blobs.size() * 8);
-  for (const GaussianBlob& b : blobs)
-    packed.insert(packed.end(), {b.center.x, b.center.y, b.center.z, b.radius, b.weight, 0, 0, 0});
-  const Buffer blobBuf(packed.size() * sizeof(float), packed.data(), 0, "gaussian blobs");
+  std::vector<GpuBlob> packed;
+  packed.reserve(blobs.size());
+  for (const GaussianBlob& b : blobs) packed.push_back(packBlob(b));
+  const Buffer blobBuf(packed.size() * sizeof(GpuBlob), packed.data(), 0, "gaussian blobs");
   ScopedGpuTimer t(timer, "density splat");
   program.use();
   glUniform1f(program.uniform("uCull"), kGaussianCullRadius);
-  blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+  blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBlobs);
   splatSlices(program, v.texture, bounds, dims, GLsizei(blobs.size()), "density splat");
   checkGl("density splat");
   return v;

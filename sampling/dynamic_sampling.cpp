@@ -93,14 +93,14 @@ float localShadingError(const RadianceSample& s, const Vec3* probeS, const float
   return s.radius * s.radius * s.radius * sum / float(count) * tau;
 }
 
-namespace {
-
 float quantile(std::vector<float> v, double q) {
   if (v.empty()) return 0.0f;
   const std::size_t k = std::min(v.size() - 1, std::size_t(q * double(v.size())));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
   return v[k];
 }
+
+namespace {
 
 /// Transmittance from x to the camera position.
 float viewTransmittance(const Scene& scene, const DensityGrid& density, const Vec3& x,

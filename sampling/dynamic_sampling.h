@@ -64,6 +64,10 @@ struct LevelStats {
   double ms = 0.0;  ///< wall time of the level (evaluation, error, split, scan)
 };
 
+/// The q-quantile of `v` (the element of rank ⌊q·n⌋, clamped to the last; 0 when empty):
+/// LevelStats::p90Error of the CPU and GPU dynamic sampling, which must agree.
+float quantile(std::vector<float> v, double q);
+
 struct DynamicSamplingResult {
   std::vector<RadianceSample> samples;  ///< ∪_k Q^k minus the split ones; S and dS evaluated
   std::vector<LevelStats> levels;       ///< [0] = initial set, then one per grid level

@@ -6,21 +6,30 @@
 const float kInvFourPi = 1.0 / (4.0 * 3.14159265358979323846);
 const float kInf = 1.0 / 0.0;
 
-// One light: type 0 point, 1 spot, 2 directional (Light::Type order).
+// One light: type 0 point, 1 spot, 2 directional (Light::Type order). Mirrored by gpu::GpuLight
+// (gpu/records.h); std430 offsets 0, 16, 32, stride 48.
 struct GpuLight {
   vec4 positionType;       // xyz position, w type
   vec4 directionCosInner;  // xyz direction (unit), w cos of the inner half-angle
   vec4 intensityCosOuter;  // rgb intensity / irradiance, w cos of the outer half-angle
 };
-layout(std430, binding = 0) readonly buffer Lights { GpuLight lights[]; };
+layout(std430, binding = BINDING_LIGHTS) readonly buffer Lights { GpuLight lights[]; };
 uniform int uLightCount;
 uniform int uPhaseType;  // 0 isotropic, 1 Henyey-Greenstein
 uniform float uPhaseG;
 uniform float uSigmaT;
 uniform float uDelta1;
 
-// Density volume: texture unit 0, lookups in index space u (voxel centre i at u = i).
-layout(binding = 0) uniform sampler3D uDensity;
+// S and the rows of ∇S of one sample (rgb; w unused), as the volume tracer and dynamic sampling
+// write them. Mirrored by gpu::GpuRadianceRecord (gpu/records.h); std430 offsets S 0, dS 16
+// (stride 16), record stride 64.
+struct RadianceRecord {
+  vec4 S;
+  vec4 dS[3];
+};
+
+// Density volume: texture unit BINDING_DENSITY_TEXTURE, lookups in index space u (voxel centre i at u = i).
+layout(binding = BINDING_DENSITY_TEXTURE) uniform sampler3D uDensity;
 uniform vec3 uBoxMin;
 uniform vec3 uBoxMax;
 uniform vec3 uDensityScale;   // world -> index: u = p * scale + offset

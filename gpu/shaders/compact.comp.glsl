@@ -3,11 +3,11 @@
 // as GridInfoBuffer::vertex), the level's valid radius and its ancestor. Ascending vertex order.
 layout(local_size_x = 256) in;
 
-layout(std430, binding = 7) readonly buffer InSet { uint inSet[]; };
-layout(std430, binding = 8) readonly buffer VertexAncestor { int vertexAncestor[]; };
-layout(std430, binding = 9) readonly buffer Offsets { uint offsets[]; };
-layout(std430, binding = 10) writeonly buffer NextSamples { vec4 nextSamples[]; };
-layout(std430, binding = 11) writeonly buffer NextAncestors { int nextAncestors[]; };
+layout(std430, binding = BINDING_IN_SET) readonly buffer InSet { uint inSet[]; };
+layout(std430, binding = BINDING_VERTEX_ANCESTORS) readonly buffer VertexAncestor { int vertexAncestor[]; };
+layout(std430, binding = BINDING_OFFSETS) readonly buffer Offsets { uint offsets[]; };
+layout(std430, binding = BINDING_NEXT_SAMPLES) writeonly buffer NextSamples { vec4 nextSamples[]; };
+layout(std430, binding = BINDING_NEXT_ANCESTORS) writeonly buffer NextAncestors { int nextAncestors[]; };
 
 uniform uint uVertexCount;
 uniform vec3 uGridMin;

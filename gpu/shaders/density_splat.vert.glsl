@@ -1,7 +1,8 @@
 // Density construction by splatting (paper Sec. 6): for one slice z of the density volume,
 // instance j draws the bounding square of blob j's culling sphere (3 r) cut by the slice plane.
+// Mirrored by gpu::GpuBlob (gpu/records.h); std430 offsets 0, 16, stride 32.
 struct Blob { vec4 centerRadius; vec4 weight; };
-layout(std430, binding = 1) readonly buffer Blobs { Blob blobs[]; };
+layout(std430, binding = BINDING_BLOBS) readonly buffer Blobs { Blob blobs[]; };
 uniform vec3 uGridMin;
 uniform vec3 uGridCell;
 uniform ivec3 uGridDims;

@@ -4,13 +4,12 @@
 // sampling/dynamic_sampling.cpp (localShadingError, viewTransmittance) operation for operation.
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 1) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
-layout(std430, binding = 2) readonly buffer Ancestors { int ancestors[]; };
-layout(std430, binding = 3) buffer RootTau { float rootTau[]; };  // τ of every level-0 sample
-// Per sample four vec4: S, dS/dx, dS/dy, dS/dz (rgb).
-layout(std430, binding = 4) writeonly buffer Results { vec4 results[]; };
-layout(std430, binding = 5) writeonly buffer Errors { float errors[]; };
-layout(std430, binding = 6) writeonly buffer SplitFlags { uint splitFlags[]; };
+layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
+layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
+layout(std430, binding = BINDING_ROOT_TAU) buffer RootTau { float rootTau[]; };  // τ of every level-0 sample
+layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
+layout(std430, binding = BINDING_ERRORS) writeonly buffer Errors { float errors[]; };
+layout(std430, binding = BINDING_SPLIT_FLAGS) writeonly buffer SplitFlags { uint splitFlags[]; };
 
 uniform uint uCount;
 uniform float uDelta2;
@@ -44,8 +43,8 @@ void main() {
     e[a] = uDelta2;
     dS[a] = (sourceTowardsEye(x + e) - sourceTowardsEye(x - e)) / (2.0 * uDelta2);
   }
-  results[4u * j] = vec4(S, 0.0);
-  for (int a = 0; a < 3; ++a) results[4u * j + 1u + uint(a)] = vec4(dS[a], 0.0);
+  results[j].S = vec4(S, 0.0);
+  for (int a = 0; a < 3; ++a) results[j].dS[a] = vec4(dS[a], 0.0);
   if (uFinal != 0) {
     errors[j] = 0.0;
     splitFlags[j] = 0u;

@@ -5,11 +5,11 @@
 // sphere test alone (same float operations as the CPU, `precise`) decides membership.
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 1) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
-layout(std430, binding = 2) readonly buffer Ancestors { int ancestors[]; };
-layout(std430, binding = 6) readonly buffer SplitFlags { uint splitFlags[]; };
-layout(std430, binding = 7) buffer InSet { uint inSet[]; };
-layout(std430, binding = 8) buffer VertexAncestor { int vertexAncestor[]; };  // INT_MAX = none
+layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
+layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
+layout(std430, binding = BINDING_SPLIT_FLAGS) readonly buffer SplitFlags { uint splitFlags[]; };
+layout(std430, binding = BINDING_IN_SET) buffer InSet { uint inSet[]; };
+layout(std430, binding = BINDING_VERTEX_ANCESTORS) buffer VertexAncestor { int vertexAncestor[]; };  // INT_MAX = none
 
 uniform uint uCount;
 uniform vec3 uGridMin;

@@ -3,8 +3,9 @@
 // in the density volume is empty (identical to tracing them).
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 
-layout(rgba32f, binding = 0) uniform writeonly image3D uRadiance;
-layout(std430, binding = 3) buffer Counters { uint traced; uint skipped; };
+layout(rgba32f, binding = BINDING_RADIANCE_IMAGE) uniform writeonly image3D uRadiance;
+// Mirrored by gpu::GpuPerVoxelCounters (gpu/records.h); std430 offsets 0, 4.
+layout(std430, binding = BINDING_COUNTERS) buffer Counters { uint traced; uint skipped; };
 uniform ivec3 uRadDims;
 uniform vec3 uRadMin;
 uniform vec3 uRadCell;

@@ -1,10 +1,10 @@
 // Normalises the splatted sums into the source-radiance volume: S = Σ W·taylor / Σ W, zero
 // where no sample covers the voxel; counts covered-nothing voxels that hold density.
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
-layout(rgba32f, binding = 0) uniform readonly image3D uSums;
-layout(rgba32f, binding = 1) uniform writeonly image3D uRadiance;
-layout(binding = 0) uniform sampler3D uDensity;
-layout(std430, binding = 3) buffer Counters { uint uncovered; };
+layout(rgba32f, binding = BINDING_SUMS_IMAGE) uniform readonly image3D uSums;
+layout(rgba32f, binding = BINDING_RADIANCE_IMAGE) uniform writeonly image3D uRadiance;
+layout(binding = BINDING_DENSITY_TEXTURE) uniform sampler3D uDensity;
+layout(std430, binding = BINDING_COUNTERS) buffer Counters { uint uncovered; };
 uniform ivec3 uGridDims;
 uniform vec3 uDensityLookupScale;  // radiance voxel index -> density texture coordinate
 uniform vec3 uDensityLookupOffset;

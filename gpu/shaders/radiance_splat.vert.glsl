@@ -1,7 +1,9 @@
 // Radiance splatting (paper Sec. 4): for one slice of the radiance volume, instance j draws the
 // bounding square of the circle where sample j's valid sphere cuts the slice plane.
-struct Sample { vec4 positionRadius; vec4 S; vec4 dSx; vec4 dSy; vec4 dSz; };
-layout(std430, binding = 1) readonly buffer Samples { Sample samples[]; };
+// Mirrored by gpu::GpuSplatSample (gpu/records.h); std430 offsets positionRadius 0, S 16,
+// dS 32 (stride 16), record stride 80.
+struct SplatSample { vec4 positionRadius; vec4 S; vec4 dS[3]; };
+layout(std430, binding = BINDING_SPLAT_SAMPLES) readonly buffer Samples { SplatSample samples[]; };
 uniform vec3 uGridMin;
 uniform vec3 uGridCell;
 uniform ivec3 uGridDims;
@@ -14,14 +16,14 @@ flat out vec3 vDy;
 flat out vec3 vDz;
 
 void main() {
-  Sample s = samples[gl_InstanceID];
+  SplatSample s = samples[gl_InstanceID];
   float R = s.positionRadius.w;
   float dz = uSliceZ - s.positionRadius.z;
   vPosR = s.positionRadius;
   vS = s.S.rgb;
-  vDx = s.dSx.rgb;
-  vDy = s.dSy.rgb;
-  vDz = s.dSz.rgb;
+  vDx = s.dS[0].rgb;
+  vDy = s.dS[1].rgb;
+  vDz = s.dS[2].rgb;
   if (abs(dz) >= R) {
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
     return;

@@ -10,8 +10,8 @@ layout(local_size_x = 256) in;
 uniform uint uCount;
 
 #ifdef SL_SCAN_ADD
-layout(std430, binding = 1) buffer Out { uint outData[]; };
-layout(std430, binding = 3) readonly buffer ScannedSums { uint scannedSums[]; };
+layout(std430, binding = BINDING_SCAN_OUT) buffer Out { uint outData[]; };
+layout(std430, binding = BINDING_SCAN_SCANNED_SUMS) readonly buffer ScannedSums { uint scannedSums[]; };
 void main() {
   uint t = gl_LocalInvocationID.x;
   uint base = gl_WorkGroupID.x * SCAN_BLOCK;
@@ -21,9 +21,9 @@ void main() {
   if (b < uCount) outData[b] += add;
 }
 #else
-layout(std430, binding = 0) readonly buffer In { uint inData[]; };
-layout(std430, binding = 1) writeonly buffer Out { uint outData[]; };
-layout(std430, binding = 2) writeonly buffer Sums { uint blockSums[]; };
+layout(std430, binding = BINDING_SCAN_IN) readonly buffer In { uint inData[]; };
+layout(std430, binding = BINDING_SCAN_OUT) writeonly buffer Out { uint outData[]; };
+layout(std430, binding = BINDING_SCAN_BLOCK_SUMS) writeonly buffer Sums { uint blockSums[]; };
 uniform int uFlags;
 shared uint temp[SCAN_BLOCK];
 

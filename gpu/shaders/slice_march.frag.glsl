@@ -3,7 +3,7 @@
 // GL_ONE / GL_SRC_ALPHA: dst = rgb + alpha·dst. Per pixel, the slab's piece of the camera ray
 // is clipped to the box and treated as the CPU marcher treats one step:
 // rgb = Ω·(1 − a)·S(x_mid), a = exp(−σt·D(x_mid)·Δt).
-layout(binding = 1) uniform sampler3D uRadiance;
+layout(binding = BINDING_RADIANCE_TEXTURE) uniform sampler3D uRadiance;
 uniform vec3 uRadScale;   // world -> radiance index
 uniform vec3 uRadOffset;
 uniform ivec3 uRadDims;

@@ -211,7 +211,7 @@ TEST(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
 }
 
 /// The glow scene (a point light inside the medium) at 32³, 80×60: with the default ray-step
-/// layers the GPU per-voxel image is within 0.5% of the CPU's; view planes are not (≈1.2%).
+/// layers the GPU per-voxel image is within 0.5% of the CPU's; view planes are not (0.53%).
 TEST(GpuPerVoxelMethod, GlowSceneWithinHalfAPercent) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
@@ -227,6 +227,9 @@ TEST(GpuPerVoxelMethod, GlowSceneWithinHalfAPercent) {
   std::printf("glow per-voxel gpu vs cpu: ray-steps %.3g, view-planes %.3g\n", err, errPlanes);
   EXPECT_EQ(gpu.stats.extra["slicing"].get<std::string>(), "ray-steps");
   EXPECT_LT(err, 0.005);
+  // Measured 0.00533 (llvmpipe, Mesa 22.3); the bound is that × 1.5, so a regression of the
+  // view-plane slicing shows while float noise does not.
+  EXPECT_LT(errPlanes, 0.008);
 }
 
 }  // namespace

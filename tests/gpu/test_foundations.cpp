@@ -2,6 +2,8 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <regex>
+#include <set>
 
 #include "gpu/gl.h"
 #include "gpu/shaders.h"
@@ -44,27 +46,83 @@ TEST(GpuWrappers, MoveAssignSwapsAndMoveConstructEmpties) {
   gpu::checkGl("wrapper test");
 }
 
+/// The stage of an embedded file from its name (x.comp.glsl, x.vert.glsl, x.frag.glsl), or 0
+/// for a library file that other files are compiled with (common.glsl).
+GLenum stageOf(const std::string& name) {
+  for (const auto& [suffix, stage] :
+       {std::pair{".comp.glsl", GL_COMPUTE_SHADER}, std::pair{".vert.glsl", GL_VERTEX_SHADER},
+        std::pair{".frag.glsl", GL_FRAGMENT_SHADER}})
+    if (name.ends_with(suffix)) return stage;
+  return 0;
+}
+
+/// The SL_* variant macros a source tests (#ifdef, #ifndef, defined(...)).
+std::set<std::string> variantsOf(const std::string& source) {
+  static const std::regex re(R"((?:#\s*ifn?def\s+|defined\s*\(\s*)(SL_\w+))");
+  std::set<std::string> out;
+  for (auto it = std::sregex_iterator(source.begin(), source.end(), re);
+       it != std::sregex_iterator(); ++it)
+    out.insert((*it)[1].str());
+  return out;
+}
+
 TEST(GpuShaders, EveryEmbeddedFileIsPresent) {
   // No context needed: the table is compiled into the library.
-  for (const char* f :
-       {"common.glsl", "volume_tracer.comp.glsl", "per_voxel.comp.glsl", "density_splat.vert.glsl",
-        "density_splat.frag.glsl", "radiance_splat.vert.glsl", "radiance_splat.frag.glsl",
-        "radiance_normalize.comp.glsl", "fullscreen.vert.glsl", "slice_march.frag.glsl"})
-    EXPECT_FALSE(gpu::shaderSource(f).empty()) << f;
+  const auto& table = gpu::embeddedShaders();
+  EXPECT_FALSE(table.empty());
+  std::set<std::string> names;
+  for (const gpu::EmbeddedShader& s : table) {
+    EXPECT_TRUE(names.insert(s.name).second) << "twice: " << s.name;
+    EXPECT_FALSE(std::string_view(s.source).empty()) << s.name;
+    EXPECT_EQ(gpu::shaderSource(s.name), std::string_view(s.source)) << s.name;
+  }
   EXPECT_THROW(gpu::shaderSource("nope.glsl"), GpuError);
 }
 
-TEST(GpuShaders, EveryProgramCompilesAndLinks) {
+/// Every shader of the embedded table, in every variant it tests, compiles (and a compute
+/// shader links), so a new file or #ifdef SL_* is covered without editing this test. A stage
+/// file that does not compile alone is compiled after a library file (what the stages do with
+/// common.glsl); it must compile one way or the other.
+TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_NO_THROW(
-      gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, {"SL_GRADIENTS"}, "t"));
-  EXPECT_NO_THROW(
-      gpu::computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, {"SL_HW_FILTER"}, "t"));
-  EXPECT_NO_THROW(gpu::computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "t"));
-  EXPECT_NO_THROW(gpu::computeProgram({"radiance_normalize.comp.glsl"}, {}, "t"));
-  EXPECT_NO_THROW(gpu::graphicsProgram({"fullscreen.vert.glsl"},
-                                       {"common.glsl", "slice_march.frag.glsl"}, {}, "t"));
-  gpu::checkGl("compiling every program");
+  std::vector<std::string> libraries;
+  for (const gpu::EmbeddedShader& s : gpu::embeddedShaders())
+    if (!stageOf(s.name)) libraries.push_back(s.name);
+  ASSERT_FALSE(libraries.empty());
+  int compiled = 0, stageFiles = 0;
+  for (const gpu::EmbeddedShader& s : gpu::embeddedShaders()) {
+    const GLenum stage = stageOf(s.name);
+    if (!stage) continue;
+    ++stageFiles;
+    std::vector<std::vector<std::string>> fileSets = {{s.name}};
+    for (const std::string& lib : libraries) fileSets.push_back({lib, s.name});
+    std::string log;
+    bool ok = false;
+    for (const auto& files : fileSets) {
+      std::set<std::string> variants;
+      for (const std::string& f : files)
+        variants.merge(variantsOf(std::string(gpu::shaderSource(f))));
+      try {
+        std::vector<std::vector<std::string>> defineSets = {{}};
+        for (const std::string& v : variants) defineSets.push_back({v});
+        for (const auto& defines : defineSets) {
+          if (stage == GL_COMPUTE_SHADER)
+            gpu::computeProgram(files, defines, s.name);
+          else
+            gpu::compileShader(stage, files, defines);
+          ++compiled;
+        }
+        ok = true;
+        break;
+      } catch (const GpuError& e) {
+        log += std::string(e.what()) + "\n";
+      }
+    }
+    EXPECT_TRUE(ok) << s.name << " compiles neither alone nor after a library file:\n" << log;
+  }
+  EXPECT_GT(compiled, stageFiles) << "no SL_* variant found: is variantsOf broken?";
+  std::printf("compiled %d shader variants from the embedded table\n", compiled);
+  gpu::checkGl("compiling every embedded shader");
 }
 
 TEST(GpuShaders, CompileErrorNamesTheFileAndQuotesTheLog) {

@@ -1,0 +1,105 @@
+#pragma once
+/// Binding points shared by the C++ passes and the shaders (DESIGN.md §8). compileShader
+/// prepends "#define BINDING_<NAME> <value>" for every entry of kBindingDefines to each shader,
+/// so GLSL writes `layout(binding = BINDING_LIGHTS)` and C++ binds at binding::kLights: each
+/// number is written once, here. Needs no context.
+///
+/// GL keeps separate binding namespaces for storage buffers, texture units and image units.
+/// A number is reused only by bindings that never meet in one program (e.g. the scan's and the
+/// tracers' buffers); within one program every binding of a kind is distinct.
+
+#include <epoxy/gl.h>
+
+namespace scatterlab::gpu {
+
+namespace binding {
+
+// ---- shader storage buffers
+
+/// GpuLight[] of the scene (common.glsl, every tracing pass).
+inline constexpr GLuint kLights = 0;
+/// GpuSamplePoint[]: the positions the volume tracer evaluates, and the current level's
+/// samples in dynamic sampling.
+inline constexpr GLuint kSamples = 1;
+/// GpuBlob[] of density splatting.
+inline constexpr GLuint kBlobs = 1;
+/// GpuSplatSample[] of radiance splatting.
+inline constexpr GLuint kSplatSamples = 1;
+/// int32 level-0 ancestor of each sample of the current level (dynamic sampling).
+inline constexpr GLuint kAncestors = 2;
+/// float τ to the viewer of every level-0 sample (dynamic sampling).
+inline constexpr GLuint kRootTau = 3;
+/// uint counters a pass reports (GpuPerVoxelCounters; uncovered voxels of the normalisation).
+inline constexpr GLuint kCounters = 3;
+/// GpuRadianceRecord[]: S and ∇S per sample (volume tracer, dynamic sampling).
+inline constexpr GLuint kRadiance = 4;
+/// float E_j per sample (dynamic sampling).
+inline constexpr GLuint kErrors = 5;
+/// uint split flag per sample (dynamic sampling).
+inline constexpr GLuint kSplitFlags = 6;
+/// Grid information buffer of G_{k+1}: uint membership per vertex.
+inline constexpr GLuint kInSet = 7;
+/// Grid information buffer of G_{k+1}: int32 ancestor per vertex (INT_MAX = none).
+inline constexpr GLuint kVertexAncestors = 8;
+/// uint exclusive scan of kInSet: each member vertex's slot in the next level.
+inline constexpr GLuint kOffsets = 9;
+/// GpuSamplePoint[] of the next level (compaction output).
+inline constexpr GLuint kNextSamples = 10;
+/// int32 ancestors of the next level (compaction output).
+inline constexpr GLuint kNextAncestors = 11;
+/// Scan (scan.comp.glsl): input, output, per-block totals, and the scanned block totals.
+inline constexpr GLuint kScanIn = 0;
+inline constexpr GLuint kScanOut = 1;
+inline constexpr GLuint kScanBlockSums = 2;
+inline constexpr GLuint kScanScannedSums = 3;
+
+// ---- texture units
+
+/// The density volume (sampler3D uDensity).
+inline constexpr GLuint kDensityTexture = 0;
+/// The source-radiance volume the slice marcher reads (sampler3D uRadiance).
+inline constexpr GLuint kRadianceTexture = 1;
+
+// ---- image units
+
+/// RGBA32F sums of radiance splatting, read by the normalisation.
+inline constexpr GLuint kSumsImage = 0;
+/// The RGBA32F source-radiance volume a compute pass writes.
+inline constexpr GLuint kRadianceImage = 1;
+
+}  // namespace binding
+
+/// A binding as the shaders see it: "#define <name> <value>".
+struct BindingDefine {
+  const char* name;
+  GLuint value;
+};
+
+/// Every binding above under its GLSL name; compileShader prepends all of them to every shader.
+inline constexpr BindingDefine kBindingDefines[] = {
+    {"BINDING_LIGHTS", binding::kLights},
+    {"BINDING_SAMPLES", binding::kSamples},
+    {"BINDING_BLOBS", binding::kBlobs},
+    {"BINDING_SPLAT_SAMPLES", binding::kSplatSamples},
+    {"BINDING_ANCESTORS", binding::kAncestors},
+    {"BINDING_ROOT_TAU", binding::kRootTau},
+    {"BINDING_COUNTERS", binding::kCounters},
+    {"BINDING_RADIANCE", binding::kRadiance},
+    {"BINDING_ERRORS", binding::kErrors},
+    {"BINDING_SPLIT_FLAGS", binding::kSplitFlags},
+    {"BINDING_IN_SET", binding::kInSet},
+    {"BINDING_VERTEX_ANCESTORS", binding::kVertexAncestors},
+    {"BINDING_OFFSETS", binding::kOffsets},
+    {"BINDING_NEXT_SAMPLES", binding::kNextSamples},
+    {"BINDING_NEXT_ANCESTORS", binding::kNextAncestors},
+    {"BINDING_SCAN_IN", binding::kScanIn},
+    {"BINDING_SCAN_OUT", binding::kScanOut},
+    {"BINDING_SCAN_BLOCK_SUMS", binding::kScanBlockSums},
+    {"BINDING_SCAN_SCANNED_SUMS", binding::kScanScannedSums},
+    {"BINDING_DENSITY_TEXTURE", binding::kDensityTexture},
+    {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
+    {"BINDING_SUMS_IMAGE", binding::kSumsImage},
+    {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
+};
+
+}  // namespace scatterlab::gpu
