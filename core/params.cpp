@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.h"
 #include "core/grid.h"
@@ -71,12 +72,39 @@ void Params::fail(const std::string& key, const std::string& why) const {
   throw ConfigError("'" + keyPath(key) + "': " + why);
 }
 
-void Params::allow(const std::string& key) {
+namespace {
+std::set<std::string>* activeLog = nullptr;
+}  // namespace
+
+Params::ReadLog::ReadLog() {
+  if (activeLog) throw std::logic_error("Params::ReadLog: one at a time");
+  activeLog = &keys_;
+}
+
+Params::ReadLog::~ReadLog() {
+  activeLog = nullptr;
+}
+
+void Params::mark(const std::string& key) {
   known_.insert(key);
+  if (!activeLog) return;
+  std::string path = keyPath(key), out;
+  // Drop array indices: "lights[3].type" -> "lights[].type".
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    out += path[i];
+    if (path[i] == '[') {
+      while (i + 1 < path.size() && path[i + 1] != ']') ++i;
+    }
+  }
+  activeLog->insert(out);
+}
+
+void Params::allow(const std::string& key) {
+  mark(key);
 }
 
 const Json& Params::require(const std::string& key, const char* expected) {
-  known_.insert(key);
+  mark(key);
   auto it = j_->find(key);
   if (it == j_->end())
     fail(key, std::string("required key is missing (expected ") + expected + ")");
@@ -88,7 +116,7 @@ const Json& Params::raw(const std::string& key) {
 }
 
 double Params::number(const std::string& key, std::optional<double> def, const Interval& range) {
-  known_.insert(key);
+  mark(key);
   double v;
   if (!has(key)) {
     if (!def) require(key, "a number");
@@ -106,7 +134,7 @@ double Params::number(const std::string& key, std::optional<double> def, const I
 
 long long Params::integer(const std::string& key, std::optional<long long> def,
                           const Interval& range) {
-  known_.insert(key);
+  mark(key);
   long long v;
   if (!has(key)) {
     if (!def) require(key, "an integer");
@@ -128,7 +156,7 @@ long long Params::integer(const std::string& key, std::optional<long long> def,
 }
 
 bool Params::boolean(const std::string& key, std::optional<bool> def) {
-  known_.insert(key);
+  mark(key);
   if (!has(key)) {
     if (!def) require(key, "true or false");
     return *def;
@@ -140,7 +168,7 @@ bool Params::boolean(const std::string& key, std::optional<bool> def) {
 }
 
 std::string Params::string(const std::string& key, std::optional<std::string> def) {
-  known_.insert(key);
+  mark(key);
   if (!has(key)) {
     if (!def) require(key, "a string");
     return *def;
@@ -162,7 +190,7 @@ std::string Params::choice(const std::string& key, const std::vector<std::string
 }
 
 Vec3 Params::vec3(const std::string& key, std::optional<Vec3> def, const Interval& range) {
-  known_.insert(key);
+  mark(key);
   if (!has(key)) {
     if (!def) require(key, "an array of 3 numbers");
     return *def;
@@ -213,7 +241,7 @@ Params Params::child(const std::string& key) {
 }
 
 std::vector<Params> Params::children(const std::string& key, bool required) {
-  known_.insert(key);
+  mark(key);
   std::vector<Params> out;
   if (!has(key)) {
     if (required) require(key, "an array of objects");

@@ -90,6 +90,21 @@ class Params {
   /// Array of objects (possibly empty); missing gives an empty list when `required` is false.
   std::vector<Params> children(const std::string& key, bool required = false);
 
+  /// While one exists, every key any Params reads or allows is recorded as its dotted path with
+  /// array indices dropped ("lights[].type"): what tests/methods/test_key_docs.cpp checks the
+  /// documentation against. One at a time; not thread-safe (tests only).
+  class ReadLog {
+   public:
+    ReadLog();
+    ~ReadLog();
+    ReadLog(const ReadLog&) = delete;
+    ReadLog& operator=(const ReadLog&) = delete;
+    const std::set<std::string>& keys() const { return keys_; }
+
+   private:
+    std::set<std::string> keys_;
+  };
+
   /// The keys read or allowed so far, sorted.
   std::vector<std::string> knownKeys() const { return {known_.begin(), known_.end()}; }
 
@@ -103,6 +118,8 @@ class Params {
   /// `j` points into *root (null: the root itself).
   Params(std::shared_ptr<const Json> root, const Json* j, std::string path);
   const Json& require(const std::string& key, const char* expected);
+  /// Marks `key` known (and records it in the active ReadLog).
+  void mark(const std::string& key);
 
   std::shared_ptr<const Json> root_;  ///< keeps the document alive
   const Json* j_;                     ///< this object, inside *root_

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <set>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -84,6 +85,7 @@ class ReferenceCache {
   std::FILE* console_;
   bool clearLine_;
   std::map<std::string, Reference> cache_;
+  std::set<std::string> warned_;  ///< ignored-key warnings already given
 };
 
 // ---- Run loop (run.cpp) ----------------------------------------------------------------------

@@ -2,6 +2,7 @@
 // taken from a run that renders the same configuration) once, cached in memory and on disk
 // under DIR/references/, and reused from disk by a resumed experiment.
 
+#include <cstdio>
 #include <filesystem>
 
 #include "core/scene.h"
@@ -47,7 +48,18 @@ void ReferenceCache::render(const RunSpec& r, const MethodSpec& ref, const Rende
     rr = *seed;
   } else {
     const Scene scene = buildRunScene(r.sceneSpec->file, sets, r.refLights);
-    rr = createMethod(scene, ref.method, ref.backend)->render(scene, nullptr);
+    auto method = createMethod(scene, ref.method, ref.backend);
+    if (!method->ignoredKeys.empty()) {
+      // The scenes' own method settings do not apply to the reference: say so once per set.
+      std::string list;
+      for (const std::string& k : method->ignoredKeys) list += (list.empty() ? "" : ", ") + k;
+      if (warned_.insert(ref.name + ": " + list).second) {
+        out_.log("reference " + ref.name + " ignores " + list + " (read by other methods)");
+        std::fprintf(stderr, "scatterlab: warning: reference '%s' ignores %s (read by other "
+                     "methods)\n", ref.name.c_str(), list.c_str());
+      }
+    }
+    rr = method->render(scene, nullptr);
   }
   writeExr(rr.image, out_.path(base + ".exr"));
   writePng(rr.image, out_.path(base + ".png"), plan_.exposure);

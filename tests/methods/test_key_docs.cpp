@@ -1,0 +1,136 @@
+/// Every key the code reads is documented, and every documented render key is read: the key
+/// tables of docs/scene-format.md against what Params records (Params::ReadLog) while every
+/// demo scene is loaded and every method and sampler is created on it.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "api/scatterlab.h"
+#include "core/stages.h"
+
+namespace scatterlab {
+namespace {
+
+std::string readDoc(const std::string& name) {
+  std::ifstream f(std::string(SCATTERLAB_SOURCE_DIR) + "/docs/" + name);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+/// Backticked names in the first column of the key tables between `from` and `to` (or the end),
+/// prefixed with the subsection's object ("sampler." under "### `render.sampler`").
+std::set<std::string> documentedRenderKeys(const std::string& doc) {
+  std::set<std::string> keys;
+  std::istringstream in(doc.substr(doc.find("## `render`")));
+  std::string line, prefix;
+  const std::regex cell("^\\| `([a-z_0-9]+)` \\|");
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (line.rfind("### Methods", 0) == 0) break;
+    if (line.rfind("### `render.sampler`", 0) == 0) prefix = "sampler.";
+    if (std::regex_search(line, m, cell)) keys.insert(prefix + m[1].str());
+  }
+  return keys;
+}
+
+/// Every backticked word of the document, outside fenced code blocks.
+std::set<std::string> backticked(const std::string& text) {
+  std::string doc;
+  bool fenced = false;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("```", 0) == 0) {
+      fenced = !fenced;
+      continue;
+    }
+    if (!fenced) doc += line + "\n";
+  }
+  std::set<std::string> words;
+  const std::regex tick("`([^`]+)`");
+  for (auto it = std::sregex_iterator(doc.begin(), doc.end(), tick); it != std::sregex_iterator();
+       ++it) {
+    // "`bounds.min`, ..." and "`phase.type`": each dotted part counts.
+    std::string w = (*it)[1].str(), part;
+    std::istringstream parts(w);
+    while (std::getline(parts, part, '.')) words.insert(part);
+    words.insert(w);
+  }
+  return words;
+}
+
+/// The keys read while loading every demo scene and creating every method (all its keys given,
+/// so optional ones are read too) and every sampler type on it.
+std::set<std::string> keysTheCodeReads() {
+  initialize();
+  std::set<std::string> read;
+  Params::ReadLog log;
+  for (const char* name : {"glow", "shaft", "dusty_room", "fig3", "smoke", "cloud"}) {
+    const std::string file = std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/" + name + ".json";
+    Scene base;
+    try {
+      base = loadScene(file);
+    } catch (const IoError&) {
+      continue;  // a scene on ../shared/data that this checkout lacks
+    }
+    for (const std::string& m : methods().names()) {
+      Scene s = base;
+      s.render = {{"method", m}, {"backend", "cpu"}};
+      for (const std::string& k : methods().get(m, "").keys) {
+        // Values of the right type, valid on this scene: the keys' own defaults where known.
+        if (k == "sampler") s.render[k] = {{"type", "jittered"}, {"count", 8}, {"seed", 1},
+                                           {"radius_scale", 1.5}, {"skip_empty", true}};
+        else if (k == "radiance_resolution") s.render[k] = 8;
+        else if (k == "slicing") s.render[k] = "ray-steps";
+        else if (k == "evaluator") s.render[k] = "volume-tracer";
+        else if (k == "integrator") s.render[k] = "ray-marcher";
+        else if (k == "levels") s.render[k] = {2};
+        else if (k == "tau") s.render[k] = "ancestor";
+        else if (k == "probes") s.render[k] = 6;
+        else if (k == "min_transmittance" || k == "epsilon") s.render[k] = 0.5;
+        else s.render[k] = s.medium.voxelSize();
+      }
+      createMethod(s);
+    }
+    for (const std::string& type : samplers().names()) {
+      if (type == "gaussian-centres" && !base.medium.density->gaussians()) continue;
+      Scene s = base;
+      s.render = {{"method", "gradient"}, {"sampler", {{"type", type}}}};
+      createMethod(s);
+    }
+  }
+  return log.keys();
+}
+
+TEST(KeyDocs, EveryRenderKeyReadIsDocumentedAndEveryDocumentedOneIsRead) {
+  const std::set<std::string> documented = documentedRenderKeys(readDoc("scene-format.md"));
+  ASSERT_GT(documented.size(), 15u) << "the render tables of docs/scene-format.md were not found";
+  std::set<std::string> read;
+  for (const std::string& k : keysTheCodeReads())
+    if (k.rfind("render.", 0) == 0) read.insert(k.substr(7));
+  for (const std::string& k : read)
+    EXPECT_TRUE(documented.count(k)) << "render." << k << " is read but not documented";
+  for (const std::string& k : documented)
+    EXPECT_TRUE(read.count(k)) << "render." << k << " is documented but never read";
+}
+
+TEST(KeyDocs, EverySceneKeyReadIsNamedInTheDocs) {
+  // Scene keys outside `render` are documented in scene-format.md's tables and, for the density
+  // types from files (OpenVDB, fitted models), in media.md: each key's name must appear there.
+  const std::set<std::string> words =
+      backticked(readDoc("scene-format.md") + readDoc("media.md"));
+  for (const std::string& path : keysTheCodeReads()) {
+    if (path.rfind("render.", 0) == 0) continue;
+    std::string leaf = path.substr(path.rfind('.') == std::string::npos ? 0 : path.rfind('.') + 1);
+    if (leaf.size() > 2 && leaf.compare(leaf.size() - 2, 2, "[]") == 0)
+      leaf.resize(leaf.size() - 2);
+    EXPECT_TRUE(words.count(leaf)) << path << " is read but '" << leaf
+                                   << "' appears in neither scene-format.md nor media.md";
+  }
+}
+
+}  // namespace
+}  // namespace scatterlab

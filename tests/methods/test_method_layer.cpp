@@ -1,0 +1,172 @@
+/// The method layer: one registration per method, keys read once and the same on every backend,
+/// overrides that behave like --set render.method, and the key lists the tolerance relies on.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "api/scatterlab.h"
+#include "core/stages.h"
+#include "methods/pipeline.h"
+#include "methods/register.h"
+#include "support/scenes.h"
+
+namespace scatterlab {
+namespace {
+
+const std::string kGlow = SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json";
+const std::vector<std::string> kSmall = {"camera.width=24", "camera.height=18",
+                                         "medium.resolution=16"};
+
+std::vector<std::string> with(std::vector<std::string> sets) {
+  sets.insert(sets.end(), kSmall.begin(), kSmall.end());
+  return sets;
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool gpuBackendBuilt() {
+  initialize();
+  return bool(backends()[int(Backend::Gpu)].makeFrame);
+}
+
+// The first failure: a sampler key on a scene whose own method is `exact`, with the
+// method chosen by override, failed with "unknown key 'render.sampler'".
+TEST(MethodLayer, MethodOverrideMeansSetRenderMethod) {
+  initialize();
+  const Scene viaOverride = loadScene(kGlow, with({"render.sampler.count=3"}));
+  const Scene viaSet = loadScene(kGlow, with({"render.sampler.count=3", "render.method=gradient"}));
+  const RenderResult a = createMethod(viaOverride, "gradient", "cpu")->render(viaOverride, nullptr);
+  const RenderResult b = createMethod(viaSet, "", "cpu")->render(viaSet, nullptr);
+  EXPECT_EQ(a.stats.method, "gradient");
+  EXPECT_EQ(a.stats.samples, 3);
+  EXPECT_EQ(a.image.pixels(), b.image.pixels());
+  // And an error is the same error either way.
+  const Scene badO = loadScene(kGlow, with({"render.sampler.count=0"}));
+  const Scene badS = loadScene(kGlow, with({"render.sampler.count=0", "render.method=gradient"}));
+  const std::string eo = errorOf([&] { createMethod(badO, "gradient", "cpu"); });
+  EXPECT_NE(eo.find("render.sampler.count"), std::string::npos) << eo;
+  EXPECT_EQ(eo, errorOf([&] { createMethod(badS, "", "cpu"); }));
+}
+
+// The second failure: `slicing` was valid with --backend gpu and rejected with --backend cpu.
+TEST(MethodLayer, SameKeysOnEveryBackend) {
+  initialize();
+  for (const MethodDesc& d : builtinMethods()) {
+    if (!d.radianceVolume()) continue;
+    const Scene s = loadScene(kGlow, with({"render.method=" + d.name, "render.slicing=view-planes",
+                                           "render.levels=[4]"}));
+    auto cpu = createMethod(s, "", "cpu");
+    if (d.name == "per-voxel" || d.name == "gradient") {
+      const RenderResult r = cpu->render(s, nullptr);
+      ASSERT_TRUE(r.stats.extra.contains("unused_keys")) << d.name;
+      EXPECT_EQ(r.stats.extra["unused_keys"], Json::array({"render.slicing"})) << d.name;
+    }
+    if (gpuBackendBuilt() && pipelineRunsOn(d, Backend::Gpu)) {
+      EXPECT_NO_THROW(createMethod(s, "", "gpu")) << d.name;  // creating needs no context
+    }
+  }
+  // A bad value is the same error on both backends (read before the backend is chosen).
+  const Scene bad = loadScene(kGlow, with({"render.method=gradient", "render.slicing=diagonal"}));
+  const std::string ec = errorOf([&] { createMethod(bad, "", "cpu"); });
+  EXPECT_NE(ec.find("render.slicing"), std::string::npos) << ec;
+  if (gpuBackendBuilt()) {
+    EXPECT_EQ(ec, errorOf([&] { createMethod(bad, "", "gpu"); }));
+  }
+}
+
+TEST(MethodLayer, ABackendWithoutAVariantIsAClearError) {
+  initialize();
+  const Scene s = loadScene(kGlow, kSmall);
+  if (!gpuBackendBuilt()) GTEST_SKIP() << "built without the GPU backend";
+  const std::string e = errorOf([&] { createMethod(s, "exact", "gpu"); });
+  EXPECT_NE(e.find("'exact' has no GPU variant"), std::string::npos) << e;
+  // auto falls back to the CPU for a CPU-only method, whatever the machine.
+  const RenderResult r = createMethod(s, "exact", "auto")->render(s, nullptr);
+  EXPECT_EQ(r.stats.backend, "cpu");
+}
+
+// The third failure: a fractional radiance resolution rendered at the truncated size.
+TEST(MethodLayer, ResolutionsFollowOneRule) {
+  initialize();
+  const Scene s = loadScene(
+      kGlow, with({"render.method=per-voxel", "render.radiance_resolution=[8,8,8.7]"}));
+  const std::string e = errorOf([&] { createMethod(s, "", "cpu"); });
+  EXPECT_NE(e.find("'render.radiance_resolution': expected integers"), std::string::npos) << e;
+  const std::string m = errorOf([&] { loadScene(kGlow, {"medium.resolution=[8,8,8.7]"}); });
+  EXPECT_NE(m.find("'medium.resolution': expected integers"), std::string::npos) << m;
+  const Scene ok = loadScene(kGlow, with({"render.method=per-voxel",
+                                          "render.radiance_resolution=[8,6,4]"}));
+  const RenderResult r = createMethod(ok, "", "cpu")->render(ok, nullptr);
+  EXPECT_EQ(r.stats.extra["radiance_resolution"], Json::array({8, 6, 4}));
+  EXPECT_EQ(r.radiance->dims(), IVec3(8, 6, 4));
+}
+
+TEST(MethodLayer, KeysOfOtherMethodsAreIgnoredAndListedUnknownKeysAreErrors) {
+  initialize();
+  const Scene s = loadScene(kGlow, with({"render.method=adaptive", "render.delta2=0.01",
+                                         "render.epsilon=0.5", "render.sampler.count=4"}));
+  auto exact = createMethod(s, "exact", "cpu");
+  EXPECT_EQ(exact->ignoredKeys,
+            (std::vector<std::string>{"render.delta2", "render.epsilon", "render.sampler"}));
+  EXPECT_EQ(createMethod(s, "adaptive", "cpu")->ignoredKeys, std::vector<std::string>{});
+  const RenderResult r = exact->render(s, nullptr);
+  EXPECT_EQ(r.stats.extra["ignored_keys"].size(), 3u);
+  const Scene bogus = loadScene(kGlow, with({"render.bogus=1"}));
+  const std::string e = errorOf([&] { createMethod(bogus, "exact", "cpu"); });
+  EXPECT_NE(e.find("unknown key 'render.bogus'"), std::string::npos) << e;
+}
+
+// methodKeys() (what the tolerance of other methods' keys uses) is exactly what each method's
+// parser reads from an empty render object.
+TEST(MethodLayer, KeyListsAreWhatTheParsersRead) {
+  initialize();
+  for (const MethodDesc& d : builtinMethods()) {
+    const Scene s = loadScene(kGlow, with({"render.method=" + d.name}));
+    std::set<std::string> read;
+    {
+      Params::ReadLog log;
+      createMethod(s, "", "cpu");
+      for (const std::string& k : log.keys())
+        if (k.rfind("render.", 0) == 0 && k.find('.', 7) == std::string::npos)
+          read.insert(k.substr(7));
+    }
+    std::set<std::string> listed = {"method", "backend"};
+    for (const std::string& k : methodKeys(d)) listed.insert(k);
+    EXPECT_EQ(read, listed) << d.name;
+    EXPECT_EQ(methods().get(d.name, "").keys, methodKeys(d)) << d.name;
+  }
+}
+
+// Every registered method renders on the CPU through the one pipeline, with its stages timed.
+TEST(MethodLayer, EveryMethodRunsItsStageSequence) {
+  initialize();
+  const std::map<std::string, std::vector<std::string>> stages = {
+      {"exact", {"density", "march"}},
+      {"per-voxel", {"density", "radiance", "march"}},
+      {"gradient", {"density", "sampling", "evaluation", "reconstruction", "march"}},
+      {"rbf", {"density", "sampling", "evaluation", "reconstruction", "march"}},
+      {"nearest", {"density", "sampling", "evaluation", "reconstruction", "march"}},
+      {"adaptive", {"density", "sampling", "dynamic_sampling", "reconstruction", "march"}}};
+  ASSERT_EQ(methods().names().size(), stages.size());
+  for (const auto& [name, expected] : stages) {
+    const Scene s = loadScene(kGlow, with({"render.levels=[4]"}));
+    const RenderResult r = createMethod(s, name, "cpu")->render(s, nullptr);
+    std::vector<std::string> got;
+    for (const auto& [stage, ms] : r.stats.timingsMs) got.push_back(stage);
+    EXPECT_EQ(got, expected) << name;
+    EXPECT_EQ(r.stats.device, "CPU (TBB)");
+    ASSERT_TRUE(r.density) << name;
+    EXPECT_EQ(bool(r.radiance), name != "exact") << name;
+  }
+}
+
+}  // namespace
+}  // namespace scatterlab
