@@ -48,9 +48,13 @@ Action addRender(CLI::App& app) {
     auto method = createMethod(scene, o->method, o->backend);
     if (!method->ignoredKeys.empty()) {
       std::string list;
-      for (const std::string& k : method->ignoredKeys) list += (list.empty() ? "'" : ", '") + k + "'";
-      std::fprintf(stderr, "scatterlab: warning: ignoring %s (read by other methods, not '%s')\n",
-                   list.c_str(), (o->method.empty() ? scene.render.value("method", std::string("exact")) : o->method).c_str());
+      for (const std::string& k : method->ignoredKeys)
+        list += (list.empty() ? "'" : ", '") + k + "'";
+      std::fprintf(
+          stderr, "scatterlab: warning: ignoring %s (read by other methods, not '%s')\n",
+          list.c_str(),
+          (o->method.empty() ? scene.render.value("method", std::string("exact")) : o->method)
+              .c_str());
     }
     // Refuse unwritable outputs before spending time on the render.
     checkWritablePath(o->out);

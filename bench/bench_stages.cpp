@@ -78,8 +78,10 @@ const Inputs& inputs(int res) {
   in.samples = samplers().get("jittered", "sampler")(p, in.scene)->generate(in.scene, in.density);
   const PipelineSettings ps = defaultSettings(in.scene);
   HostFrame frame(in.density);
-  radianceEvaluators().get("volume-tracer", "").on[int(Backend::Cpu)](ps)->evaluate(
-      frame, in.scene, in.samples, true);
+  radianceEvaluators()
+      .get("volume-tracer", "")
+      .on[int(Backend::Cpu)](ps)
+      ->evaluate(frame, in.scene, in.samples, true);
   return cache.emplace(res, std::move(in)).first->second;
 }
 
@@ -125,9 +127,8 @@ bool registerAll() {
                     try {
                       auto s = samplers().get(name, "sampler")(p, in.scene);
                       long long n = 0;
-                      timeLoop(state, false, [&] {
-                        n = (long long)s->generate(in.scene, in.density).size();
-                      });
+                      timeLoop(state, false,
+                               [&] { n = (long long)s->generate(in.scene, in.density).size(); });
                       state.counters["samples"] = double(n);
                     } catch (const std::exception& e) {
                       state.SkipWithError(e.what());
@@ -140,20 +141,20 @@ bool registerAll() {
     for (const std::string& name : radianceEvaluators().names()) {
       if (!radianceEvaluators().get(name, "").has(b)) continue;
       for (int res : kSizes)
-        registerOne("Stage/evaluator/" + name + on + std::to_string(res), gpu, 3,
-                    [name, res, b, gpu](benchmark::State& state) {
-                      const Inputs& in = inputs(res);
-                      try {
-                        auto frame = frameWithDensity(b, in.scene);
-                        auto ev = radianceEvaluators().get(name, "").on[int(b)](
-                            defaultSettings(in.scene));
-                        std::vector<RadianceSample> s = in.samples;
-                        timeLoop(state, gpu, [&] { ev->evaluate(*frame, in.scene, s, true); });
-                        state.counters["samples"] = double(s.size());
-                      } catch (const std::exception& e) {
-                        state.SkipWithError(e.what());
-                      }
-                    });
+        registerOne(
+            "Stage/evaluator/" + name + on + std::to_string(res), gpu, 3,
+            [name, res, b, gpu](benchmark::State& state) {
+              const Inputs& in = inputs(res);
+              try {
+                auto frame = frameWithDensity(b, in.scene);
+                auto ev = radianceEvaluators().get(name, "").on[int(b)](defaultSettings(in.scene));
+                std::vector<RadianceSample> s = in.samples;
+                timeLoop(state, gpu, [&] { ev->evaluate(*frame, in.scene, s, true); });
+                state.counters["samples"] = double(s.size());
+              } catch (const std::exception& e) {
+                state.SkipWithError(e.what());
+              }
+            });
     }
     for (const std::string& name : reconstructions().names()) {
       if (!reconstructions().get(name, "").has(b)) continue;
@@ -163,11 +164,11 @@ bool registerAll() {
                       const Inputs& in = inputs(res);
                       try {
                         auto frame = frameWithDensity(b, in.scene);
-                        auto rc = reconstructions().get(name, "").on[int(b)](
-                            defaultSettings(in.scene));
+                        auto rc =
+                            reconstructions().get(name, "").on[int(b)](defaultSettings(in.scene));
                         timeLoop(state, gpu, [&] {
-                          rc->reconstruct(*frame, in.scene, in.samples,
-                                          in.scene.medium.resolution, nullptr);
+                          rc->reconstruct(*frame, in.scene, in.samples, in.scene.medium.resolution,
+                                          nullptr);
                         });
                       } catch (const std::exception& e) {
                         state.SkipWithError(e.what());
@@ -183,8 +184,11 @@ bool registerAll() {
                       try {
                         const PipelineSettings ps = defaultSettings(in.scene);
                         auto frame = frameWithDensity(b, in.scene);
-                        reconstructions().get("gradient", "").on[int(b)](ps)->reconstruct(
-                            *frame, in.scene, in.samples, in.scene.medium.resolution, nullptr);
+                        reconstructions()
+                            .get("gradient", "")
+                            .on[int(b)](ps)
+                            ->reconstruct(*frame, in.scene, in.samples, in.scene.medium.resolution,
+                                          nullptr);
                         auto ig = integrators().get(name, "").on[int(b)](ps);
                         timeLoop(state, gpu, [&] {
                           Image img = ig->integrate(*frame, in.scene, nullptr);

@@ -56,8 +56,7 @@ Params::Params(std::shared_ptr<const Json> root, const Json* j, std::string path
     : root_(std::move(root)), j_(j ? j : root_.get()), path_(std::move(path)) {
   if (!j_->is_object())
     throw ConfigError((path_.empty() ? std::string("document") : "'" + path_ + "'") +
-                      " must be a JSON object, got " + typeName(*j_) + " " +
-                      describeValue(*j_));
+                      " must be a JSON object, got " + typeName(*j_) + " " + describeValue(*j_));
 }
 
 std::string Params::keyPath(const std::string& key) const {
@@ -230,8 +229,8 @@ IVec3 Params::resolution(const std::string& key, std::optional<IVec3> def) {
   }
   const long long n = (long long)r.x * r.y * r.z;
   if (n > kMaxGridVoxels)
-    fail(key, std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) +
-                  " = " + std::to_string(n) + " voxels is above the memory bound of " +
+    fail(key, std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) + " = " +
+                  std::to_string(n) + " voxels is above the memory bound of " +
                   std::to_string(kMaxGridVoxels) + " voxels (512^3)");
   return r;
 }

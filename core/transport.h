@@ -1,7 +1,8 @@
 #pragma once
-/// Transport physics shared by every backend and stage (volume tracing, paper Sec. 4, Eq. 1): transmittance along straight segments through the
-/// density volume, and the source radiance S(x, ω) = Σ_l f(ω_l → ω)·E_l(x) of DESIGN.md §2.
-/// Header-only templates so the inner loops inline; no virtual calls per step.
+/// Transport physics shared by every backend and stage (volume tracing, paper Sec. 4, Eq. 1):
+/// transmittance along straight segments through the density volume, and the source radiance S(x,
+/// ω) = Σ_l f(ω_l → ω)·E_l(x) of DESIGN.md §2. Header-only templates so the inner loops inline; no
+/// virtual calls per step.
 
 #include <vector>
 

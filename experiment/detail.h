@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <set>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <string>
 #include <vector>
 

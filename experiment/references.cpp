@@ -55,8 +55,10 @@ void ReferenceCache::render(const RunSpec& r, const MethodSpec& ref, const Rende
       for (const std::string& k : method->ignoredKeys) list += (list.empty() ? "" : ", ") + k;
       if (warned_.insert(ref.name + ": " + list).second) {
         out_.log("reference " + ref.name + " ignores " + list + " (read by other methods)");
-        std::fprintf(stderr, "scatterlab: warning: reference '%s' ignores %s (read by other "
-                     "methods)\n", ref.name.c_str(), list.c_str());
+        std::fprintf(stderr,
+                     "scatterlab: warning: reference '%s' ignores %s (read by other "
+                     "methods)\n",
+                     ref.name.c_str(), list.c_str());
       }
     }
     rr = method->render(scene, nullptr);

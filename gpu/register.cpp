@@ -18,8 +18,7 @@ class GpuRefiner : public SampleRefiner {
   GpuRefiner(DynamicSamplingSettings s, DynamicSamplingGpuSteps steps)
       : s_(std::move(s)), steps_(steps) {}
   DynamicSamplingResult refine(Frame& frame, const Scene& scene,
-                               std::vector<RadianceSample> initial,
-                               RadianceEvaluator&) override {
+                               std::vector<RadianceSample> initial, RadianceEvaluator&) override {
     GpuFrame& f = static_cast<GpuFrame&>(frame);
     return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer);
   }
@@ -49,8 +48,8 @@ bool preferGpu(std::string* why) {
 }  // namespace
 
 void registerGpuStages() {
-  backends()[int(Backend::Gpu)] = BackendEntry{
-      [] { return std::unique_ptr<Frame>(new GpuFrame()); }, preferGpu};
+  backends()[int(Backend::Gpu)] =
+      BackendEntry{[] { return std::unique_ptr<Frame>(new GpuFrame()); }, preferGpu};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(s.delta1, s.delta2));
   });
@@ -61,16 +60,14 @@ void registerGpuStages() {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1));
   });
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(
-        new SliceMarcher(s.march, s.slicing == Slicing::RaySteps));
+    return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps));
   });
-  refiners().addVariant("dynamic", Backend::Gpu,
-                        [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
-                          DynamicSamplingSettings s = ds;
-                          s.delta1 = ps.delta1;
-                          return std::unique_ptr<SampleRefiner>(
-                              new GpuRefiner(std::move(s), {ps.delta1, ps.delta2}));
-                        });
+  refiners().addVariant(
+      "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
+        DynamicSamplingSettings s = ds;
+        s.delta1 = ps.delta1;
+        return std::unique_ptr<SampleRefiner>(new GpuRefiner(std::move(s), {ps.delta1, ps.delta2}));
+      });
 }
 
 }  // namespace scatterlab::gpu

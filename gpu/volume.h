@@ -5,11 +5,11 @@
 
 #include <span>
 
+#include "core/density_model.h"
 #include "core/grid.h"
 #include "core/scene.h"
 #include "gpu/gl.h"
 #include "gpu/timer.h"
-#include "core/density_model.h"
 
 namespace scatterlab::gpu {
 

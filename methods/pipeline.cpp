@@ -23,10 +23,7 @@ const Maker& variant(const StageRegistry<Maker>& registry, const std::string& na
 class PipelineMethod : public Method {
  public:
   PipelineMethod(MethodDesc desc, Backend backend, PipelineSettings settings, std::string note)
-      : desc_(std::move(desc)),
-        backend_(backend),
-        settings_(settings),
-        note_(std::move(note)) {}
+      : desc_(std::move(desc)), backend_(backend), settings_(settings), note_(std::move(note)) {}
 
   std::unique_ptr<Sampler> sampler;
   std::string samplerType;
@@ -53,7 +50,8 @@ class PipelineMethod : public Method {
     };
     stage("density", [&] { frame->buildDensity(scene); });
     std::vector<RadianceSample> samples;
-    if (sampler) stage("sampling", [&] { samples = sampler->generate(scene, frame->hostDensity()); });
+    if (sampler)
+      stage("sampling", [&] { samples = sampler->generate(scene, frame->hostDensity()); });
     if (refiner) {
       DynamicSamplingResult ds;
       stage("dynamic_sampling",
@@ -61,9 +59,8 @@ class PipelineMethod : public Method {
       samples = std::move(ds.samples);
       addDynamicSamplingStats(st, ds.levels, samples, *dynamic);
     } else if (sampler) {
-      stage("evaluation", [&] {
-        evaluator->evaluate(*frame, scene, samples, reconstruction->needsGradients());
-      });
+      stage("evaluation",
+            [&] { evaluator->evaluate(*frame, scene, samples, reconstruction->needsGradients()); });
     }
     if (reconstruction) {
       const bool fromSamples = reconstruction->usesSamples();
@@ -137,8 +134,8 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
     m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
                            "radiance evaluator")(settings);
   if (!d.refiner.empty())
-    m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"),
-                         "sample refiner")(*m->dynamic, settings);
+    m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(
+        *m->dynamic, settings);
   if (d.radianceVolume())
     m->reconstruction = variant(reconstructions(), d.reconstruction, b, p.keyPath("method"),
                                 "reconstruction")(settings);

@@ -17,12 +17,12 @@ namespace scatterlab {
 /// Registered once in methods/register.cpp; a PipelineMethod runs it.
 struct MethodDesc {
   std::string name;
-  std::string summary;              ///< one line
-  bool sampler = false;             ///< a sampler and the radiance evaluator run (samples)
-  std::string refiner;              ///< a SampleRefiner between them ("dynamic"), or empty
-  std::string reconstruction;       ///< reconstructions() entry, or empty (no radiance volume)
-  std::string integrator;           ///< default integrators() entry (render.integrator)
-  bool integratorSelectable = true; ///< whether render.integrator may replace it
+  std::string summary;               ///< one line
+  bool sampler = false;              ///< a sampler and the radiance evaluator run (samples)
+  std::string refiner;               ///< a SampleRefiner between them ("dynamic"), or empty
+  std::string reconstruction;        ///< reconstructions() entry, or empty (no radiance volume)
+  std::string integrator;            ///< default integrators() entry (render.integrator)
+  bool integratorSelectable = true;  ///< whether render.integrator may replace it
 
   /// Whether the method builds a source-radiance volume (and reads its keys).
   bool radianceVolume() const { return !reconstruction.empty(); }

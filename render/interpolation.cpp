@@ -278,8 +278,7 @@ class InterpolatingReconstruction : public Reconstruction {
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
                                   Progress*) override {
-    return interpolateSamples(kind_, frame.hostDensity(), samples,
-                              newRadiance(frame, scene, dims));
+    return interpolateSamples(kind_, frame.hostDensity(), samples, newRadiance(frame, scene, dims));
   }
 
  private:
@@ -291,9 +290,8 @@ class PerVoxelReconstruction : public Reconstruction {
   explicit PerVoxelReconstruction(float delta1) : delta1_(delta1) {}
   bool needsGradients() const override { return false; }
   bool usesSamples() const override { return false; }
-  ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
-                                  std::span<const RadianceSample>, IVec3 dims,
-                                  Progress* progress) override {
+  ReconstructionStats reconstruct(Frame& frame, const Scene& scene, std::span<const RadianceSample>,
+                                  IVec3 dims, Progress* progress) override {
     if (progress) progress->restart("per-voxel S", dims.z);
     const PerVoxelStats pv = buildPerVoxelRadiance(scene, frame.hostDensity(), delta1_,
                                                    newRadiance(frame, scene, dims), progress);

@@ -52,11 +52,10 @@ class VolumeTracerEvaluator : public RadianceEvaluator {
 }  // namespace
 
 void registerRadianceEvaluators() {
-  radianceEvaluators().addVariant(
-      "volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
-        return std::unique_ptr<RadianceEvaluator>(
-            new VolumeTracerEvaluator(TracerSteps{s.delta1, s.delta2}));
-      });
+  radianceEvaluators().addVariant("volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<RadianceEvaluator>(
+        new VolumeTracerEvaluator(TracerSteps{s.delta1, s.delta2}));
+  });
 }
 
 }  // namespace scatterlab

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "core/stages.h"
+#include "core/transport.h"
 #include "gpu/frame.h"
 #include "gpu/stages.h"
 #include "gpu/volume.h"
@@ -11,7 +12,6 @@
 #include "media/procedural.h"
 #include "render/per_voxel.h"
 #include "render/ray_marcher.h"
-#include "core/transport.h"
 
 namespace scatterlab::testing {
 namespace {

@@ -81,17 +81,30 @@ std::set<std::string> keysTheCodeReads() {
       s.render = {{"method", m}, {"backend", "cpu"}};
       for (const std::string& k : methods().get(m, "").keys) {
         // Values of the right type, valid on this scene: the keys' own defaults where known.
-        if (k == "sampler") s.render[k] = {{"type", "jittered"}, {"count", 8}, {"seed", 1},
-                                           {"radius_scale", 1.5}, {"skip_empty", true}};
-        else if (k == "radiance_resolution") s.render[k] = 8;
-        else if (k == "slicing") s.render[k] = "ray-steps";
-        else if (k == "evaluator") s.render[k] = "volume-tracer";
-        else if (k == "integrator") s.render[k] = "ray-marcher";
-        else if (k == "levels") s.render[k] = {2};
-        else if (k == "tau") s.render[k] = "ancestor";
-        else if (k == "probes") s.render[k] = 6;
-        else if (k == "min_transmittance" || k == "epsilon") s.render[k] = 0.5;
-        else s.render[k] = s.medium.voxelSize();
+        if (k == "sampler")
+          s.render[k] = {{"type", "jittered"},
+                         {"count", 8},
+                         {"seed", 1},
+                         {"radius_scale", 1.5},
+                         {"skip_empty", true}};
+        else if (k == "radiance_resolution")
+          s.render[k] = 8;
+        else if (k == "slicing")
+          s.render[k] = "ray-steps";
+        else if (k == "evaluator")
+          s.render[k] = "volume-tracer";
+        else if (k == "integrator")
+          s.render[k] = "ray-marcher";
+        else if (k == "levels")
+          s.render[k] = {2};
+        else if (k == "tau")
+          s.render[k] = "ancestor";
+        else if (k == "probes")
+          s.render[k] = 6;
+        else if (k == "min_transmittance" || k == "epsilon")
+          s.render[k] = 0.5;
+        else
+          s.render[k] = s.medium.voxelSize();
       }
       createMethod(s);
     }
@@ -120,15 +133,14 @@ TEST(KeyDocs, EveryRenderKeyReadIsDocumentedAndEveryDocumentedOneIsRead) {
 TEST(KeyDocs, EverySceneKeyReadIsNamedInTheDocs) {
   // Scene keys outside `render` are documented in scene-format.md's tables and, for the density
   // types from files (OpenVDB, fitted models), in media.md: each key's name must appear there.
-  const std::set<std::string> words =
-      backticked(readDoc("scene-format.md") + readDoc("media.md"));
+  const std::set<std::string> words = backticked(readDoc("scene-format.md") + readDoc("media.md"));
   for (const std::string& path : keysTheCodeReads()) {
     if (path.rfind("render.", 0) == 0) continue;
     std::string leaf = path.substr(path.rfind('.') == std::string::npos ? 0 : path.rfind('.') + 1);
     if (leaf.size() > 2 && leaf.compare(leaf.size() - 2, 2, "[]") == 0)
       leaf.resize(leaf.size() - 2);
-    EXPECT_TRUE(words.count(leaf)) << path << " is read but '" << leaf
-                                   << "' appears in neither scene-format.md nor media.md";
+    EXPECT_TRUE(words.count(leaf))
+        << path << " is read but '" << leaf << "' appears in neither scene-format.md nor media.md";
   }
 }
 

@@ -96,14 +96,14 @@ TEST(MethodLayer, ABackendWithoutAVariantIsAClearError) {
 // The third failure: a fractional radiance resolution rendered at the truncated size.
 TEST(MethodLayer, ResolutionsFollowOneRule) {
   initialize();
-  const Scene s = loadScene(
-      kGlow, with({"render.method=per-voxel", "render.radiance_resolution=[8,8,8.7]"}));
+  const Scene s =
+      loadScene(kGlow, with({"render.method=per-voxel", "render.radiance_resolution=[8,8,8.7]"}));
   const std::string e = errorOf([&] { createMethod(s, "", "cpu"); });
   EXPECT_NE(e.find("'render.radiance_resolution': expected integers"), std::string::npos) << e;
   const std::string m = errorOf([&] { loadScene(kGlow, {"medium.resolution=[8,8,8.7]"}); });
   EXPECT_NE(m.find("'medium.resolution': expected integers"), std::string::npos) << m;
-  const Scene ok = loadScene(kGlow, with({"render.method=per-voxel",
-                                          "render.radiance_resolution=[8,6,4]"}));
+  const Scene ok =
+      loadScene(kGlow, with({"render.method=per-voxel", "render.radiance_resolution=[8,6,4]"}));
   const RenderResult r = createMethod(ok, "", "cpu")->render(ok, nullptr);
   EXPECT_EQ(r.stats.extra["radiance_resolution"], Json::array({8, 6, 4}));
   EXPECT_EQ(r.radiance->dims(), IVec3(8, 6, 4));

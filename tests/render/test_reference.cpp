@@ -4,8 +4,8 @@
 
 #include <functional>
 
-#include "media/procedural.h"
 #include "core/transport.h"
+#include "media/procedural.h"
 #include "support/scenes.h"
 
 using namespace scatterlab;

@@ -21,8 +21,7 @@ class AnalyticEvaluator : public RadianceEvaluator {
  public:
   std::function<Vec3(const Vec3&)> S;
   std::function<void(const Vec3&, Vec3[3])> grad;
-  void evaluate(Frame&, const Scene&, std::span<RadianceSample> samples,
-                bool gradients) override {
+  void evaluate(Frame&, const Scene&, std::span<RadianceSample> samples, bool gradients) override {
     for (auto& s : samples) {
       s.S = S(s.position);
       if (gradients) grad(s.position, s.dS);
