@@ -8,6 +8,7 @@ namespace scatterlab::gpu {
 GpuFrame::GpuFrame(const DensityGrid& d) : density(uploadDensity(d)) {}
 
 void GpuFrame::buildDensity(const Scene& scene) {
+  context();  // current before the first timer query or upload
   density = gpu::buildDensity(scene, &timer, &splatted_);
   host_.reset();
 }
