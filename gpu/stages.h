@@ -16,8 +16,9 @@
 
 namespace scatterlab::gpu {
 
-/// Buffers and uniforms every tracing shader (common.glsl) needs: lights SSBO at binding 0,
-/// density on texture unit 0, phase, σt, Δ1, eye. Needs a current context.
+/// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
+/// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs
+/// a current context.
 class TracingInputs {
  public:
   TracingInputs(const Scene& scene, const Volume& density, float delta1);

@@ -106,6 +106,44 @@ TEST_F(Cli, RenderWritesImageStatsAndHonoursSet) {
   EXPECT_NE(r.output.find(out("a.exr")), std::string::npos);
 }
 
+// The method layer's three user-visible rules, through the tool (issue #10's failures).
+TEST_F(Cli, MethodOverrideBackendKeysAndResolutions) {
+  const std::string scene = writeScene(tinyScene());  // its own method is `exact`
+  // --method X means --set render.method=X: the sampler key is the gradient method's.
+  const RunResult a = run("render " + scene + " -q -o " + out("a.exr") +
+                          " --method gradient --set render.sampler.count=3");
+  ASSERT_EQ(a.code, 0) << a.output;
+  const RunResult b = run("render " + scene + " -q -o " + out("b.exr") +
+                          " --set render.method=gradient --set render.sampler.count=3");
+  ASSERT_EQ(b.code, 0) << b.output;
+  EXPECT_EQ(scatterlab::readExr(out("a.exr")).pixels(), scatterlab::readExr(out("b.exr")).pixels());
+  // A key of another method is ignored with one warning; a key nobody reads is an error.
+  const RunResult c = run("render " + scene + " -q -o " + out("c.exr") +
+                          " --set render.sampler.count=3 --set render.epsilon=0.1");
+  ASSERT_EQ(c.code, 0) << c.output;
+  EXPECT_NE(c.output.find("warning: ignoring 'render.epsilon', 'render.sampler'"),
+            std::string::npos)
+      << c.output;
+  const RunResult d = run("render " + scene + " -q -o " + out("d.exr") + " --set render.sampels=3");
+  EXPECT_EQ(d.code, 1);
+  EXPECT_NE(d.output.find("unknown key 'render.sampels'"), std::string::npos) << d.output;
+  EXPECT_FALSE(fs::exists(out("d.exr")));
+  // A GPU-only key is valid on the CPU and reported unused there.
+  const RunResult e =
+      run("render " + scene + " -q -o " + out("e.exr") + " --stats " + out("e.json") +
+          " --method per-voxel --backend cpu --set render.slicing=view-planes");
+  ASSERT_EQ(e.code, 0) << e.output;
+  const Json stats = Json::parse(std::ifstream(out("e.json")));
+  EXPECT_EQ(stats["unused_keys"], Json::array({"render.slicing"}));
+  // Every resolution key follows one rule.
+  const RunResult f = run("render " + scene + " -q -o " + out("f.exr") +
+                          " --method per-voxel --set 'render.radiance_resolution=[8,8,8.7]'");
+  EXPECT_EQ(f.code, 1);
+  EXPECT_NE(f.output.find("'render.radiance_resolution': expected integers"), std::string::npos)
+      << f.output;
+  EXPECT_FALSE(fs::exists(out("f.exr")));
+}
+
 TEST_F(Cli, CompareReportsErrorsAsJson) {
   const std::string scene = writeScene(tinyScene());
   ASSERT_EQ(run("render " + scene + " -q -o " + out("ref.exr")).code, 0);
