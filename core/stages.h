@@ -67,6 +67,12 @@ enum class Slicing {
 /// The settings every stage variant is built from, whichever backend runs it. Parsed once,
 /// with its key table, by parsePipelineSettings (methods/settings.h).
 struct PipelineSettings {
+  /// render.paper: the paper's algorithm exactly (every extension off, today's images).
+  bool paper = false;
+  /// Singular-light factorization (docs/fidelity.md): samples and the radiance volume hold
+  /// V = S / A, A the analytic unshadowed source radiance of the lights, and the integrator
+  /// multiplies A back at each step. Default: on for gradient and adaptive unless `paper`.
+  bool factorLights = false;
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
   bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)

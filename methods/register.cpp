@@ -6,20 +6,21 @@
 namespace scatterlab {
 
 const std::vector<MethodDesc>& builtinMethods() {
-  // name, summary, sampler, refiner, reconstruction, integrator, render.integrator selectable
+  // name, summary, sampler, refiner, reconstruction, integrator, render.integrator selectable,
+  // extensions on by default
   static const std::vector<MethodDesc> table = {
       {"exact", "per-pixel march, transmittance to every light traced at each step (reference)",
        false, "", "", "exact", false},
       {"per-voxel", "S traced at every voxel, then marched (the paper's baseline)", false, "",
        "per-voxel", "ray-marcher", true},
       {"gradient", "samples with S and ∇S, first-order Taylor splatting (paper Eq. 4)", true, "",
-       "gradient", "ray-marcher", true},
+       "gradient", "ray-marcher", true, /*extended=*/true},
       {"rbf", "samples with S, normalised RBF interpolation (Zhou et al. 2007)", true, "", "rbf",
        "ray-marcher", true},
       {"nearest", "samples with S, nearest covering sample", true, "", "nearest", "ray-marcher",
        true},
       {"adaptive", "gradient with dynamic sampling (paper Sec. 5: Eq. 5 error, grid splitting)",
-       true, "dynamic", "gradient", "ray-marcher", true},
+       true, "dynamic", "gradient", "ray-marcher", true, /*extended=*/true},
   };
   return table;
 }

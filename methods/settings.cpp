@@ -6,6 +6,12 @@ namespace scatterlab {
 
 const std::vector<KeyDoc>& pipelineKeys() {
   static const std::vector<KeyDoc> keys = {
+      {"paper", "bool", "false", "true, false",
+       "the paper's algorithm exactly: every extension off; methods with samples"},
+      {"factor_lights", "bool", "true for gradient and adaptive, else false (false with paper)",
+       "true, false",
+       "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
+       "back at each march step (singular lights); methods with samples"},
       {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
        "view-ray step (world units)"},
       {"min_transmittance", "number", "1e-6", "[0, 1]",
@@ -35,7 +41,13 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   s.march.step = p.real("march_step", voxel, steps);
   s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
   s.delta1 = p.real("delta1", voxel, steps);
-  if (d.sampler) s.delta2 = p.real("delta2", voxel, steps);
+  if (d.sampler) {
+    s.delta2 = p.real("delta2", voxel, steps);
+    s.paper = p.boolean("paper", false);
+    s.factorLights = p.boolean("factor_lights", d.extended && !s.paper);
+    if (s.paper && s.factorLights)
+      p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
+  }
   if (d.radianceVolume()) {
     s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution);
     s.slicingGiven = p.has("slicing");
@@ -48,7 +60,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
-  if (d.sampler) k.insert(k.end(), {"delta2", "sampler", "evaluator"});
+  if (d.sampler) k.insert(k.end(), {"delta2", "paper", "factor_lights", "sampler", "evaluator"});
   if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())

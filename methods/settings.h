@@ -23,6 +23,9 @@ struct MethodDesc {
   std::string reconstruction;        ///< reconstructions() entry, or empty (no radiance volume)
   std::string integrator;            ///< default integrators() entry (render.integrator)
   bool integratorSelectable = true;  ///< whether render.integrator may replace it
+  /// The fidelity extensions (docs/fidelity.md) are on by default (`gradient`, `adaptive`); the
+  /// baselines keep the paper's algorithm unless asked. render.paper turns them all off.
+  bool extended = false;
 
   /// Whether the method builds a source-radiance volume (and reads its keys).
   bool radianceVolume() const { return !reconstruction.empty(); }
