@@ -10,6 +10,7 @@
 
 #include "api/scatterlab.h"
 #include "core/stages.h"
+#include "methods/settings.h"
 
 namespace scatterlab {
 namespace {
@@ -62,6 +63,13 @@ std::set<std::string> backticked(const std::string& text) {
   return words;
 }
 
+/// Whether the key tables say `key` is a bool.
+bool isBool(const std::string& key) {
+  for (const KeyDoc& d : pipelineKeys())
+    if (d.name == key) return d.type == "bool";
+  return false;
+}
+
 /// The keys read while loading every demo scene and creating every method (all its keys given,
 /// so optional ones are read too) and every sampler type on it.
 std::set<std::string> keysTheCodeReads() {
@@ -103,6 +111,8 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 6;
         else if (k == "min_transmittance" || k == "epsilon")
           s.render[k] = 0.5;
+        else if (isBool(k))
+          s.render[k] = false;
         else
           s.render[k] = s.medium.voxelSize();
       }
