@@ -73,6 +73,10 @@ struct PipelineSettings {
   /// V = S / A, A the analytic unshadowed source radiance of the lights, and the integrator
   /// multiplies A back at each step. Default: on for gradient and adaptive unless `paper`.
   bool factorLights = false;
+  /// With factorLights: samples hold u = ln V and ∇u, the reconstruction interpolates u and
+  /// stores V = exp(u). ln V is minus a light-weighted optical depth, nearly linear where V =
+  /// exp(−τ) is convex, so first-order estimates do not undershoot (docs/fidelity.md).
+  bool logSpace = false;
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
   bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)

@@ -91,4 +91,125 @@ class SourceRadiance {
   float delta1_;
 };
 
+/// The singular-light factorization (docs/fidelity.md): S(x, ω) = A(x, ω) ⊙ V(x, ω), per RGB
+/// channel, with A = Σ_l f(ω_l → ω)·E⁰_l(x) the analytic, unshadowed source radiance (E⁰ =
+/// I·cone/d² for point and spot lights, the sun's irradiance for directional ones) and
+/// V = S / A the light-weighted transmittance, in [0, 1]. A carries the 1/d² singularity, the
+/// spot cone's edge and the phase function exactly; V is as smooth as the transmittance, so
+/// V is what the samples hold and the volume interpolates, and the integrator multiplies A
+/// back at each step.
+class LightFactor {
+ public:
+  /// References must outlive this object.
+  explicit LightFactor(const Scene& scene) : lights_(scene.lights), phase_(scene.medium.phase) {}
+
+  /// A(x, toViewer): one analytic evaluation per light (no tracing).
+  Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 a(0.0f);
+    for (const Light& l : lights_) {
+      Light::Incident inc;
+      if (!l.incident(x, inc)) continue;
+      a += inc.irradiance * phase_.eval(-inc.toLight, toViewer);
+    }
+    return a;
+  }
+
+ private:
+  const std::vector<Light>& lights_;
+  Phase phase_;
+};
+
+/// V(x, ω) = S / A of LightFactor, traced like SourceRadiance. Where A is zero in a channel
+/// (outside every spot cone) S is zero too and any V reproduces it; there V is the weighted
+/// transmittance with the cones ignored — the continuation of V from inside the cone — so that
+/// samples outside a cone do not drag the interpolated V down at its edge.
+class FactoredSourceRadiance {
+ public:
+  /// `delta1`: volume tracing step (world units). References must outlive this object.
+  FactoredSourceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
+      : lights_(scene.lights),
+        phase_(scene.medium.phase),
+        sigmaT_(scene.medium.sigmaT),
+        density_(density),
+        delta1_(delta1) {
+    for (const Light& l : lights_) lit_ = glm::max(lit_, l.intensity);
+  }
+
+  Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 s(0.0f), a(0.0f);
+    bool outside = false;  // some light's cone excludes x
+    for (std::size_t i = 0; i < lights_.size(); ++i) {
+      Term t;
+      if (!term(i, x, toViewer, t)) continue;
+      if (t.cone <= 0.0f) {
+        outside = true;
+        continue;
+      }
+      s += t.w * (t.cone * transmittance(x, t.end));
+      a += t.w * t.cone;
+    }
+    Vec3 v(0.0f), free(-1.0f);
+    for (int c = 0; c < 3; ++c) {
+      if (a[c] > 0.0f) {
+        v[c] = s[c] / a[c];
+      } else if (outside && lit_[c] > 0.0f) {
+        if (free.x < 0.0f) free = freeV(x, toViewer);
+        v[c] = free[c];
+      }
+    }
+    return v;
+  }
+
+ private:
+  /// One light's analytic weight w = E⁰·f (cone not applied), its cone factor, and the far end
+  /// of the segment to trace.
+  struct Term {
+    Vec3 w, end;
+    float cone = 1.0f;
+  };
+  bool term(std::size_t i, const Vec3& x, const Vec3& toViewer, Term& t) const {
+    const Light& l = lights_[i];
+    Vec3 toLight, e0;
+    if (l.type == Light::Type::Directional) {
+      toLight = -l.direction;
+      e0 = l.intensity;
+      float t0, t1;
+      t.end = density_.bounds().intersect(Ray{x, toLight}, t0, t1) ? x + toLight * t1 : x;
+    } else {
+      const Vec3 d = l.position - x;
+      const float dist2 = glm::dot(d, d);
+      if (dist2 <= 0.0f) return false;
+      toLight = d / std::sqrt(dist2);
+      e0 = l.intensity / dist2;
+      if (l.type == Light::Type::Spot) t.cone = l.spotFalloff(-toLight);
+      t.end = l.position;
+    }
+    t.w = e0 * phase_.eval(-toLight, toViewer);
+    return true;
+  }
+  float transmittance(const Vec3& x, const Vec3& end) const {
+    return std::exp(-sigmaT_ * opticalDepth(density_, x, end, delta1_));
+  }
+  /// V with every cone ignored (every light traced).
+  Vec3 freeV(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 s(0.0f), a(0.0f);
+    for (std::size_t i = 0; i < lights_.size(); ++i) {
+      Term t;
+      if (!term(i, x, toViewer, t)) continue;
+      s += t.w * (transmittance(x, t.end));
+      a += t.w;
+    }
+    Vec3 v(0.0f);
+    for (int c = 0; c < 3; ++c) v[c] = a[c] > 0.0f ? s[c] / a[c] : 0.0f;
+    return v;
+  }
+
+  const std::vector<Light>& lights_;
+  Phase phase_;
+  float sigmaT_;
+  const DensityGrid& density_;
+  float delta1_;
+  Vec3 lit_{0.0f};  ///< channels some light emits in
+};
+
 }  // namespace scatterlab

@@ -12,6 +12,9 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "true, false",
        "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
        "back at each march step (singular lights); methods with samples"},
+      {"log_space", "bool", "false", "true, false (true needs factor_lights)",
+       "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
+       "methods with samples"},
       {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
        "view-ray step (world units)"},
       {"min_transmittance", "number", "1e-6", "[0, 1]",
@@ -47,6 +50,9 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     s.factorLights = p.boolean("factor_lights", d.extended && !s.paper);
     if (s.paper && s.factorLights)
       p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
+    s.logSpace = p.boolean("log_space", false);
+    if (s.logSpace && !s.factorLights)
+      p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
   }
   if (d.radianceVolume()) {
     s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution);
@@ -60,7 +66,8 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
-  if (d.sampler) k.insert(k.end(), {"delta2", "paper", "factor_lights", "sampler", "evaluator"});
+  if (d.sampler) k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "sampler",
+                                   "evaluator"});
   if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())

@@ -10,12 +10,21 @@ namespace {
 
 class RayMarcher : public Integrator {
  public:
-  explicit RayMarcher(const PipelineSettings& s) : march_(s.march), slicingGiven_(s.slicingGiven) {}
+  explicit RayMarcher(const PipelineSettings& s)
+      : march_(s.march), slicingGiven_(s.slicingGiven), factored_(s.factorLights) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     const HostFrame& f = static_cast<const HostFrame&>(frame);
     const RadianceGrid& radiance = *f.radiance;
     if (progress) progress->restart("march", scene.camera.height);
     const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
+    if (factored_) {
+      // The volume holds V = S / A; A is analytic (one evaluation per light and step).
+      const LightFactor A(scene);
+      const auto lookup = [&](const Vec3& x, const Vec3& toViewer) {
+        return radiance.sampleIndex(x * s + o) * A(x, toViewer);
+      };
+      return marchImage(scene, *f.density, lookup, march_, progress);
+    }
     const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
     return marchImage(scene, *f.density, lookup, march_, progress);
   }
@@ -27,6 +36,7 @@ class RayMarcher : public Integrator {
  private:
   MarchSettings march_;
   bool slicingGiven_;
+  bool factored_;
 };
 
 class ExactIntegrator : public Integrator {

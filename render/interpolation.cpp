@@ -113,7 +113,7 @@ Vec3 clampNonNegative(Vec3 v) {
 
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
-                                       Grid3<float>* weightSum) {
+                                       Grid3<float>* weightSum, ValueSpace space) {
   const IVec3 n = out.dims();
   const Vec3 h = out.cellSize(), lo = out.bounds().min;
   if (weightSum) weightSum->reset(out.bounds(), n, 0.0f);
@@ -214,7 +214,10 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
           const int m = nearestIndex.nearest(out.cellCenter(i, j, k));
           if (m >= 0) v = samples[std::size_t(m)].S;
         }
-        out.at(i, j, k) = clampNonNegative(v);
+        out.at(i, j, k) = space == ValueSpace::Log ? (covered || occupied[out.index(i, j, k)]
+                                                          ? glm::exp(v)
+                                                          : Vec3(0.0f))
+                                                   : clampNonNegative(v);
         if (weightSum) weightSum->at(i, j, k) = wsum;
       }
     uncovered += unc;
@@ -273,16 +276,18 @@ RadianceGrid& newRadiance(Frame& frame, const Scene& scene, IVec3 dims) {
 
 class InterpolatingReconstruction : public Reconstruction {
  public:
-  explicit InterpolatingReconstruction(Interpolation k) : kind_(k) {}
+  InterpolatingReconstruction(Interpolation k, ValueSpace space) : kind_(k), space_(space) {}
   bool needsGradients() const override { return kind_ == Interpolation::Gradient; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
                                   Progress*) override {
-    return interpolateSamples(kind_, frame.hostDensity(), samples, newRadiance(frame, scene, dims));
+    return interpolateSamples(kind_, frame.hostDensity(), samples, newRadiance(frame, scene, dims),
+                              nullptr, space_);
   }
 
  private:
   Interpolation kind_;
+  ValueSpace space_;
 };
 
 class PerVoxelReconstruction : public Reconstruction {
@@ -309,8 +314,9 @@ class PerVoxelReconstruction : public Reconstruction {
 
 void registerReconstructions() {
   const auto interp = [](Interpolation k) {
-    return [k](const PipelineSettings&) {
-      return std::unique_ptr<Reconstruction>(new InterpolatingReconstruction(k));
+    return [k](const PipelineSettings& s) {
+      const ValueSpace space = s.factorLights && s.logSpace ? ValueSpace::Log : ValueSpace::Linear;
+      return std::unique_ptr<Reconstruction>(new InterpolatingReconstruction(k, space));
     };
   };
   reconstructions().addVariant("gradient", Backend::Cpu, interp(Interpolation::Gradient));

@@ -40,9 +40,14 @@ inline constexpr float kSingularEps = 1e-9f;
 /// Fills `out` (bounds and dims preset) from the samples. `weightSum`, when given (it is reset
 /// to out's bounds and dims), receives the denominator at each voxel centre (Σ W_j for
 /// Gradient, Σ w_j·B_j for Rbf, 1 where covered for Nearest). No GL context.
+/// What the samples' S holds: the value itself (results clamped to >= 0), or its natural
+/// logarithm (results exponentiated: PipelineSettings::logSpace).
+enum class ValueSpace { Linear, Log };
+
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
-                                       Grid3<float>* weightSum = nullptr);
+                                       Grid3<float>* weightSum = nullptr,
+                                       ValueSpace space = ValueSpace::Linear);
 
 /// Brute-force evaluation of the interpolation at one point, over all samples (no clamping,
 /// no uncovered rule): the formulas above executed literally, for tests and probes.

@@ -11,7 +11,15 @@ namespace scatterlab {
 struct TracerSteps {
   float delta1 = 0.0f;
   float delta2 = 0.0f;
+  /// Evaluate V = S / A (core/transport.h, FactoredSourceRadiance) instead of S, and ∇V.
+  bool factorLights = false;
+  /// With factorLights: ln V and ∇ ln V (V clamped below at kMinV).
+  bool logSpace = false;
 };
+
+/// Smallest V whose logarithm the samples hold (ln 1e-9 ≈ −20.7: transmittance below it is
+/// black at any exposure).
+inline constexpr float kMinV = 1e-9f;
 
 /// Fills S (and dS when `gradients`) of every sample. The view direction at a point p is
 /// towards scene.camera.position from p itself, also at the six offset points, so ∇S is the
