@@ -127,11 +127,21 @@ std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
 
 LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
                                     const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
-                                    float delta2, const DynamicSamplingSettings& settings,
-                                    StageTimer* timer) {
+                                    const DynamicSamplingGpuSteps& steps,
+                                    const DynamicSamplingSettings& settings, StageTimer* timer) {
   context();
-  const Program& program = cachedProgram("dynamic sampling error", [] {
-    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {}, "dynamic sampling error");
+  std::string key = "dynamic sampling error";
+  std::vector<std::string> defines;
+  if (steps.factorLights) {
+    defines.push_back("SL_FACTOR_LIGHTS");
+    key += " V";
+  }
+  if (steps.factorLights && steps.logSpace) {
+    defines.push_back("SL_LOG_SPACE");
+    key += " ln";
+  }
+  const Program& program = cachedProgram(key, [&] {
+    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, defines, key);
   });
   const std::size_t count = level.count;
   LevelEvaluationGpu e;
@@ -154,7 +164,7 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
     program.use();
     inputs.apply(program);
     glUniform1ui(program.uniform("uCount"), GLuint(count));
-    glUniform1f(program.uniform("uDelta2"), delta2);
+    glUniform1f(program.uniform("uDelta2"), steps.delta2);
     glUniform1i(program.uniform("uProbes"), settings.probes);
     glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
     glUniform1i(program.uniform("uTauMode"),
@@ -273,7 +283,7 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
     const bool final = level == nLevels || current.count == 0;
     if (current.count > 0) {
       const LevelEvaluationGpu eval =
-          evaluateLevelGpu(inputs, density, current, rootTau, final, steps.delta2, settings, timer);
+          evaluateLevelGpu(inputs, density, current, rootTau, final, steps, settings, timer);
       appendKept(eval, level, final, result.samples);
       if (!final) {
         if (errorsOut) errorsOut->push_back(eval.errors);

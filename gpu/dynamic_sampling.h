@@ -26,6 +26,8 @@ namespace scatterlab::gpu {
 struct DynamicSamplingGpuSteps {
   float delta1 = 0.0f;  ///< tracing step towards the lights
   float delta2 = 0.0f;  ///< central-difference step of ∇S
+  bool factorLights = false;  ///< samples hold V = S / A (PipelineSettings::factorLights)
+  bool logSpace = false;      ///< ... or ln V (with factorLights)
 };
 
 /// Runs recursive splitting from `initial` (positions and radii) entirely with GL compute
@@ -68,13 +70,14 @@ struct GridInfoGpu {
 };
 
 /// Evaluate: one dispatch computes, for every sample of `level`, S and ∇S (central
-/// differences, step `delta2`) and, unless `final`, the probes' S and density, τ to the viewer
-/// (traced on level 0 and stored in `rootTau`, one float per level-0 sample; later levels read
-/// their ancestor's unless settings.perSampleTau), E_j and the split flag E_j > ε. `inputs`
-/// must be those of `density`. GPU time: "ds evaluate+error".
+/// differences, step steps.delta2; V or ln V instead of S as steps says) and, unless `final`, the
+/// probes' S and density, τ to the viewer (traced on level 0 and stored in `rootTau`, one float per
+/// level-0 sample; later levels read their ancestor's unless settings.perSampleTau), E_j and the
+/// split flag E_j > ε. `inputs` must be those of `density`. GPU time: "ds evaluate+error".
 LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
                                     const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
-                                    float delta2, const DynamicSamplingSettings& settings,
+                                    const DynamicSamplingGpuSteps& steps,
+                                    const DynamicSamplingSettings& settings,
                                     StageTimer* timer = nullptr);
 
 /// Split: adds the level's split count, largest and 90th-percentile E_j to `stats`, and marks,

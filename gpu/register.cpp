@@ -51,22 +51,25 @@ void registerGpuStages() {
   backends()[int(Backend::Gpu)] =
       BackendEntry{[] { return std::unique_ptr<Frame>(new GpuFrame()); }, preferGpu};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(s.delta1, s.delta2));
+    return std::unique_ptr<RadianceEvaluator>(
+        new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace));
   });
-  reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings&) {
-    return std::unique_ptr<Reconstruction>(new GradientSplatGpu());
+  reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Reconstruction>(new GradientSplatGpu(s.factorLights && s.logSpace));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1));
   });
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps));
+    return std::unique_ptr<Integrator>(
+        new SliceMarcher(s.march, s.slicing == Slicing::RaySteps, s.factorLights));
   });
   refiners().addVariant(
       "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
         DynamicSamplingSettings s = ds;
         s.delta1 = ps.delta1;
-        return std::unique_ptr<SampleRefiner>(new GpuRefiner(std::move(s), {ps.delta1, ps.delta2}));
+        return std::unique_ptr<SampleRefiner>(
+            new GpuRefiner(std::move(s), {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}));
       });
 }
 

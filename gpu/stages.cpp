@@ -49,10 +49,13 @@ void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
                                StageTimer* timer) {
   context();
   if (samples.empty()) return;
-  const std::string key = gradients ? "volume tracer (S, grad S)" : "volume tracer (S)";
+  std::string key = gradients ? "volume tracer (S, grad S)" : "volume tracer (S)";
+  if (factor_) key += log_ ? " ln V" : " V";
   const Program& program = cachedProgram(key, [&] {
     std::vector<std::string> defines;
     if (gradients) defines.push_back("SL_GRADIENTS");
+    if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
+    if (log_) defines.push_back("SL_LOG_SPACE");
     return computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, defines, key);
   });
   std::vector<GpuSamplePoint> pos;
@@ -100,8 +103,11 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"}, {},
                            "radiance splat");
   });
-  const Program& normalize = cachedProgram("radiance normalize", [] {
-    return computeProgram({"radiance_normalize.comp.glsl"}, {}, "radiance normalize");
+  const std::string normKey = log_ ? "radiance normalize (exp)" : "radiance normalize";
+  const Program& normalize = cachedProgram(normKey, [&] {
+    return computeProgram(
+        {"radiance_normalize.comp.glsl"},
+        log_ ? std::vector<std::string>{"SL_LOG_SPACE"} : std::vector<std::string>{}, normKey);
   });
   std::vector<GpuSplatSample> packed;
   packed.reserve(samples.size());
@@ -205,11 +211,14 @@ Image SliceMarcher::integrate(const Scene& scene, const DensityGrid& density,
 Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
                               StageTimer* timer, int* sliceCount) {
   context();
-  const std::string key = raySteps_ ? "slice marcher (ray steps)" : "slice marcher";
+  std::string key = raySteps_ ? "slice marcher (ray steps)" : "slice marcher";
+  if (factor_) key += " x A";
   const Program& program = cachedProgram(key, [&] {
-    return graphicsProgram(
-        {"fullscreen.vert.glsl"}, {"common.glsl", "slice_march.frag.glsl"},
-        raySteps_ ? std::vector<std::string>{"SL_RAY_STEPS"} : std::vector<std::string>{}, key);
+    std::vector<std::string> defines;
+    if (raySteps_) defines.push_back("SL_RAY_STEPS");
+    if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
+    return graphicsProgram({"fullscreen.vert.glsl"}, {"common.glsl", "slice_march.frag.glsl"},
+                           defines, key);
   });
   const Camera& cam = scene.camera;
   const auto gen = cam.rayGenerator();

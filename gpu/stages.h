@@ -38,7 +38,10 @@ class TracingInputs {
 class VolumeTracerGpu : public RadianceEvaluator {
  public:
   /// delta1: tracing step towards the lights; delta2: central-difference step (world units).
-  VolumeTracerGpu(float delta1, float delta2) : delta1_(delta1), delta2_(delta2) {}
+  /// factorLights / logSpace: evaluate V = S / A (or ln V) instead of S, as the CPU evaluator
+  /// does (PipelineSettings).
+  VolumeTracerGpu(float delta1, float delta2, bool factorLights = false, bool logSpace = false)
+      : delta1_(delta1), delta2_(delta2), factor_(factorLights), log_(factorLights && logSpace) {}
   void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override;
   void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
@@ -48,6 +51,7 @@ class VolumeTracerGpu : public RadianceEvaluator {
 
  private:
   float delta1_, delta2_;
+  bool factor_, log_;
 };
 
 /// Radiance splatting (paper Sec. 4, Eq. 4) by rasterisation: for each z slice of the output
@@ -56,6 +60,8 @@ class VolumeTracerGpu : public RadianceEvaluator {
 /// pass normalises into the source-radiance volume. Voxels no sphere covers get S = 0.
 class GradientSplatGpu : public Reconstruction {
  public:
+  /// logSpace: the samples hold ln V; the normalised result is exponentiated.
+  explicit GradientSplatGpu(bool logSpace = false) : log_(logSpace) {}
   bool needsGradients() const override { return true; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
@@ -65,6 +71,9 @@ class GradientSplatGpu : public Reconstruction {
   /// Splats into a new volume over `bounds` with `dims`.
   Volume reconstruct(const Volume& density, std::span<const RadianceSample> samples,
                      const Box& bounds, IVec3 dims, ReconstructionStats* stats, StageTimer* timer);
+
+ private:
+  bool log_;
 };
 
 /// The per-voxel baseline on the GPU (twin of buildPerVoxelRadiance): S traced at every voxel
@@ -98,8 +107,9 @@ class PerVoxelGpu : public Reconstruction {
 /// slabs' different sample points matter (a point light inside the medium).
 class SliceMarcher : public Integrator {
  public:
-  explicit SliceMarcher(MarchSettings settings, bool raySteps = false)
-      : settings_(settings), raySteps_(raySteps) {}
+  /// factorLights: the radiance volume holds V = S / A; A is multiplied back per layer.
+  explicit SliceMarcher(MarchSettings settings, bool raySteps = false, bool factorLights = false)
+      : settings_(settings), raySteps_(raySteps), factor_(factorLights) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
   /// slicing and the number of slices of the last integrate().
   void describe(RenderStats& stats) const override;
@@ -110,6 +120,7 @@ class SliceMarcher : public Integrator {
  private:
   MarchSettings settings_;
   bool raySteps_;
+  bool factor_;
   int slices_ = 0;
 };
 

@@ -144,10 +144,96 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
   return s;
 }
 
-// S at p seen from the camera at uEye (per-voxel and evaluator convention).
+// One light's analytic weight, the twin of FactoredSourceRadiance::term (core/transport.h):
+// w = E0·f (cone not applied), the cone factor, and the far end of the segment to trace.
+bool lightTerm(int li, vec3 x, vec3 toViewer, out vec3 w, out float cone, out vec3 segEnd) {
+  GpuLight l = lights[li];
+  int type = int(l.positionType.w);
+  vec3 toLight, e0;
+  cone = 1.0;
+  if (type == 2) {
+    toLight = -l.directionCosInner.xyz;
+    e0 = l.intensityCosOuter.rgb;
+    float t0, t1;
+    segEnd = intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
+  } else {
+    vec3 d = l.positionType.xyz - x;
+    float dist2 = dot(d, d);
+    if (dist2 <= 0.0) return false;
+    toLight = d / sqrt(dist2);
+    e0 = l.intensityCosOuter.rgb / dist2;
+    if (type == 1)
+      cone = smoothStepCpu(dot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
+                           l.directionCosInner.w);
+    segEnd = l.positionType.xyz;
+  }
+  w = e0 * phaseEvalCos(dot(-toLight, toViewer));
+  return true;
+}
+
+// LightFactor::operator() (core/transport.h): A(x, ω), the lights' analytic, unshadowed source
+// radiance (singular-light factorization, docs/fidelity.md).
+vec3 lightFactor(vec3 x, vec3 toViewer) {
+  vec3 a = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) {
+    vec3 w, segEnd;
+    float cone;
+    if (lightTerm(li, x, toViewer, w, cone, segEnd)) a += w * cone;
+  }
+  return a;
+}
+
+// FactoredSourceRadiance::operator(): V = S / A; where A is zero in a channel (outside every
+// cone), V with the cones ignored.
+vec3 factoredSource(vec3 x, vec3 toViewer) {
+  vec3 s = vec3(0.0), a = vec3(0.0), lit = vec3(0.0);
+  bool outside = false;
+  for (int li = 0; li < uLightCount; ++li) {
+    lit = max(lit, lights[li].intensityCosOuter.rgb);
+    vec3 w, segEnd;
+    float cone;
+    if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
+    if (cone <= 0.0) {
+      outside = true;
+      continue;
+    }
+    s += w * (cone * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1)));
+    a += w * cone;
+  }
+  vec3 v = vec3(0.0);
+  bool needFree = false;
+  for (int c = 0; c < 3; ++c) {
+    if (a[c] > 0.0) v[c] = s[c] / a[c];
+    else if (outside && lit[c] > 0.0) needFree = true;
+  }
+  if (needFree) {
+    vec3 sf = vec3(0.0), af = vec3(0.0);
+    for (int li = 0; li < uLightCount; ++li) {
+      vec3 w, segEnd;
+      float cone;
+      if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
+      sf += w * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
+      af += w;
+    }
+    for (int c = 0; c < 3; ++c)
+      if (!(a[c] > 0.0) && outside && lit[c] > 0.0) v[c] = af[c] > 0.0 ? sf[c] / af[c] : 0.0;
+  }
+  return v;
+}
+
+// What the samples hold at p seen from the camera at uEye (per-voxel and evaluator
+// convention): S; V = S / A with SL_FACTOR_LIGHTS; ln V (V clamped below at 1e-9, kMinV of
+// render/radiance_evaluator.h) with SL_LOG_SPACE too.
 uniform vec3 uEye;
 vec3 sourceTowardsEye(vec3 p) {
   vec3 v = uEye - p;
   float len = length(v);
-  return sourceRadiance(p, len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0));
+  vec3 toViewer = len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0);
+#if defined(SL_FACTOR_LIGHTS) && defined(SL_LOG_SPACE)
+  return log(max(factoredSource(p, toViewer), vec3(1e-9)));
+#elif defined(SL_FACTOR_LIGHTS)
+  return factoredSource(p, toViewer);
+#else
+  return sourceRadiance(p, toViewer);
+#endif
 }

@@ -16,7 +16,11 @@ void main() {
   vec4 s = imageLoad(uSums, v);
   if (s.a > 0.0) {
     // clampNonNegative of the CPU twin: Taylor extrapolation can go below zero at a shaft edge.
+#ifdef SL_LOG_SPACE
+    imageStore(uRadiance, v, vec4(exp(s.rgb / s.a), 0.0));  // the samples held ln V
+#else
     imageStore(uRadiance, v, vec4(max(s.rgb / s.a, vec3(0.0)), 0.0));
+#endif
   } else {
     imageStore(uRadiance, v, vec4(0.0));
     float D = uSameGrid ? texelFetch(uDensity, v, 0).r

@@ -46,5 +46,8 @@ void main() {
   if (!(D > 0.0)) discard;
   float alpha = exp(-uSigmaT * D * dt);
   vec3 S = textureLod(uRadiance, (x * uRadScale + uRadOffset + 0.5) / vec3(uRadDims), 0.0).rgb;
+#ifdef SL_FACTOR_LIGHTS
+  S *= lightFactor(x, -dir);  // the volume holds V = S / A
+#endif
   outColor = vec4(uAlbedo * (1.0 - alpha) * S, alpha);
 }

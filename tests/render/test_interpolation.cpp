@@ -220,7 +220,10 @@ TEST(SampledMethods, GradientWithASampleAtEveryVoxelReproducesPerVoxel) {
       {"blobs", {{{"center", {0.5, 0.5, 0.5}}, {"radius", 0.3}, {"weight", 1.0}}}}};
   doc["render"] = {{"method", "per-voxel"}};
   const RenderResult ref = renderWith(doc);
+  // The paper's gradient (per-voxel interpolates S itself; factor_lights multiplies an analytic
+  // A back at the march's sample points instead).
   doc["render"] = {{"method", "gradient"},
+                   {"paper", true},
                    {"sampler", {{"type", "grid"}, {"count", 12 * 12 * 12}, {"skip_empty", false}}}};
   const RenderResult g = renderWith(doc);
   EXPECT_EQ(*g.stats.samples, 1728);
