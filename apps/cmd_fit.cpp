@@ -21,6 +21,7 @@ struct FitArgs {
   int gaussians = 512;
   double threshold = SogFitOptions{}.threshold;
   int bits = 8;
+  std::string residual = "diffuse";
   long long fitVoxels = SogFitOptions{}.fitVoxels;
   int sweeps = SogFitOptions{}.sweeps;
   bool verbose = false;
@@ -52,6 +53,7 @@ int runFit(const FitArgs& a) {
   o.gaussians = a.gaussians;
   o.threshold = a.threshold;
   o.bits = a.bits;
+  o.residual = a.residual == "drop" ? SogResidualMode::Drop : SogResidualMode::Diffuse;
   o.fitVoxels = a.fitVoxels;
   o.sweeps = a.sweeps;
   if (a.verbose) o.log = [](const std::string& s) { std::printf("  %s\n", s.c_str()); };
@@ -78,6 +80,8 @@ int runFit(const FitArgs& a) {
                 100.0 * double(m.fileBytes()) / denseBytes, denseBytes);
     std::printf("  rel. L2 D~       %.5f\n", rep.relL2Gaussians);
     std::printf("  rel. L2 D~ + F   %.5f\n", rep.relL2Model);
+    std::printf("  mass change      %+.3f%% (sum over the input cells)\n",
+                100.0 * rep.relMassModel);
     std::printf(
         "  time             %.2f s (placement %.2f, refinement %.2f, weights %.2f, "
         "residual %.2f)\n",
@@ -108,6 +112,11 @@ Action addFit(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--bits", a->bits, "Residual quantisation bits (8 or 16)")
       ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  c->add_option("--residual", a->residual,
+                "Residual below the threshold: diffuse (carried to neighbouring cells, mass "
+                "kept) or drop (lost; the original fit)")
+      ->check(CLI::IsMember({"diffuse", "drop"}))
       ->capture_default_str();
   c->add_option("--fit-voxels", a->fitVoxels,
                 "Cell budget of the working grid for placement and refinement")

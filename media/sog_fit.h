@@ -18,10 +18,20 @@
 
 namespace scatterlab {
 
+/// How step 5 treats residuals below the threshold (docs/media.md, "Residual").
+enum class SogResidualMode {
+  /// Dropped (the original behaviour): thin smoke below threshold·max(D) is lost.
+  Drop,
+  /// Error diffusion: what a cell does not keep is carried to its neighbours, so the lattice
+  /// sum of the model equals the input's (mass-preserving).
+  Diffuse,
+};
+
 struct SogFitOptions {
-  int gaussians = 512;                    ///< number of Gaussians placed greedily (N)
-  double threshold = 0.003;               ///< residual kept where |F| > threshold · max(D)
-  int bits = 8;                           ///< residual quantisation (8 or 16)
+  int gaussians = 512;       ///< number of Gaussians placed greedily (N)
+  double threshold = 0.003;  ///< residual kept where |F| > threshold · max(D)
+  int bits = 8;              ///< residual quantisation (8 or 16)
+  SogResidualMode residual = SogResidualMode::Diffuse;
   std::int64_t fitVoxels = 48 * 48 * 48;  ///< working-grid budget for steps 2–3
   int sweeps = 2;                         ///< refinement passes (0: placement only)
   int lmMaxEvaluations = 40;              ///< function evaluations per local LM solve
@@ -39,6 +49,7 @@ struct SogFitReport {
   IVec3 fitDims{0};           ///< working-grid dims of steps 2–3
   double relL2Gaussians = 0;  ///< ‖D − D̃‖ / ‖D‖ on the input cells
   double relL2Model = 0;      ///< ‖D − max(0, D̃ + F)‖ / ‖D‖ on the input cells
+  double relMassModel = 0;    ///< (Σ max(0, D̃ + F) − Σ D) / Σ D over the input cells
   double secondsPlacement = 0, secondsRefinement = 0, secondsWeights = 0, secondsResidual = 0;
   double secondsTotal = 0;
 };
