@@ -10,6 +10,7 @@
 #include <unsupported/Eigen/NonLinearOptimization>
 
 #include "core/error.h"
+#include "media/dense_grid.h"
 
 namespace scatterlab {
 
@@ -475,6 +476,51 @@ SogModel fitSog(const DensityGrid& D, const SogFitOptions& o, SogFitReport* repo
   rep.secondsTotal = since(t0);
   if (report) *report = rep;
   return m;
+}
+
+Scene sogCheckScene(const DensityGrid& D, const SogCheckView& view) {
+  if (view.width < 1 || view.height < 1 || !(view.meanOpticalDepth > 0) || view.maxVoxels < 1)
+    throw ConfigError("fit image check: width, height, optical depth and voxels must be > 0");
+  const IVec3 n = D.dims();
+  const Box box = D.bounds();
+  const Vec3 ext = box.extent();
+  // σt from the mean column integral along the view axis (z), over non-empty columns.
+  double sum = 0;
+  std::int64_t cols = 0;
+  const double dz = D.cellSize().z;
+  for (int j = 0; j < n.y; ++j)
+    for (int i = 0; i < n.x; ++i) {
+      double c = 0;
+      for (int k = 0; k < n.z; ++k) c += D.at(i, j, k);
+      if (c > 0) sum += c * dz, ++cols;
+    }
+  if (cols == 0) throw LimitError("fit image check: the input density is zero everywhere");
+  Scene s;
+  s.medium.bounds = box;
+  s.medium.density = std::make_shared<DenseGridDensity>(D, "the fitted input");
+  const double cells = double(n.x) * n.y * n.z;
+  const double shrink = std::max(1.0, std::cbrt(cells / double(view.maxVoxels)));
+  s.medium.resolution = glm::max(IVec3(1), IVec3(glm::floor(Vec3(n) / float(shrink))));
+  s.medium.sigmaT = float(view.meanOpticalDepth / (sum / double(cols)));
+  s.medium.albedo = 0.9f;
+  Camera& cam = s.camera;
+  cam.width = view.width;
+  cam.height = view.height;
+  cam.fovYDeg = 40.0f;
+  const float aspect = float(view.width) / float(view.height);
+  const float halfH = 0.55f * std::max(ext.y, ext.x / aspect);  // the box fills ~90 %
+  const Vec3 c = box.center();
+  cam.lookAt = c;
+  cam.position = c - Vec3(0, 0, 0.5f * ext.z + halfH / std::tan(glm::radians(20.0f)));
+  cam.up = Vec3(0, 1, 0);
+  Light sun;
+  sun.type = Light::Type::Directional;
+  sun.direction = glm::normalize(Vec3(-1, -1, 1));
+  sun.intensity = Vec3(1.0f);
+  s.lights = {sun};
+  s.background = Vec3(0.0f);
+  s.render = Json{{"method", "exact"}};
+  return s;
 }
 
 }  // namespace scatterlab

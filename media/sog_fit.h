@@ -14,6 +14,7 @@
 #include <functional>
 #include <string>
 
+#include "core/scene.h"
 #include "media/sog.h"
 
 namespace scatterlab {
@@ -58,6 +59,25 @@ struct SogFitReport {
 /// Throws ConfigError on bad options, LimitError when the input is empty (all zero).
 SogModel fitSog(const DensityGrid& input, const SogFitOptions& options,
                 SogFitReport* report = nullptr);
+
+/// Settings of fit's image-space check (docs/media.md, "Image-space check").
+struct SogCheckView {
+  int width = 160, height = 120;
+  /// Optical depth τ̄ the extinction is chosen for: σt = τ̄ / mean of the column integrals
+  /// ∫D dz over the columns that hold any density, so thin and dense inputs look alike.
+  double meanOpticalDepth = 3.0;
+  /// The density volume's voxels are the input's cells, scaled down to at most this many.
+  std::int64_t maxVoxels = 256 * 256 * 256;
+};
+
+/// A scene that shows `input` as a user would see it, for judging a fit in image space: the
+/// medium box = the input's box, medium resolution = its dims (capped by view.maxVoxels),
+/// σt by view.meanOpticalDepth, albedo 0.9, isotropic phase; a camera on the −z side looking
+/// at the box centre (fov 40°, the box filling ~90 % of the frame); one directional light
+/// travelling along normalize(−1, −1, 1) (from the upper right front); black background;
+/// method `exact`. The density is `input` itself (DenseGridDensity); replace
+/// scene.medium.density by the fitted model for the second image.
+Scene sogCheckScene(const DensityGrid& input, const SogCheckView& view = {});
 
 /// Relative L2 of `approx` against `ref` over their cells (same dims).
 double relativeL2(const std::vector<float>& approx, const std::vector<float>& ref);
