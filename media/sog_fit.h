@@ -65,6 +65,8 @@ struct SogCheckView {
   int width = 160, height = 120;
   /// Optical depth τ̄ the extinction is chosen for: σt = τ̄ / mean of the column integrals
   /// ∫D dz over the columns that hold any density, so thin and dense inputs look alike.
+  /// 3 is close to the smoke demo scene (smoke1 with σt 0.8 has τ̄ ≈ 3.6): dense enough that
+  /// the core saturates and the thin smoke around it shows, where fits go wrong.
   double meanOpticalDepth = 3.0;
   /// The density volume's voxels are the input's cells, scaled down to at most this many.
   std::int64_t maxVoxels = 256 * 256 * 256;
