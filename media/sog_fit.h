@@ -8,8 +8,9 @@
 ///     with Eigen's Levenberg–Marquardt (analytic Jacobian);
 ///  4. a final linear least-squares solve of all weights on the full-resolution input (exact
 ///     normal equations, non-negative by active-set elimination);
-///  5. residual F = D − D̃ at every input cell, kept where |F| > threshold·max(D), quantised to
-///     `bits` bits with a common step.
+///  5. residual F = D − D̃ at every input cell, quantised to `bits` bits with a common step and
+///     kept where |F| > threshold·max(D); by default what a cell does not keep is diffused to
+///     its neighbours so the model keeps the input's mass locally (SogResidualMode).
 
 #include <functional>
 #include <string>
