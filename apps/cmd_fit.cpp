@@ -1,5 +1,6 @@
 /// `scatterlab fit IN.vdb [IN2.vdb ...] -o OUT.sog`: sum-of-Gaussians + residual-hash models.
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 
@@ -7,6 +8,7 @@
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "media/dense_grid.h"
 #include "media/sog_fit.h"
 #include "media/vdb.h"
 
@@ -21,9 +23,12 @@ struct FitArgs {
   int gaussians = 512;
   double threshold = SogFitOptions{}.threshold;
   int bits = 8;
+  std::string residual = "diffuse";
   long long fitVoxels = SogFitOptions{}.fitVoxels;
   int sweeps = SogFitOptions{}.sweeps;
   bool verbose = false;
+  bool imageCheck = true;
+  std::string imageScene;  ///< scene file for the image check; empty: sogCheckScene
 };
 
 std::string frameName(const std::string& pattern, size_t frame) {
@@ -32,6 +37,37 @@ std::string frameName(const std::string& pattern, size_t frame) {
   std::string s = pattern;
   s.replace(s.find("{frame}"), 7, num);
   return s;
+}
+
+struct ImageCheck {
+  double relL2 = 0;
+  std::string view;
+  double seconds = 0;
+};
+
+/// The fit's effect in image space: the same scene rendered with `exact` on the CPU, once
+/// with the input grid and once with the model; relative L2 of the second against the first.
+ImageCheck imageCheck(const DensityGrid& D, const SogModel& m, const std::string& sceneFile) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ImageCheck out;
+  Scene scene;
+  if (sceneFile.empty()) {
+    scene = sogCheckScene(D);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%dx%d, exact, sigma_t %.3g, one directional light",
+                  scene.camera.width, scene.camera.height, double(scene.medium.sigmaT));
+    out.view = buf;
+  } else {
+    scene = loadScene(sceneFile);
+    scene.medium.density = std::make_shared<DenseGridDensity>(D, "the fitted input");
+    out.view = sceneFile + ", exact";
+  }
+  const Image ref = createMethod(scene, "exact", "cpu")->render(scene, nullptr).image;
+  scene.medium.density = std::make_shared<SogDensity>(m, "the fitted model");
+  const Image img = createMethod(scene, "exact", "cpu")->render(scene, nullptr).image;
+  out.relL2 = compareImages(img, ref).relL2;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
 }
 
 int runFit(const FitArgs& a) {
@@ -48,10 +84,16 @@ int runFit(const FitArgs& a) {
     outputs.push_back(sequence ? frameName(a.output, f) : a.output);
     checkWritablePath(outputs.back());
   }
+  if (!a.imageScene.empty()) {
+    if (!a.imageCheck)
+      throw ConfigError("fit: --image-scene and --no-image-check contradict each other");
+    loadScene(a.imageScene);  // a bad scene fails now, not after the fit
+  }
   SogFitOptions o;
   o.gaussians = a.gaussians;
   o.threshold = a.threshold;
   o.bits = a.bits;
+  o.residual = a.residual == "drop" ? SogResidualMode::Drop : SogResidualMode::Diffuse;
   o.fitVoxels = a.fitVoxels;
   o.sweeps = a.sweeps;
   if (a.verbose) o.log = [](const std::string& s) { std::printf("  %s\n", s.c_str()); };
@@ -78,6 +120,13 @@ int runFit(const FitArgs& a) {
                 100.0 * double(m.fileBytes()) / denseBytes, denseBytes);
     std::printf("  rel. L2 D~       %.5f\n", rep.relL2Gaussians);
     std::printf("  rel. L2 D~ + F   %.5f\n", rep.relL2Model);
+    std::printf("  mass change      %+.3f%% (sum over the input cells)\n",
+                100.0 * rep.relMassModel);
+    if (a.imageCheck) {
+      const ImageCheck ic = imageCheck(D, m, a.imageScene);
+      std::printf("  image rel. L2    %.5f (model vs input rendered: %s; %.2f s)\n", ic.relL2,
+                  ic.view.c_str(), ic.seconds);
+    }
     std::printf(
         "  time             %.2f s (placement %.2f, refinement %.2f, weights %.2f, "
         "residual %.2f)\n",
@@ -109,6 +158,11 @@ Action addFit(CLI::App& app) {
   c->add_option("--bits", a->bits, "Residual quantisation bits (8 or 16)")
       ->check(CLI::IsMember({8, 16}))
       ->capture_default_str();
+  c->add_option("--residual", a->residual,
+                "Residual below the threshold: diffuse (carried to neighbouring cells, mass "
+                "kept) or drop (lost; the original fit)")
+      ->check(CLI::IsMember({"diffuse", "drop"}))
+      ->capture_default_str();
   c->add_option("--fit-voxels", a->fitVoxels,
                 "Cell budget of the working grid for placement and refinement")
       ->check(CLI::Range(8LL, 512LL * 512 * 512))
@@ -116,6 +170,11 @@ Action addFit(CLI::App& app) {
   c->add_option("--sweeps", a->sweeps, "Levenberg-Marquardt refinement sweeps")
       ->check(CLI::Range(0, 100))
       ->capture_default_str();
+  c->add_flag("!--no-image-check", a->imageCheck,
+              "Skip rendering the input and the model to report the fit's image-space error");
+  c->add_option("--image-scene", a->imageScene,
+                "Scene for the image check (its density replaced by the input, then the model); "
+                "default: a 160x120 view of the model's box with one light");
   c->add_flag("-v,--verbose", a->verbose, "Print the fitting steps");
   return [a]() { return runFit(*a); };
 }

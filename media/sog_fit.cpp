@@ -10,6 +10,7 @@
 #include <unsupported/Eigen/NonLinearOptimization>
 
 #include "core/error.h"
+#include "media/dense_grid.h"
 
 namespace scatterlab {
 
@@ -327,6 +328,45 @@ std::vector<GaussianBlob> solveWeights(const DensityGrid& D, std::vector<Gaussia
   return out;
 }
 
+/// Step 5, mass-preserving: the residual of each cell plus the error carried into it is
+/// quantised (kept only when it exceeds the threshold and does not round to 0); what the model
+/// then misses at that cell, D + carry − max(0, D̃ + code·step), is passed on to the next cells
+/// in x, y and z (⅓ each, renormalised at the lattice faces). This is 3-D error diffusion:
+/// thin smoke below the threshold comes back as sparse entries whose sum matches what was
+/// dropped locally, instead of vanishing (a systematic loss that darkens/thins the render), and
+/// the clamp at 0 is accounted for. Sequential (x fastest): each cell depends on its
+/// predecessors.
+void diffuseResidual(const DensityGrid& D, const DensityGrid& approx, float thr, float step,
+                     float qmax, ResidualHash& out) {
+  const IVec3 n = D.dims();
+  const std::size_t sx = 1, sy = std::size_t(n.x), sz = std::size_t(n.x) * std::size_t(n.y);
+  std::vector<double> carry(D.size(), 0.0);
+  const double keep = std::max(double(thr), 0.5 * step);  // smaller codes round to 0
+  std::size_t idx = 0;
+  for (int k = 0; k < n.z; ++k)
+    for (int j = 0; j < n.y; ++j)
+      for (int i = 0; i < n.x; ++i, ++idx) {
+        const double target = double(D.data()[idx]) + carry[idx];
+        const double g = approx.data()[idx];
+        const double v = target - g;
+        int code = 0;
+        if (std::abs(v) > keep)
+          code = int(std::lround(std::clamp(v / step, -double(qmax), double(qmax))));
+        // The float the model will produce at this centre (SogModel::eval's arithmetic).
+        const double model = code != 0 ? std::max(0.0f, approx.data()[idx] + float(code) * step)
+                                       : std::max(0.0f, approx.data()[idx]);
+        if (code != 0) out.insert(std::uint32_t(idx), std::int16_t(code));
+        const double e = target - model;
+        const bool hx = i + 1 < n.x, hy = j + 1 < n.y, hz = k + 1 < n.z;
+        const int parts = int(hx) + int(hy) + int(hz);
+        if (parts == 0 || e == 0) continue;
+        const double share = e / parts;
+        if (hx) carry[idx + sx] += share;
+        if (hy) carry[idx + sy] += share;
+        if (hz) carry[idx + sz] += share;
+      }
+}
+
 }  // namespace
 
 SogModel fitSog(const DensityGrid& D, const SogFitOptions& o, SogFitReport* report) {
@@ -413,21 +453,74 @@ SogModel fitSog(const DensityGrid& D, const SogFitOptions& o, SogFitReport* repo
   const float step = maxF > 0 ? maxF / qmax : 0.0f;
   m.residual = ResidualHash(D.bounds(), n, o.bits, step);
   m.threshold = thr;
-  if (step > 0)
+  if (step > 0 && o.residual == SogResidualMode::Drop) {
     for (size_t i = 0; i < D.size(); ++i) {
       const float F = D.data()[i] - approx.data()[i];
       if (std::abs(F) <= thr) continue;
       const int code = int(std::lround(std::clamp(F / step, -qmax, qmax)));
       if (code != 0) m.residual.insert(std::uint32_t(i), std::int16_t(code));
     }
+  } else if (step > 0) {
+    diffuseResidual(D, approx, thr, step, qmax, m.residual);
+  }
   m.splat(approx, /*withResidual=*/true);
   rep.relL2Model = relativeL2(approx.data(), D.data());
+  {
+    double sm = 0, sd = 0;
+    for (size_t i = 0; i < D.size(); ++i) sm += approx.data()[i], sd += D.data()[i];
+    rep.relMassModel = (sm - sd) / sd;
+  }
   rep.secondsResidual = since(t);
   rep.gaussians = int(m.gaussians.size());
   rep.hashEntries = m.residual.size();
   rep.secondsTotal = since(t0);
   if (report) *report = rep;
   return m;
+}
+
+Scene sogCheckScene(const DensityGrid& D, const SogCheckView& view) {
+  if (view.width < 1 || view.height < 1 || !(view.meanOpticalDepth > 0) || view.maxVoxels < 1)
+    throw ConfigError("fit image check: width, height, optical depth and voxels must be > 0");
+  const IVec3 n = D.dims();
+  const Box box = D.bounds();
+  const Vec3 ext = box.extent();
+  // σt from the mean column integral along the view axis (z), over non-empty columns.
+  double sum = 0;
+  std::int64_t cols = 0;
+  const double dz = D.cellSize().z;
+  for (int j = 0; j < n.y; ++j)
+    for (int i = 0; i < n.x; ++i) {
+      double c = 0;
+      for (int k = 0; k < n.z; ++k) c += D.at(i, j, k);
+      if (c > 0) sum += c * dz, ++cols;
+    }
+  if (cols == 0) throw LimitError("fit image check: the input density is zero everywhere");
+  Scene s;
+  s.medium.bounds = box;
+  s.medium.density = std::make_shared<DenseGridDensity>(D, "the fitted input");
+  const double cells = double(n.x) * n.y * n.z;
+  const double shrink = std::max(1.0, std::cbrt(cells / double(view.maxVoxels)));
+  s.medium.resolution = glm::max(IVec3(1), IVec3(glm::floor(Vec3(n) / float(shrink))));
+  s.medium.sigmaT = float(view.meanOpticalDepth / (sum / double(cols)));
+  s.medium.albedo = 0.9f;
+  Camera& cam = s.camera;
+  cam.width = view.width;
+  cam.height = view.height;
+  cam.fovYDeg = 40.0f;
+  const float aspect = float(view.width) / float(view.height);
+  const float halfH = 0.55f * std::max(ext.y, ext.x / aspect);  // the box fills ~90 %
+  const Vec3 c = box.center();
+  cam.lookAt = c;
+  cam.position = c - Vec3(0, 0, 0.5f * ext.z + halfH / std::tan(glm::radians(20.0f)));
+  cam.up = Vec3(0, 1, 0);
+  Light sun;
+  sun.type = Light::Type::Directional;
+  sun.direction = glm::normalize(Vec3(-1, -1, 1));
+  sun.intensity = Vec3(1.0f);
+  s.lights = {sun};
+  s.background = Vec3(0.0f);
+  s.render = Json{{"method", "exact"}};
+  return s;
 }
 
 }  // namespace scatterlab

@@ -1,5 +1,6 @@
 // Sum of Gaussians + residual hash: exact recovery, error falling with N on real smoke, the
-// residual meeting 2%, splatting equal to evaluation, and the .sog format checked on load.
+// residual meeting 2%, mass kept by the diffused residual, the rendered smoke1 image within 3 %
+// of the grid's, splatting equal to evaluation, and the .sog format checked on load.
 
 #include <gtest/gtest.h>
 
@@ -7,6 +8,7 @@
 #include <fstream>
 
 #include "api/scatterlab.h"
+#include "media/dense_grid.h"
 #include "media/sog.h"
 #include "media/sog_fit.h"
 #include "media/temp_dir.h"
@@ -74,6 +76,108 @@ TEST(SogFit, SmokeErrorFallsWithGaussianCountAndResidualMeetsTwoPercent) {
                 rep.gaussians, rep.relL2Gaussians, rep.relL2Model, rep.hashEntries,
                 rep.secondsTotal);
   }
+}
+
+/// A field built in code: one Gaussian of peak 1 (radius 0.12) plus a haze of 0.002 (below the
+/// default threshold 0.003 · max D) filling the ball |x − (0.5, 0.5, 0.5)| < 0.4 on a 40³
+/// lattice over the unit box. One fitted Gaussian captures the blob; the haze is residual.
+DensityGrid blobInHaze(double& hazeMass, std::vector<char>& inHaze) {
+  DensityGrid D(Box{Vec3(0), Vec3(1)}, IVec3(40));
+  GaussianDensity({{Vec3(0.5f), 0.12f, 1.0f}}).build(D);
+  hazeMass = 0;
+  inHaze.assign(D.size(), 0);
+  size_t idx = 0;
+  for (int k = 0; k < 40; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i, ++idx)
+        if (glm::length(D.cellCenter(i, j, k) - Vec3(0.5f)) < 0.4f) {
+          D.at(i, j, k) += 0.002f;
+          hazeMass += 0.002;
+          inHaze[idx] = 1;
+        }
+  return D;
+}
+
+TEST(SogFit, DiffusedResidualKeepsTheMassOfThinHaze) {
+  double hazeMass = 0;
+  std::vector<char> inHaze;
+  const DensityGrid D = blobInHaze(hazeMass, inHaze);
+  double massD = 0;
+  for (float v : D.data()) massD += v;
+  // Haze region (the ball minus the blob's core, where D < 0.01): there D = 0.002 + a small
+  // Gaussian tail, so the model's mass there is compared with the input's.
+  const auto regionMass = [&](const std::vector<float>& v) {
+    double s = 0;
+    for (size_t i = 0; i < v.size(); ++i)
+      if (inHaze[i] && D.data()[i] < 0.01f) s += v[i];
+    return s;
+  };
+  const double hazeIn = regionMass(D.data());
+  EXPECT_GT(hazeIn, 0.9 * hazeMass);  // the haze dominates that region by construction
+  for (SogResidualMode mode : {SogResidualMode::Diffuse, SogResidualMode::Drop}) {
+    SogFitOptions o;
+    o.gaussians = 1;
+    o.sweeps = 4;
+    o.residual = mode;
+    SogFitReport rep;
+    const SogModel m = fitSog(D, o, &rep);
+    DensityGrid out(D.bounds(), D.dims());
+    m.splat(out);
+    double massM = 0;
+    for (float v : out.data()) massM += v;
+    const double hazeOut = regionMass(out.data());
+    std::printf("  %s: total mass %+.5f%%, haze region %.4f of the input's, %zu entries\n",
+                mode == SogResidualMode::Diffuse ? "diffuse" : "drop",
+                100 * (massM - massD) / massD, hazeOut / hazeIn, rep.hashEntries);
+    EXPECT_NEAR(rep.relMassModel, (massM - massD) / massD, 1e-9);
+    if (mode == SogResidualMode::Diffuse) {
+      // Error diffusion passes on exactly what a cell misses; only the carry left at the last
+      // cell (and negative carry that cannot go below 0 in empty space) is lost.
+      EXPECT_NEAR(massM, massD, 6.5e-6 * massD);  // measured −4.3e-6
+      // Diffusion moves some haze across the region's edge: measured 0.9870.
+      EXPECT_NEAR(hazeOut / hazeIn, 1.0, 0.02);
+    } else {
+      // Dropping |F| <= 0.003 removes the haze but the Gaussian tail inside it.
+      EXPECT_LT(hazeOut / hazeIn, 0.56);  // measured 0.3723; total mass −3.94 %
+    }
+  }
+}
+
+/// Renders `scene` with `exact` on the CPU, with density `d`.
+Image renderExact(Scene scene, std::shared_ptr<const DensityModel> d) {
+  scene.medium.density = std::move(d);
+  return createMethod(scene, "exact", "cpu")->render(scene, nullptr).image;
+}
+
+TEST(SogFit, Smoke1RenderedWithin3PercentOfTheGrid) {
+  if (!std::filesystem::exists(kVdb + "smoke1.vdb"))
+    GTEST_SKIP() << "needs ../shared/data/vdb/smoke1.vdb (the shared data checkout is absent)";
+  // Issue 11.6: 256 Gaussians at default settings, the smoke demo scene, exact.
+  initialize();
+  const DensityGrid D = loadVdbAsDense(kVdb + "smoke1.vdb", "density");
+  const Scene smoke = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/smoke.json");
+  const Scene check = sogCheckScene(D);
+  const Image gridSmoke = renderExact(smoke, std::make_shared<DenseGridDensity>(D, "smoke1"));
+  const Image gridCheck = renderExact(check, check.medium.density);
+  double err[2][2];
+  for (SogResidualMode mode : {SogResidualMode::Diffuse, SogResidualMode::Drop}) {
+    SogFitOptions o;
+    o.gaussians = 256;
+    o.residual = mode;
+    const auto m = std::make_shared<SogDensity>(fitSog(D, o), "fit");
+    const int r = mode == SogResidualMode::Drop;
+    err[r][0] = compareImages(renderExact(smoke, m), gridSmoke).relL2;
+    err[r][1] = compareImages(renderExact(check, m), gridCheck).relL2;
+    std::printf("  %s: smoke.json %.4f, fit's check view %.4f\n", r ? "drop" : "diffuse", err[r][0],
+                err[r][1]);
+  }
+  // Issue bound 3 %; measured 0.0152 and 0.0158 (tolerance ×1.5).
+  EXPECT_LT(err[0][0], 0.023) << "smoke.json, diffused residual (default)";
+  EXPECT_LT(err[0][1], 0.024) << "fit's check view, diffused residual (default)";
+  // The old fit (dropped residual) fails the 3 % bound, measured 0.0464 and 0.0793: what the
+  // check exists to catch.
+  EXPECT_GT(err[1][0], 0.03) << "smoke.json, dropped residual";
+  EXPECT_GT(err[1][1], 0.03) << "fit's check view, dropped residual";
 }
 
 SogModel smallModel() {
