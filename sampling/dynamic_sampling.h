@@ -12,10 +12,12 @@
 /// the RGB channels; D the density volume at the probe (0 outside the box); τ the transmittance
 /// from x_j to the camera position, traced with step Δ1 — taken from each sample's level-0
 /// ancestor (the paper's setting) or, optionally, from the sample itself.
-/// Scale of ε: E is (length³) × (source radiance) × (density), so ε depends on the scene's
-/// units and light intensity. For a unit box, S of order 1 and initial radii ~0.1, E of a
-/// badly reconstructed sample is of order 1e-4…1e-3; the stats report the largest E and the
-/// 90th percentile per level to help choose ε.
+/// Scale of ε: E is (length³) × (source radiance) × (density), so an absolute ε (the paper's)
+/// depends on the scene's units and light intensity. The default (extension) is a relative ε:
+/// the threshold is ε × relativeErrorScale(), the mean R³·|S|·D·τ of the initial samples, so one
+/// ε works on every scene. A sample budget (max_samples) raises the threshold until the final
+/// set fits (withSampleBudget). The stats report the largest E and the 90th percentile per
+/// level, and the threshold used.
 
 #include <cstdint>
 #include <functional>
