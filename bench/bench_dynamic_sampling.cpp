@@ -15,7 +15,7 @@ namespace {
 void BM_DynamicSampling_Shaft128(benchmark::State& state) {
   initialize();
   const Scene scene = loadScene(std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/shaft.json",
-                                {"render.method=adaptive", "render.epsilon=1e-4",
+                                {"render.method=adaptive", "render.paper=true", "render.epsilon=1e-4",
                                  "render.sampler={\"type\": \"grid\", \"count\": 541}",
                                  "render.probes=" + std::to_string(state.range(0))});
   Params p(scene.render, "render");

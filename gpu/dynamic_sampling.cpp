@@ -150,15 +150,11 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
   e.errors.resize(count);
   e.splitFlags.resize(count);
   if (count == 0) return e;
-  // The CPU's probe directions: probe points of a unit sphere at the origin.
-  RadianceSample unit;
-  unit.position = Vec3(0.0f);
-  unit.radius = 1.0f;
-  Vec3 dirs[kMaxProbes];
-  probePoints(unit, dirs, kMaxProbes);
+  const bool root = level.level == 0;
+  const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
   const Buffer results(count * sizeof(GpuRadianceRecord), nullptr, 0, "dynamic sampling S");
-  const Buffer errors(count * sizeof(float), nullptr, 0, "dynamic sampling E");
-  e.flags = Buffer(count * sizeof(GLuint), nullptr, 0, "split flags");
+  // E per sample, then (level 0) the contributions R³·mean|S|·D·τ.
+  const Buffer errors((root ? 2 : 1) * count * sizeof(float), nullptr, 0, "dynamic sampling E");
   {
     ScopedGpuTimer t(timer, "ds evaluate+error");
     program.use();
@@ -170,7 +166,6 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
     glUniform1i(program.uniform("uTauMode"),
                 level.level == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
-    glUniform1f(program.uniform("uEpsilon"), float(settings.epsilon));
     glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
     setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
     level.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
@@ -178,7 +173,6 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
     rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRootTau);
     results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
     errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
-    e.flags.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplitFlags);
     glDispatchCompute(groups(count, 64), 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
@@ -186,8 +180,21 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
   level.samples.read(e.samples.data(), count * sizeof(GpuSamplePoint));
   results.read(e.radiance.data(), count * sizeof(GpuRadianceRecord));
   errors.read(e.errors.data(), count * sizeof(float));
-  e.flags.read(e.splitFlags.data(), count * sizeof(std::uint32_t));
+  if (root && !final) {
+    e.contributions.resize(count);
+    errors.read(e.contributions.data(), count * sizeof(float), count * sizeof(float));
+  }
   return e;
+}
+
+void setSplitFlags(LevelEvaluationGpu& eval, double threshold) {
+  context();
+  const std::size_t n = eval.errors.size();
+  eval.splitFlags.assign(n, 0u);
+  // In double against the double threshold, as the CPU variant compares.
+  for (std::size_t j = 0; j < n; ++j) eval.splitFlags[j] = double(eval.errors[j]) > threshold;
+  eval.flags = Buffer(std::max<std::size_t>(n, 1) * sizeof(GLuint),
+                      n ? eval.splitFlags.data() : nullptr, 0, "split flags");
 }
 
 GridInfoGpu splitLevelGpu(const DynamicLevelGpu& level, const LevelEvaluationGpu& eval,
@@ -262,17 +269,21 @@ DynamicLevelGpu compactLevelGpu(const GridInfoGpu& grid, std::size_t level, Stag
   return next;
 }
 
-DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
-                                         std::vector<RadianceSample> initial,
-                                         DynamicSamplingGpuSteps steps,
-                                         const DynamicSamplingSettings& settings, StageTimer* timer,
-                                         std::vector<std::vector<float>>* errorsOut) {
+namespace {
+
+/// One splitting pass on the GPU (no budget): dynamicSamplingGpu() without max_samples.
+DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
+                                   const TracingInputs& inputs,
+                                   const std::vector<RadianceSample>& initial,
+                                   DynamicSamplingGpuSteps steps,
+                                   const DynamicSamplingSettings& settings, StageTimer* timer,
+                                   std::vector<std::vector<float>>* errorsOut) {
   using Clock = std::chrono::steady_clock;
-  context();
   DynamicSamplingResult result;
-  const TracingInputs inputs(scene, density, steps.delta1);
   DynamicLevelGpu current = uploadInitialLevel(initial);
-  const Buffer rootTau(current.count * sizeof(float), nullptr, 0, "dynamic sampling root tau");
+  const Buffer rootTau(std::max<std::size_t>(current.count, 1) * sizeof(float), nullptr, 0,
+                       "dynamic sampling root tau");
+  double threshold = settings.epsilon, errorScale = 0.0;  // set on level 0
 
   const std::size_t nLevels = settings.levels.size();
   for (std::size_t level = 0; level <= nLevels; ++level) {
@@ -282,8 +293,17 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
     ls.samples = (long long)current.count;
     const bool final = level == nLevels || current.count == 0;
     if (current.count > 0) {
-      const LevelEvaluationGpu eval =
+      LevelEvaluationGpu eval =
           evaluateLevelGpu(inputs, density, current, rootTau, final, steps, settings, timer);
+      if (!final) {
+        if (level == 0) {
+          errorScale = settings.relative ? relativeErrorScale(eval.contributions) : 0.0;
+          threshold = settings.relative ? settings.epsilon * errorScale : settings.epsilon;
+        }
+        ls.threshold = threshold;
+        ls.errorScale = errorScale;
+        setSplitFlags(eval, threshold);
+      }
       appendKept(eval, level, final, result.samples);
       if (!final) {
         if (errorsOut) errorsOut->push_back(eval.errors);
@@ -301,6 +321,21 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
     }
   }
   return result;
+}
+
+}  // namespace
+
+DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
+                                         std::vector<RadianceSample> initial,
+                                         DynamicSamplingGpuSteps steps,
+                                         const DynamicSamplingSettings& settings, StageTimer* timer,
+                                         std::vector<std::vector<float>>* errorsOut) {
+  context();
+  const TracingInputs inputs(scene, density, steps.delta1);
+  return withSampleBudget(settings, [&](const DynamicSamplingSettings& s) {
+    if (errorsOut) errorsOut->clear();  // the errors of the pass returned
+    return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut);
+  });
 }
 
 }  // namespace scatterlab::gpu

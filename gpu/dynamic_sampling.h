@@ -31,12 +31,15 @@ struct DynamicSamplingGpuSteps {
 };
 
 /// Runs recursive splitting from `initial` (positions and radii) entirely with GL compute
-/// passes: per level evaluateLevelGpu, then (but on the finest level) splitLevelGpu and
-/// compactLevelGpu. Same result as dynamicSampling() with the CPU volume tracer up to
+/// passes: per level evaluateLevelGpu, setSplitFlags (on the host: the threshold of a relative
+/// ε needs level 0's contributions), then (but on the finest level) splitLevelGpu and
+/// compactLevelGpu; with settings.maxSamples, the passes are repeated by withSampleBudget()
+/// exactly as on the CPU. Same result as dynamicSampling() with the CPU volume tracer up to
 /// floating-point differences of S (1e-3); the split decisions agree unless some E_j is within
-/// rounding of ε. The comparison E > ε is done in float (ε rounded to float). `errors`, when
-/// given, receives E of every evaluated sample per split level (in evaluation order). GPU times
-/// per pass go to `timer` (stages "ds evaluate+error", "ds split", "ds scan", "ds compact").
+/// rounding of the threshold (compared in double, as on the CPU). `errors`, when given,
+/// receives E of every evaluated sample per split level (in evaluation order) of the pass
+/// returned. GPU times per pass go to `timer` (stages "ds evaluate+error", "ds split", "ds
+/// scan", "ds compact").
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
                                          std::vector<RadianceSample> initial,
                                          DynamicSamplingGpuSteps steps,
@@ -58,8 +61,9 @@ struct LevelEvaluationGpu {
   std::vector<GpuSamplePoint> samples;      ///< the level's positions and radii
   std::vector<GpuRadianceRecord> radiance;  ///< S and ∇S per sample
   std::vector<float> errors;                ///< E_j (0 on the final level)
-  std::vector<std::uint32_t> splitFlags;    ///< 1 where E_j > ε (0 on the final level)
-  Buffer flags;                             ///< splitFlags on the GPU
+  std::vector<float> contributions;  ///< level 0, not final: R³·mean|S|·D·τ (sampleContribution)
+  std::vector<std::uint32_t> splitFlags;  ///< 1 where E_j > threshold (set by setSplitFlags)
+  Buffer flags;                           ///< splitFlags on the GPU
 };
 
 /// The grid information buffer of G_{k+1} on the GPU, as splitting leaves it.
@@ -70,15 +74,20 @@ struct GridInfoGpu {
 };
 
 /// Evaluate: one dispatch computes, for every sample of `level`, S and ∇S (central
-/// differences, step steps.delta2; V or ln V instead of S as steps says) and, unless `final`, the
-/// probes' S and density, τ to the viewer (traced on level 0 and stored in `rootTau`, one float per
-/// level-0 sample; later levels read their ancestor's unless settings.perSampleTau), E_j and the
-/// split flag E_j > ε. `inputs` must be those of `density`. GPU time: "ds evaluate+error".
+/// differences, step steps.delta2; V or ln V instead of S as steps says) and, unless `final`, the probes' S and density, τ to the viewer
+/// (traced on level 0 and stored in `rootTau`, one float per level-0 sample; later levels read
+/// their ancestor's unless settings.perSampleTau), E_j and, on level 0, the contributions.
+/// The split flags are left to setSplitFlags. `inputs` must be those of `density`. GPU time:
+/// "ds evaluate+error".
 LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
                                     const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
                                     const DynamicSamplingGpuSteps& steps,
                                     const DynamicSamplingSettings& settings,
                                     StageTimer* timer = nullptr);
+
+/// The split flags E_j > threshold of an evaluated level (host, in double: the CPU's
+/// comparison), uploaded to eval.flags for splitLevelGpu.
+void setSplitFlags(LevelEvaluationGpu& eval, double threshold);
 
 /// Split: adds the level's split count, largest and 90th-percentile E_j to `stats`, and marks,
 /// in a new grid information buffer of G_{k+1} (`resolution`³ vertices over `bounds`), every

@@ -127,7 +127,7 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
     m->sampler = makeSampler(p, scene, m->samplerType);
     evaluatorName = p.string("evaluator", "volume-tracer");
   }
-  if (!d.refiner.empty()) m->dynamic = parseDynamicSampling(p, scene);
+  if (!d.refiner.empty()) m->dynamic = parseDynamicSampling(p, scene, settings.paper);
   if (d.integratorSelectable) integratorName = p.string("integrator", d.integrator);
 
   if (d.sampler)

@@ -6,6 +6,8 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <functional>
 
 #include "core/transport.h"
 #include "sampling/scan.h"
@@ -46,8 +48,9 @@ void GridInfoBuffer::markSphere(const Vec3& c, float R, std::int32_t anc) {
 
 namespace {
 
-/// Probe directions: the 6 axis directions of Eq. 5, then the 8 cube diagonals, then the 12
-/// edge diagonals (unit length).
+/// Probe offsets: the 6 axis directions of Eq. 5, the 8 cube diagonals, the 12 edge diagonals
+/// (unit length), then the 6 axis and 8 cube-diagonal directions at length ½ (the inner shell:
+/// a shaft that passes through a sphere's inside without touching its surface near a probe).
 const std::array<Vec3, kMaxProbes>& probeDirections() {
   static const std::array<Vec3, kMaxProbes> dirs = [] {
     std::array<Vec3, kMaxProbes> d{};
@@ -69,12 +72,17 @@ const std::array<Vec3, kMaxProbes>& probeDirections() {
           e[(a + 2) % 3] = v;
           d[n++] = glm::normalize(e);
         }
+    for (int i = 0; i < 14; ++i) d[n++] = 0.5f * d[std::size_t(i)];
     return d;
   }();
   return dirs;
 }
 
 }  // namespace
+
+const Vec3* probeOffsets() {
+  return probeDirections().data();
+}
 
 void probePoints(const RadianceSample& s, Vec3* out, int count) {
   const auto& dirs = probeDirections();
@@ -91,6 +99,18 @@ float localShadingError(const RadianceSample& s, const Vec3* probeS, const float
     sum += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
   }
   return s.radius * s.radius * s.radius * sum / float(count) * tau;
+}
+
+float sampleContribution(const RadianceSample& s, float density, float tau) {
+  const Vec3 a = glm::abs(s.S);
+  return s.radius * s.radius * s.radius * ((a.x + a.y + a.z) / 3.0f) * density * tau;
+}
+
+double relativeErrorScale(const std::vector<float>& contributions) {
+  if (contributions.empty()) return 0.0;
+  double sum = 0.0;
+  for (float c : contributions) sum += double(c);
+  return sum / double(contributions.size());
 }
 
 float quantile(std::vector<float> v, double q) {
@@ -110,10 +130,12 @@ float viewTransmittance(const Scene& scene, const DensityGrid& density, const Ve
 
 }  // namespace
 
-DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
-                                      std::vector<RadianceSample> current,
-                                      RadianceEvaluator& evaluator,
-                                      const DynamicSamplingSettings& settings) {
+namespace {
+
+/// One pass of recursive splitting (no budget): dynamicSampling() without max_samples.
+DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
+                                std::vector<RadianceSample> current, RadianceEvaluator& evaluator,
+                                const DynamicSamplingSettings& settings) {
   using Clock = std::chrono::steady_clock;
   const DensityGrid& density = frame.hostDensity();
   DynamicSamplingResult result;
@@ -125,6 +147,7 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
     anc[i] = std::int32_t(i);
   });
 
+  double threshold = settings.epsilon, errorScale = 0.0;  // set on level 0
   const std::size_t nLevels = settings.levels.size();
   for (std::size_t level = 0; level <= nLevels; ++level) {
     const auto t0 = Clock::now();
@@ -157,7 +180,8 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
     });
     evaluator.evaluate(frame, scene, probes, /*gradients=*/false);
 
-    std::vector<float> errors(current.size());
+    std::vector<float> errors(current.size()), contributions;
+    if (level == 0 && settings.relative) contributions.resize(current.size());
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
       Vec3 S[kMaxProbes];
       float D[kMaxProbes];
@@ -170,15 +194,23 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
               ? viewTransmittance(scene, density, current[j].position, settings.delta1)
               : rootTau[anc[j]];
       errors[j] = localShadingError(current[j], S, D, tau, np);
+      if (!contributions.empty())
+        contributions[j] = sampleContribution(current[j], density.sample(current[j].position), tau);
     });
     ls.maxError = errors.empty() ? 0.0f : *std::max_element(errors.begin(), errors.end());
     ls.p90Error = quantile(errors, 0.9);
+    if (level == 0) {
+      errorScale = settings.relative ? relativeErrorScale(contributions) : 0.0;
+      threshold = settings.relative ? settings.epsilon * errorScale : settings.epsilon;
+    }
+    ls.threshold = threshold;
+    ls.errorScale = errorScale;
 
-    // Split: mark the vertices of G_{k+1} inside every sphere with E > ε.
+    // Split: mark the vertices of G_{k+1} inside every sphere with E > threshold.
     GridInfoBuffer next(scene.medium.bounds, settings.levels[level]);
     std::vector<std::uint8_t> split(current.size());
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
-      split[j] = double(errors[j]) > settings.epsilon ? 1 : 0;
+      split[j] = double(errors[j]) > threshold ? 1 : 0;
       if (split[j]) next.markSphere(current[j].position, current[j].radius, anc[j]);
     });
     for (std::size_t j = 0; j < current.size(); ++j) {
@@ -205,6 +237,71 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
     result.levels.push_back(ls);
   }
   return result;
+}
+
+}  // namespace
+
+DynamicSamplingResult withSampleBudget(
+    const DynamicSamplingSettings& settings,
+    const std::function<DynamicSamplingResult(const DynamicSamplingSettings&)>& run) {
+  DynamicSamplingResult first = run(settings);
+  const auto fits = [&](const DynamicSamplingResult& r) {
+    return (long long)r.samples.size() <= settings.maxSamples;
+  };
+  if (settings.maxSamples <= 0 || fits(first) || first.levels.empty()) return first;
+  const auto splitNothing = [](const DynamicSamplingResult& r) {
+    for (const LevelStats& l : r.levels)
+      if (l.split > 0) return false;
+    return true;
+  };
+  if (splitNothing(first)) return first;  // the initial set alone exceeds the budget
+  float maxError = 0.0f;
+  for (const LevelStats& l : first.levels) maxError = std::max(maxError, l.maxError);
+  DynamicSamplingSettings s = settings;
+  s.relative = false;  // the searched thresholds are absolute
+  int runs = 1;
+  const auto runAt = [&](double threshold) {
+    s.epsilon = threshold;
+    ++runs;
+    return run(s);
+  };
+  // Grow the threshold by 4× until the result fits (lo: too many samples, hi: fits) ...
+  double lo = first.levels[0].threshold, hi = 0.0;
+  DynamicSamplingResult best;
+  for (;;) {
+    hi = lo > 0.0 ? 4.0 * lo : 1e-6 * double(maxError);
+    best = runAt(hi);
+    if (fits(best)) break;
+    if (splitNothing(best)) {
+      best.levels[0].budgetRuns = runs;
+      return best;
+    }
+    lo = hi;
+  }
+  // ... then narrow it geometrically: the smallest fitting threshold found keeps the most
+  // splits, and they are those of the largest errors, on every level alike.
+  for (int i = 0; i < 5; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    DynamicSamplingResult r = runAt(mid);
+    if (fits(r)) {
+      hi = mid;
+      best = std::move(r);
+    } else {
+      lo = mid;
+    }
+  }
+  best.levels[0].errorScale = first.levels[0].errorScale;
+  best.levels[0].budgetRuns = runs;
+  return best;
+}
+
+DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
+                                      std::vector<RadianceSample> initial,
+                                      RadianceEvaluator& evaluator,
+                                      const DynamicSamplingSettings& settings) {
+  return withSampleBudget(settings, [&](const DynamicSamplingSettings& s) {
+    return splitOnce(frame, scene, initial, evaluator, s);
+  });
 }
 
 DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
@@ -236,27 +333,50 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
   st.extra["initial_samples"] = levelStats.empty() ? 0 : levelStats[0].samples;
   st.extra["levels"] = levels;
   st.extra["epsilon"] = settings.epsilon;
+  st.extra["error"] = settings.relative ? "relative" : "absolute";
+  st.extra["threshold"] = levelStats.empty() ? settings.epsilon : levelStats[0].threshold;
+  if (settings.relative && !levelStats.empty()) st.extra["error_scale"] = levelStats[0].errorScale;
+  st.extra["max_samples"] = settings.maxSamples;
+  if (settings.maxSamples > 0 && !levelStats.empty())
+    st.extra["budget_runs"] = levelStats[0].budgetRuns;
   st.extra["tau"] = settings.perSampleTau ? "sample" : "ancestor";
   st.extra["probes"] = settings.probes;
 }
 
+/// Defaults of the extended dynamic sampling (render.paper false), chosen by the measurements
+/// in docs/dynamic-sampling.md.
+constexpr double kRelativeEpsilon = 0.05;
+constexpr int kExtendedProbes = 40;
+
 const std::vector<KeyDoc>& dynamicSamplingKeys() {
   static const std::vector<KeyDoc> keys = {
-      {"epsilon", "number", "1e-4", ">= 0", "split a sample when its error E_j (Eq. 5) is above"},
+      {"epsilon", "number", "0.05 (relative); 1e-4 (absolute) with paper", ">= 0",
+       "split a sample when its error E_j (Eq. 5) is above epsilon · the mean R³|S|Dτ of the "
+       "initial samples (relative), or, with paper, above epsilon itself (the paper's ε)"},
       {"levels", "array of int", "[16, 32, 64] (those <= half the medium resolution)",
        "increasing, each 2…1024, finest <= half the medium resolution",
        "vertices per axis of the split grids G1, G2, …"},
       {"tau", "string", "ancestor", "ancestor, sample",
        "τ to the viewer in Eq. 5: from the level-0 ancestor (paper) or the sample itself"},
-      {"probes", "int", "6", "6, 14, 26",
-       "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals"},
+      {"probes", "int", "40 (6 with paper)", "6, 14, 26, 40",
+       "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
+       "R/2"},
+      {"max_samples", "int", "0 (no cap; not with paper)", ">= 0 (non-integers rounded down)",
+       "most samples in the final set: the threshold is raised until the set fits"},
   };
   return keys;
 }
 
-DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
+DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool paper) {
   DynamicSamplingSettings s;
-  s.epsilon = p.number("epsilon", 1e-4, Interval::atLeast(0));
+  // One threshold key: a fraction of the error scale, or with paper the paper's absolute ε.
+  s.relative = !paper;
+  s.epsilon = p.number("epsilon", paper ? 1e-4 : kRelativeEpsilon, Interval::atLeast(0));
+  if (paper && p.has("max_samples"))
+    p.fail("max_samples", "is an extension; it cannot be set with render.paper = true");
+  // A number rather than an integer so that any non-negative value is valid (0: no cap).
+  s.maxSamples =
+      (long long)std::floor(std::min(p.number("max_samples", 0.0, Interval::atLeast(0)), 9e15));
   const IVec3 res = scene.medium.resolution;
   const int finestAllowed = std::max(2, std::max(res.x, std::max(res.y, res.z)) / 2);
   if (p.has("levels")) {
@@ -283,11 +403,11 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene) {
                          " exceeds half the medium resolution (" + std::to_string(finestAllowed) +
                          ")");
   s.perSampleTau = p.choice("tau", {"ancestor", "sample"}, "ancestor") == "sample";
-  const long long probes = p.integer("probes", 6);
-  if (probes != 6 && probes != 14 && probes != 26)
+  const long long probes = p.integer("probes", paper ? 6 : kExtendedProbes);
+  if (probes != 6 && probes != 14 && probes != 26 && probes != 40)
     p.fail("probes", "value " + std::to_string(probes) +
-                         " is not allowed; allowed: 6 (Eq. 5: "
-                         "x ± R along X, Y, Z), 14 (+ cube diagonals), 26 (+ edge diagonals)");
+                         " is not allowed; allowed: 6 (Eq. 5: x ± R along X, Y, Z), 14 (+ cube "
+                         "diagonals), 26 (+ edge diagonals), 40 (+ 14 at R/2)");
   s.probes = int(probes);
   s.delta1 = scene.medium.voxelSize();
   return s;

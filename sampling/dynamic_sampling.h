@@ -12,12 +12,15 @@
 /// the RGB channels; D the density volume at the probe (0 outside the box); τ the transmittance
 /// from x_j to the camera position, traced with step Δ1 — taken from each sample's level-0
 /// ancestor (the paper's setting) or, optionally, from the sample itself.
-/// Scale of ε: E is (length³) × (source radiance) × (density), so ε depends on the scene's
-/// units and light intensity. For a unit box, S of order 1 and initial radii ~0.1, E of a
-/// badly reconstructed sample is of order 1e-4…1e-3; the stats report the largest E and the
-/// 90th percentile per level to help choose ε.
+/// Scale of ε: E is (length³) × (source radiance) × (density), so an absolute ε (the paper's)
+/// depends on the scene's units and light intensity. The default (extension) is a relative ε:
+/// the threshold is ε × relativeErrorScale(), the mean R³·|S|·D·τ of the initial samples, so one
+/// ε works on every scene. A sample budget (max_samples) raises the threshold until the final
+/// set fits (withSampleBudget). The stats report the largest E and the 90th percentile per
+/// level, and the threshold used.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/stages.h"
@@ -26,14 +29,21 @@
 namespace scatterlab {
 
 struct DynamicSamplingSettings {
-  double epsilon = 1e-4;                ///< split when E_j > epsilon
+  /// Split when E_j > threshold, where threshold = epsilon (absolute, the paper's ε) or, with
+  /// `relative`, epsilon · errorScale (errorScale: see relativeErrorScale()).
+  double epsilon = 1e-4;
+  /// ε is a fraction of the scene's error scale instead of an absolute E (extension).
+  bool relative = false;
   std::vector<int> levels{16, 32, 64};  ///< vertices per axis of G1, G2, ... (increasing)
   bool perSampleTau = false;            ///< τ from each sample instead of its level-0 ancestor
   float delta1 = 0.0f;                  ///< step for tracing τ to the viewer (world units)
   /// Probe points per sample: 6 is Eq. 5 (x ± R along X, Y, Z). 14 and 26 add diagonal
-  /// directions: an extension for shading boundaries that pass between the axis probes (a
-  /// light shaft beside a large initial sphere), which Eq. 5 can miss.
+  /// directions at distance R, 40 also the 6 axis and 8 diagonal directions at R/2: extensions
+  /// for shading boundaries that pass between the axis probes (a light shaft beside a large
+  /// initial sphere, or through its inside), which Eq. 5 can miss.
   int probes = 6;
+  /// Most samples in the final set (0: no cap): see withSampleBudget().
+  long long maxSamples = 0;
 };
 
 /// Grid information buffer of one level: vertices of G_k at the cell centres of a regular
@@ -59,9 +69,12 @@ struct GridInfoBuffer {
 struct LevelStats {
   int resolution = 0;     ///< 0 for the initial set
   long long samples = 0;  ///< |Q^k| evaluated at this level
-  long long split = 0;    ///< of which split (E > ε)
+  long long split = 0;    ///< of which split (E > threshold)
   float maxError = 0.0f, p90Error = 0.0f;
-  double ms = 0.0;  ///< wall time of the level (evaluation, error, split, scan)
+  double threshold = 0.0;   ///< the absolute threshold E_j was compared with (0: final level)
+  double errorScale = 0.0;  ///< relativeErrorScale() of the initial set (relative ε; else 0)
+  int budgetRuns = 1;       ///< level 0: splitting passes run to meet max_samples
+  double ms = 0.0;          ///< wall time of the level (evaluation, error, split, scan)
 };
 
 /// The q-quantile of `v` (the element of rank ⌊q·n⌋, clamped to the last; 0 when empty):
@@ -73,19 +86,46 @@ struct DynamicSamplingResult {
   std::vector<LevelStats> levels;       ///< [0] = initial set, then one per grid level
 };
 
-/// E_j of Eq. 5 from the evaluated sample, the traced S at its six probes (order +X −X +Y −Y
-/// +Z −Z), the density there, and τ.
+/// Contribution of one sample to the image, in the units of E_j (Eq. 5 with the error replaced
+/// by S itself): R_j³ · mean_RGB |S_j| · D(x_j) · τ_j.
+float sampleContribution(const RadianceSample& s, float density, float tau);
+
+/// The error scale of a relative ε: the mean sampleContribution() of the initial samples,
+/// summed in index order in double (so the CPU and GPU variants agree to float rounding). With
+/// it E_j / scale is scale-free: it does not change when the scene is scaled in size, the
+/// lights in intensity, or the initial count (R³ ∝ 1/N cancels).
+double relativeErrorScale(const std::vector<float>& contributions);
+
 /// Most probe points a sample can have.
-inline constexpr int kMaxProbes = 26;
+inline constexpr int kMaxProbes = 40;
+
+/// The probe offsets of a unit sphere at the origin, in probePoints() order: the 6 axis
+/// directions (Eq. 5), 8 cube diagonals, 12 edge diagonals (unit length), then the 6 axis and 8
+/// cube-diagonal directions at length ½.
+const Vec3* probeOffsets();
 
 /// E_j of Eq. 5 from the evaluated sample, the traced S at its `count` probes (in the order of
-/// probePoints), the density there, and τ. count = 6 is the paper's Eq. 5.
+/// probePoints), the density there, and τ. count = 6 is the paper's Eq. 5. The mean is over
+/// the probes (Eq. 5's Σ/n).
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
                         int count = 6);
 
-/// The probe points x_j + R_j·d of a sample: d = +X −X +Y −Y +Z −Z (the paper's six), then the
-/// 8 cube diagonals, then the 12 edge diagonals (unit vectors). count is 6, 14 or 26.
+/// The probe points x_j + R_j·d of a sample, d = probeOffsets()[0 … count): +X −X +Y −Y +Z −Z
+/// (the paper's six), then the 8 cube diagonals, the 12 edge diagonals, and the inner shell at
+/// R/2. count is 6, 14, 26 or 40.
 void probePoints(const RadianceSample& s, Vec3* out, int count = 6);
+
+/// The sample budget (max_samples) around one splitting pass `run` (of either backend): runs it
+/// with `settings`; if the final set exceeds settings.maxSamples, raises the (absolute)
+/// threshold by 4× per pass until it fits, then narrows it by 5 geometric bisection passes and
+/// returns the result of the smallest fitting threshold. Raising one threshold for every level
+/// drops the splits of the smallest errors first, on every level alike (a level-by-level
+/// greedy cap would spend the whole budget on the coarse levels, where E ∝ R³ is largest).
+/// When nothing splits and the initial set still exceeds the budget, that set is returned.
+/// Deterministic; LevelStats::budgetRuns of level 0 counts the passes.
+DynamicSamplingResult withSampleBudget(
+    const DynamicSamplingSettings& settings,
+    const std::function<DynamicSamplingResult(const DynamicSamplingSettings&)>& run);
 
 /// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's
 /// density. `evaluator` (of the frame's backend) computes S and ∇S of the samples and S at the
@@ -121,15 +161,20 @@ void registerRefiners();
 
 /// Adds the dynamic-sampling facts to render stats (shared by the CPU and GPU `adaptive`):
 /// samples_per_level (final samples per level), initial_samples, levels (per level: grid,
-/// evaluated, split, kept, max_error, p90_error, ms), epsilon, tau, probes.
+/// evaluated, split, capped, kept, max_error, p90_error, ms), epsilon, error ("relative" or
+/// "absolute"), threshold (the absolute one used), error_scale, max_samples, tau, probes.
 void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& levels,
                              const std::vector<RadianceSample>& samples,
                              const DynamicSamplingSettings& settings);
 
 /// Reads the dynamic-sampling keys of the render object (table in dynamic_sampling.cpp):
-/// epsilon, levels, tau, probes. delta1 is not read here (the pipeline's Δ1 is used; this
-/// sets it to one voxel edge for callers without a pipeline).
-DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene);
+/// epsilon, levels, tau, probes, max_samples. With `paper` the paper's algorithm: epsilon is the
+/// absolute ε (default 1e-4), probes default to Eq. 5's six, max_samples is an error. Otherwise
+/// epsilon is relative (a fraction of relativeErrorScale(), default 0.05) and the defaults are
+/// the measured best (docs/dynamic-sampling.md). delta1 is not read here (the pipeline's Δ1 is
+/// used; this sets it to one voxel edge for callers without a pipeline).
+DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene,
+                                             bool paper = false);
 
 /// The key table of parseDynamicSampling (render keys of method `adaptive`).
 const std::vector<KeyDoc>& dynamicSamplingKeys();

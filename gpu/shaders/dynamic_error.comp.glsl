@@ -1,23 +1,25 @@
 // Dynamic sampling (paper Sec. 5), one invocation per sample of the current level: S and ∇S
 // (as volume_tracer.comp.glsl), the traced S and the density at the probes x_j + R_j·d_i,
-// τ to the viewer, the local shading error E_j of Eq. 5 and the split flag E_j > ε. Mirrors
-// sampling/dynamic_sampling.cpp (localShadingError, viewTransmittance) operation for operation.
+// τ to the viewer, the local shading error E_j of Eq. 5 and, on level 0, the sample's
+// contribution R³·mean|S|·D·τ (the scale of a relative ε). The split flags are set on the host
+// (the threshold of a relative ε is known only once level 0's contributions are read back).
+// Mirrors sampling/dynamic_sampling.cpp (localShadingError, sampleContribution,
+// viewTransmittance) operation for operation.
 layout(local_size_x = 64) in;
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
 layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
 layout(std430, binding = BINDING_ROOT_TAU) buffer RootTau { float rootTau[]; };  // τ of every level-0 sample
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
+// E_j at [j]; on level 0 also the contribution at [uCount + j]
 layout(std430, binding = BINDING_ERRORS) writeonly buffer Errors { float errors[]; };
-layout(std430, binding = BINDING_SPLIT_FLAGS) writeonly buffer SplitFlags { uint splitFlags[]; };
 
 uniform uint uCount;
 uniform float uDelta2;
-uniform int uProbes;            // 6, 14 or 26
-uniform vec3 uProbeDirs[26];    // probeDirections() of the CPU, computed on the host
+uniform int uProbes;            // 6, 14, 26 or 40
+uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
 uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
 uniform float uTauDelta1;       // step of the τ trace
-uniform float uEpsilon;
 uniform int uFinal;             // 1: finest level, S and ∇S only
 uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
 
@@ -47,7 +49,6 @@ void main() {
   for (int a = 0; a < 3; ++a) results[j].dS[a] = vec4(dS[a], 0.0);
   if (uFinal != 0) {
     errors[j] = 0.0;
-    splitFlags[j] = 0u;
     return;
   }
   float tau;
@@ -71,5 +72,9 @@ void main() {
   }
   precise float E = R * R * R * sum / float(uProbes) * tau;
   errors[j] = E;
-  splitFlags[j] = E > uEpsilon ? 1u : 0u;
+  if (uTauMode == 0) {
+    precise vec3 a = abs(S);
+    precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAt(x) * tau;
+    errors[uCount + j] = c;
+  }
 }

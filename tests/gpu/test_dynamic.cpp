@@ -138,6 +138,63 @@ TEST(GpuDynamicSampling, SameSampleSetAsCpu) {
   std::printf("\n");
 }
 
+/// The extensions (issue 11): relative ε, 40 probes and a sample budget give the CPU's samples.
+TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
+  SCATTERLAB_REQUIRE_GPU();
+  const Scene scene = spotScene();
+  DensityGrid density(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(density);
+  const float delta1 = 1.0f / 24, delta2 = 1.0f / 24;
+  PipelineSettings ps;
+  ps.delta1 = delta1;
+  ps.delta2 = delta2;
+  auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
+  const gpu::Volume d = gpu::uploadDensity(density);
+  DynamicSamplingSettings ds;
+  ds.levels = {8, 12};
+  ds.delta1 = delta1;
+  ds.relative = true;
+  ds.epsilon = 0.05;
+  ds.probes = 40;
+  for (long long cap : {0LL, 200LL}) {
+    ds.maxSamples = cap;
+    const DynamicSamplingResult cpu =
+        dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
+    std::vector<std::vector<float>> errors;
+    const DynamicSamplingResult g =
+        gpu::dynamicSamplingGpu(scene, d, latticeSamples(), {delta1, delta2}, ds, nullptr, &errors);
+    expectNoGlError();
+    // No E within 1e-3 relative of the threshold of the returned pass (else a flag could flip).
+    double closest = 1e30;
+    for (const auto& level : errors)
+      for (float e : level)
+        closest = std::min(closest, std::abs(double(e) / cpu.levels[0].threshold - 1.0));
+    std::printf("cap %lld: %zu samples, threshold %.4g (scale %.4g), %d passes, closest E %.3g\n",
+                cap, cpu.samples.size(), cpu.levels[0].threshold, cpu.levels[0].errorScale,
+                cpu.levels[0].budgetRuns, closest);
+    EXPECT_GT(closest, 1e-3);
+    EXPECT_NEAR(g.levels[0].errorScale, cpu.levels[0].errorScale, 1e-4 * cpu.levels[0].errorScale);
+    EXPECT_NEAR(g.levels[0].threshold, cpu.levels[0].threshold, 1e-4 * cpu.levels[0].threshold);
+    EXPECT_EQ(g.levels[0].budgetRuns, cpu.levels[0].budgetRuns);
+    EXPECT_GT(cpu.levels[0].split, 0);
+    if (cap > 0) {
+      EXPECT_LE((long long)cpu.samples.size(), cap);
+      EXPECT_GT(cpu.levels[0].budgetRuns, 1);
+    }
+    ASSERT_EQ(g.levels.size(), cpu.levels.size());
+    for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
+      EXPECT_EQ(g.levels[l].samples, cpu.levels[l].samples) << "level " << l;
+      EXPECT_EQ(g.levels[l].split, cpu.levels[l].split) << "level " << l;
+    }
+    ASSERT_EQ(g.samples.size(), cpu.samples.size());
+    int bad = 0;
+    for (std::size_t i = 0; i < cpu.samples.size(); ++i)
+      bad += g.samples[i].position != cpu.samples[i].position ||
+             g.samples[i].level != cpu.samples[i].level;
+    EXPECT_EQ(bad, 0);
+  }
+}
+
 TEST(GpuDynamicSampling, InfiniteAndZeroEpsilon) {
   SCATTERLAB_REQUIRE_GPU();
   const Scene scene = spotScene();
