@@ -1,5 +1,6 @@
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
@@ -53,7 +54,15 @@ Action addCompare(CLI::App& app) {
   c->add_option("--mask-radius", o->maskRadius,
                 "Radius K in pixels of the disc masked around each light's projection (default: "
                 "1% of the image diagonal, at least 2 px); needs --scene")
-      ->check(CLI::NonNegativeNumber)
+      ->check(
+          [](const std::string& v) -> std::string {
+            char* end = nullptr;
+            const double k = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && std::isfinite(k) && k >= 0
+                       ? ""
+                       : "expected a number of pixels >= 0, got '" + v + "'";
+          },
+          "K >= 0")
       ->needs(scene);
   return [o]() {
     const Image a = readExr(o->image), b = readExr(o->reference);
