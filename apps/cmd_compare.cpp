@@ -1,19 +1,39 @@
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
+#include "core/atomic_file.h"
+#include "core/metrics.h"
 
 namespace scatterlab::cli {
 
+namespace {
+
+/// A measure as JSON: NaN (no mask, or a mask that keeps nothing) as null, +inf as "inf".
+Json number(double v) {
+  if (std::isnan(v)) return Json(nullptr);
+  if (std::isinf(v)) return Json(v > 0 ? "inf" : "-inf");
+  return Json(v);
+}
+
+}  // namespace
+
 Action addCompare(CLI::App& app) {
   struct Opts {
-    std::string image, reference, diff;
+    std::string image, reference, diff, scene;
+    std::vector<std::string> sets;
     float diffScale = 0.0f;
+    double maskRadius = -1.0;
     bool json = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* c = app.add_subcommand(
-      "compare", "Error of an image against a reference: relative L2, relative L1, PSNR, max");
+      "compare",
+      "Error of an image against a reference: relative L2 (the headline), relative L1, PSNR, "
+      "max abs error, the share of visibly wrong pixels and, with --scene, relative L2 with the "
+      "pixels next to each light masked (definitions: docs/metrics.md)");
   c->add_option("image", o->image, "Image to judge (OpenEXR)")->required();
   c->add_option("reference", o->reference, "Reference image (OpenEXR)")->required();
   c->add_flag("--json", o->json, "Print JSON instead of text");
@@ -21,10 +41,41 @@ Action addCompare(CLI::App& app) {
                 "Also write a PNG of |image - reference| (per channel), scaled so the largest "
                 "difference is white unless --diff-scale is given");
   c->add_option("--diff-scale", o->diffScale, "Multiplier for --diff (default: 1/max)");
+  CLI::Option* scene = c->add_option(
+      "--scene", o->scene,
+      "The scene the images show (JSON): its camera and point/spot lights give the masked "
+      "relative L2. Without --scene the masked relative L2 is not computed or printed");
+  c->add_option("--set", o->sets,
+                "Override a key of --scene, as for render (repeatable); give the overrides the "
+                "images were rendered with")
+      ->take_all()
+      ->allow_extra_args(false)
+      ->needs(scene);
+  c->add_option("--mask-radius", o->maskRadius,
+                "Radius K in pixels of the disc masked around each light's projection (default: "
+                "1% of the image diagonal, at least 2 px); needs --scene")
+      ->check(
+          [](const std::string& v) -> std::string {
+            char* end = nullptr;
+            const double k = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && std::isfinite(k) && k >= 0
+                       ? ""
+                       : "expected a number of pixels >= 0, got '" + v + "'";
+          },
+          "K >= 0")
+      ->needs(scene);
   return [o]() {
     const Image a = readExr(o->image), b = readExr(o->reference);
-    const ImageError e = compareImages(a, b);
+    // Everything is read and checked before the --diff PNG is written: no partial output.
+    std::optional<LightMask> mask;
+    if (!o->scene.empty()) {
+      const Scene s = loadScene(o->scene, o->sets);
+      mask = lightMask(s, o->maskRadius >= 0 ? o->maskRadius
+                                             : defaultMaskRadius(s.camera.width, s.camera.height));
+    }
+    const ImageError e = mask ? compareImages(a, b, *mask) : compareImages(a, b);
     if (!o->diff.empty()) {
+      checkWritablePath(o->diff);
       Image d(a.width(), a.height());
       for (size_t i = 0; i < d.pixels().size(); ++i)
         d.pixels()[i] = glm::abs(a.pixels()[i] - b.pixels()[i]);
@@ -39,16 +90,38 @@ Action addCompare(CLI::App& app) {
       j["reference"] = o->reference;
       j["width"] = a.width();
       j["height"] = a.height();
-      j["rel_l2"] = e.relL2;
-      j["rel_l1"] = e.relL1;
-      j["psnr_db"] = std::isfinite(e.psnr) ? Json(e.psnr) : Json("inf");
-      j["max_abs"] = e.maxAbs;
+      j["rel_l2"] = number(e.relL2);
+      j["rel_l1"] = number(e.relL1);
+      j["psnr_db"] = number(e.psnr);
+      j["max_abs"] = number(e.maxAbs);
+      j["visibly_wrong"] = e.visiblyWrong;
+      j["visible_threshold"] = kVisibleThreshold;
+      if (mask) {
+        j["masked_rel_l2"] = number(e.maskedRelL2);
+        j["mask_radius_px"] = e.maskRadius;
+        j["masked_lights"] = e.maskedLights;
+        j["masked_pixels"] = mask->maskedPixels();
+      }
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       std::printf("relative L2 error: %.6g (%.3f%%)\n", e.relL2, 100 * e.relL2);
       std::printf("relative L1 error: %.6g (%.3f%%)\n", e.relL1, 100 * e.relL1);
       std::printf("PSNR (sRGB):       %.2f dB\n", e.psnr);
       std::printf("max abs error:     %.6g\n", e.maxAbs);
+      std::printf(
+          "visibly wrong:     %.4f%% of pixels (some channel off by > %.2f after the PNG "
+          "transform)\n",
+          100 * e.visiblyWrong, kVisibleThreshold);
+      if (mask) {
+        if (std::isnan(e.maskedRelL2))
+          std::printf("masked rel. L2:    n/a (the mask covers every pixel)\n");
+        else
+          std::printf(
+              "masked rel. L2:    %.6g (%.3f%%), %zu px within %.3g px of %d light%s "
+              "excluded\n",
+              e.maskedRelL2, 100 * e.maskedRelL2, mask->maskedPixels(), e.maskRadius,
+              e.maskedLights, e.maskedLights == 1 ? "" : "s");
+      }
     }
     return 0;
   };

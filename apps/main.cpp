@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // Usage errors exit with 2 (the project's rule), whatever CLI11's own code; --help is 0.
+    return app.exit(e) == 0 ? 0 : 2;
   }
   try {
     scatterlab::initialize();

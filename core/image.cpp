@@ -89,32 +89,4 @@ void writePng(const Image& img, const std::string& path, float exposure) {
   });
 }
 
-ImageError compareImages(const Image& img, const Image& ref) {
-  if (img.width() != ref.width() || img.height() != ref.height())
-    throw ConfigError("image sizes differ: " + std::to_string(img.width()) + "x" +
-                      std::to_string(img.height()) + " vs reference " +
-                      std::to_string(ref.width()) + "x" + std::to_string(ref.height()));
-  double d2 = 0, b2 = 0, d1 = 0, b1 = 0, mse = 0, maxAbs = 0;
-  const size_t n = img.pixels().size();
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) {
-      const double a = img.pixels()[i][c], b = ref.pixels()[i][c];
-      const double d = a - b;
-      d2 += d * d;
-      b2 += b * b;
-      d1 += std::abs(d);
-      b1 += std::abs(b);
-      maxAbs = std::max(maxAbs, std::abs(d));
-      const double t = double(toneMapSrgb(float(a))) - double(toneMapSrgb(float(b)));
-      mse += t * t;
-    }
-  ImageError e;
-  e.relL2 = b2 > 0 ? std::sqrt(d2 / b2) : (d2 > 0 ? std::numeric_limits<double>::infinity() : 0);
-  e.relL1 = b1 > 0 ? d1 / b1 : (d1 > 0 ? std::numeric_limits<double>::infinity() : 0);
-  mse /= double(n * 3);
-  e.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : std::numeric_limits<double>::infinity();
-  e.maxAbs = maxAbs;
-  return e;
-}
-
 }  // namespace scatterlab

@@ -1,6 +1,7 @@
 #pragma once
-/// Linear RGB float images, OpenEXR and PNG I/O, image error measures (DESIGN.md §2).
+/// Linear RGB float images, OpenEXR and PNG I/O, image error measures (docs/metrics.md).
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,15 +42,28 @@ float toneMapSrgb(float linear, float exposure = 0.0f);
 /// Writes an 8-bit sRGB PNG (toneMapSrgb) atomically. Throws IoError.
 void writePng(const Image& img, const std::string& path, float exposure = 0.0f);
 
-/// Error of `img` against `ref` over all pixels and channels (DESIGN.md §2).
+/// Error of `img` against `ref` over all pixels and channels (docs/metrics.md). Computed in
+/// core/metrics.cpp, the one implementation used by `compare` and the experiment harness.
 struct ImageError {
   double relL2 = 0.0;   ///< sqrt(Σ(a−b)²) / sqrt(Σb²): the headline "relative error"
   double relL1 = 0.0;   ///< Σ|a−b| / Σ|b|
   double psnr = 0.0;    ///< dB on the tone-mapped (exposure 0, sRGB) image; +inf when equal
   double maxAbs = 0.0;  ///< max |a−b| in linear units
+  /// Share of pixels where some channel of the tone-mapped images (toneMapSrgb, exposure 0:
+  /// the PNG transform) differs by more than kVisibleThreshold.
+  double visiblyWrong = 0.0;
+  /// Relative L2 without the pixels near the lights (core/metrics.h: LightMask); NaN when no
+  /// mask was given or it keeps no pixel.
+  double maskedRelL2 = std::numeric_limits<double>::quiet_NaN();
+  double maskRadius = std::numeric_limits<double>::quiet_NaN();  ///< px; NaN without a mask
+  int maskedLights = 0;                                          ///< lights whose disc was excluded
 };
 
-/// Throws ConfigError when the sizes differ.
+/// Display-space difference above which a pixel counts as visibly wrong (0.05 of full scale,
+/// about 13 of 255 PNG levels).
+inline constexpr double kVisibleThreshold = 0.05;
+
+/// Every measure but the masked one. Throws ConfigError when the sizes differ.
 ImageError compareImages(const Image& img, const Image& ref);
 
 }  // namespace scatterlab

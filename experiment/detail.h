@@ -59,6 +59,8 @@ struct Reference {
   Image image;
   bool ok = false;
   std::string error;  ///< why it could not be rendered or read
+  /// A converged reference's check (MethodSpec::converge): null for others.
+  Json check;
 };
 
 /// References, rendered once per distinct (scene, reference overrides, reference method) and
@@ -79,6 +81,9 @@ class ReferenceCache {
  private:
   void render(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed, const Json& key,
               const std::string& base, Reference& rc);
+  /// Renders `ref` at ½ voxel and ¼ voxel and keeps the ½-voxel image when the two differ by
+  /// less than kReferenceTolerance, else the ¼-voxel one; the check goes into `check`.
+  RenderResult renderConverged(const Scene& scene, const MethodSpec& ref, Json& check);
 
   const ExperimentPlan& plan_;
   OutputDir& out_;
@@ -126,6 +131,10 @@ struct ResultFacts {
 /// A paper value of a record formatted with `format`; "" when the config gave none.
 std::string paperValue(const Json& paper, const char* key, const char* format);
 
+/// The distinct convergence checks of the converged references (one per reference image), each
+/// with the reference, scene, sweep and the first run that used it.
+Json referenceChecks(const ResultFacts& facts);
+
 /// results.csv: one row per run.
 std::string resultsCsv(const ResultFacts& facts);
 /// results.json: the records plus what the CSV derives (fps, speed-up, dominant stage).
@@ -139,6 +148,8 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
                   const std::string& memoryMethod);
 /// One sweep's results table and per-stage breakdown.
 void reportSweep(std::ostream& md, const ResultFacts& facts, const SweepSpec& sweep);
+/// The convergence checks of the converged references; nothing when there are none.
+void reportReferenceChecks(std::ostream& md, const ResultFacts& facts);
 /// The plots (from DIR/plots/) or why there are none.
 void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out);
 /// The failed runs with their configurations; nothing when none failed.

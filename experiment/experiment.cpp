@@ -25,6 +25,7 @@ void writeOutputs(ExperimentResult& res, const std::string& configPath, detail::
   std::ostringstream md;
   detail::reportHeader(md, res, configPath, memoryMethod);
   for (const SweepSpec& sw : res.plan.sweeps) detail::reportSweep(md, facts, sw);
+  detail::reportReferenceChecks(md, facts);
   detail::writeGallery(md, res.plan, res.runs, refs, out);
   detail::writeText(out.path("results.csv"), csv);
   detail::writeText(out.path("results.json"), json.dump(2) + "\n");

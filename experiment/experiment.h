@@ -27,7 +27,15 @@ struct MethodSpec {
   std::string backend;  ///< "cpu", "gpu" or "auto"
   std::vector<std::string> sets;
   Json paper = Json::object();  ///< paper values copied into the results (e.g. rel_error)
+  /// References only: render with march_step = delta1 = ½ voxel of the run's scene, and check
+  /// that halving both again moves the image by < kReferenceTolerance relative L2, else use
+  /// the ¼-voxel image (one refinement) and record that. The default reference is `exact`
+  /// with this on (docs/metrics.md).
+  bool converge = false;
 };
+
+/// The largest relative L2 change a converged reference may show when its steps are halved.
+inline constexpr double kReferenceTolerance = 0.005;
 
 struct SceneSpec {
   std::string name, file;  ///< file: absolute or relative to the working directory
@@ -65,24 +73,31 @@ struct RunSpec {
   const MethodSpec* spec = nullptr;
   const SceneSpec* sceneSpec = nullptr;
   const SweepSpec* sweepSpec = nullptr;
-  int point = 0;                      ///< index of the sweep point (product order)
-  Json axes = Json::object();         ///< axis name -> value
-  std::vector<std::string> sets;      ///< all scene overrides, in order
+  int point = 0;                  ///< index of the sweep point (product order)
+  Json axes = Json::object();     ///< axis name -> value
+  std::vector<std::string> sets;  ///< all scene overrides, in order
   std::optional<int> lights;
-  std::vector<std::string> refSets;   ///< the overrides the reference of this run uses
+  std::vector<std::string> refSets;  ///< the overrides the reference of this run uses
   std::optional<int> refLights;
   bool axesAllAffectReference = true;  ///< no render.* axis: the reference sees the same scene
-  std::string hash;                   ///< of everything that determines the result
-  Json paperFps;                      ///< null when the config gives none
+  std::string hash;                    ///< of everything that determines the result
+  Json paperFps;                       ///< null when the config gives none
 };
 
 struct ExperimentPlan {
   std::string title, description;
   std::vector<SceneSpec> scenes;
   std::vector<MethodSpec> references;  ///< the first is the headline reference
+  bool defaultReference = false;       ///< the config named none: `exact`, converged
   std::vector<MethodSpec> methods;
   std::vector<SweepSpec> sweeps;
   float exposure = 0.0f;
+  /// Radius in pixels of the disc masked around each light for the masked relative L2; none:
+  /// defaultMaskRadius() of each image (1 % of its diagonal, at least 2 px).
+  std::optional<double> maskRadius;
+  /// Gallery strips: "images" (references, then runs), "image+error" (a second row with each
+  /// image's signed error map against the headline reference) or "off".
+  std::string gallery = "images";
   std::vector<RunSpec> runs;
 };
 
@@ -101,14 +116,18 @@ struct RunRecord {
   Json axes = Json::object();
   int point = 0;
   std::string hash;
-  std::string status;  ///< "ok" or "failed"
-  std::string error;   ///< the failure's message
+  std::string status;    ///< "ok" or "failed"
+  std::string error;     ///< the failure's message
   bool resumed = false;  ///< loaded from DIR/runs/ instead of rendered
   Json stats;            ///< RenderStats::toJson() of the last repetition, timings = medians
   std::vector<std::pair<std::string, double>> medianMs;  ///< per stage, plus "total"
   int repetitions = 0, warmup = 0;
   std::vector<std::string> references;  ///< names, in order
   std::vector<ImageError> errors;       ///< one per reference
+  /// Reference name -> its convergence check (converged references only): steps, the relative
+  /// L2 change on halving them, whether it passed or was refined.
+  Json referenceChecks = Json::object();
+  bool lightInMedium = false;  ///< a point or spot light lies inside the medium's box
   double peakHostMiB = 0.0;    ///< VmHWM during the run (whole process)
   double baseHostMiB = 0.0;    ///< VmRSS just before it
   std::string memoryMethod;    ///< how peakHostMiB was measured

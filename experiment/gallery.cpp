@@ -2,6 +2,7 @@
 // point (report.md's gallery), and the plots made by experiment/plots.py.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -31,6 +32,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// Display-space difference shown at full colour in the signed error maps.
+constexpr double kErrorMapFull = 0.1;
+
 /// Images side by side, left to right, with a 4-pixel black gap.
 Image sideBySide(const std::vector<Image>& imgs) {
   int w = 0, h = 0;
@@ -45,6 +49,40 @@ Image sideBySide(const std::vector<Image>& imgs) {
       for (int x = 0; x < i.width(); ++x) out.at(x0 + x, y) = i.at(x, y);
     x0 += i.width() + 4;
   }
+  return out;
+}
+
+/// Inverse of the sRGB curve: the linear value that toneMapSrgb (exposure 0) shows as `v`.
+float srgbToLinear(float v) {
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+/// Signed error map of `img` against `ref` in display units (the visibly-wrong metric's): per
+/// pixel Δ = mean over channels of toneMapSrgb(a) − toneMapSrgb(b); red where the image is
+/// brighter, blue where darker, full at |Δ| = kErrorMapFull. Returned as linear values that show
+/// as those colours after `exposure` stops.
+Image signedErrorMap(const Image& img, const Image& ref, float exposure) {
+  Image out(img.width(), img.height());
+  const float unexpose = std::exp2(-exposure);
+  for (std::size_t i = 0; i < out.pixels().size(); ++i) {
+    float d = 0;
+    for (int c = 0; c < 3; ++c)
+      d += toneMapSrgb(img.pixels()[i][c]) - toneMapSrgb(ref.pixels()[i][c]);
+    const float t = std::min(1.0f, std::abs(d / 3.0f) / float(kErrorMapFull));
+    const float v = srgbToLinear(t) * unexpose;
+    out.pixels()[i] = d > 0 ? Vec3(v, 0, 0) : Vec3(0, 0, v);
+  }
+  return out;
+}
+
+/// Images side by side (the first row) above their error maps (the second), 4-pixel gaps.
+Image twoRows(const std::vector<Image>& top, const std::vector<Image>& bottom) {
+  const Image a = sideBySide(top), b = sideBySide(bottom);
+  Image out(std::max(a.width(), b.width()), a.height() + 4 + b.height());
+  for (int y = 0; y < a.height(); ++y)
+    for (int x = 0; x < a.width(); ++x) out.at(x, y) = a.at(x, y);
+  for (int y = 0; y < b.height(); ++y)
+    for (int x = 0; x < b.width(); ++x) out.at(x, a.height() + 4 + y) = b.at(x, y);
   return out;
 }
 
@@ -100,7 +138,19 @@ void writeStrip(std::ostream& md, const ExperimentPlan& plan, const std::string&
     names.resize(12);
   }
   if (file.rfind("gallery/", 0) == 0) fs::create_directories(out.path("gallery"));
-  writePng(sideBySide(imgs), out.path(file), plan.exposure);
+  // Error maps against the headline reference: the first image when it rendered.
+  const bool errors = plan.gallery == "image+error" && !names.empty() &&
+                      names.front() == plan.references.front().name + " (reference)";
+  if (errors) {
+    std::vector<Image> maps;
+    for (const Image& i : imgs)
+      maps.push_back(i.width() == imgs.front().width() && i.height() == imgs.front().height()
+                         ? signedErrorMap(i, imgs.front(), plan.exposure)
+                         : Image(i.width(), i.height()));
+    writePng(twoRows(imgs, maps), out.path(file), plan.exposure);
+  } else {
+    writePng(sideBySide(imgs), out.path(file), plan.exposure);
+  }
   std::string caption;
   for (const auto& n : names) caption += (caption.empty() ? "" : ", ") + n;
   md << "**" << g << "** — " << caption << "\n\n![" << g << "](" << file << ")\n\n";
@@ -110,9 +160,16 @@ void writeStrip(std::ostream& md, const ExperimentPlan& plan, const std::string&
 
 void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
                   ReferenceCache& refs, OutputDir& out) {
+  if (plan.gallery == "off") return;
   md << "## Gallery\n\nEach strip: the reference(s), then the runs of that sweep point, left to "
         "right (PNG, exposure "
-     << plan.exposure << ").\n\n";
+     << plan.exposure << ").";
+  if (plan.gallery == "image+error")
+    md << " Below each image its signed error against `" << plan.references.front().name
+       << "` after the PNG transform (exposure 0): red = brighter than the reference, blue = "
+          "darker, full colour at a mean channel difference of "
+       << kErrorMapFull << " (visibly wrong starts at " << kVisibleThreshold << ").";
+  md << "\n\n";
   const Groups groups = groupRuns(runs);
   for (const std::string& g : groups.order) {
     const std::string file =

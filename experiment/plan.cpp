@@ -62,7 +62,8 @@ void checkName(Params& p, const std::string& key, const std::string& name) {
 }
 
 /// A method entry: a string (its name = the method) or an object.
-MethodSpec parseMethod(const Json& j, const std::string& path, const std::string& defBackend) {
+MethodSpec parseMethod(const Json& j, const std::string& path, const std::string& defBackend,
+                       bool reference = false) {
   MethodSpec m;
   if (j.is_string()) {
     m.name = m.method = j.get<std::string>();
@@ -81,6 +82,10 @@ MethodSpec parseMethod(const Json& j, const std::string& path, const std::string
       m.paper["samples"] = r.number("paper_samples", std::nullopt, Interval::atLeast(0));
     else
       r.allow("paper_samples");
+    if (reference)
+      m.converge = r.boolean("converge", false);
+    else if (r.has("converge"))
+      r.fail("converge", "only references are converged (put the method in 'references')");
     checkName(r, "name", m.name);
     r.finish();
   }
@@ -189,13 +194,23 @@ void parseScenes(Params& p, const fs::path& base, ExperimentPlan& plan) {
 
 /// 'references' (CPU unless they say otherwise) and 'methods' (or its synonym 'runs').
 void parseMethods(Params& p, const std::string& defBackend, ExperimentPlan& plan) {
-  if (!p.has("references")) p.fail("references", "give at least one reference method");
-  const Json& refs = p.raw("references");
-  if (!refs.is_array() || refs.empty())
-    p.fail("references", "expected a non-empty array of methods, got " + describeValue(refs));
-  for (std::size_t i = 0; i < refs.size(); ++i)
-    plan.references.push_back(
-        parseMethod(refs[i], p.keyPath("references") + "[" + std::to_string(i) + "]", "cpu"));
+  if (!p.has("references")) {
+    // The default: `exact` at half a voxel, checked by halving once more (docs/metrics.md).
+    p.allow("references");
+    MethodSpec ref;
+    ref.name = ref.method = "exact";
+    ref.backend = "cpu";
+    ref.converge = true;
+    plan.references.push_back(ref);
+    plan.defaultReference = true;
+  } else {
+    const Json& refs = p.raw("references");
+    if (!refs.is_array() || refs.empty())
+      p.fail("references", "expected a non-empty array of methods, got " + describeValue(refs));
+    for (std::size_t i = 0; i < refs.size(); ++i)
+      plan.references.push_back(parseMethod(
+          refs[i], p.keyPath("references") + "[" + std::to_string(i) + "]", "cpu", true));
+  }
 
   const std::string methodsKey = p.has("runs") && !p.has("methods") ? "runs" : "methods";
   if (p.has("runs") && p.has("methods")) p.fail("runs", "give either 'methods' or 'runs'");
@@ -293,8 +308,11 @@ std::string runHash(const ExperimentPlan& plan, const RunSpec& r, const std::str
               {"warmup", r.sweepSpec->warmup},
               {"lights", r.lights ? Json(*r.lights) : Json()}};
   Json refs = Json::array();
-  for (const MethodSpec& ref : plan.references) refs.push_back({ref.method, ref.backend, ref.sets});
+  for (const MethodSpec& ref : plan.references)
+    refs.push_back(ref.converge ? Json{ref.method, ref.backend, ref.sets, "converge"}
+                                : Json{ref.method, ref.backend, ref.sets});
   key["references"] = refs;
+  if (plan.maskRadius) key["mask_radius"] = *plan.maskRadius;
   key["ref_sets"] = r.refSets;
   return stableHash(key.dump());
 }
@@ -445,6 +463,11 @@ ExperimentPlan parseExperiment(const std::string& configPath,
   globalSets.insert(globalSets.end(), overrides.begin(), overrides.end());
   const std::string defBackend = p.choice("backend", {"cpu", "gpu", "auto"}, std::string("cpu"));
   plan.exposure = p.real("exposure", 0.0);
+  if (p.has("mask_radius"))
+    plan.maskRadius = p.number("mask_radius", std::nullopt, Interval::atLeast(0));
+  else
+    p.allow("mask_radius");
+  plan.gallery = p.choice("gallery", {"images", "image+error", "off"}, std::string("images"));
   const int defReps = int(p.integer("repetitions", 3, Interval::closed(1, 1000)));
   const int defWarm = int(p.integer("warmup", 1, Interval::closed(0, 100)));
   parseMethods(p, defBackend, plan);

@@ -2,7 +2,9 @@
 // breakdown, the plots and the failures. (The gallery section is written by gallery.cpp.)
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <set>
 
 #include "experiment/detail.h"
 
@@ -19,11 +21,33 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
      << " rendered now, " << res.resumed << " resumed from `runs/`, " << res.failed
      << " failed). Written " << nowIso() << ".\n\n"
      << "Times are medians over the stated repetitions after the warm-up, in ms per frame. "
-        "Errors: relative L2 = sqrt(Σ(a−b)²)/sqrt(Σb²) over all pixels and channels (DESIGN.md "
-        "§2), against the reference `"
+        "Errors (docs/metrics.md), against the reference `"
      << plan.references[0].name << "`"
-     << (plan.references.size() > 1 ? " (the other references are in results.csv)" : "")
-     << ". Peak host memory: " << memoryMethod << ", MiB, whole process.\n\n";
+     << (plan.references.size() > 1 ? " (against the others: rel L2 here, the rest in results.csv)"
+                                    : "")
+     << ": relative L2 = sqrt(Σ(a−b)²)/sqrt(Σb²) over all pixels and channels (the headline); "
+        "masked rel L2 = the same without the pixels within K px of each point or spot light's "
+        "projection (K in the column; a 1/d² glow puts nearly all squared error in those "
+        "pixels); relative L1 = Σ|a−b|/Σ|b|; visibly wrong = share of pixels where some channel "
+        "of the PNG transform (exposure 0, clamp, sRGB) differs by more than "
+     << kVisibleThreshold << ". Peak host memory: " << memoryMethod << ", MiB, whole process.\n\n";
+  if (plan.defaultReference)
+    md << "Reference: the default, `exact` with march_step = delta1 = ½ voxel, checked by "
+          "halving both once more (see *Reference convergence*).\n\n";
+  // per-voxel interpolates S trilinearly from voxel centres: next to a light inside the medium
+  // it blurs the 1/d² peak, so there it is a baseline, not ground truth.
+  std::set<std::string> inMedium;
+  for (const RunRecord& rec : res.runs)
+    if (rec.lightInMedium) inMedium.insert(rec.scene);
+  for (const MethodSpec& ref : plan.references)
+    if (ref.method != "exact" && !inMedium.empty()) {
+      std::string list;
+      for (const std::string& s : inMedium) list += (list.empty() ? "`" : ", `") + s + "`";
+      md << "**`" << ref.name << "` is not a reference on " << list
+         << "**: a light sits inside the medium there, where a method that interpolates S "
+            "from a volume blurs the 1/d² peak; errors against it are differences from that "
+            "baseline. Judge those scenes against `exact`.\n\n";
+    }
 }
 
 namespace {
@@ -34,12 +58,16 @@ void sweepTableHeader(std::ostream& md, const ExperimentPlan& plan, const SweepS
   md << " samples | time (ms) | fps |";
   if (!sw.paperFps.empty()) md << " paper fps |";
   if (!sw.baseline.empty()) md << " speed-up vs " << sw.baseline << " |";
-  for (const auto& r : plan.references) md << " rel L2 vs " << r.name << " |";
+  const std::string& head = plan.references[0].name;
+  md << " rel L2 vs " << head << " | masked rel L2 (K px) | rel L1 | visibly wrong |";
+  for (std::size_t k = 1; k < plan.references.size(); ++k)
+    md << " rel L2 vs " << plan.references[k].name << " |";
   md << " paper rel. error | dominant stage | peak MiB |\n|---|---|---|---|";
   for (std::size_t k = 0; k < sw.axes.size(); ++k) md << "---|";
   md << "---|---|---|";
   if (!sw.paperFps.empty()) md << "---|";
   if (!sw.baseline.empty()) md << "---|";
+  md << "---|---|---|";
   for (std::size_t k = 0; k < plan.references.size(); ++k) md << "---|";
   md << "---|---|---|\n";
 }
@@ -63,9 +91,19 @@ void sweepTableRow(std::ostream& md, const ResultFacts& facts, const SweepSpec& 
     md << " " << (b ? fmt(b->totalMs() / std::max(rec.totalMs(), 1e-9), "%.2f") + "×" : "—")
        << " |";
   }
-  for (std::size_t k = 0; k < facts.plan.references.size(); ++k)
-    md << " " << (k < rec.errors.size() ? fmt(100 * rec.errors[k].relL2, "%.2f") + "%" : "—")
-       << " |";
+  const auto pct = [](double v, const char* format) {
+    return std::isfinite(v) ? fmt(100 * v, format) + "%" : std::string("—");
+  };
+  if (!rec.errors.empty()) {
+    const ImageError& e = rec.errors[0];
+    md << " " << pct(e.relL2, "%.2f") << " | " << pct(e.maskedRelL2, "%.2f")
+       << (std::isfinite(e.maskRadius) ? " (" + fmt(e.maskRadius, "%.3g") + ")" : "") << " | "
+       << pct(e.relL1, "%.2f") << " | " << pct(e.visiblyWrong, "%.3f") << " |";
+  } else {
+    md << " — | — | — | — |";
+  }
+  for (std::size_t k = 1; k < facts.plan.references.size(); ++k)
+    md << " " << (k < rec.errors.size() ? pct(rec.errors[k].relL2, "%.2f") : "—") << " |";
   md << " "
      << (rec.paper.contains("rel_error")
              ? fmt(100 * rec.paper["rel_error"].get<double>(), "%.1f") + "%"
@@ -100,6 +138,25 @@ void reportSweep(std::ostream& md, const ResultFacts& facts, const SweepSpec& sw
     if (rec.sweep == sweep.name) sweepTableRow(md, facts, sweep, rec);
   md << "\n";
   stageTable(md, facts, sweep);
+}
+
+void reportReferenceChecks(std::ostream& md, const ResultFacts& facts) {
+  const Json checks = referenceChecks(facts);
+  if (checks.empty()) return;
+  md << "## Reference convergence\n\nEach converged reference is rendered with march_step = "
+        "delta1 = ½ voxel and again with both halved; when the two differ by "
+     << fmt(100 * kReferenceTolerance, "%.2g")
+     << "% relative L2 or more, the finer image becomes the reference (refined once; its own "
+        "change is not measured).\n\n| reference | scene | first run | voxel | step used | "
+        "change on halving | verdict |\n|---|---|---|---|---|---|---|\n";
+  for (const Json& c : checks)
+    md << "| " << c.value("reference", "") << " | " << c.value("scene", "") << " | "
+       << c.value("first_run", "") << " | " << fmt(c.value("voxel", NAN), "%.4g") << " | "
+       << fmt(c.value("step", NAN), "%.4g") << " (" << fmt(c.value("step_voxels", NAN), "%.3g")
+       << " voxel) | " << fmt(100 * c.value("change_rel_l2", NAN), "%.3f") << "% | "
+       << (c.value("passed", false) ? "converged (< " : "**refined** (≥ ")
+       << fmt(100 * c.value("threshold", NAN), "%.2g") << "%) |\n";
+  md << "\n";
 }
 
 void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out) {

@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/metrics.h"
 #include "core/scene.h"
 #include "experiment/detail.h"
 
@@ -190,12 +191,20 @@ class Runner {
     rec.image = "images/" + r.id + ".png";
     writeExr(last.image, out_.path("images/" + r.id + ".exr"));
     writePng(last.image, out_.path(rec.image), plan_.exposure);
+    // The masked relative L2 needs the lights' projections: the run's own camera and lights.
+    const LightMask mask = lightMask(scene, plan_.maskRadius.value_or(defaultMaskRadius(
+                                                scene.camera.width, scene.camera.height)));
+    for (const Light& l : scene.lights)
+      if (l.type != Light::Type::Directional && scene.medium.bounds.contains(l.position))
+        rec.lightInMedium = true;
     for (const MethodSpec& refSpec : plan_.references) {
-      const bool same = r.axesAllAffectReference && refSpec.method == m.method &&
-                        refSpec.backend == m.backend && refSpec.sets == m.sets;
+      const bool same = r.axesAllAffectReference && !refSpec.converge &&
+                        refSpec.method == m.method && refSpec.backend == m.backend &&
+                        refSpec.sets == m.sets;
       Reference& ref = refs_.get(r, refSpec, same ? &last : nullptr);
       if (!ref.ok) throw Error("reference '" + refSpec.name + "' failed: " + ref.error);
-      rec.errors.push_back(compareImages(last.image, ref.image));
+      rec.errors.push_back(compareImages(last.image, ref.image, mask));
+      if (!ref.check.is_null()) rec.referenceChecks[refSpec.name] = ref.check;
     }
     rec.status = "ok";
   }
@@ -213,7 +222,10 @@ class Runner {
                        " warm-up)";
     if (!rec.errors.empty())
       line += ", rel L2 vs " + plan_.references[0].name + " " +
-              fmt(100 * rec.errors[0].relL2, "%.2f") + "%";
+              fmt(100 * rec.errors[0].relL2, "%.2f") + "%, masked " +
+              fmt(100 * rec.errors[0].maskedRelL2, "%.2f") + "% (" +
+              fmt(rec.errors[0].maskRadius, "%.3g") + " px), visibly wrong " +
+              fmt(100 * rec.errors[0].visiblyWrong, "%.3f") + "%";
     out_.log(line);
     if (opt_.log)
       std::fprintf(opt_.log, "%s%-40s %-10s %9.1f ms%s%s\n", bar_.enabled ? "\r\033[K" : "",

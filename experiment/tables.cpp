@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 #include "experiment/detail.h"
@@ -13,11 +14,20 @@ namespace scatterlab {
 
 namespace {
 
+/// A finite number, else null (JSON has no NaN or infinity).
+Json finite(double v) {
+  return std::isfinite(v) ? Json(v) : Json(nullptr);
+}
+
 Json errorJson(const ImageError& e) {
   return {{"rel_l2", e.relL2},
           {"rel_l1", e.relL1},
-          {"psnr", std::isfinite(e.psnr) ? Json(e.psnr) : Json(nullptr)},
-          {"max_abs", e.maxAbs}};
+          {"psnr", finite(e.psnr)},
+          {"max_abs", e.maxAbs},
+          {"visibly_wrong", e.visiblyWrong},
+          {"masked_rel_l2", finite(e.maskedRelL2)},
+          {"mask_radius_px", finite(e.maskRadius)},
+          {"masked_lights", e.maskedLights}};
 }
 
 /// A number from a record; `def` when missing or null (NaN and ±inf are written as null).
@@ -32,6 +42,10 @@ ImageError errorFromJson(const Json& j) {
   e.relL1 = num(j, "rel_l1", NAN);
   e.psnr = num(j, "psnr", INFINITY);
   e.maxAbs = num(j, "max_abs", NAN);
+  e.visiblyWrong = num(j, "visibly_wrong", NAN);
+  e.maskedRelL2 = num(j, "masked_rel_l2", NAN);
+  e.maskRadius = num(j, "mask_radius_px", NAN);
+  e.maskedLights = int(num(j, "masked_lights", 0));
   return e;
 }
 
@@ -67,6 +81,8 @@ Json RunRecord::toJson() const {
     e[references[k]] = errorJson(errors[k]);
   j["errors"] = e;
   j["references"] = references;
+  j["reference_checks"] = referenceChecks;
+  j["light_in_medium"] = lightInMedium;
   j["peak_host_mib"] = peakHostMiB;
   j["base_host_mib"] = baseHostMiB;
   j["memory_method"] = memoryMethod;
@@ -100,6 +116,8 @@ RunRecord RunRecord::fromJson(const Json& j) {
   const Json e = j.value("errors", Json::object());
   for (const std::string& ref : r.references)
     r.errors.push_back(e.contains(ref) ? errorFromJson(e[ref]) : ImageError{});
+  r.referenceChecks = j.value("reference_checks", Json::object());
+  r.lightInMedium = j.value("light_in_medium", false);
   r.peakHostMiB = num(j, "peak_host_mib", 0.0);
   r.baseHostMiB = num(j, "base_host_mib", 0.0);
   r.memoryMethod = j.value("memory_method", "");
@@ -185,7 +203,11 @@ void csvHeader(std::ostream& csv, const ResultFacts& facts) {
   csv << ",status,samples,width,height,repetitions,total_ms,fps";
   for (const auto& s : facts.stages) csv << "," << s << "_ms";
   for (const auto& r : facts.plan.references)
-    csv << ",rel_l2_vs_" << r.name << ",rel_l1_vs_" << r.name << ",psnr_vs_" << r.name;
+    csv << ",rel_l2_vs_" << r.name << ",rel_l1_vs_" << r.name << ",psnr_vs_" << r.name
+        << ",masked_rel_l2_vs_" << r.name << ",visibly_wrong_vs_" << r.name;
+  csv << ",mask_radius_px";
+  for (const auto& r : facts.plan.references)
+    if (r.converge) csv << ",ref_step_voxels_" << r.name << ",ref_halving_change_" << r.name;
   csv << ",speedup_vs_baseline,dominant_stage,peak_host_mib,paper_rel_error,paper_fps,paper_"
          "samples,resumed,error\n";
 }
@@ -205,12 +227,28 @@ void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
     const auto v = ResultFacts::stageMs(rec, s);
     csv << "," << (v ? fmt(*v, "%.2f") : "");
   }
+  const auto finiteOr = [](double v, const char* format, const char* otherwise) {
+    return std::isfinite(v) ? fmt(v, format) : std::string(otherwise);
+  };
   for (std::size_t k = 0; k < facts.plan.references.size(); ++k) {
-    if (ok && k < rec.errors.size())
-      csv << "," << fmt(rec.errors[k].relL2, "%.6f") << "," << fmt(rec.errors[k].relL1, "%.6f")
-          << "," << (std::isfinite(rec.errors[k].psnr) ? fmt(rec.errors[k].psnr, "%.2f") : "inf");
+    if (ok && k < rec.errors.size()) {
+      const ImageError& e = rec.errors[k];
+      csv << "," << fmt(e.relL2, "%.6f") << "," << fmt(e.relL1, "%.6f") << ","
+          << finiteOr(e.psnr, "%.2f", "inf") << "," << finiteOr(e.maskedRelL2, "%.6f", "") << ","
+          << finiteOr(e.visiblyWrong, "%.6f", "");
+    } else {
+      csv << ",,,,,";
+    }
+  }
+  csv << "," << (ok && !rec.errors.empty() ? finiteOr(rec.errors[0].maskRadius, "%.3g", "") : "");
+  for (const auto& r : facts.plan.references) {
+    if (!r.converge) continue;
+    const Json c = rec.referenceChecks.value(r.name, Json());
+    if (c.is_object())
+      csv << "," << fmt(c.value("step_voxels", NAN), "%.3g") << ","
+          << fmt(c.value("change_rel_l2", NAN), "%.6f");
     else
-      csv << ",,,";
+      csv << ",,";
   }
   const RunRecord* b = ok ? facts.baselineOf(rec) : nullptr;
   // A plain double (valid when b): GCC 12 warns falsely about std::optional<double> here.
@@ -224,6 +262,22 @@ void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
 }
 
 }  // namespace
+
+Json referenceChecks(const ResultFacts& facts) {
+  Json out = Json::array();
+  std::set<std::string> seen;
+  for (const RunRecord& rec : facts.runs)
+    for (const auto& [ref, c] : rec.referenceChecks.items())
+      if (seen.insert(c.value("file", ref + rec.id)).second) {
+        Json e = c;
+        e["reference"] = ref;
+        e["scene"] = rec.scene;
+        e["sweep"] = rec.sweep;
+        e["first_run"] = rec.id;
+        out.push_back(e);
+      }
+  return out;
+}
 
 std::string resultsCsv(const ResultFacts& facts) {
   std::ostringstream csv;
@@ -247,6 +301,8 @@ Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
   jres["resumed"] = res.resumed;
   jres["failed"] = res.failed;
   jres["memory_method"] = memoryMethod;
+  jres["default_reference"] = plan.defaultReference;
+  jres["reference_checks"] = referenceChecks(facts);
   for (const RunRecord& rec : facts.runs) {
     const bool ok = rec.status == "ok";
     const RunRecord* b = ok ? facts.baselineOf(rec) : nullptr;

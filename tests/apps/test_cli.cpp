@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -162,6 +163,83 @@ TEST_F(Cli, CompareReportsErrorsAsJson) {
   r = run("compare " + out("pv.exr") + " " + out("missing.exr"));
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("missing.exr"), std::string::npos);
+}
+
+// The masked relative L2 and the visibly wrong share, on hand-made 16×12 images. The tiny
+// scene's light at (0.5, 1.4, 0.5) projects to (8, 0.066) px (camera 2.5 in front of it, 0.9
+// above the axis, tan 20° = 0.364): within 1 px of it lie the pixel centres (7.5, 0.5) and
+// (8.5, 0.5) (0.66 px away; the next ones are 1.5 px away); within 2 px (the default radius:
+// 1% of the 20-px diagonal is raised to 2) also (6.5|9.5, 0.5) and (7.5|8.5, 1.5): 6 pixels.
+TEST_F(Cli, CompareMasksTheLightsOfTheScene) {
+  const std::string scene = writeScene(tinyScene());
+  scatterlab::Image ref(16, 12), img(16, 12);
+  for (auto& p : ref.pixels()) p = scatterlab::Vec3(1.0f);
+  img = ref;
+  img.at(8, 0) = scatterlab::Vec3(11.0f);  // next to the light: 100 of the 101 squared error
+  img.at(0, 11) = scatterlab::Vec3(0.0f);  // far from it
+  scatterlab::writeExr(ref, out("ref.exr"));
+  scatterlab::writeExr(img, out("img.exr"));
+  const std::string images = out("img.exr") + " " + out("ref.exr");
+  RunResult r = run("compare " + images + " --json --scene " + scene);
+  ASSERT_EQ(r.code, 0) << r.output;
+  Json j = Json::parse(r.output);
+  EXPECT_NEAR(j["rel_l2"].get<double>(), std::sqrt(101.0 / 192.0), 1e-9);
+  EXPECT_NEAR(j["masked_rel_l2"].get<double>(), std::sqrt(1.0 / 186.0), 1e-9);
+  EXPECT_EQ(j["masked_pixels"], 6);
+  EXPECT_EQ(j["mask_radius_px"], 2.0);
+  EXPECT_EQ(j["masked_lights"], 1);
+  // Pixel (8, 0): 11 and 1 both clamp to white, so only (0, 11) (black vs white) is visibly
+  // wrong.
+  EXPECT_NEAR(j["visibly_wrong"].get<double>(), 1.0 / 192.0, 1e-12);
+  r = run("compare " + images + " --json --scene " + scene + " --mask-radius 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  j = Json::parse(r.output);
+  EXPECT_NEAR(j["masked_rel_l2"].get<double>(), std::sqrt(1.0 / 190.0), 1e-9);
+  EXPECT_EQ(j["masked_pixels"], 2);
+  // Text: the radius is reported with the number; without --scene there is no masked line.
+  r = run("compare " + images + " --scene " + scene);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("masked rel. L2:    0.0733236 (7.332%), 6 px within 2 px of 1 light"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("visibly wrong:     0.5208% of pixels"), std::string::npos) << r.output;
+  r = run("compare " + images);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output.find("masked"), std::string::npos) << r.output;
+  // --set applies to the scene: the light moved behind the camera masks nothing.
+  r = run("compare " + images + " --json --scene " + scene +
+          " --set 'lights=[{\"type\": \"point\", \"position\": [0.5,0.5,-3], "
+          "\"intensity\": 1}]'");
+  ASSERT_EQ(r.code, 0) << r.output;
+  j = Json::parse(r.output);
+  EXPECT_EQ(j["masked_pixels"], 0);
+  EXPECT_EQ(j["masked_rel_l2"], j["rel_l2"]);
+}
+
+TEST_F(Cli, CompareBadInputs) {
+  const std::string scene = writeScene(tinyScene());
+  scatterlab::writeExr(scatterlab::Image(16, 12), out("a.exr"));
+  scatterlab::writeExr(scatterlab::Image(16, 12), out("b.exr"));
+  const std::string images = out("a.exr") + " " + out("b.exr") + " --diff " + out("d.png");
+  const auto expectFails = [&](const std::string& extra, int code,
+                               std::initializer_list<std::string> fragments) {
+    const RunResult r = run("compare " + images + " " + extra);
+    EXPECT_EQ(r.code, code) << extra << ": " << r.output;
+    for (const auto& f : fragments)
+      EXPECT_NE(r.output.find(f), std::string::npos) << "'" << r.output << "' lacks '" << f << "'";
+    EXPECT_FALSE(fs::exists(out("d.png"))) << extra;
+  };
+  // Usage errors: exit 2.
+  expectFails("--mask-radius 3", 2, {"--mask-radius requires --scene"});
+  expectFails("--set camera.width=8", 2, {"--set requires --scene"});
+  expectFails("--scene " + scene + " --mask-radius -1", 2,
+              {"--mask-radius", "expected a number of pixels >= 0, got '-1'"});
+  expectFails("--scene " + scene + " --mask-radius wide", 2, {"--mask-radius", "'wide'"});
+  // Bad input: exit 1, one message naming it, no --diff output.
+  expectFails("--scene " + out("nope.json"), 1, {"nope.json", "does not exist"});
+  expectFails("--scene " + scene + " --set camera.width=20", 1,
+              {"camera is 20x12 but the images are 16x12"});
+  expectFails("--scene " + scene + " --set camera.zoom=2", 1, {"camera.zoom", "unknown key"});
 }
 
 TEST_F(Cli, InfoDescribesScenesAndImages) {

@@ -128,8 +128,9 @@ TEST_F(ExperimentTest, BadConfigsNameTheKey) {
   e = expectConfigError(c);
   EXPECT_NE(e.find("methods[0].backend"), std::string::npos) << e;
 
+  // No 'references' means the default (`exact`, converged); an empty list is an error.
   c = tinyConfig();
-  c.erase("references");
+  c["references"] = Json::array();
   e = expectConfigError(c);
   EXPECT_NE(e.find("references"), std::string::npos) << e;
 
@@ -263,6 +264,126 @@ TEST_F(ExperimentTest, FailingRunIsLoggedAndTheSweepGoesOn) {
       runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
   EXPECT_EQ(again.resumed, 1);
   EXPECT_EQ(again.failed, 1);
+}
+
+// The default reference is `exact` at half a voxel with the halving check; errors carry the
+// masked relative L2 and the visibly wrong share; the report and the tables show them.
+TEST_F(ExperimentTest, DefaultReferenceIsConvergedExactAndMetricsAreRecorded) {
+  // A lamp inside a homogeneous box, on the image (its projection is the image centre).
+  Json scene =
+      testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 0.5f, 0.5f), 0.2f, 32, 24, 16);
+  writeJson(dir / "lamp.json", scene);
+  const Json cfg = {{"scene", "lamp.json"},
+                    {"methods", {"per-voxel"}},
+                    {"repetitions", 1},
+                    {"warmup", 0},
+                    {"gallery", "image+error"}};
+  writeJson(dir / "exp.json", cfg);
+  const ExperimentPlan plan = parseExperiment((dir / "exp.json").string());
+  ASSERT_EQ(plan.references.size(), 1u);
+  EXPECT_TRUE(plan.defaultReference);
+  EXPECT_EQ(plan.references[0].method, "exact");
+  EXPECT_TRUE(plan.references[0].converge);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const fs::path out = dir / "out";
+  const ExperimentResult r = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  ASSERT_EQ(r.runs.size(), 1u);
+  const RunRecord& rec = r.runs[0];
+  ASSERT_EQ(rec.status, "ok") << rec.error;
+  EXPECT_TRUE(rec.lightInMedium);
+  const Json check = rec.referenceChecks.value("exact", Json());
+  ASSERT_TRUE(check.is_object()) << rec.referenceChecks.dump();
+  EXPECT_DOUBLE_EQ(check["voxel"].get<double>(), 1.0f / 16);
+  EXPECT_DOUBLE_EQ(check["check_step"].get<double>(), 0.25 / 16);
+  // Halving ½ voxel on this smooth box changes the image by 0.051 % (measured 2026-11-23;
+  // ×1.5), far below the 0.5 % threshold.
+  EXPECT_LT(check["change_rel_l2"].get<double>(), 0.00077);
+  EXPECT_TRUE(check["passed"].get<bool>()) << check.dump();
+  EXPECT_DOUBLE_EQ(check["step"].get<double>(), 0.5 / 16);
+  // The reference is exactly `exact` at march_step = delta1 = ½ voxel.
+  const Scene half = buildRunScene((dir / "lamp.json").string(),
+                                   {"render.march_step=0.03125", "render.delta1=0.03125"}, {});
+  const Image direct = createMethod(half, "exact", "cpu")->render(half, nullptr).image;
+  const Image ref = readExr((out / check["file"].get<std::string>()).string());
+  EXPECT_LT(compareImages(ref, direct).maxAbs, 1e-7);
+  // Errors: the default mask radius is 2 px (1 % of the 40-px diagonal is 0.4); the lamp's
+  // disc holds most of per-voxel's squared error: rel L2 11.6 %, masked 3.07 % (measured
+  // 2026-11-23; bounds ×1.5).
+  const ImageError& e = rec.errors[0];
+  EXPECT_DOUBLE_EQ(e.maskRadius, 2.0);
+  EXPECT_EQ(e.maskedLights, 1);
+  EXPECT_LT(e.relL2, 0.174);
+  EXPECT_LT(e.maskedRelL2, 0.046);
+  EXPECT_LT(e.maskedRelL2, 0.5 * e.relL2);
+  EXPECT_DOUBLE_EQ(e.visiblyWrong, 0.0);  // measured 0: per-voxel's error is linear-small
+  // The tables and the report carry them.
+  std::ifstream csv(out / "results.csv");
+  std::string header;
+  std::getline(csv, header);
+  for (const char* col : {"masked_rel_l2_vs_exact", "visibly_wrong_vs_exact", "mask_radius_px",
+                          "ref_step_voxels_exact", "ref_halving_change_exact"})
+    EXPECT_NE(header.find(col), std::string::npos) << col << " in " << header;
+  const Json j = readJsonFile((out / "results.json").string());
+  EXPECT_TRUE(j["default_reference"].get<bool>());
+  ASSERT_EQ(j["reference_checks"].size(), 1u);
+  EXPECT_EQ(j["runs"][0]["errors"]["exact"]["mask_radius_px"], 2.0);
+  std::ifstream md(out / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), {});
+  for (const char* s : {"masked rel L2 (K px)", "visibly wrong", "## Reference convergence",
+                        "converged (< 0.5%)", "signed error"})
+    EXPECT_NE(report.find(s), std::string::npos) << s;
+  EXPECT_TRUE(fs::exists(out / "side_by_side.png"));
+  // Resumed: the check comes back from the record.
+  const ExperimentResult again = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  EXPECT_EQ(again.resumed, 1);
+  EXPECT_EQ(again.runs[0].referenceChecks, rec.referenceChecks);
+}
+
+// A reference too coarse for its scene is refined once, and the tables say so; per-voxel named
+// as a reference where a light sits in the medium is called a baseline.
+TEST_F(ExperimentTest, CoarseReferenceIsRefinedAndPerVoxelIsNotCalledAReference) {
+  // 2 voxels per axis: ½ voxel is a quarter of the box, far from converged.
+  Json scene =
+      testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 0.5f, 0.5f), 0.2f, 32, 24, 2);
+  writeJson(dir / "lamp.json", scene);
+  const Json cfg = {
+      {"scene", "lamp.json"},
+      {"references", {{{"name", "exact"}, {"method", "exact"}, {"converge", true}}, "per-voxel"}},
+      {"methods", {"nearest"}},
+      {"repetitions", 1},
+      {"warmup", 0}};
+  writeJson(dir / "exp.json", cfg);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const fs::path out = dir / "out";
+  const ExperimentResult r = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  ASSERT_EQ(r.runs.size(), 1u);
+  ASSERT_EQ(r.runs[0].status, "ok") << r.runs[0].error;
+  const Json check = r.runs[0].referenceChecks.value("exact", Json());
+  ASSERT_TRUE(check.is_object());
+  // Halving ½ voxel (a quarter of the box) changes the image by 42 % (measured 2026-11-23).
+  EXPECT_GT(check["change_rel_l2"].get<double>(), 0.28);
+  EXPECT_FALSE(check["passed"].get<bool>()) << check.dump();
+  EXPECT_TRUE(check["refined"].get<bool>());
+  EXPECT_DOUBLE_EQ(check["step_voxels"].get<double>(), 0.25);
+  EXPECT_FALSE(r.runs[0].referenceChecks.contains("per-voxel"));
+  std::ifstream md(out / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(report.find("**refined**"), std::string::npos) << report;
+  EXPECT_NE(report.find("`per-voxel` is not a reference on `lamp`"), std::string::npos) << report;
+  // Only references converge.
+  Json bad = cfg;
+  bad["methods"] = {{{"name", "n"}, {"method", "nearest"}, {"converge", true}}};
+  EXPECT_NE(expectConfigError(bad).find("methods[0].converge"), std::string::npos);
+  bad = cfg;
+  bad["mask_radius"] = -1;
+  EXPECT_NE(expectConfigError(bad).find("mask_radius"), std::string::npos);
+  bad = cfg;
+  bad["gallery"] = "pictures";
+  EXPECT_NE(expectConfigError(bad).find("gallery"), std::string::npos);
 }
 
 TEST_F(ExperimentTest, LightsAxisReplicatesOnARing) {
