@@ -124,7 +124,7 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   auto m = std::make_unique<PipelineMethod>(d, b, settings, std::move(note));
   std::string evaluatorName, integratorName = d.integrator;
   if (d.sampler) {
-    m->sampler = makeSampler(p, scene, m->samplerType);
+    m->sampler = makeSampler(p, scene, m->samplerType, settings.paper ? "" : d.extendedSampler);
     evaluatorName = p.string("evaluator", "volume-tracer");
   }
   if (!d.refiner.empty()) m->dynamic = parseDynamicSampling(p, scene, settings.paper);

@@ -7,20 +7,23 @@ namespace scatterlab {
 
 const std::vector<MethodDesc>& builtinMethods() {
   // name, summary, sampler, refiner, reconstruction, integrator, render.integrator selectable,
-  // extensions on by default
+  // extensions on by default, the sampler without render.sampler when they are on (measured
+  // best at <= 4000 samples on the fidelity scenes: docs/fidelity.md)
   static const std::vector<MethodDesc> table = {
       {"exact", "per-pixel march, transmittance to every light traced at each step (reference)",
        false, "", "", "exact", false},
       {"per-voxel", "S traced at every voxel, then marched (the paper's baseline)", false, "",
        "per-voxel", "ray-marcher", true},
       {"gradient", "samples with S and ∇S, first-order Taylor splatting (paper Eq. 4)", true, "",
-       "gradient", "ray-marcher", true, /*extended=*/true},
+       "gradient", "ray-marcher", true, /*extended=*/true,
+       R"({"type": "jittered", "count": 2000})"},
       {"rbf", "samples with S, normalised RBF interpolation (Zhou et al. 2007)", true, "", "rbf",
        "ray-marcher", true},
       {"nearest", "samples with S, nearest covering sample", true, "", "nearest", "ray-marcher",
        true},
       {"adaptive", "gradient with dynamic sampling (paper Sec. 5: Eq. 5 error, grid splitting)",
-       true, "dynamic", "gradient", "ray-marcher", true, /*extended=*/true},
+       true, "dynamic", "gradient", "ray-marcher", true, /*extended=*/true,
+       R"({"type": "grid", "count": 1000})"},
   };
   return table;
 }

@@ -66,8 +66,8 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
-  if (d.sampler) k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "sampler",
-                                   "evaluator"});
+  if (d.sampler)
+    k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "sampler", "evaluator"});
   if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())
@@ -75,14 +75,16 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
   return k;
 }
 
-std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type) {
+std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type,
+                                     const std::string& extendedDefault) {
   const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
-  const Json defaultSampler = hasGaussians ? Json{{"type", "gaussian-centres"}}
-                                           : Json{{"type", "jittered"}, {"count", 512}};
+  const Json defaultSampler = !extendedDefault.empty() ? Json::parse(extendedDefault)
+                              : hasGaussians           ? Json{{"type", "gaussian-centres"}}
+                                                       : Json{{"type", "jittered"}, {"count", 512}};
   const bool given = p.has("sampler");
   Params sp = given ? p.child("sampler") : Params(defaultSampler, p.keyPath("sampler"));
   if (!given) p.allow("sampler");
-  type = sp.string("type", std::string(hasGaussians ? "gaussian-centres" : "jittered"));
+  type = sp.string("type", defaultSampler["type"].get<std::string>());
   std::unique_ptr<Sampler> sampler = samplers().get(type, sp.keyPath("type"))(sp, scene);
   sp.finish();
   return sampler;

@@ -26,6 +26,9 @@ struct MethodDesc {
   /// The fidelity extensions (docs/fidelity.md) are on by default (`gradient`, `adaptive`); the
   /// baselines keep the paper's algorithm unless asked. render.paper turns them all off.
   bool extended = false;
+  /// The render.sampler a user who sets none gets when the extensions are on (empty: the
+  /// paper's default, which also applies with render.paper).
+  std::string extendedSampler;
 
   /// Whether the method builds a source-radiance volume (and reads its keys).
   bool radianceVolume() const { return !reconstruction.empty(); }
@@ -45,8 +48,10 @@ PipelineSettings parsePipelineSettings(Params& render, const Scene& scene, const
 /// refiner's keys, as its stages need them.
 std::vector<std::string> methodKeys(const MethodDesc& desc);
 
-/// The render.sampler object (default: Gaussian centres when the medium has Gaussians, else
-/// 512 jittered samples); `type` receives the sampler's name.
-std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type);
+/// The render.sampler object; `type` receives the sampler's name. Default: `extendedDefault`
+/// (JSON of a sampler object) when non-empty, else the paper's: Gaussian centres when the
+/// medium has Gaussians, else 512 jittered samples.
+std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type,
+                                     const std::string& extendedDefault = "");
 
 }  // namespace scatterlab

@@ -335,7 +335,8 @@ TEST(SogDensity, GaussianCentresAreTheInitialSamplesOfGradient) {
   writeSog(file, smallModel());
   Json doc = testing::homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 1.3f, 0.5f), 2.0f, 16, 12, 16);
   doc["medium"]["density"] = {{"type", "sog"}, {"file", file}};
-  doc["render"] = {{"method", "gradient"}};
+  // The paper's default sampler (the extensions default to jittered samples).
+  doc["render"] = {{"method", "gradient"}, {"paper", true}};
   const Scene scene = testing::sceneFromJson(doc);
   ASSERT_NE(scene.medium.density->gaussians(), nullptr);
   EXPECT_EQ(scene.medium.density->gaussians()->size(), 3u);

@@ -41,8 +41,9 @@ bool gpuBackendBuilt() {
 // method chosen by override, failed with "unknown key 'render.sampler'".
 TEST(MethodLayer, MethodOverrideMeansSetRenderMethod) {
   initialize();
-  const Scene viaOverride = loadScene(kGlow, with({"render.sampler.count=3"}));
-  const Scene viaSet = loadScene(kGlow, with({"render.sampler.count=3", "render.method=gradient"}));
+  const std::string sampler = R"(render.sampler={"type": "gaussian-centres", "count": 3})";
+  const Scene viaOverride = loadScene(kGlow, with({sampler}));
+  const Scene viaSet = loadScene(kGlow, with({sampler, "render.method=gradient"}));
   const RenderResult a = createMethod(viaOverride, "gradient", "cpu")->render(viaOverride, nullptr);
   const RenderResult b = createMethod(viaSet, "", "cpu")->render(viaSet, nullptr);
   EXPECT_EQ(a.stats.method, "gradient");
