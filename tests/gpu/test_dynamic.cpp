@@ -221,10 +221,14 @@ RenderResult renderWith(Scene s, const Json& render, const char* backend) {
   return createMethod(s, "", backend)->render(s, nullptr);
 }
 
-TEST(GpuGradientMethod, EndToEndMatchesCpuMethod) {
+// Both the extensions (the default: V = S / A interpolated, A multiplied back) and the paper.
+class GpuGradientMethod : public ::testing::TestWithParam<bool> {};
+
+TEST_P(GpuGradientMethod, EndToEndMatchesCpuMethod) {
   SCATTERLAB_REQUIRE_GPU();
   const Scene scene = sceneFromJson(blobSceneDoc(20, 32, 24));  // point light inside
   const Json render{{"method", "gradient"},
+                    {"paper", GetParam()},
                     {"sampler", {{"type", "jittered"}, {"count", 64}}},
                     {"march_step", 0.5 / 20}};
   const RenderResult cpu = renderWith(scene, render, "cpu");
@@ -240,17 +244,22 @@ TEST(GpuGradientMethod, EndToEndMatchesCpuMethod) {
     EXPECT_TRUE(j["timings_ms"].contains(stage)) << stage;
   EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains("radiance evaluation"));
   const double err = relL2(gpu.image, cpu.image);
-  std::printf("gradient gpu vs cpu: relative L2 %.3g\n", err);
-  EXPECT_LT(err, 0.005);
+  std::printf("gradient (paper %d) gpu vs cpu: relative L2 %.3g\n", int(GetParam()), err);
+  // Measured on llvmpipe 2026-11-23: extensions 1.16e-6, paper 1.61e-6; ×1.5 of the larger.
+  EXPECT_LT(err, 2.4e-6);
 }
+INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuGradientMethod, ::testing::Bool());
 
-TEST(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
+class GpuAdaptiveMethod : public ::testing::TestWithParam<bool> {};
+
+TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
   SCATTERLAB_REQUIRE_GPU();
   const Scene scene = spotScene();
-  const Json render{{"method", "adaptive"},
-                    {"sampler", {{"type", "grid"}, {"count", 64}}},
-                    {"levels", {8, 12}},
-                    {"epsilon", 2e-4}};
+  Json render{{"method", "adaptive"},
+              {"paper", GetParam()},
+              {"sampler", {{"type", "grid"}, {"count", 64}}},
+              {"levels", {8, 12}},
+              {"epsilon", GetParam() ? 2e-4 : 0.05}};
   const RenderResult cpu = renderWith(scene, render, "cpu");
   const RenderResult gpu = renderWith(scene, render, "gpu");
   expectNoGlError();
@@ -263,9 +272,12 @@ TEST(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
     EXPECT_TRUE(j["timings_ms"].contains(stage)) << stage;
   EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains("ds scan"));
   const double err = relL2(gpu.image, cpu.image);
-  std::printf("adaptive gpu vs cpu: %lld samples, relative L2 %.3g\n", *gpu.stats.samples, err);
-  EXPECT_LT(err, 0.005);
+  std::printf("adaptive (paper %d) gpu vs cpu: %lld samples, relative L2 %.3g\n", int(GetParam()),
+              *gpu.stats.samples, err);
+  // Measured on llvmpipe 2026-11-23: extensions 1.67e-6, paper 1.13e-6; ×1.5 of the larger.
+  EXPECT_LT(err, 2.5e-6);
 }
+INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuAdaptiveMethod, ::testing::Bool());
 
 /// The glow scene (a point light inside the medium) at 32³, 80×60: with the default ray-step
 /// layers the GPU per-voxel image is within 0.5% of the CPU's; view planes are not (0.53%).
