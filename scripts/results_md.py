@@ -148,8 +148,16 @@ def main():
     d = os.path.dirname(a.output)
     if d:
         os.makedirs(d, exist_ok=True)
+    # Sections this script does not make (the fidelity table: docs/fidelity.md) are kept.
+    kept = ""
+    if os.path.exists(a.output):
+        with open(a.output) as f:
+            old = f.read()
+        i = old.find("\n## Fidelity")
+        if i >= 0:
+            kept = old[i:]
     with open(a.output, "w") as f:
-        f.write("\n".join(out) + "\n")
+        f.write("\n".join(out) + "\n" + kept)
     print("wrote", a.output)
 
 
