@@ -77,6 +77,9 @@ struct PipelineSettings {
   /// stores V = exp(u). ln V is minus a light-weighted optical depth, nearly linear where V =
   /// exp(−τ) is convex, so first-order estimates do not undershoot (docs/fidelity.md).
   bool logSpace = false;
+  /// Occlusion-aware Eq. 4 weights: W_j(x)·exp(−σt·τ(x_j, x)), τ the optical depth between the
+  /// sample and the voxel, so no sample contributes across a dense occluder.
+  bool occlusionWeights = false;
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
   bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)

@@ -24,8 +24,8 @@ namespace scatterlab::gpu {
 
 /// Steps of the GPU volume tracer used by dynamic sampling (render keys delta1, delta2).
 struct DynamicSamplingGpuSteps {
-  float delta1 = 0.0f;  ///< tracing step towards the lights
-  float delta2 = 0.0f;  ///< central-difference step of ∇S
+  float delta1 = 0.0f;        ///< tracing step towards the lights
+  float delta2 = 0.0f;        ///< central-difference step of ∇S
   bool factorLights = false;  ///< samples hold V = S / A (PipelineSettings::factorLights)
   bool logSpace = false;      ///< ... or ln V (with factorLights)
 };
@@ -74,11 +74,11 @@ struct GridInfoGpu {
 };
 
 /// Evaluate: one dispatch computes, for every sample of `level`, S and ∇S (central
-/// differences, step steps.delta2; V or ln V instead of S as steps says) and, unless `final`, the probes' S and density, τ to the viewer
-/// (traced on level 0 and stored in `rootTau`, one float per level-0 sample; later levels read
-/// their ancestor's unless settings.perSampleTau), E_j and, on level 0, the contributions.
-/// The split flags are left to setSplitFlags. `inputs` must be those of `density`. GPU time:
-/// "ds evaluate+error".
+/// differences, step steps.delta2; V or ln V instead of S as steps says) and, unless `final`, the
+/// probes' S and density, τ to the viewer (traced on level 0 and stored in `rootTau`, one float per
+/// level-0 sample; later levels read their ancestor's unless settings.perSampleTau), E_j and, on
+/// level 0, the contributions. The split flags are left to setSplitFlags. `inputs` must be those of
+/// `density`. GPU time: "ds evaluate+error".
 LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
                                     const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
                                     const DynamicSamplingGpuSteps& steps,

@@ -47,6 +47,7 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
                                                   IVec3 dims, Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   ReconstructionStats st;
+  sigmaT_ = scene.medium.sigmaT;
   f.radiance = reconstruct(f.density, samples, scene.medium.bounds, dims, &st, &f.timer);
   return st;
 }

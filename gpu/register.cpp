@@ -55,7 +55,8 @@ void registerGpuStages() {
         new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(new GradientSplatGpu(s.factorLights && s.logSpace));
+    return std::unique_ptr<Reconstruction>(
+        new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1));

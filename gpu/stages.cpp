@@ -99,9 +99,14 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
                                      const Box& bounds, IVec3 dims, ReconstructionStats* stats,
                                      StageTimer* timer) {
   context();
-  const Program& splat = cachedProgram("radiance splat", [] {
-    return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"}, {},
-                           "radiance splat");
+  const bool occlusion = occlusion_ && sigmaT_ > 0.0f;
+  const std::string splatKey = occlusion ? "radiance splat (occlusion)" : "radiance splat";
+  const Program& splat = cachedProgram(splatKey, [&] {
+    if (!occlusion)
+      return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"}, {},
+                             splatKey);
+    return graphicsProgram({"radiance_splat.vert.glsl"},
+                           {"common.glsl", "radiance_splat.frag.glsl"}, {"SL_OCCLUSION"}, splatKey);
   });
   const std::string normKey = log_ ? "radiance normalize (exp)" : "radiance normalize";
   const Program& normalize = cachedProgram(normKey, [&] {
@@ -124,6 +129,15 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     ScopedGpuTimer t(timer, "radiance splat");
     splat.use();
     sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
+    if (occlusion) {
+      glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+      setVec3(splat, "uDensityScale", density.indexScale());
+      setVec3(splat, "uDensityOffset", density.indexOffset());
+      setIVec3(splat, "uDensityDims", density.dims);
+      glUniform1f(splat.uniform("uSigmaT"), sigmaT_);
+      const Vec3 dc = density.cellSize();
+      glUniform1f(splat.uniform("uDensityVoxel"), std::min(dc.x, std::min(dc.y, dc.z)));
+    }
     splatSlices(splat, sums, bounds, dims, GLsizei(samples.size()), "radiance splat");
   }
   checkGl("radiance splat");

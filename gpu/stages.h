@@ -60,8 +60,11 @@ class VolumeTracerGpu : public RadianceEvaluator {
 /// pass normalises into the source-radiance volume. Voxels no sphere covers get S = 0.
 class GradientSplatGpu : public Reconstruction {
  public:
-  /// logSpace: the samples hold ln V; the normalised result is exponentiated.
-  explicit GradientSplatGpu(bool logSpace = false) : log_(logSpace) {}
+  /// logSpace: the samples hold ln V; the normalised result is exponentiated. occlusion: the
+  /// weights are multiplied by exp(−σt·τ) of the segment sample → voxel (set σt with
+  /// setOcclusion, or through the frame override, which takes it from the scene).
+  explicit GradientSplatGpu(bool logSpace = false, bool occlusion = false)
+      : log_(logSpace), occlusion_(occlusion) {}
   bool needsGradients() const override { return true; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
@@ -73,7 +76,8 @@ class GradientSplatGpu : public Reconstruction {
                      const Box& bounds, IVec3 dims, ReconstructionStats* stats, StageTimer* timer);
 
  private:
-  bool log_;
+  bool log_, occlusion_;
+  float sigmaT_ = 0.0f;  ///< for the occlusion weights
 };
 
 /// The per-voxel baseline on the GPU (twin of buildPerVoxelRadiance): S traced at every voxel

@@ -15,6 +15,10 @@ const std::vector<KeyDoc>& pipelineKeys() {
       {"log_space", "bool", "false", "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "methods with samples"},
+      {"occlusion_weights", "bool", "true for adaptive, else false (false with paper)",
+       "true, false",
+       "Eq. 4 weights times exp(−σt·τ) of the segment sample → voxel: no sample contributes "
+       "across a dense occluder; gradient reconstruction"},
       {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
        "view-ray step (world units)"},
       {"min_transmittance", "number", "1e-6", "[0, 1]",
@@ -51,6 +55,12 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     if (s.paper && s.factorLights)
       p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
     s.logSpace = p.boolean("log_space", false);
+    // Measured (docs/fidelity.md): a clear win for adaptive, whose splits give the samples on
+    // each side of an occluder; mixed for gradient's fixed samples.
+    s.occlusionWeights =
+        p.boolean("occlusion_weights", d.extended && !s.paper && !d.refiner.empty());
+    if (s.paper && s.occlusionWeights)
+      p.fail("occlusion_weights", "is an extension; it cannot be true with render.paper = true");
     if (s.logSpace && !s.factorLights)
       p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
   }
@@ -67,7 +77,8 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
   if (d.sampler)
-    k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "sampler", "evaluator"});
+    k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
+                       "sampler", "evaluator"});
   if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())

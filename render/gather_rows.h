@@ -17,4 +17,10 @@ void gradientRow(float* __restrict r0, float* __restrict g0, float* __restrict b
                  float* __restrict w0, int i0, int i1, float lox, float hx, float px, float c,
                  float R, float eps, Vec3 base, Vec3 gx);
 
+/// gradientRow with each voxel's weight W also multiplied by occ[i] (occlusion-aware weights).
+void gradientRowWeighted(float* __restrict r0, float* __restrict g0, float* __restrict b0,
+                         float* __restrict w0, int i0, int i1, float lox, float hx, float px,
+                         float c, float R, float eps, Vec3 base, Vec3 gx,
+                         const float* __restrict occ);
+
 }  // namespace scatterlab

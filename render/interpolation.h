@@ -47,7 +47,8 @@ enum class ValueSpace { Linear, Log };
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
                                        Grid3<float>* weightSum = nullptr,
-                                       ValueSpace space = ValueSpace::Linear);
+                                       ValueSpace space = ValueSpace::Linear,
+                                       float occlusionSigmaT = 0.0f);
 
 /// Brute-force evaluation of the interpolation at one point, over all samples (no clamping,
 /// no uncovered rule): the formulas above executed literally, for tests and probes.

@@ -30,8 +30,7 @@ class VoxelOccupancy {
     // Density voxels whose trilinear support overlaps this voxel's support: open intervals,
     // so the range is shrunk by 1e-4 voxel (a voxel exactly two centres away does not count,
     // whatever the rounding); on equal layouts this is the 3x3x3 neighbourhood.
-    const IVec3 lo =
-        glm::max(IVec3(glm::floor((c - hr_) * scale_ + offset_ + 1e-4f)), IVec3(0));
+    const IVec3 lo = glm::max(IVec3(glm::floor((c - hr_) * scale_ + offset_ + 1e-4f)), IVec3(0));
     const IVec3 hi = glm::min(IVec3(glm::ceil((c + hr_) * scale_ + offset_ - 1e-4f)), nd_ - 1);
     for (int kk = lo.z; kk <= hi.z; ++kk)
       for (int jj = lo.y; jj <= hi.y; ++jj)

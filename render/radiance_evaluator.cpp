@@ -48,8 +48,8 @@ void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps
     };
     evaluateWith(logV, scene, steps.delta2, samples, gradients);
   } else if (steps.factorLights)
-    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1), scene, steps.delta2,
-                 samples, gradients);
+    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
+                 gradients);
   else
     evaluateWith(SourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
                  gradients);
@@ -73,9 +73,8 @@ class VolumeTracerEvaluator : public RadianceEvaluator {
 
 void registerRadianceEvaluators() {
   radianceEvaluators().addVariant("volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<RadianceEvaluator>(
-        new VolumeTracerEvaluator(TracerSteps{s.delta1, s.delta2, s.factorLights,
-                                                 s.factorLights && s.logSpace}));
+    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerEvaluator(
+        TracerSteps{s.delta1, s.delta2, s.factorLights, s.factorLights && s.logSpace}));
   });
 }
 

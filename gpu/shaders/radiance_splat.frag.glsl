@@ -3,6 +3,9 @@
 uniform vec3 uGridMin;
 uniform vec3 uGridCell;
 uniform float uSliceZ;
+#ifdef SL_OCCLUSION
+uniform float uDensityVoxel;  // smallest density voxel edge (world units)
+#endif
 flat in vec4 vPosR;
 flat in vec3 vS;
 flat in vec3 vDx;
@@ -19,6 +22,17 @@ void main() {
   // A voxel centre on the sample itself: W is unbounded; a large finite weight keeps the sum a
   // weighted average dominated by this sample (the same clamp as the CPU twin in the tests).
   float W = R / max(dist, 1e-6 * R);
+#ifdef SL_OCCLUSION
+  // Occlusion-aware weight (interpolateSamples' twin): exp(−σt·τ) of the segment from the
+  // sample to the voxel, τ by the midpoint rule with steps of at most one density voxel.
+  vec3 p = vPosR.xyz;
+  int steps = max(1, int(ceil(dist / uDensityVoxel)));
+  float sum = 0.0;
+  for (int m = 0; m < steps; ++m)
+    sum += densityAtIndex((p + d * ((float(m) + 0.5) / float(steps))) * uDensityScale +
+                          uDensityOffset);
+  W *= exp(-uSigmaT * sum * (dist / float(steps)));
+#endif
   vec3 taylor = vS + d.x * vDx + d.y * vDy + d.z * vDz;
   outSum = vec4(W * taylor, W);
 }

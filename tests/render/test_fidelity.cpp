@@ -8,6 +8,7 @@
 
 #include "core/metrics.h"
 #include "core/transport.h"
+#include "render/interpolation.h"
 #include "render/radiance_evaluator.h"
 #include "support/scenes.h"
 
@@ -103,6 +104,38 @@ TEST(LightFactorization, ALampInsideTheMediumAgainstExact) {
   EXPECT_LT(factored.relL2, 0.026);
   EXPECT_LT(factored.maskedRelL2, 0.049);
   EXPECT_GT(paper.maskedRelL2, 10 * factored.maskedRelL2);
+}
+
+}  // namespace
+}  // namespace scatterlab
+
+namespace scatterlab {
+namespace {
+
+TEST(OcclusionWeights, NoSampleContributesAcrossADenseSlab) {
+  // A slab x in [0.45, 0.55] of density 50 (σt = 10: optical depth 50 across, e^-50 ≈ 2e-22)
+  // between two samples whose valid spheres cover the whole box: S = 1 on the left, 0 on the
+  // right, no gradient. Without occlusion a voxel at x = 0.2 averages both (weights R/d).
+  const Box box{Vec3(0.0f), Vec3(1.0f)};
+  DensityGrid d(box, IVec3(20, 4, 4));
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 20; ++i) d.at(i, j, k) = (i >= 9 && i <= 10) ? 50.0f : 0.1f;
+  std::vector<RadianceSample> s(2);
+  s[0].position = Vec3(0.325f, 0.5f, 0.5f);
+  s[1].position = Vec3(0.675f, 0.5f, 0.5f);
+  s[0].radius = s[1].radius = 2.0f;
+  s[0].S = Vec3(1.0f);
+  RadianceGrid plain(box, IVec3(20, 4, 4)), occluded(box, IVec3(20, 4, 4));
+  interpolateSamples(Interpolation::Gradient, d, s, plain);
+  interpolateSamples(Interpolation::Gradient, d, s, occluded, nullptr, ValueSpace::Linear, 10.0f);
+  // Voxel i = 3 (x = 0.175, row j = k = 1): W = R/d to each sample, d = 0.15 and 0.5.
+  const Vec3 c = plain.cellCenter(3, 1, 1);
+  const float wa = 2.0f / glm::length(c - s[0].position),
+              wb = 2.0f / glm::length(c - s[1].position);
+  EXPECT_NEAR(plain.at(3, 1, 1).x, wa / (wa + wb), 1e-6f);
+  EXPECT_NEAR(occluded.at(3, 1, 1).x, 1.0f, 1e-6f);
+  EXPECT_NEAR(occluded.at(16, 1, 1).x, 0.0f, 1e-6f);
 }
 
 }  // namespace
