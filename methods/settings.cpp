@@ -15,8 +15,7 @@ const std::vector<KeyDoc>& pipelineKeys() {
       {"log_space", "bool", "false", "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "methods with samples"},
-      {"occlusion_weights", "bool", "true for adaptive, else false (false with paper)",
-       "true, false",
+      {"occlusion_weights", "bool", "false", "true, false",
        "Eq. 4 weights times exp(−σt·τ) of the segment sample → voxel: no sample contributes "
        "across a dense occluder; gradient reconstruction"},
       {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
@@ -55,10 +54,9 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     if (s.paper && s.factorLights)
       p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
     s.logSpace = p.boolean("log_space", false);
-    // Measured (docs/fidelity.md): a clear win for adaptive, whose splits give the samples on
-    // each side of an occluder; mixed for gradient's fixed samples.
-    s.occlusionWeights =
-        p.boolean("occlusion_weights", d.extended && !s.paper && !d.refiner.empty());
+    // Off by default: measured (docs/fidelity.md) a clear win with adaptive on occluders (the
+    // perforated sheet, the chimney trail) but 3-30x the frame time and worse on smoke1.
+    s.occlusionWeights = p.boolean("occlusion_weights", false);
     if (s.paper && s.occlusionWeights)
       p.fail("occlusion_weights", "is an extension; it cannot be true with render.paper = true");
     if (s.logSpace && !s.factorLights)
