@@ -50,7 +50,9 @@ TEST(LightFactorization, VTimesAIsTheSourceRadiance) {
     const Vec3 s = S(x, w), va = V(x, w) * A(x, w);
     for (int c = 0; c < 3; ++c) {
       worst = std::max(worst, double(std::abs(va[c] - s[c]) / std::max(s[c], 1e-30f)));
-      if (s[c] == 0.0f) EXPECT_EQ(va[c], 0.0f);  // e.g. the blue channel of the spot
+      if (s[c] == 0.0f) {
+        EXPECT_EQ(va[c], 0.0f);  // e.g. the blue channel of the spot
+      }
     }
     const Vec3 v = V(x, w);
     EXPECT_TRUE(v.x >= 0.0f && v.x <= 1.0f && v.y >= 0.0f && v.y <= 1.0f) << i;
