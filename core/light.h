@@ -29,26 +29,39 @@ struct Light {
     Vec3 irradiance;  ///< I·falloff/d² (point, spot) or the sun's irradiance (directional)
   };
 
-  /// Returns false when x receives nothing (outside a spot cone, or at the light position).
-  bool incident(const Vec3& x, Incident& out) const {
+  /// Geometry towards the light from x before anything is cut off: what incident() and the
+  /// singular-light factorization (core/transport.h) both start from.
+  struct Geometry {
+    Vec3 toLight;     ///< unit direction from x towards the light
+    float distance;   ///< infinity for directional lights
+    float distance2;  ///< distance²; infinity for directional lights
+    float cone;       ///< spotFalloff towards x (spot lights), else 1
+  };
+
+  /// Returns false only at a point or spot light's own position.
+  bool geometry(const Vec3& x, Geometry& g) const {
+    g.cone = 1.0f;
     if (type == Type::Directional) {
-      out.toLight = -direction;
-      out.distance = kInfinity;
-      out.irradiance = intensity;
+      g.toLight = -direction;
+      g.distance = g.distance2 = kInfinity;
       return true;
     }
     const Vec3 d = position - x;
-    const float dist2 = glm::dot(d, d);
-    if (dist2 <= 0.0f) return false;
-    const float dist = std::sqrt(dist2);
-    out.toLight = d / dist;
-    out.distance = dist;
-    float f = 1.0f;
-    if (type == Type::Spot) {
-      f = spotFalloff(-out.toLight);
-      if (f <= 0.0f) return false;
-    }
-    out.irradiance = intensity * (f / dist2);
+    g.distance2 = glm::dot(d, d);
+    if (g.distance2 <= 0.0f) return false;
+    g.distance = std::sqrt(g.distance2);
+    g.toLight = d / g.distance;
+    if (type == Type::Spot) g.cone = spotFalloff(-g.toLight);
+    return true;
+  }
+
+  /// Returns false when x receives nothing (outside a spot cone, or at the light position).
+  bool incident(const Vec3& x, Incident& out) const {
+    Geometry g;
+    if (!geometry(x, g) || g.cone <= 0.0f) return false;
+    out.toLight = g.toLight;
+    out.distance = g.distance;
+    out.irradiance = type == Type::Directional ? intensity : intensity * (g.cone / g.distance2);
     return true;
   }
 };

@@ -169,22 +169,19 @@ class FactoredSourceRadiance {
   };
   bool term(std::size_t i, const Vec3& x, const Vec3& toViewer, Term& t) const {
     const Light& l = lights_[i];
-    Vec3 toLight, e0;
+    Light::Geometry g;
+    if (!l.geometry(x, g)) return false;
+    t.cone = g.cone;
+    Vec3 e0;
     if (l.type == Light::Type::Directional) {
-      toLight = -l.direction;
       e0 = l.intensity;
       float t0, t1;
-      t.end = density_.bounds().intersect(Ray{x, toLight}, t0, t1) ? x + toLight * t1 : x;
+      t.end = density_.bounds().intersect(Ray{x, g.toLight}, t0, t1) ? x + g.toLight * t1 : x;
     } else {
-      const Vec3 d = l.position - x;
-      const float dist2 = glm::dot(d, d);
-      if (dist2 <= 0.0f) return false;
-      toLight = d / std::sqrt(dist2);
-      e0 = l.intensity / dist2;
-      if (l.type == Light::Type::Spot) t.cone = l.spotFalloff(-toLight);
+      e0 = l.intensity / g.distance2;
       t.end = l.position;
     }
-    t.w = e0 * phase_.eval(-toLight, toViewer);
+    t.w = e0 * phase_.eval(-g.toLight, toViewer);
     return true;
   }
   float transmittance(const Vec3& x, const Vec3& end) const {

@@ -1,6 +1,6 @@
 // Shared by every stage that traces source radiance (DESIGN.md §2). Mirrors, line for line,
-// core/light.h (Light::incident, spotFalloff), core/phase.h (Phase::evalCos), core/math.h
-// (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and render/volume_tracer.h
+// core/light.h (Light::geometry, incident, spotFalloff), core/phase.h (Phase::evalCos), core/math.h
+// (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and core/transport.h
 // (opticalDepth, lightSegmentEnd, SourceRadiance); tests/gpu holds them in step (CPU == GPU).
 
 const float kInvFourPi = 1.0 / (4.0 * 3.14159265358979323846);
@@ -111,30 +111,45 @@ float opticalDepth(vec3 a, vec3 b, float stepLen) {
   return sum * dt;
 }
 
+// Light::geometry (core/light.h): direction and distance towards light l from x, and the spot
+// cone factor (1 for point and directional lights); false only at a point or spot light itself.
+bool lightGeometry(GpuLight l, vec3 x, out vec3 toLight, out float dist, out float dist2,
+                   out float cone) {
+  cone = 1.0;
+  if (int(l.positionType.w) == 2) {
+    toLight = -l.directionCosInner.xyz;
+    dist = dist2 = kInf;
+    return true;
+  }
+  vec3 d = l.positionType.xyz - x;
+  dist2 = dot(d, d);
+  if (dist2 <= 0.0) return false;
+  dist = sqrt(dist2);
+  toLight = d / dist;
+  if (int(l.positionType.w) == 1)
+    cone = smoothStepCpu(dot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
+                         l.directionCosInner.w);
+  return true;
+}
+
+// The end of the segment to trace towards a directional light: where the ray leaves the box.
+vec3 boxExit(vec3 x, vec3 toLight) {
+  float t0, t1;
+  return intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
+}
+
 // SourceRadiance::operator(): S at x for light leaving towards the viewer along toViewer.
 vec3 sourceRadiance(vec3 x, vec3 toViewer) {
   vec3 s = vec3(0.0);
   for (int li = 0; li < uLightCount; ++li) {
     GpuLight l = lights[li];
-    int type = int(l.positionType.w);
     vec3 toLight, irradiance, segEnd;
-    if (type == 2) {
-      toLight = -l.directionCosInner.xyz;
+    float dist, dist2, f;
+    if (!lightGeometry(l, x, toLight, dist, dist2, f) || f <= 0.0) continue;
+    if (int(l.positionType.w) == 2) {
       irradiance = l.intensityCosOuter.rgb;
-      float t0, t1;
-      segEnd = intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
+      segEnd = boxExit(x, toLight);
     } else {
-      vec3 d = l.positionType.xyz - x;
-      float dist2 = dot(d, d);
-      if (dist2 <= 0.0) continue;
-      float dist = sqrt(dist2);
-      toLight = d / dist;
-      float f = 1.0;
-      if (type == 1) {
-        f = smoothStepCpu(dot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
-                          l.directionCosInner.w);
-        if (f <= 0.0) continue;
-      }
       irradiance = l.intensityCosOuter.rgb * (f / dist2);
       segEnd = x + toLight * dist;
     }
@@ -148,23 +163,14 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
 // w = E0·f (cone not applied), the cone factor, and the far end of the segment to trace.
 bool lightTerm(int li, vec3 x, vec3 toViewer, out vec3 w, out float cone, out vec3 segEnd) {
   GpuLight l = lights[li];
-  int type = int(l.positionType.w);
   vec3 toLight, e0;
-  cone = 1.0;
-  if (type == 2) {
-    toLight = -l.directionCosInner.xyz;
+  float dist, dist2;
+  if (!lightGeometry(l, x, toLight, dist, dist2, cone)) return false;
+  if (int(l.positionType.w) == 2) {
     e0 = l.intensityCosOuter.rgb;
-    float t0, t1;
-    segEnd = intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
+    segEnd = boxExit(x, toLight);
   } else {
-    vec3 d = l.positionType.xyz - x;
-    float dist2 = dot(d, d);
-    if (dist2 <= 0.0) return false;
-    toLight = d / sqrt(dist2);
     e0 = l.intensityCosOuter.rgb / dist2;
-    if (type == 1)
-      cone = smoothStepCpu(dot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
-                           l.directionCosInner.w);
     segEnd = l.positionType.xyz;
   }
   w = e0 * phaseEvalCos(dot(-toLight, toViewer));
