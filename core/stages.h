@@ -9,8 +9,11 @@
 /// one backend is valid on the other.
 
 #include <array>
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -80,6 +83,11 @@ struct PipelineSettings {
   /// Occlusion-aware Eq. 4 weights: W_j(x)·exp(−σt·τ(x_j, x)), τ the optical depth between the
   /// sample and the voxel, so no sample contributes across a dense occluder.
   bool occlusionWeights = false;
+  /// Bounded Taylor terms: each sample's first-order estimate is clamped, before it is
+  /// weighted, to the range its quantity is known to lie in (V in [0, 1], ln V <= 0, S >= 0),
+  /// so a steep gradient (self-shadowing dense smoke) cannot extrapolate far out of range and
+  /// drag its neighbours' average (docs/fidelity.md). Default: on unless `paper`.
+  bool boundedTaylor = false;
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
   bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)
@@ -87,6 +95,24 @@ struct PipelineSettings {
   float delta2 = 0.0f;        ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
 };
+
+/// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.
+inline constexpr float kMinV = 1e-9f;
+
+/// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted
+/// (PipelineSettings::boundedTaylor): [0, 1] for V, [ln kMinV, 0] for ln V, [0, FLT_MAX] for S.
+struct TaylorBounds {
+  float lo = 0.0f, hi = 1.0f;
+  Vec3 clamp(const Vec3& v) const { return glm::clamp(v, Vec3(lo), Vec3(hi)); }
+};
+
+/// The bounds for what `s`'s samples hold (nullopt when boundedTaylor is off).
+inline std::optional<TaylorBounds> taylorBounds(const PipelineSettings& s) {
+  if (!s.boundedTaylor) return std::nullopt;
+  if (s.factorLights && s.logSpace) return TaylorBounds{std::log(kMinV), 0.0f};
+  if (s.factorLights) return TaylorBounds{0.0f, 1.0f};
+  return TaylorBounds{0.0f, std::numeric_limits<float>::max()};
+}
 
 /// The volumes of one frame, kept where the backend that renders the frame keeps them. The
 /// method layer creates one per render (backendFrames()) and hands it to every stage; a stage

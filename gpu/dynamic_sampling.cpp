@@ -140,6 +140,10 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
     defines.push_back("SL_LOG_SPACE");
     key += " ln";
   }
+  if (settings.space.bounds) {
+    defines.push_back("SL_BOUNDED");
+    key += " bounded";
+  }
   const Program& program = cachedProgram(key, [&] {
     return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, defines, key);
   });
@@ -167,6 +171,9 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
                 level.level == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
     glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
+    if (settings.space.bounds)
+      glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
+                  settings.space.bounds->hi);
     setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
     level.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
     level.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);

@@ -56,7 +56,7 @@ void registerGpuStages() {
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(
-        new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights));
+        new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s)));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1));
@@ -69,6 +69,7 @@ void registerGpuStages() {
       "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
         DynamicSamplingSettings s = ds;
         s.delta1 = ps.delta1;
+        s.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
         return std::unique_ptr<SampleRefiner>(
             new GpuRefiner(std::move(s), {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}));
       });

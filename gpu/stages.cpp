@@ -100,13 +100,19 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
                                      StageTimer* timer) {
   context();
   const bool occlusion = occlusion_ && sigmaT_ > 0.0f;
-  const std::string splatKey = occlusion ? "radiance splat (occlusion)" : "radiance splat";
+  std::string splatKey = occlusion ? "radiance splat (occlusion)" : "radiance splat";
+  std::vector<std::string> splatDefines;
+  if (occlusion) splatDefines.push_back("SL_OCCLUSION");
+  if (bounds_) {
+    splatDefines.push_back("SL_BOUNDED");
+    splatKey += " bounded";
+  }
   const Program& splat = cachedProgram(splatKey, [&] {
     if (!occlusion)
-      return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"}, {},
-                             splatKey);
+      return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"},
+                             splatDefines, splatKey);
     return graphicsProgram({"radiance_splat.vert.glsl"},
-                           {"common.glsl", "radiance_splat.frag.glsl"}, {"SL_OCCLUSION"}, splatKey);
+                           {"common.glsl", "radiance_splat.frag.glsl"}, splatDefines, splatKey);
   });
   const std::string normKey = log_ ? "radiance normalize (exp)" : "radiance normalize";
   const Program& normalize = cachedProgram(normKey, [&] {
@@ -129,6 +135,7 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     ScopedGpuTimer t(timer, "radiance splat");
     splat.use();
     sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
+    if (bounds_) glUniform2f(splat.uniform("uTaylorBounds"), bounds_->lo, bounds_->hi);
     if (occlusion) {
       glBindTextureUnit(binding::kDensityTexture, density.texture.id());
       setVec3(splat, "uDensityScale", density.indexScale());

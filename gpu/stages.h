@@ -63,8 +63,10 @@ class GradientSplatGpu : public Reconstruction {
   /// logSpace: the samples hold ln V; the normalised result is exponentiated. occlusion: the
   /// weights are multiplied by exp(−σt·τ) of the segment sample → voxel (set σt with
   /// setOcclusion, or through the frame override, which takes it from the scene).
-  explicit GradientSplatGpu(bool logSpace = false, bool occlusion = false)
-      : log_(logSpace), occlusion_(occlusion) {}
+  /// bounds: each sample's Taylor estimate is clamped to it (PipelineSettings::boundedTaylor).
+  explicit GradientSplatGpu(bool logSpace = false, bool occlusion = false,
+                            std::optional<TaylorBounds> bounds = std::nullopt)
+      : log_(logSpace), occlusion_(occlusion), bounds_(bounds) {}
   bool needsGradients() const override { return true; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
@@ -77,6 +79,7 @@ class GradientSplatGpu : public Reconstruction {
 
  private:
   bool log_, occlusion_;
+  std::optional<TaylorBounds> bounds_;
   float sigmaT_ = 0.0f;  ///< for the occlusion weights
 };
 

@@ -23,7 +23,7 @@ const std::vector<MethodDesc>& builtinMethods() {
        true, false, ""},
       {"adaptive", "gradient with dynamic sampling (paper Sec. 5: Eq. 5 error, grid splitting)",
        true, "dynamic", "gradient", "ray-marcher", true, /*extended=*/true,
-       R"({"type": "grid", "count": 1000})"},
+       R"({"type": "grid", "count": 2000})"},
   };
   return table;
 }

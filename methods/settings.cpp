@@ -12,12 +12,16 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "true, false",
        "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
        "back at each march step (singular lights); methods with samples"},
-      {"log_space", "bool", "false", "true, false (true needs factor_lights)",
+      {"log_space", "bool", "true for adaptive, else false (false with paper)",
+       "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
-       "methods with samples"},
+       "dynamic sampling then measures its error on V; methods with samples"},
       {"occlusion_weights", "bool", "false", "true, false",
        "Eq. 4 weights times exp(−σt·τ) of the segment sample → voxel: no sample contributes "
        "across a dense occluder; gradient reconstruction"},
+      {"bounded_taylor", "bool", "true (false with paper)", "true, false",
+       "clamp each sample's Taylor estimate to the known range of what is interpolated (V in "
+       "[0, 1], ln V <= 0, S >= 0) before weighting; gradient reconstruction"},
       {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
        "view-ray step (world units)"},
       {"min_transmittance", "number", "1e-6", "[0, 1]",
@@ -53,12 +57,18 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     s.factorLights = p.boolean("factor_lights", d.extended && !s.paper);
     if (s.paper && s.factorLights)
       p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
-    s.logSpace = p.boolean("log_space", false);
+    // On by default where dynamic sampling splits (measured, docs/fidelity.md: with adaptive it
+    // removes the perforated sheet's leak and halves the chimney's error; with gradient alone,
+    // whose samples are not placed by the error, it loses on glows and smoke1).
+    s.logSpace = p.boolean("log_space", s.factorLights && !d.refiner.empty());
     // Off by default: measured (docs/fidelity.md) a clear win with adaptive on occluders (the
     // perforated sheet, the chimney trail) but 3-30x the frame time and worse on smoke1.
     s.occlusionWeights = p.boolean("occlusion_weights", false);
     if (s.paper && s.occlusionWeights)
       p.fail("occlusion_weights", "is an extension; it cannot be true with render.paper = true");
+    s.boundedTaylor = p.boolean("bounded_taylor", !s.paper);
+    if (s.paper && s.boundedTaylor)
+      p.fail("bounded_taylor", "is an extension; it cannot be true with render.paper = true");
     if (s.logSpace && !s.factorLights)
       p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
   }
@@ -76,7 +86,7 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
   if (d.sampler)
     k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
-                       "sampler", "evaluator"});
+                       "bounded_taylor", "sampler", "evaluator"});
   if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())

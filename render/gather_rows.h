@@ -23,4 +23,13 @@ void gradientRowWeighted(float* __restrict r0, float* __restrict g0, float* __re
                          float c, float R, float eps, Vec3 base, Vec3 gx,
                          const float* __restrict occ);
 
+/// The bounded Taylor term (PipelineSettings::boundedTaylor): gradientRow / gradientRowWeighted
+/// with each sample's estimate clamped to [lo, hi] per channel before it is weighted, so that
+/// one sample's extrapolation cannot leave the range the interpolated quantity is known to lie
+/// in (V in [0, 1], ln V <= 0). `occ` may be null (all weights 1).
+void gradientRowBounded(float* __restrict r0, float* __restrict g0, float* __restrict b0,
+                        float* __restrict w0, int i0, int i1, float lox, float hx, float px,
+                        float c, float R, float eps, Vec3 base, Vec3 gx,
+                        const float* __restrict occ, float lo, float hi);
+
 }  // namespace scatterlab

@@ -114,7 +114,7 @@ Vec3 clampNonNegative(Vec3 v) {
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
                                        Grid3<float>* weightSum, ValueSpace space,
-                                       float occlusionSigmaT) {
+                                       float occlusionSigmaT, std::optional<TaylorBounds> bounds) {
   const IVec3 n = out.dims();
   const Vec3 h = out.cellSize(), lo = out.bounds().min;
   if (weightSum) weightSum->reset(out.bounds(), n, 0.0f);
@@ -179,8 +179,17 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
                   sum += density.sample(p + seg * ((float(m) + 0.5f) / float(steps)));
                 occ[std::size_t(i)] = std::exp(-occlusionSigmaT * sum * (len / float(steps)));
               }
-              gradientRowWeighted(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
-                                  s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ.data());
+              if (bounds)
+                gradientRowBounded(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
+                                   s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ.data(),
+                                   bounds->lo, bounds->hi);
+              else
+                gradientRowWeighted(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
+                                    s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ.data());
+            } else if (bounds) {
+              gradientRowBounded(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
+                                 s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], nullptr, bounds->lo,
+                                 bounds->hi);
             } else {
               gradientRow(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
                           s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0]);
@@ -297,20 +306,22 @@ RadianceGrid& newRadiance(Frame& frame, const Scene& scene, IVec3 dims) {
 
 class InterpolatingReconstruction : public Reconstruction {
  public:
-  InterpolatingReconstruction(Interpolation k, ValueSpace space, bool occlusion)
-      : kind_(k), space_(space), occlusion_(occlusion) {}
+  InterpolatingReconstruction(Interpolation k, ValueSpace space, bool occlusion,
+                              std::optional<TaylorBounds> bounds)
+      : kind_(k), space_(space), occlusion_(occlusion), bounds_(bounds) {}
   bool needsGradients() const override { return kind_ == Interpolation::Gradient; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
                                   Progress*) override {
     return interpolateSamples(kind_, frame.hostDensity(), samples, newRadiance(frame, scene, dims),
-                              nullptr, space_, occlusion_ ? scene.medium.sigmaT : 0.0f);
+                              nullptr, space_, occlusion_ ? scene.medium.sigmaT : 0.0f, bounds_);
   }
 
  private:
   Interpolation kind_;
   ValueSpace space_;
   bool occlusion_;
+  std::optional<TaylorBounds> bounds_;
 };
 
 class PerVoxelReconstruction : public Reconstruction {
@@ -340,7 +351,7 @@ void registerReconstructions() {
     return [k](const PipelineSettings& s) {
       const ValueSpace space = s.factorLights && s.logSpace ? ValueSpace::Log : ValueSpace::Linear;
       return std::unique_ptr<Reconstruction>(
-          new InterpolatingReconstruction(k, space, s.occlusionWeights));
+          new InterpolatingReconstruction(k, space, s.occlusionWeights, taylorBounds(s)));
     };
   };
   reconstructions().addVariant("gradient", Backend::Cpu, interp(Interpolation::Gradient));

@@ -17,6 +17,8 @@
 /// Every result is clamped to S >= 0 per channel (a first-order estimate can undershoot near a
 /// point light; negative source radiance is unphysical).
 
+#include <optional>
+
 #include "core/stages.h"
 
 namespace scatterlab {
@@ -48,7 +50,8 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
                                        Grid3<float>* weightSum = nullptr,
                                        ValueSpace space = ValueSpace::Linear,
-                                       float occlusionSigmaT = 0.0f);
+                                       float occlusionSigmaT = 0.0f,
+                                       std::optional<TaylorBounds> bounds = std::nullopt);
 
 /// Brute-force evaluation of the interpolation at one point, over all samples (no clamping,
 /// no uncovered rule): the formulas above executed literally, for tests and probes.

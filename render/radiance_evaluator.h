@@ -19,7 +19,6 @@ struct TracerSteps {
 
 /// Smallest V whose logarithm the samples hold (ln 1e-9 ≈ −20.7: transmittance below it is
 /// black at any exposure).
-inline constexpr float kMinV = 1e-9f;
 
 /// Fills S (and dS when `gradients`) of every sample. The view direction at a point p is
 /// towards scene.camera.position from p itself, also at the six offset points, so ∇S is the

@@ -90,19 +90,26 @@ void probePoints(const RadianceSample& s, Vec3* out, int count) {
 }
 
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
-                        int count) {
+                        int count, const DynamicSamplingSettings::ErrorSpace& space) {
   Vec3 p[kMaxProbes];
   probePoints(s, p, count);
   float sum = 0.0f;
   for (int i = 0; i < count; ++i) {
-    const Vec3 diff = glm::abs(s.taylor(p[i]) - probeS[i]);
+    Vec3 est = s.taylor(p[i]), truth = probeS[i];
+    if (space.bounds) est = space.bounds->clamp(est);
+    if (space.log) {
+      est = glm::exp(est);
+      truth = glm::exp(truth);
+    }
+    const Vec3 diff = glm::abs(est - truth);
     sum += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
   }
   return s.radius * s.radius * s.radius * sum / float(count) * tau;
 }
 
-float sampleContribution(const RadianceSample& s, float density, float tau) {
-  const Vec3 a = glm::abs(s.S);
+float sampleContribution(const RadianceSample& s, float density, float tau,
+                         const DynamicSamplingSettings::ErrorSpace& space) {
+  const Vec3 a = space.log ? glm::exp(s.S) : glm::abs(s.S);
   return s.radius * s.radius * s.radius * ((a.x + a.y + a.z) / 3.0f) * density * tau;
 }
 
@@ -193,9 +200,10 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
           settings.perSampleTau && level > 0
               ? viewTransmittance(scene, density, current[j].position, settings.delta1)
               : rootTau[anc[j]];
-      errors[j] = localShadingError(current[j], S, D, tau, np);
+      errors[j] = localShadingError(current[j], S, D, tau, np, settings.space);
       if (!contributions.empty())
-        contributions[j] = sampleContribution(current[j], density.sample(current[j].position), tau);
+        contributions[j] = sampleContribution(current[j], density.sample(current[j].position), tau,
+                                              settings.space);
     });
     ls.maxError = errors.empty() ? 0.0f : *std::max_element(errors.begin(), errors.end());
     ls.p90Error = quantile(errors, 0.9);
@@ -440,6 +448,7 @@ void registerRefiners() {
                         [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
                           DynamicSamplingSettings s = ds;
                           s.delta1 = ps.delta1;
+                          s.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
                           return std::unique_ptr<SampleRefiner>(new CpuRefiner(std::move(s)));
                         });
 }

@@ -44,6 +44,14 @@ struct DynamicSamplingSettings {
   int probes = 6;
   /// Most samples in the final set (0: no cap): see withSampleBudget().
   long long maxSamples = 0;
+  /// How the error compares values (set from the pipeline, not a key): see ErrorSpace.
+  struct ErrorSpace {
+    /// Taylor estimates clamped as the reconstruction clamps them (boundedTaylor).
+    std::optional<TaylorBounds> bounds;
+    /// The samples hold ln V: E_j and the contribution are measured on V = exp(·), what the
+    /// image sees, not on ln V (whose errors are largest where V is too dark to matter).
+    bool log = false;
+  } space;
 };
 
 /// Grid information buffer of one level: vertices of G_k at the cell centres of a regular
@@ -88,7 +96,8 @@ struct DynamicSamplingResult {
 
 /// Contribution of one sample to the image, in the units of E_j (Eq. 5 with the error replaced
 /// by S itself): R_j³ · mean_RGB |S_j| · D(x_j) · τ_j.
-float sampleContribution(const RadianceSample& s, float density, float tau);
+float sampleContribution(const RadianceSample& s, float density, float tau,
+                         const DynamicSamplingSettings::ErrorSpace& space = {});
 
 /// The error scale of a relative ε: the mean sampleContribution() of the initial samples,
 /// summed in index order in double (so the CPU and GPU variants agree to float rounding). With
@@ -106,9 +115,11 @@ const Vec3* probeOffsets();
 
 /// E_j of Eq. 5 from the evaluated sample, the traced S at its `count` probes (in the order of
 /// probePoints), the density there, and τ. count = 6 is the paper's Eq. 5. The mean is over
-/// the probes (Eq. 5's Σ/n).
+/// the probes (Eq. 5's Σ/n). `space`: the Taylor estimate is clamped to its bounds, and in log
+/// space both sides are exponentiated before they are compared (extensions; the default is the
+/// paper's Eq. 5).
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
-                        int count = 6);
+                        int count = 6, const DynamicSamplingSettings::ErrorSpace& space = {});
 
 /// The probe points x_j + R_j·d of a sample, d = probeOffsets()[0 … count): +X −X +Y −Y +Z −Z
 /// (the paper's six), then the 8 cube diagonals, the 12 edge diagonals, and the inner shell at

@@ -22,6 +22,9 @@ uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1
 uniform float uTauDelta1;       // step of the τ trace
 uniform int uFinal;             // 1: finest level, S and ∇S only
 uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
+#ifdef SL_BOUNDED
+uniform vec2 uTaylorBounds;     // TaylorBounds (lo, hi): the Taylor estimate is clamped to it
+#endif
 
 // DensityGrid::sample: 0 outside the (closed) box.
 float densityAt(vec3 p) {
@@ -67,13 +70,25 @@ void main() {
     float D = densityAt(p);
     precise vec3 d = p - x;
     precise vec3 taylor = S + d.x * dS[0] + d.y * dS[1] + d.z * dS[2];
+#ifdef SL_BOUNDED
+    taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(uTaylorBounds.y));
+#endif
+#ifdef SL_LOG_SPACE
+    // ln V held: compared on V, what the image sees (localShadingError's ErrorSpace::log).
+    precise vec3 diff = abs(exp(taylor) - exp(Sp));
+#else
     precise vec3 diff = abs(taylor - Sp);
+#endif
     sum += (diff.x + diff.y + diff.z) / 3.0 * D;
   }
   precise float E = R * R * R * sum / float(uProbes) * tau;
   errors[j] = E;
   if (uTauMode == 0) {
+#ifdef SL_LOG_SPACE
+    precise vec3 a = exp(S);
+#else
     precise vec3 a = abs(S);
+#endif
     precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAt(x) * tau;
     errors[uCount + j] = c;
   }

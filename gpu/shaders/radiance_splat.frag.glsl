@@ -6,6 +6,9 @@ uniform float uSliceZ;
 #ifdef SL_OCCLUSION
 uniform float uDensityVoxel;  // smallest density voxel edge (world units)
 #endif
+#ifdef SL_BOUNDED
+uniform vec2 uTaylorBounds;  // TaylorBounds (lo, hi): each Taylor estimate is clamped to it
+#endif
 flat in vec4 vPosR;
 flat in vec3 vS;
 flat in vec3 vDx;
@@ -34,5 +37,8 @@ void main() {
   W *= exp(-uSigmaT * sum * (dist / float(steps)));
 #endif
   vec3 taylor = vS + d.x * vDx + d.y * vDy + d.z * vDz;
+#ifdef SL_BOUNDED
+  taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(uTaylorBounds.y));
+#endif
   outSum = vec4(W * taylor, W);
 }

@@ -142,3 +142,54 @@ TEST(OcclusionWeights, NoSampleContributesAcrossADenseSlab) {
 
 }  // namespace
 }  // namespace scatterlab
+
+namespace scatterlab {
+namespace {
+
+TEST(BoundedTaylor, EachSampleIsClampedBeforeItIsWeighted) {
+  // Two samples covering the whole box hold V; sample a's gradient extrapolates far out of
+  // [0, 1] (+40 per unit, as on the lit edge of a dense self-shadowed blob), sample b is flat.
+  // Unbounded, a voxel averages a's out-of-range estimate; bounded, a's estimate is first
+  // clamped to 1 (above) or 0 (below) and then averaged with weights R/d.
+  const Box box{Vec3(0.0f), Vec3(1.0f)};
+  DensityGrid d(box, IVec3(10, 2, 2));
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 10; ++i) d.at(i, j, k) = 1.0f;
+  std::vector<RadianceSample> s(2);
+  s[0].position = Vec3(0.45f, 0.5f, 0.5f);
+  s[1].position = Vec3(0.85f, 0.5f, 0.5f);
+  s[0].radius = s[1].radius = 2.0f;
+  s[0].S = Vec3(0.5f);
+  s[0].dS[0] = Vec3(40.0f, -40.0f, 0.0f);  // R: rises, G: falls, B: flat
+  s[1].S = Vec3(0.3f);
+  RadianceGrid plain(box, IVec3(10, 2, 2)), bounded(box, IVec3(10, 2, 2));
+  interpolateSamples(Interpolation::Gradient, d, s, plain);
+  interpolateSamples(Interpolation::Gradient, d, s, bounded, nullptr, ValueSpace::Linear, 0.0f,
+                     TaylorBounds{0.0f, 1.0f});
+  const Vec3 c = plain.cellCenter(7, 0, 0);  // x = 0.75: a's estimate 0.5 ± 40·0.3 = 12.5, −11.5
+  const float wa = 2.0f / glm::length(c - s[0].position),
+              wb = 2.0f / glm::length(c - s[1].position);
+  const float dx = c.x - s[0].position.x;
+  EXPECT_NEAR(plain.at(7, 0, 0).x, (wa * (0.5f + 40.0f * dx) + wb * 0.3f) / (wa + wb), 1e-4f);
+  EXPECT_EQ(plain.at(7, 0, 0).y, 0.0f);  // the average is negative: clamped to 0 only after
+  EXPECT_NEAR(bounded.at(7, 0, 0).x, (wa * 1.0f + wb * 0.3f) / (wa + wb), 1e-6f);
+  EXPECT_NEAR(bounded.at(7, 0, 0).y, (wa * 0.0f + wb * 0.3f) / (wa + wb), 1e-6f);
+  EXPECT_NEAR(bounded.at(7, 0, 0).z, (wa * 0.5f + wb * 0.3f) / (wa + wb), 1e-6f);
+}
+
+TEST(BoundedTaylor, BoundsFollowWhatTheSamplesHold) {
+  PipelineSettings s;
+  EXPECT_FALSE(taylorBounds(s));  // off (the paper's Eq. 4)
+  s.boundedTaylor = true;
+  EXPECT_EQ(taylorBounds(s)->lo, 0.0f);  // S: only S >= 0 is known
+  EXPECT_EQ(taylorBounds(s)->hi, std::numeric_limits<float>::max());
+  s.factorLights = true;  // V = S / A in [0, 1]
+  EXPECT_EQ(taylorBounds(s)->hi, 1.0f);
+  s.logSpace = true;  // ln V in [ln kMinV, 0]
+  EXPECT_EQ(taylorBounds(s)->lo, std::log(kMinV));
+  EXPECT_EQ(taylorBounds(s)->hi, 0.0f);
+}
+
+}  // namespace
+}  // namespace scatterlab

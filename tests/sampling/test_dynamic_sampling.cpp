@@ -416,3 +416,39 @@ TEST(DynamicSampling, SampleBudgetRaisesTheThresholdUntilTheSetFits) {
   r = dynamicSampling(scene, density, init, ev, st);
   EXPECT_EQ(r.samples.size(), init.size());
 }
+
+namespace scatterlab {
+namespace {
+
+TEST(DynamicSampling, ErrorSpaceClampsAndComparesOnV) {
+  // A sample holding u = ln V = ln 0.5 with ∇u = (−10, 0, 0), R = 0.1: at the +X probe the
+  // Taylor estimate is ln 0.5 − 1, at −X ln 0.5 + 1 (> 0: V = 1.36 > 1, out of range).
+  RadianceSample s;
+  s.position = Vec3(0.5f);
+  s.radius = 0.1f;
+  s.S = Vec3(std::log(0.5f));
+  s.dS[0] = Vec3(-10.0f);
+  Vec3 p[6], S[6];
+  float D[6];
+  probePoints(s, p);
+  for (int i = 0; i < 6; ++i) {
+    S[i] = Vec3(std::log(0.5f));  // the truth: V = 0.5 at every probe
+    D[i] = 1.0f;
+  }
+  const float r3 = 1e-3f;
+  // Paper (on u itself): |Δu| = 1 at ±X, 0 elsewhere.
+  EXPECT_NEAR(localShadingError(s, S, D, 1.0f), r3 * 2.0f / 6.0f, 1e-8);
+  DynamicSamplingSettings::ErrorSpace space;
+  space.log = true;  // on V: |0.5·e^{-1} − 0.5| + |0.5·e − 0.5|
+  const float onV = 0.5f * (1.0f - std::exp(-1.0f)) + 0.5f * (std::exp(1.0f) - 1.0f);
+  EXPECT_NEAR(localShadingError(s, S, D, 1.0f, 6, space), r3 * onV / 6.0f, 1e-8);
+  space.bounds = TaylorBounds{std::log(kMinV), 0.0f};  // −X clamped to u = 0: V = 1
+  const float bounded = 0.5f * (1.0f - std::exp(-1.0f)) + 0.5f;
+  EXPECT_NEAR(localShadingError(s, S, D, 1.0f, 6, space), r3 * bounded / 6.0f, 1e-8);
+  // The contribution is measured on V too: R³·V·D·τ.
+  EXPECT_NEAR(sampleContribution(s, 1.0f, 1.0f, space), r3 * 0.5f, 1e-8);
+  EXPECT_NEAR(sampleContribution(s, 1.0f, 1.0f), r3 * std::log(2.0f), 1e-8);
+}
+
+}  // namespace
+}  // namespace scatterlab
