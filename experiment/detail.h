@@ -174,17 +174,20 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
 void reportSweep(std::ostream& md, const ResultFacts& facts, const SweepSpec& sweep);
 /// The convergence checks of the converged references; nothing when there are none.
 void reportReferenceChecks(std::ostream& md, const ResultFacts& facts);
-/// The plots (from DIR/plots/) or why there are none.
+/// The plots with their captions (DIR/plots/index.json, written by plots.py) or why there are
+/// none.
 void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out);
 /// The failed runs with their configurations; nothing when none failed.
 void reportFailures(std::ostream& md, const ExperimentResult& res);
 
 // ---- Gallery and plots (gallery.cpp) ---------------------------------------------------------
 
-/// Writes one side-by-side strip per (sweep, scene, point), the references then the runs, and
-/// appends the gallery section to `md`.
+/// Appends the gallery section to `md`: the labelled pages plots.py wrote (DIR/gallery/
+/// page-NN.png, listed in gallery/index.json) when `plotted`; otherwise (no python with
+/// matplotlib, --no-plots) one unlabelled side-by-side strip per (sweep, scene, point), the
+/// references then every run, captioned with their names.
 void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
-                  ReferenceCache& refs, OutputDir& out);
+                  ReferenceCache& refs, OutputDir& out, bool plotted);
 
 /// Calls experiment/plots.py on the output directory (when `opt.plots`); returns why there are
 /// no plots, or "" when they were made.

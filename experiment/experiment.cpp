@@ -18,7 +18,7 @@ namespace scatterlab {
 namespace {
 
 /// Everything after the runs: plots.py reads results.json, so the tables are written before it
-/// runs; the report lists the plots, so it is written last.
+/// runs; the report lists its plots and gallery pages, so it is written last.
 void writeOutputs(ExperimentResult& res, const std::string& configPath, detail::OutputDir& out,
                   detail::ReferenceCache& refs, const std::string& memoryMethod,
                   const ExperimentOptions& opt) {
@@ -29,10 +29,10 @@ void writeOutputs(ExperimentResult& res, const std::string& configPath, detail::
   detail::reportHeader(md, res, configPath, memoryMethod);
   for (const SweepSpec& sw : res.plan.sweeps) detail::reportSweep(md, facts, sw);
   detail::reportReferenceChecks(md, facts);
-  detail::writeGallery(md, res.plan, res.runs, refs, out);
   detail::writeText(out.path("results.csv"), csv);
   detail::writeText(out.path("results.json"), json.dump(2) + "\n");
   res.plotsNote = detail::makePlots(opt, out);
+  detail::writeGallery(md, res.plan, res.runs, refs, out, res.plotsNote.empty());
   detail::reportPlots(md, res.plotsNote, out);
   detail::reportFailures(md, res);
   detail::writeText(out.path("report.md"), md.str());

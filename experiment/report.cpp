@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <set>
 
+#include "core/scene.h"
 #include "experiment/detail.h"
 
 namespace scatterlab::detail {
@@ -194,6 +195,14 @@ void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out)
   if (!plotsNote.empty()) {
     md << "No plots: " << plotsNote << ".\n";
     out.log("plots: " + plotsNote);
+    return;
+  }
+  if (fs::exists(out.path("plots/index.json"))) {
+    const Json index = readJsonFile(out.path("plots/index.json"));
+    for (const Json& p : index)
+      md << p.value("caption", "") << " ([SVG](plots/" << p.value("svg", "") << ")):\n\n!["
+         << p.value("file", "") << "](plots/" << p.value("file", "") << ")\n\n";
+    if (index.empty()) md << "No sweep of this experiment has data for a plot.\n";
     return;
   }
   std::vector<std::string> pngs;
