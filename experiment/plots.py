@@ -26,6 +26,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 from collections import OrderedDict
 
 import matplotlib
@@ -35,7 +36,8 @@ import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.patches  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
+from matplotlib.ticker import (FixedLocator, FuncFormatter, MaxNLocator, NullFormatter,  # noqa: E402
+                               NullLocator)
 
 # Display-space difference shown at full colour in the gallery's difference images (the same
 # scale as report.md's signed error maps; "visibly wrong" starts at 0.05).
@@ -88,13 +90,14 @@ def machine_text(res, runs):
 
 def short_title(res):
     t = res.get("title", "experiment")
-    return t if len(t) <= 70 else t[:67].rstrip() + "..."
+    return t if len(t) <= 110 else t[:107].rstrip() + "..."
 
 
 def panel_grid(n, width=4.2, height=3.3, max_cols=4):
     cols = min(n, max_cols)
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols + 0.4, height * rows + 1.5),
+    # At least 9 in wide, so that one panel still has room for the title and the legend.
+    fig, axes = plt.subplots(rows, cols, figsize=(max(9.0, width * cols + 0.4), height * rows + 1.5),
                              squeeze=False)
     for ax in axes.flat[n:]:
         ax.set_visible(False)
@@ -103,9 +106,11 @@ def panel_grid(n, width=4.2, height=3.3, max_cols=4):
 
 def finish(fig, path_base, title, subtitle, handles=None, made=None, caption=""):
     """Suptitle, one legend below the panels, PNG + SVG; records the figure in `made`."""
-    fig.suptitle(f"{title}\n{subtitle}", fontsize=10)
+    wrap = max(40, int(fig.get_figwidth() * 11))
+    lines = textwrap.wrap(title, wrap) + textwrap.wrap(subtitle, wrap)
+    fig.suptitle("\n".join(lines), fontsize=10)
     h = fig.get_figheight()  # margins in inches, whatever the figure's height
-    top = 1 - 0.55 / h
+    top = 1  # tight_layout makes room for the suptitle itself
     if handles:
         ncol = min(len(handles), 5)
         fig.legend(handles=handles, loc="lower center", ncol=ncol, fontsize=8, frameon=False)
@@ -122,22 +127,20 @@ def finish(fig, path_base, title, subtitle, handles=None, made=None, caption="")
 
 
 def plain_log_ticks(ax, x=True, y=True):
-    """Log axes labelled 20, 50, 0.5 rather than 2x10^1."""
+    """Log axes labelled 20, 50, 0.5 rather than 2x10^1; an axis spanning less than ~1.5
+    decades gets evenly spaced round ticks instead of the decades it does not reach."""
     fmt = FuncFormatter(lambda v, _: f"{v:g}")
-
-    def minor(v, _):  # 2, 3 and 5 times a power of ten, so that short ranges get labels
-        if v <= 0:
-            return ""
-        m = round(v / 10 ** math.floor(math.log10(v)), 3)
-        return f"{v:g}" if m in (2, 3, 5) else ""
-
-    for on, axis in ((x, ax.xaxis), (y, ax.yaxis)):
-        if on and axis.get_scale() == "log":
-            ax.autoscale_view()
-            axis.set_major_formatter(fmt)
-            lo, hi = axis.get_view_interval()
-            wide = lo > 0 and hi / lo > 30
-            axis.set_minor_formatter(NullFormatter() if wide else FuncFormatter(minor))
+    for on, axis, lim in ((x, ax.xaxis, ax.get_xlim), (y, ax.yaxis, ax.get_ylim)):
+        if not on or axis.get_scale() != "log":
+            continue
+        lo, hi = lim()
+        axis.set_major_formatter(fmt)
+        axis.set_minor_formatter(NullFormatter())
+        if lo > 0 and hi / lo < 30:
+            ticks = [t for t in MaxNLocator(nbins=6).tick_values(lo, hi) if lo <= t <= hi and t > 0]
+            if len(ticks) >= 2:
+                axis.set_major_locator(FixedLocator(ticks))
+                axis.set_minor_locator(NullLocator())
 
 
 def ok_runs(res):
@@ -197,7 +200,7 @@ def line_figure(res, style, runs, sweep, scenes, xkey, ykey, xlabel, ylabel, log
         if logy:
             ax.set_yscale("log")
         plain_log_ticks(ax)
-        ax.tick_params(labelsize=7)
+        ax.tick_params(which="both", labelsize=7)
         ax.grid(True, which="both", alpha=0.25)
     if not methods_seen:
         plt.close(fig)
@@ -249,7 +252,7 @@ def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
         ax.set_xlabel("frame time (ms, median)", fontsize=8)
         ax.set_ylabel(f"relative L2 vs {ref} (%)", fontsize=8)
         plain_log_ticks(ax)
-        ax.tick_params(labelsize=7)
+        ax.tick_params(which="both", labelsize=7)
         ax.grid(True, which="both", alpha=0.25)
     if not methods_seen:
         plt.close(fig)
@@ -295,6 +298,12 @@ def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
                     used.append(s)
                 ax.barh(range(len(srun)), share, left=left, color=style.stage_colour[s], height=0.7)
             left = [a + b for a, b in zip(left, share)]
+        # What no stage timer covers (set-up, copies): the rest of the frame, in grey.
+        rest = [max(0.0, 100.0 - v) for v in left]
+        if any(v > 0.5 for v in rest):
+            if "other (untimed)" not in used:
+                used.append("other (untimed)")
+            ax.barh(range(len(srun)), rest, left=left, color="0.85", height=0.7)
         for i, r in enumerate(srun):
             ax.text(101, i, f"{r['median_ms'].get('total', 0):.0f} ms", va="center", fontsize=7)
         ax.set_yticks(range(len(srun)))
@@ -305,12 +314,14 @@ def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
         ax.set_xlabel("share of the frame time (%, median per stage); total at the right", fontsize=8)
         ax.set_title(scene, fontsize=9)
         ax.tick_params(axis="x", labelsize=7)
-    handles = [matplotlib.patches.Patch(color=style.stage_colour[s], label=s) for s in used]
+    handles = [matplotlib.patches.Patch(color=style.stage_colour.get(s, "0.85"), label=s)
+               for s in used]
     finish(fig, os.path.join(d, "plots", f"stages__{sweep}"),
            f"{short_title(res)} — sweep '{sweep}': where does the frame time go?",
            machine_text(res, runs), handles, made,
-           f"Sweep `{sweep}`: each run's frame split into its stages (share of the median frame "
-           "time, linear axis), the frame time at the right")
+           f"Sweep `{sweep}`: each run's frame split into its stages (each stage's median as a "
+           "share of the median frame time, linear axis; grey: time no stage timer covers), the "
+           "frame time at the right")
 
 
 def sweep_figures(res, style, d, made):
@@ -414,7 +425,7 @@ def gallery(res, d, per_page):
             cb = fig.colorbar(diff_im, cax=cax, orientation="horizontal")
             cb.set_label(f"image − {ref}, mean over channels of the PNGs (red: brighter); "
                          f"full colour at ±{DIFF_FULL}", fontsize=8)
-            cb.ax.tick_params(labelsize=7)
+            cb.ax.tick_params(which="both", labelsize=7)
         name = f"page-{p + 1:02d}.png"
         fig.savefig(os.path.join(d, "gallery", name), dpi=90)
         plt.close(fig)
