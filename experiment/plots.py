@@ -366,8 +366,14 @@ def load_rgb(path):
     return img[..., :3] if img.ndim == 3 else img
 
 
+def axes_text(r):
+    return ", ".join(f"{a}={v if not isinstance(v, list) else 'x'.join(map(str, v))}"
+                     for a, v in r.get("axes", {}).items())
+
+
 def gallery(res, d, per_page):
-    """Labelled tiles (image + signed difference from the headline reference), `per_page` a page."""
+    """Labelled tiles (image + signed difference from the headline reference), `per_page` a
+    page; each run's reference image as a tile of its own before the first run that uses it."""
     runs = ok_runs(res)
     refs = res.get("references", [])
     ref = refs[0] if refs else None
@@ -375,15 +381,24 @@ def gallery(res, d, per_page):
     for f in os.listdir(os.path.join(d, "gallery")):
         if f.startswith("page-") and f.endswith(".png"):
             os.remove(os.path.join(d, "gallery", f))
-    tiles = [r for r in runs if os.path.exists(os.path.join(d, r.get("image", "")))]
+    shown = [r for r in runs if os.path.exists(os.path.join(d, r.get("image", "")))]
+    tiles, last_ref = [], None
+    for n, r in enumerate(shown):
+        rp = r.get("reference_images", {}).get(ref) if ref else None
+        if rp and os.path.exists(os.path.join(d, rp)) and rp != last_ref:
+            tiles.append({"ref": rp, "run": r})
+            last_ref = rp
+        tiles.append({"run": r, "n": n + 1, "ref_image": rp})
     pages = [tiles[i:i + per_page] for i in range(0, len(tiles), per_page)]
-    cols = 2  # runs per row, each an image and its difference
+    cols = 2  # tiles per row, each an image and its difference
     files = []
     for p, page in enumerate(pages):
         nrow = math.ceil(len(page) / cols)
-        first = load_rgb(os.path.join(d, page[0]["image"]))
+        first = load_rgb(os.path.join(d, page[0]["run"]["image"]))
         aspect = first.shape[0] / first.shape[1]
-        fig, axes = plt.subplots(nrow, 2 * cols, figsize=(4 * 2 * cols, 4 * aspect * nrow + 1.6),
+        # 4 in per tile half, plus room for two title lines a row, the header and the colour bar.
+        fig, axes = plt.subplots(nrow, 2 * cols,
+                                 figsize=(4 * 2 * cols, (4 * aspect + 0.6) * nrow + 2.0),
                                  squeeze=False)
         diff_im = None
         for i, ax in enumerate(axes.flat):
@@ -393,20 +408,28 @@ def gallery(res, d, per_page):
             if k >= len(page):
                 ax.set_visible(False)
                 continue
-            r = page[k]
+            t, r = page[k], page[k]["run"]
+            if "ref" in t:
+                if i % 2 == 0:
+                    ax.imshow(load_rgb(os.path.join(d, t["ref"])))
+                    ax.set_title(f"{r['scene']}: reference {ref}"
+                                 f"{' · ' + axes_text(r) if axes_text(r) else ''}", fontsize=8)
+                else:
+                    ax.axis("off")
+                    ax.text(0.5, 0.5, f"the reference ({ref}) of the runs that follow",
+                            ha="center", va="center", fontsize=8, transform=ax.transAxes)
+                continue
             img = load_rgb(os.path.join(d, r["image"]))
             if i % 2 == 0:
                 ax.imshow(img)
                 e = rel_l2_pct(r, ref)
-                axes_txt = ", ".join(f"{a}={v if not isinstance(v, list) else 'x'.join(map(str, v))}"
-                                     for a, v in r.get("axes", {}).items())
                 ax.set_title(f"{r['scene']}: {r['method']} ({r.get('backend', 'cpu')})"
-                             f"{' · ' + axes_txt if axes_txt else ''}\n"
+                             f"{' · ' + axes_text(r) if axes_text(r) else ''}\n"
                              f"{r['samples'] if 'samples' in r else '—'} samples · "
                              f"rel L2 {'—' if e is None else f'{e:.2f}%'} · "
                              f"{r['median_ms'].get('total', 0):.0f} ms", fontsize=8)
                 continue
-            rp = r.get("reference_images", {}).get(ref) if ref else None
+            rp = t["ref_image"]
             if rp and os.path.exists(os.path.join(d, rp)):
                 refimg = load_rgb(os.path.join(d, rp))
                 if refimg.shape == img.shape:
@@ -416,21 +439,24 @@ def gallery(res, d, per_page):
                     continue
             ax.text(0.5, 0.5, "no reference image", ha="center", va="center", fontsize=8,
                     transform=ax.transAxes)
-        title = (f"{short_title(res)} — gallery page {p + 1}/{len(pages)} "
-                 f"(runs {p * per_page + 1}–{p * per_page + len(page)} of {len(tiles)})")
-        fig.suptitle(title + "\n" + machine_text(res, page), fontsize=10)
-        fig.tight_layout(rect=(0, 0.06, 1, 0.95))
+        numbers = [t["n"] for t in page if "n" in t]
+        span = f"runs {numbers[0]}–{numbers[-1]} of {len(shown)}" if numbers else "references"
+        title = f"{short_title(res)} — gallery page {p + 1}/{len(pages)} ({span})"
+        lines = textwrap.wrap(title, 100) + [machine_text(res, [t["run"] for t in page])]
+        fig.suptitle("\n".join(lines), fontsize=10)
+        h = fig.get_figheight()
+        fig.tight_layout(rect=(0, 1.0 / h, 1, 1 - (0.1 + 0.2 * len(lines)) / h))
         if diff_im is not None:
-            cax = fig.add_axes([0.3, 0.025, 0.4, 0.015])
+            cax = fig.add_axes([0.3, 0.55 / h, 0.4, 0.12 / h])
             cb = fig.colorbar(diff_im, cax=cax, orientation="horizontal")
             cb.set_label(f"image − {ref}, mean over channels of the PNGs (red: brighter); "
                          f"full colour at ±{DIFF_FULL}", fontsize=8)
-            cb.ax.tick_params(which="both", labelsize=7)
+            cb.ax.tick_params(labelsize=7)
         name = f"page-{p + 1:02d}.png"
         fig.savefig(os.path.join(d, "gallery", name), dpi=90)
         plt.close(fig)
         files.append(name)
-    index = {"pages": files, "runs": len(tiles), "per_page": per_page, "reference": ref,
+    index = {"pages": files, "runs": len(shown), "per_page": per_page, "reference": ref,
              "diff_full": DIFF_FULL}
     with open(os.path.join(d, "gallery", "index.json"), "w") as f:
         json.dump(index, f, indent=2)
