@@ -14,7 +14,7 @@ std::string parseShard(const std::string& s, int* k = nullptr, int* n = nullptr)
   char slash = 0, extra = 0;
   if (std::sscanf(s.c_str(), "%d%c%d%c", &a, &slash, &b, &extra) != 3 || slash != '/' || b < 1 ||
       a < 1 || a > b)
-    return "--shard '" + s + "': expected K/N with 1 <= K <= N, e.g. 2/4";
+    return "'" + s + "': expected K/N with 1 <= K <= N, e.g. 2/4";
   if (k) *k = a;
   if (n) *n = b;
   return "";
