@@ -486,7 +486,7 @@ def main():
     with open(os.path.join(a.dir, "plots", "index.json"), "w") as f:
         json.dump(made, f, indent=2)
     print("plots:", ", ".join(m["file"] for m in made) if made else "none")
-    if not a.no_gallery:
+    if not a.no_gallery and res.get("gallery") != "off":
         g = gallery(res, a.dir, a.per_page)
         print(f"gallery: {g['runs']} runs on {len(g['pages'])} pages")
     return 0

@@ -330,6 +330,8 @@ Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
   jres["default_reference"] = plan.defaultReference;
   jres["reference_checks"] = referenceChecks(facts);
   jres["machine"] = res.machine;
+  jres["gallery"] = plan.gallery;  // plots.py makes no gallery pages for "off"
+
   jres["machines"] = facts.machines;
   for (const RunRecord& rec : facts.runs) {
     const bool ok = rec.status == "ok";
