@@ -78,6 +78,8 @@ def machine_text(res, runs):
         if "cpu_model" not in m:
             continue
         s = f"{m['cpu_model']}, {m.get('cores_used', '?')} cores"
+        if m.get("load_avg_start"):
+            s += f" (load {m['load_avg_start'][0]:.1f} at the start)"
         gpus = m.get("gpu_renderers") or []
         if gpus and any(b != "cpu" for b in backends):
             s += ", " + "; ".join(gpus)
@@ -279,7 +281,7 @@ def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
     cols = min(len(scenes), 2)
     nrow = math.ceil(len(scenes) / cols)
     height = [max(rows[i:i + cols]) for i in range(0, len(rows), cols)]
-    fig, axes = plt.subplots(nrow, cols, figsize=(7.2 * cols, 0.26 * sum(height) + 1.3 * nrow + 1.6),
+    fig, axes = plt.subplots(nrow, cols, figsize=(max(9.0, 7.2 * cols), 0.26 * sum(height) + 1.3 * nrow + 1.6),
                              squeeze=False, gridspec_kw={"height_ratios": [h + 3 for h in height]})
     for ax in axes.flat[len(scenes):]:
         ax.set_visible(False)
