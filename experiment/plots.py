@@ -57,10 +57,20 @@ TIME_AXES = {
 class Style:
     """Fixed colours: one per method over the whole experiment, one per stage."""
 
+    # The registered methods keep these tab10 colours in every experiment's figures (a method
+    # entry named like one, e.g. `gradient`, gets its colour); other names take the free ones.
+    FIXED = {"per-voxel": 0, "gradient": 1, "adaptive": 2, "rbf": 3, "nearest": 4, "exact": 7}
+
     def __init__(self, runs, stages):
         methods = list(OrderedDict.fromkeys(r["method"] for r in runs))
-        cmap = plt.get_cmap("tab10" if len(methods) <= 10 else "tab20")
-        self.method_colour = {m: cmap(i % cmap.N) for i, m in enumerate(methods)}
+        unknown = [m for m in methods if m not in self.FIXED]
+        fixed = len(unknown) <= 10 - len(self.FIXED)
+        cmap = plt.get_cmap("tab10" if fixed or len(methods) <= 10 else "tab20")
+        self.method_colour = {m: cmap(self.FIXED[m]) for m in methods if fixed and m in self.FIXED}
+        free = [i for i in range(cmap.N) if not fixed or i not in self.FIXED.values()]
+        for m in methods:
+            if m not in self.method_colour:
+                self.method_colour[m] = cmap(free.pop(0) if free else len(self.method_colour) % cmap.N)
         scmap = plt.get_cmap("Set2" if len(stages) <= 8 else "tab20b")
         self.stage_colour = {s: scmap(i % scmap.N) for i, s in enumerate(stages)}
         self.markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
@@ -129,8 +139,9 @@ def finish(fig, path_base, title, subtitle, handles=None, made=None, caption="")
 
 
 def plain_log_ticks(ax, x=True, y=True):
-    """Log axes labelled 20, 50, 0.5 rather than 2x10^1; an axis spanning less than ~1.5
-    decades gets evenly spaced round ticks instead of the decades it does not reach."""
+    """Log axes labelled 20, 50, 0.5 rather than 2x10^1; an axis spanning fewer than three
+    decades gets ticks at 1, 2 and 5 times powers of ten, or, within one decade, evenly spaced
+    round values, instead of the decades it does not reach."""
     fmt = FuncFormatter(lambda v, _: f"{v:g}")
     for on, axis, lim in ((x, ax.xaxis, ax.get_xlim), (y, ax.yaxis, ax.get_ylim)):
         if not on or axis.get_scale() != "log":
@@ -138,11 +149,19 @@ def plain_log_ticks(ax, x=True, y=True):
         lo, hi = lim()
         axis.set_major_formatter(fmt)
         axis.set_minor_formatter(NullFormatter())
-        if lo > 0 and hi / lo < 30:
+        if lo <= 0:
+            continue
+        k0, k1 = math.floor(math.log10(lo)), math.ceil(math.log10(hi))
+        decades = [10.0 ** k for k in range(k0, k1 + 1) if lo <= 10.0 ** k <= hi]
+        if len(decades) >= 3:
+            continue  # the default decades read well
+        ticks = [m * 10.0 ** k for k in range(k0, k1 + 1) for m in (1, 2, 5)
+                 if lo <= m * 10.0 ** k <= hi]
+        if len(ticks) < 3:  # less than a decade: evenly spaced round values
             ticks = [t for t in MaxNLocator(nbins=6).tick_values(lo, hi) if lo <= t <= hi and t > 0]
-            if len(ticks) >= 2:
-                axis.set_major_locator(FixedLocator(ticks))
-                axis.set_minor_locator(NullLocator())
+        if len(ticks) >= 2:
+            axis.set_major_locator(FixedLocator(ticks))
+            axis.set_minor_locator(NullLocator())
 
 
 def ok_runs(res):
