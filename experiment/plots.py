@@ -221,6 +221,12 @@ def line_figure(res, style, runs, sweep, scenes, xkey, ykey, xlabel, ylabel, log
         if logy:
             ax.set_yscale("log")
         plain_log_ticks(ax)
+        if xkey.axes[0] in TIME_AXES:  # a swept axis: ticks at the swept values (32, 64, ...)
+            xs = sorted({xkey(r) for r in srun})
+            if xs:
+                ax.xaxis.set_major_locator(FixedLocator(xs))
+                ax.xaxis.set_minor_locator(NullLocator())
+                ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.tick_params(which="both", labelsize=7)
         ax.grid(True, which="both", alpha=0.25)
     if not methods_seen:
