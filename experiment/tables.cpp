@@ -235,7 +235,7 @@ void csvHeader(std::ostream& csv, const ResultFacts& facts) {
   for (const auto& r : facts.plan.references)
     if (r.converge) csv << ",ref_step_voxels_" << r.name << ",ref_halving_change_" << r.name;
   csv << ",speedup_vs_baseline,dominant_stage,peak_host_mib,paper_rel_error,paper_fps,paper_"
-         "samples,resumed,error\n";
+         "samples,host,cpu_model,cores_used,load_avg_1min,commit,device,resumed,error\n";
 }
 
 void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
@@ -283,8 +283,16 @@ void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
       << csvField(ok ? ResultFacts::dominantStage(rec) : "") << ","
       << (ok ? fmt(rec.peakHostMiB, "%.1f") : "") << ","
       << paperValue(rec.paper, "rel_error", "%.4f") << "," << paperValue(rec.paper, "fps", "%.2f")
-      << "," << paperValue(rec.paper, "samples", "%.0f") << "," << (rec.resumed ? 1 : 0) << ","
-      << csvField(rec.error) << "\n";
+      << "," << paperValue(rec.paper, "samples", "%.0f");
+  // The machine (runs merged from several machines stay told apart) and the device it used.
+  const Json m = rec.machine.is_object() ? rec.machine : Json::object();
+  const Json load = m.value("load_avg_start", Json());
+  csv << "," << csvField(m.value("hostname", "")) << "," << csvField(m.value("cpu_model", ""))
+      << "," << (m.contains("cores_used") ? std::to_string(m["cores_used"].get<int>()) : "") << ","
+      << (load.is_array() && !load.empty() ? fmt(load[0].get<double>(), "%.2f") : "") << ","
+      << csvField(m.value("commit", "")) << ","
+      << csvField(rec.stats.is_object() ? rec.stats.value("device", "") : "") << ","
+      << (rec.resumed ? 1 : 0) << "," << csvField(rec.error) << "\n";
 }
 
 }  // namespace

@@ -197,8 +197,10 @@ TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
     std::ifstream csv(out / "results.csv");
     std::string header, line;
     std::getline(csv, header);
-    for (const char* col : {"axis_samples", "axis_resolution", "total_ms", "rel_l2_vs_exact",
-                            "speedup_vs_baseline", "peak_host_mib", "sampling_ms"})
+    for (const char* col :
+         {"axis_samples", "axis_resolution", "total_ms", "rel_l2_vs_exact", "speedup_vs_baseline",
+          "peak_host_mib", "sampling_ms", ",host,", ",cpu_model,", ",cores_used,",
+          ",load_avg_1min,", ",commit,", ",device,"})
       EXPECT_NE(header.find(col), std::string::npos) << col << " in " << header;
     int rows = 0;
     while (std::getline(csv, line)) ++rows;
