@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 
 #include "api/scatterlab.h"
@@ -47,7 +48,7 @@ Action addExperiment(CLI::App& app) {
   struct Opts {
     std::string config, out, shard, mergeOut;
     std::vector<std::string> sets, mergeDirs;
-    bool quiet = false, noPlots = false, noProgress = false;
+    bool quiet = false, noPlots = false, noProgress = false, list = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* c = app.add_subcommand(
@@ -64,6 +65,9 @@ Action addExperiment(CLI::App& app) {
                 "K/N: render only the K-th of N deterministic slices of the runs (no report: "
                 "join the shards with `experiment merge`)")
       ->check([](const std::string& s) { return parseShard(s); });
+  c->add_flag("--list", o->list,
+              "Check the config and print its run ids (those of --shard K/N when given), one a "
+              "line; renders nothing, needs no -o");
   c->add_flag("-q,--quiet", o->quiet, "No per-run log on stderr (DIR/log.txt is still written)");
   c->add_flag("--no-plots", o->noPlots, "Do not call experiment/plots.py");
   c->add_flag("--no-progress", o->noProgress, "No progress bar");
@@ -94,6 +98,15 @@ Action addExperiment(CLI::App& app) {
       }
       const ExperimentResult r = mergeShards(o->mergeDirs, o->mergeOut, opt);
       return printSummary(r, o->mergeOut, false);
+    }
+    if (o->list && !o->config.empty()) {
+      int k = 0, n = 0;
+      if (!o->shard.empty()) parseShard(o->shard, &k, &n);
+      const ExperimentPlan plan = parseExperiment(o->config, o->sets);
+      const std::vector<int> owner = shardOf(plan, std::max(n, 1));
+      for (std::size_t i = 0; i < plan.runs.size(); ++i)
+        if (n == 0 || owner[i] == k - 1) std::printf("%s\n", plan.runs[i].id.c_str());
+      return 0;
     }
     if (o->config.empty() || o->out.empty()) {
       std::fprintf(stderr,

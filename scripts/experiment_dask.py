@@ -148,6 +148,12 @@ def main(argv=None):
     if not os.access(a.scatterlab, os.X_OK):
         ap.error(f"scatterlab binary '{a.scatterlab}' not found or not executable "
                  "(build it, or pass --scatterlab PATH)")
+    # The config is checked here first (scatterlab's own message, exit 1), before any cluster.
+    check = subprocess.run([a.scatterlab, "experiment", a.config, "--list"] +
+                           [x for s in a.set for x in ("--set", s)], capture_output=True, text=True)
+    if check.returncode != 0:
+        sys.stderr.write(check.stderr or check.stdout)
+        return 1
     ensure_distributed()
     from distributed import Client, LocalCluster
 
@@ -158,8 +164,19 @@ def main(argv=None):
                                dashboard_address=None)
         client = Client(cluster)
     else:
-        client = Client(a.scheduler, timeout="30s")
+        try:
+            client = Client(a.scheduler, timeout="30s")
+        except OSError as e:
+            print(f"experiment_dask: error: cannot reach the scheduler {a.scheduler}: {e}",
+                  file=sys.stderr)
+            return 1
     try:
+        try:
+            client.wait_for_workers(1, timeout=60)
+        except Exception:  # noqa: BLE001 -- distributed raises TimeoutError or its own
+            print(f"experiment_dask: error: no worker joined {client.scheduler.address} within "
+                  "60 s (start some: dask-worker ADDRESS --nthreads 1)", file=sys.stderr)
+            return 1
         workers = len(client.scheduler_info()["workers"])
         shards = a.shards or max(1, workers)
         print(f"experiment_dask: {shards} shard(s) on {workers} worker(s) at "

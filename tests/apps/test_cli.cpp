@@ -346,6 +346,18 @@ TEST_F(Cli, ExperimentShardAndMergeBadInputs) {
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("shard(s) 2 of 2 missing"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out("m")));
+  // --list: the run ids, of one shard with --shard; a bad config is named, exit 1.
+  r = run("experiment " + cfg + " --list");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output, "per-voxel\n");
+  r = run("experiment " + cfg + " --list --shard 2/2");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  r = run("experiment " +
+          write("bad.json", R"({"scene": "scene.json", "methods": ["per-voxel"], "bogus": 1})") +
+          " --list");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("bogus"), std::string::npos) << r.output;
   // Shard 2 of 2 has no run (one run, one reference group): its manifest still completes the set.
   r = run("experiment " + cfg + " -o " + out("s2") + " --shard 2/2 -q --no-plots");
   ASSERT_EQ(r.code, 0) << r.output;
