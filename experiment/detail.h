@@ -59,6 +59,7 @@ struct Reference {
   Image image;
   bool ok = false;
   std::string error;  ///< why it could not be rendered or read
+  std::string file;   ///< its PNG relative to DIR (references/<name>-<hash>.png)
   /// A converged reference's check (MethodSpec::converge): null for others.
   Json check;
 };
@@ -106,8 +107,22 @@ MemoryMeasure chooseMemoryMeasure();
 
 /// Renders (or resumes from DIR/runs/) every run of res.plan in order, appending to res.runs
 /// and counting into res.rendered / resumed / failed.
+/// `selected[i]`: run i of the plan is rendered (or resumed) here; others are skipped (another
+/// shard's). `machine`: machineFacts(), stored in every rendered record.
 void runAll(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
-            const ExperimentOptions& opt, bool progressBar);
+            const ExperimentOptions& opt, bool progressBar, const std::vector<char>& selected,
+            const Json& machine);
+
+/// DIR/shard-K-of-N.json, written by a shard when its slice is done (shard.cpp): the config's
+/// absolute path, the overrides, K, N, the plan's hash, the slice's run ids, the counts and the
+/// machine; `scatterlab experiment merge` checks and joins them.
+void writeShardManifest(const ExperimentResult& res, const std::string& configPath,
+                        const ExperimentOptions& opt, const std::vector<char>& selected,
+                        OutputDir& out);
+
+/// The scene every reference of run `r` sees (scene file bytes, reference overrides, lights),
+/// hashed: runs with the same group share their reference images.
+std::string referenceGroup(const RunSpec& r);
 
 // ---- Tables (tables.cpp) ---------------------------------------------------------------------
 
@@ -119,6 +134,11 @@ struct ResultFacts {
   const std::vector<RunRecord>& runs;
   std::vector<std::string> stages;     ///< union over the runs, first-seen order, no "total"
   std::vector<std::string> axisNames;  ///< union over the runs, first-seen order
+  /// The distinct machines the runs were rendered on (host, CPU model, cores used, commit), in
+  /// first-seen order: those facts, the load average at the start of the first of its runs,
+  /// `gpu_renderers` (the GL renderers of its GPU runs) and `runs` (how many). Runs resumed
+  /// from records older than the machine facts count under an empty machine.
+  Json machines = Json::array();
 
   /// The median of `stage` in `rec`; none when the run has no such stage.
   static std::optional<double> stageMs(const RunRecord& rec, const std::string& stage);
@@ -143,6 +163,10 @@ Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
 
 // ---- Report (report.cpp) ---------------------------------------------------------------------
 
+/// One machine of ResultFacts::machines in words: CPU, cores used, load at the start, GPU
+/// renderer, host, OS, commit.
+std::string machineLine(const Json& machine);
+
 /// report.md's title, summary and conventions.
 void reportHeader(std::ostream& md, const ExperimentResult& res, const std::string& configPath,
                   const std::string& memoryMethod);
@@ -150,17 +174,20 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
 void reportSweep(std::ostream& md, const ResultFacts& facts, const SweepSpec& sweep);
 /// The convergence checks of the converged references; nothing when there are none.
 void reportReferenceChecks(std::ostream& md, const ResultFacts& facts);
-/// The plots (from DIR/plots/) or why there are none.
+/// The plots with their captions (DIR/plots/index.json, written by plots.py) or why there are
+/// none.
 void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out);
 /// The failed runs with their configurations; nothing when none failed.
 void reportFailures(std::ostream& md, const ExperimentResult& res);
 
 // ---- Gallery and plots (gallery.cpp) ---------------------------------------------------------
 
-/// Writes one side-by-side strip per (sweep, scene, point), the references then the runs, and
-/// appends the gallery section to `md`.
+/// Appends the gallery section to `md`: the labelled pages plots.py wrote (DIR/gallery/
+/// page-NN.png, listed in gallery/index.json) when `plotted`; otherwise (no python with
+/// matplotlib, --no-plots) one unlabelled side-by-side strip per (sweep, scene, point), the
+/// references then every run, captioned with their names.
 void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
-                  ReferenceCache& refs, OutputDir& out);
+                  ReferenceCache& refs, OutputDir& out, bool plotted);
 
 /// Calls experiment/plots.py on the output directory (when `opt.plots`); returns why there are
 /// no plots, or "" when they were made.

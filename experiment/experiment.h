@@ -133,6 +133,12 @@ struct RunRecord {
   std::string memoryMethod;    ///< how peakHostMiB was measured
   std::optional<long long> samples;
   std::string image;  ///< PNG path relative to DIR
+  /// Reference name -> its PNG relative to DIR (references/<name>-<hash>.png), for the
+  /// gallery's difference images.
+  Json referenceImages = Json::object();
+  /// The machine that rendered the run (machineFacts() at the start of its experiment), so that
+  /// runs merged from several machines are never compared silently.
+  Json machine = Json::object();
   Json paper = Json::object();
   Json config;  ///< the run's full configuration (logged with failures)
 
@@ -146,6 +152,13 @@ struct ExperimentOptions {
   std::FILE* log = nullptr;            ///< one line per render (besides DIR/log.txt)
   bool progress = true;                ///< progress bar with ETA when stderr is a terminal
   bool plots = true;                   ///< call experiment/plots.py (python3 + matplotlib)
+  /// `--shard K/N`: render only the K-th (1-based) of N deterministic slices of the run list
+  /// (shardOf()) and write runs/, images/, references/, log.txt and shard-K-of-N.json, but no
+  /// tables, report or plots: `scatterlab experiment merge` joins the shards. 0/0: everything.
+  int shardIndex = 0, shardCount = 0;
+  /// Merge mode (mergeShards): every run must already have its record in DIR/runs/ (failed
+  /// ones included); nothing is rendered except missing references of the gallery.
+  bool recordsOnly = false;
 };
 
 struct ExperimentResult {
@@ -153,6 +166,7 @@ struct ExperimentResult {
   std::vector<RunRecord> runs;
   int rendered = 0, resumed = 0, failed = 0;
   std::string plotsNote;  ///< why plots are missing, or "" when they were made
+  Json machine;           ///< machineFacts() of this invocation
 };
 
 /// Runs (or resumes) the experiment in `configPath`, writing into `outDir` (created if
@@ -161,6 +175,27 @@ struct ExperimentResult {
 /// config before anything is rendered.
 ExperimentResult runExperiment(const std::string& configPath, const std::string& outDir,
                                const ExperimentOptions& options = {});
+
+/// Which shard (0-based) of `count` renders each run of `plan`, in run order. Deterministic
+/// (depends only on the plan): the runs are grouped by the scene their references see (same
+/// scene file, overrides and lights: one reference image per group) and each group goes whole
+/// to the shard with the fewest runs so far, so that a reference is rendered by one shard only;
+/// when there are fewer groups than shards, the runs are dealt round-robin instead, and shards
+/// sharing a group render its reference each (same cache key, same image).
+std::vector<int> shardOf(const ExperimentPlan& plan, int count);
+
+/// Facts about this machine and build for results.json and every run record: cpu_model,
+/// logical_cpus, cores_used (the process's CPU affinity), load_avg_start (1, 5, 15 min from
+/// /proc/loadavg), hostname, os, commit (git in the source tree, "+dirty" with uncommitted
+/// changes; "unknown" outside a checkout). The GPU renderer is per run (its stats' `device`).
+Json machineFacts();
+
+/// `scatterlab experiment merge DIR... -o OUT`: checks that the shard directories hold every
+/// shard of one plan (same config and configuration hashes; ConfigError naming what is missing
+/// or different, before OUT is touched), copies their runs/, images/ and references/ into OUT
+/// and writes the tables, report and plots of the whole experiment there.
+ExperimentResult mergeShards(const std::vector<std::string>& shardDirs, const std::string& outDir,
+                             const ExperimentOptions& options = {});
 
 /// The python interpreter the plots use: the first of $SCATTERLAB_PYTHON, `python3` on the PATH
 /// and /usr/bin/python3 that can import matplotlib; "" when none can.

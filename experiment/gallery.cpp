@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "core/scene.h"
 #include "experiment/detail.h"
 
 #ifndef SCATTERLAB_SOURCE_DIR
@@ -132,11 +133,6 @@ void writeStrip(std::ostream& md, const ExperimentPlan& plan, const std::string&
                       (rec->samples ? " (" + std::to_string(*rec->samples) + " samples)" : ""));
     }
   if (imgs.empty()) return;
-  // Keep strips a sensible size: at most 12 images.
-  if (imgs.size() > 12) {
-    imgs.resize(12);
-    names.resize(12);
-  }
   if (file.rfind("gallery/", 0) == 0) fs::create_directories(out.path("gallery"));
   // Error maps against the headline reference: the first image when it rendered.
   const bool errors = plan.gallery == "image+error" && !names.empty() &&
@@ -159,8 +155,27 @@ void writeStrip(std::ostream& md, const ExperimentPlan& plan, const std::string&
 }  // namespace
 
 void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
-                  ReferenceCache& refs, OutputDir& out) {
+                  ReferenceCache& refs, OutputDir& out, bool plotted) {
   if (plan.gallery == "off") return;
+  if (plotted && fs::exists(out.path("gallery/index.json"))) {
+    const Json g = readJsonFile(out.path("gallery/index.json"));
+    const Json pages = g.value("pages", Json::array());
+    int ok = 0;
+    for (const RunRecord& rec : runs) ok += rec.status == "ok";
+    md << "## Gallery\n\n"
+       << g.value("runs", 0) << " of the " << ok << " successful runs on " << pages.size()
+       << " page" << (pages.size() == 1 ? "" : "s") << " (" << g.value("per_page", 0)
+       << " a page; runs without an image are left out). Each tile: the run's PNG (exposure "
+       << plan.exposure << ") titled with scene, method, backend, sweep point, samples used, "
+       << "relative L2 against `" << g.value("reference", "") << "` and median frame time; "
+       << "beside it the signed difference of the two PNGs (mean over channels; red = brighter "
+          "than the reference, blue = darker, full colour at ±"
+       << fmt(g.value("diff_full", 0.0), "%g") << "; visibly wrong starts at " << kVisibleThreshold
+       << ").\n\n";
+    for (const Json& p : pages)
+      md << "![" << p.get<std::string>() << "](gallery/" << p.get<std::string>() << ")\n\n";
+    return;
+  }
   md << "## Gallery\n\nEach strip: the reference(s), then the runs of that sweep point, left to "
         "right (PNG, exposure "
      << plan.exposure << ").";

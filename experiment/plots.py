@@ -1,146 +1,521 @@
 #!/usr/bin/env python3
-"""Plots of an experiment directory written by `scatterlab experiment` (docs/harness.md).
+"""Plots and gallery of an experiment directory written by `scatterlab experiment` (docs/harness.md).
 
-    python3 experiment/plots.py DIR
+    python3 experiment/plots.py DIR [--per-page N]
 
-Reads DIR/results.json and writes DIR/plots/*.png (matplotlib, Agg backend):
-  error_vs_samples.png     rel. L2 against the headline reference vs samples (sampled methods)
-  time_vs_resolution.png   frame time vs the `resolution` axis, one line per method+backend
-  time_vs_lights.png       frame time vs the `lights` axis
-  time_vs_image_size.png   frame time vs pixels (the `image_size` axis)
-  stage_breakdown.png      stacked per-stage median times of every successful run
-A plot is only made when the experiment has the data for it.
+Reads DIR/results.json (and the PNGs under DIR/images/ and DIR/references/) and writes, with
+matplotlib (Agg backend):
+
+  plots/<question>__<sweep>.png and .svg, one figure per question and sweep, one panel per scene:
+    error_vs_samples   rel. L2 vs samples used (sweeps with a `samples` or `epsilon` axis)
+    time_vs_<axis>     frame time vs `resolution`, `lights` or `image_size` (with the paper's
+                       frame times, dashed, where the config gives `paper_fps`)
+    pareto             error against frame time, every run a point, the Pareto front as a line
+    stages             each run's frame split into its stages (share of the frame, linear
+                       axis), the total time at the end of each bar
+  plots/index.json     the figures in order with a one-line caption each (report.md uses it)
+  gallery/page-NN.png  every successful run as a labelled tile (method, samples, error, time)
+                       beside its signed difference from the headline reference; N tiles a page
+  gallery/index.json   the pages and how many runs they hold
+
+One colour per method (its config name) in every figure of the experiment; stages have their own
+palette. Every figure's title names the experiment, its sweep and the machine and backends.
 """
+import argparse
 import json
+import math
 import os
 import sys
-from collections import defaultdict
+import textwrap
+from collections import OrderedDict
 
 import matplotlib
 
 matplotlib.use("Agg")
+import matplotlib.image as mpimg  # noqa: E402
+import matplotlib.patches  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.ticker import (FixedLocator, FuncFormatter, MaxNLocator, NullFormatter,  # noqa: E402
+                               NullLocator)
+
+# Display-space difference shown at full colour in the gallery's difference images (the same
+# scale as report.md's signed error maps; "visibly wrong" starts at 0.05).
+DIFF_FULL = 0.1
+
+# Axes the sweep's time plots know how to put on x: value -> (x, x label, log base or None).
+TIME_AXES = {
+    "resolution": (lambda v: v if isinstance(v, (int, float)) else v[0],
+                   "volume resolution (voxels per axis)", 2),
+    "lights": (lambda v: v, "number of lights", 2),
+    "image_size": (lambda v: v[0] * v[1] / 1e6, "image size (megapixels)", 2),
+}
 
 
-def label(run):
-    b = run.get("backend", "cpu")
-    return run["method"] + ("" if b == "cpu" else f" ({b})")
+# ---- What the figures share ----------------------------------------------------------------
+
+class Style:
+    """Fixed colours: one per method over the whole experiment, one per stage."""
+
+    # The registered methods keep these tab10 colours in every experiment's figures (a method
+    # entry named like one, e.g. `gradient`, gets its colour); other names take the free ones.
+    FIXED = {"per-voxel": 0, "gradient": 1, "adaptive": 2, "rbf": 3, "nearest": 4, "exact": 7}
+
+    def __init__(self, runs, stages):
+        methods = list(OrderedDict.fromkeys(r["method"] for r in runs))
+        unknown = [m for m in methods if m not in self.FIXED]
+        fixed = len(unknown) <= 10 - len(self.FIXED)
+        cmap = plt.get_cmap("tab10" if fixed or len(methods) <= 10 else "tab20")
+        self.method_colour = {m: cmap(self.FIXED[m]) for m in methods if fixed and m in self.FIXED}
+        free = [i for i in range(cmap.N) if not fixed or i not in self.FIXED.values()]
+        for m in methods:
+            if m not in self.method_colour:
+                self.method_colour[m] = cmap(free.pop(0) if free else len(self.method_colour) % cmap.N)
+        scmap = plt.get_cmap("Set2" if len(stages) <= 8 else "tab20b")
+        self.stage_colour = {s: scmap(i % scmap.N) for i, s in enumerate(stages)}
+        self.markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
+
+    def method_handles(self, methods):
+        return [Line2D([], [], color=self.method_colour[m], marker="o", label=m) for m in methods]
 
 
-def series(runs, axis, key):
-    """{(sweep, scene, method label, other axes): [(x, y)]} over runs that have `axis`."""
-    out = defaultdict(list)
+def machine_text(res, runs):
+    """"AMD EPYC, 2 cores; cpu backend" for the figure titles, from the results' machines."""
+    machines = res.get("machines") or ([res["machine"]] if res.get("machine") else [])
+    backends = sorted({r.get("backend", "cpu") for r in runs})
+    parts = []
+    for m in machines[:2]:
+        if "cpu_model" not in m:
+            continue
+        s = f"{m['cpu_model']}, {m.get('cores_used', '?')} cores"
+        if m.get("load_avg_start"):
+            s += f" (load {m['load_avg_start'][0]:.1f} at the start)"
+        gpus = m.get("gpu_renderers") or []
+        if gpus and any(b != "cpu" for b in backends):
+            s += ", " + "; ".join(gpus)
+        parts.append(s)
+    if len(machines) > 2:
+        parts.append(f"+{len(machines) - 2} more machines")
+    text = " | ".join(parts) if parts else "machine unknown"
+    return f"{text}; backend {'/'.join(backends)}"
+
+
+def short_title(res):
+    t = res.get("title", "experiment")
+    return t if len(t) <= 110 else t[:107].rstrip() + "..."
+
+
+def panel_grid(n, width=4.2, height=3.3, max_cols=4):
+    cols = min(n, max_cols)
+    rows = math.ceil(n / cols)
+    # At least 9 in wide, so that one panel still has room for the title and the legend.
+    fig, axes = plt.subplots(rows, cols, figsize=(max(9.0, width * cols + 0.4), height * rows + 1.5),
+                             squeeze=False)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    return fig, list(axes.flat[:n])
+
+
+def finish(fig, path_base, title, subtitle, handles=None, made=None, caption=""):
+    """Suptitle, one legend below the panels, PNG + SVG; records the figure in `made`."""
+    wrap = max(40, int(fig.get_figwidth() * 11))
+    lines = textwrap.wrap(title, wrap) + textwrap.wrap(subtitle, wrap)
+    fig.suptitle("\n".join(lines), fontsize=10)
+    h = fig.get_figheight()  # margins in inches, whatever the figure's height
+    top = 1  # tight_layout makes room for the suptitle itself
+    if handles:
+        ncol = min(len(handles), 5)
+        fig.legend(handles=handles, loc="lower center", ncol=ncol, fontsize=8, frameon=False)
+        rows = math.ceil(len(handles) / ncol)
+        fig.tight_layout(rect=(0, (0.1 + 0.2 * rows) / h, 1, top))
+    else:
+        fig.tight_layout(rect=(0, 0, 1, top))
+    for ext in ("png", "svg"):
+        fig.savefig(f"{path_base}.{ext}", dpi=100)
+    plt.close(fig)
+    if made is not None:
+        made.append({"file": os.path.basename(path_base) + ".png",
+                     "svg": os.path.basename(path_base) + ".svg", "caption": caption})
+
+
+def plain_log_ticks(ax, x=True, y=True):
+    """Log axes labelled 20, 50, 0.5 rather than 2x10^1; an axis spanning fewer than three
+    decades gets ticks at 1, 2 and 5 times powers of ten, or, within one decade, evenly spaced
+    round values, instead of the decades it does not reach."""
+    fmt = FuncFormatter(lambda v, _: f"{v:g}")
+    for on, axis, lim in ((x, ax.xaxis, ax.get_xlim), (y, ax.yaxis, ax.get_ylim)):
+        if not on or axis.get_scale() != "log":
+            continue
+        lo, hi = lim()
+        axis.set_major_formatter(fmt)
+        axis.set_minor_formatter(NullFormatter())
+        if lo <= 0:
+            continue
+        k0, k1 = math.floor(math.log10(lo)), math.ceil(math.log10(hi))
+        decades = [10.0 ** k for k in range(k0, k1 + 1) if lo <= 10.0 ** k <= hi]
+        if len(decades) >= 3:
+            continue  # the default decades read well
+        ticks = [m * 10.0 ** k for k in range(k0, k1 + 1) for m in (1, 2, 5)
+                 if lo <= m * 10.0 ** k <= hi]
+        if len(ticks) < 3:  # less than a decade: evenly spaced round values
+            ticks = [t for t in MaxNLocator(nbins=6).tick_values(lo, hi) if lo <= t <= hi and t > 0]
+        if len(ticks) >= 2:
+            axis.set_major_locator(FixedLocator(ticks))
+            axis.set_minor_locator(NullLocator())
+
+
+def ok_runs(res):
+    return [r for r in res["runs"] if r.get("status") == "ok"]
+
+
+def by(runs, key):
+    out = OrderedDict()
     for r in runs:
-        if r.get("status") != "ok" or axis not in r.get("axes", {}):
-            continue
-        other = tuple(sorted((k, json.dumps(v)) for k, v in r["axes"].items() if k != axis))
-        x = r["axes"][axis]
-        y = key(r)
-        if y is None:
-            continue
-        out[(r["sweep"], r["scene"], label(r), other)].append((x, y))
+        out.setdefault(key(r), []).append(r)
     return out
 
 
-def line_plot(path, data, xlabel, ylabel, title, logx=False, logy=False, xfun=lambda x: x):
-    if not data:
-        return False
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    many_scenes = len({k[1] for k in data}) > 1
-    many_sweeps = len({k[0] for k in data}) > 1
-    for (sweep, scene, meth, other), pts in sorted(data.items()):
-        pts = sorted((xfun(x), y) for x, y in pts)
-        name = meth
-        if many_sweeps:
-            name = f"{sweep}: {name}"
-        if many_scenes:
-            name += f" [{scene}]"
-        if other:
-            name += " " + ", ".join(f"{k}={json.loads(v)}" for k, v in other)
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=name)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title)
-    if logx:
-        ax.set_xscale("log", base=2)
-    if logy:
+def other_axes(r, axis_names):
+    return tuple((k, json.dumps(v)) for k, v in sorted(r.get("axes", {}).items())
+                 if k not in axis_names)
+
+
+def other_label(other):
+    return ", ".join(f"{k}={json.loads(v)}" for k, v in other)
+
+
+def rel_l2_pct(r, ref):
+    e = r.get("errors", {}).get(ref)
+    return None if not e or e.get("rel_l2") is None else 100.0 * e["rel_l2"]
+
+
+# ---- Figures ---------------------------------------------------------------------------------
+
+def line_figure(res, style, runs, sweep, scenes, xkey, ykey, xlabel, ylabel, logx, logy, name,
+                question, d, made, caption, paper_y=None):
+    """One panel per scene, one line per method (markers tell apart the other axes' values)."""
+    fig, axes = panel_grid(len(scenes))
+    methods_seen = []
+    extra = OrderedDict()
+    for ax, scene in zip(axes, scenes):
+        srun = [r for r in runs if r["scene"] == scene]
+        for (meth, other), pts in by(srun, lambda r: (r["method"], other_axes(r, xkey.axes))).items():
+            xy = sorted((xkey(r), ykey(r)) for r in pts if ykey(r) is not None)
+            if not xy:
+                continue
+            if meth not in methods_seen:
+                methods_seen.append(meth)
+            mk = extra.setdefault(other, style.markers[len(extra) % len(style.markers)])
+            ax.plot([p[0] for p in xy], [p[1] for p in xy], color=style.method_colour[meth],
+                    marker=mk, ms=4, lw=1.4)
+            if paper_y:
+                pxy = sorted((xkey(r), paper_y(r)) for r in pts if paper_y(r) is not None)
+                if pxy:
+                    ax.plot([p[0] for p in pxy], [p[1] for p in pxy], color=style.method_colour[meth],
+                            ls="--", lw=1.0, marker=mk, ms=3, mfc="none")
+        ax.set_title(scene, fontsize=9)
+        ax.set_xlabel(xlabel, fontsize=8)
+        ax.set_ylabel(ylabel, fontsize=8)
+        if logx:
+            ax.set_xscale("log", base=logx)
+        if logy:
+            ax.set_yscale("log")
+        plain_log_ticks(ax)
+        if xkey.axes[0] in TIME_AXES:  # a swept axis: ticks at the swept values (32, 64, ...)
+            xs = sorted({xkey(r) for r in srun})
+            if xs:
+                ax.xaxis.set_major_locator(FixedLocator(xs))
+                ax.xaxis.set_minor_locator(NullLocator())
+                ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.tick_params(which="both", labelsize=7)
+        ax.grid(True, which="both", alpha=0.25)
+    if not methods_seen:
+        plt.close(fig)
+        return
+    handles = style.method_handles(methods_seen)
+    if len(extra) > 1:
+        handles += [Line2D([], [], color="0.3", marker=mk, ls="", label=other_label(o) or "—")
+                    for o, mk in extra.items()]
+    if paper_y:
+        handles.append(Line2D([], [], color="0.3", ls="--", label="paper (from its fps)"))
+    finish(fig, os.path.join(d, "plots", f"{name}__{sweep}"),
+           f"{short_title(res)} — sweep '{sweep}': {question}", machine_text(res, runs), handles,
+           made, caption)
+
+
+class XKey:
+    """x of a run for a line figure, with the axis names it consumes."""
+
+    def __init__(self, fn, axes):
+        self.fn, self.axes = fn, axes
+
+    def __call__(self, r):
+        return self.fn(r)
+
+
+def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
+    """Error against frame time, one point per run; the non-dominated runs joined by a line."""
+    fig, axes = panel_grid(len(scenes))
+    methods_seen = []
+    for ax, scene in zip(axes, scenes):
+        pts = [(r["median_ms"]["total"], rel_l2_pct(r, ref), r) for r in runs
+               if r["scene"] == scene and rel_l2_pct(r, ref) is not None]
+        pts = [p for p in pts if p[0] > 0 and p[1] > 0]
+        for t, e, r in pts:
+            if r["method"] not in methods_seen:
+                methods_seen.append(r["method"])
+            ax.scatter([t], [e], color=style.method_colour[r["method"]], s=22, zorder=3)
+        front, best = [], math.inf
+        for t, e, _ in sorted(pts, key=lambda p: (p[0], p[1])):
+            if e < best:
+                front.append((t, e))
+                best = e
+        if len(front) > 1:
+            ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="0.4",
+                    lw=1, zorder=2)
+        ax.set_title(scene, fontsize=9)
+        ax.set_xscale("log")
         ax.set_yscale("log")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+        ax.set_xlabel("frame time (ms, median)", fontsize=8)
+        ax.set_ylabel(f"relative L2 vs {ref} (%)", fontsize=8)
+        plain_log_ticks(ax)
+        ax.tick_params(which="both", labelsize=7)
+        ax.grid(True, which="both", alpha=0.25)
+    if not methods_seen:
+        plt.close(fig)
+        return
+    handles = style.method_handles(methods_seen) + [
+        Line2D([], [], color="0.4", label="Pareto front (no run both faster and more accurate)")]
+    finish(fig, os.path.join(d, "plots", f"pareto__{sweep}"),
+           f"{short_title(res)} — sweep '{sweep}': which runs are fast and accurate?",
+           machine_text(res, runs), handles, made,
+           f"Sweep `{sweep}`: error against frame time per scene; lower left is better, the grey "
+           "line joins the runs no other run beats in both")
+
+
+def run_label(r, axis_names):
+    s = r["method"]
+    ax = [f"{k}={v if not isinstance(v, list) else 'x'.join(map(str, v))}"
+          for k, v in r.get("axes", {}).items()]
+    return s + (" " + ", ".join(ax) if ax else "")
+
+
+def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
+    """Each run's frame as 100% split into its stages (linear axis), total time at the bar end."""
+    rows = [len([r for r in runs if r["scene"] == s]) for s in scenes]
+    cols = min(len(scenes), 2)
+    nrow = math.ceil(len(scenes) / cols)
+    height = [max(rows[i:i + cols]) for i in range(0, len(rows), cols)]
+    fig, axes = plt.subplots(nrow, cols, figsize=(max(9.0, 7.2 * cols), 0.26 * sum(height) + 1.3 * nrow + 1.6),
+                             squeeze=False, gridspec_kw={"height_ratios": [h + 3 for h in height]})
+    for ax in axes.flat[len(scenes):]:
+        ax.set_visible(False)
+    used = []
+    for ax, scene in zip(axes.flat, scenes):
+        srun = [r for r in runs if r["scene"] == scene]
+        labels = [run_label(r, None) for r in srun]
+        left = [0.0] * len(srun)
+        for s in stages:
+            share = []
+            for r in srun:
+                tot = r["median_ms"].get("total") or 0.0
+                share.append(100.0 * r["median_ms"].get(s, 0.0) / tot if tot > 0 else 0.0)
+            if any(v > 0 for v in share):
+                if s not in used:
+                    used.append(s)
+                ax.barh(range(len(srun)), share, left=left, color=style.stage_colour[s], height=0.7)
+            left = [a + b for a, b in zip(left, share)]
+        # What no stage timer covers (set-up, copies): the rest of the frame, in grey.
+        rest = [max(0.0, 100.0 - v) for v in left]
+        if any(v > 0.5 for v in rest):
+            if "other (untimed)" not in used:
+                used.append("other (untimed)")
+            ax.barh(range(len(srun)), rest, left=left, color="0.85", height=0.7)
+        for i, r in enumerate(srun):
+            ax.text(101, i, f"{r['median_ms'].get('total', 0):.0f} ms", va="center", fontsize=7)
+        ax.set_yticks(range(len(srun)))
+        ax.set_yticklabels(labels, fontsize=7)
+        ax.invert_yaxis()
+        ax.set_xlim(0, 118)
+        ax.set_xticks([0, 25, 50, 75, 100])
+        ax.set_xlabel("share of the frame time (%, median per stage); total at the right", fontsize=8)
+        ax.set_title(scene, fontsize=9)
+        ax.tick_params(axis="x", labelsize=7)
+    handles = [matplotlib.patches.Patch(color=style.stage_colour.get(s, "0.85"), label=s)
+               for s in used]
+    finish(fig, os.path.join(d, "plots", f"stages__{sweep}"),
+           f"{short_title(res)} — sweep '{sweep}': where does the frame time go?",
+           machine_text(res, runs), handles, made,
+           f"Sweep `{sweep}`: each run's frame split into its stages (each stage's median as a "
+           "share of the median frame time, linear axis; grey: time no stage timer covers), the "
+           "frame time at the right")
+
+
+def sweep_figures(res, style, d, made):
+    runs = ok_runs(res)
+    refs = res.get("references", [])
+    ref = refs[0] if refs else None
+    stages = res.get("stages", [])
+    for sweep, sruns in by(runs, lambda r: r["sweep"]).items():
+        scenes = list(OrderedDict.fromkeys(r["scene"] for r in sruns))
+        axes = list(OrderedDict.fromkeys(a for r in sruns for a in r.get("axes", {})))
+        if ref and ("samples" in axes or "epsilon" in axes):
+            line_figure(res, style, [r for r in sruns if "samples" in r], sweep, scenes,
+                        XKey(lambda r: r["samples"], ("samples", "epsilon")),
+                        lambda r: rel_l2_pct(r, ref), "samples used", f"relative L2 vs {ref} (%)",
+                        10, True, "error_vs_samples", "how does the error fall with samples?",
+                        d, made,
+                        f"Sweep `{sweep}`: relative L2 against `{ref}` over the samples each run "
+                        "used, one panel per scene")
+        for axis, (fx, xlabel, base) in TIME_AXES.items():
+            if axis not in axes:
+                continue
+            line_figure(res, style, [r for r in sruns if axis in r.get("axes", {})], sweep, scenes,
+                        XKey(lambda r, fx=fx, axis=axis: fx(r["axes"][axis]), (axis,)),
+                        lambda r: r["median_ms"].get("total"), xlabel, "frame time (ms, median)",
+                        base, True, f"time_vs_{axis}", f"how does the frame time grow with {axis}?",
+                        d, made,
+                        f"Sweep `{sweep}`: frame time over `{axis}`, one panel per scene; dashed: "
+                        "the paper's frame time (1000 / its fps) where the config gives it",
+                        paper_y=lambda r: (1000.0 / r["paper"]["fps"]
+                                           if isinstance(r.get("paper", {}).get("fps"), (int, float))
+                                           and r["paper"]["fps"] > 0 else None))
+        if ref:
+            pareto_figure(res, style, sruns, sweep, scenes, ref, d, made)
+        if stages:
+            stage_figure(res, style, sruns, sweep, scenes, stages, d, made)
+
+
+# ---- Gallery -----------------------------------------------------------------------------------
+
+def load_rgb(path):
+    img = mpimg.imread(path)
+    return img[..., :3] if img.ndim == 3 else img
+
+
+def axes_text(r):
+    return ", ".join(f"{a}={v if not isinstance(v, list) else 'x'.join(map(str, v))}"
+                     for a, v in r.get("axes", {}).items())
+
+
+def gallery(res, d, per_page):
+    """Labelled tiles (image + signed difference from the headline reference), `per_page` a
+    page; each run's reference image as a tile of its own before the first run that uses it."""
+    runs = ok_runs(res)
+    refs = res.get("references", [])
+    ref = refs[0] if refs else None
+    os.makedirs(os.path.join(d, "gallery"), exist_ok=True)
+    for f in os.listdir(os.path.join(d, "gallery")):
+        if f.startswith("page-") and f.endswith(".png"):
+            os.remove(os.path.join(d, "gallery", f))
+    shown = [r for r in runs if os.path.exists(os.path.join(d, r.get("image", "")))]
+    tiles, last_ref = [], None
+    for n, r in enumerate(shown):
+        rp = r.get("reference_images", {}).get(ref) if ref else None
+        if rp and os.path.exists(os.path.join(d, rp)) and rp != last_ref:
+            tiles.append({"ref": rp, "run": r})
+            last_ref = rp
+        tiles.append({"run": r, "n": n + 1, "ref_image": rp})
+    pages = [tiles[i:i + per_page] for i in range(0, len(tiles), per_page)]
+    cols = 2  # tiles per row, each an image and its difference
+    files = []
+    for p, page in enumerate(pages):
+        nrow = math.ceil(len(page) / cols)
+        first = load_rgb(os.path.join(d, page[0]["run"]["image"]))
+        aspect = first.shape[0] / first.shape[1]
+        # 4 in per tile half, plus room for two title lines a row, the header and the colour bar.
+        fig, axes = plt.subplots(nrow, 2 * cols,
+                                 figsize=(4 * 2 * cols, (4 * aspect + 0.6) * nrow + 2.0),
+                                 squeeze=False)
+        diff_im = None
+        for i, ax in enumerate(axes.flat):
+            ax.set_xticks([])
+            ax.set_yticks([])
+            k = i // 2
+            if k >= len(page):
+                ax.set_visible(False)
+                continue
+            t, r = page[k], page[k]["run"]
+            if "ref" in t:
+                if i % 2 == 0:
+                    ax.imshow(load_rgb(os.path.join(d, t["ref"])))
+                    ax.set_title(f"{r['scene']}: reference {ref}"
+                                 f"{' · ' + axes_text(r) if axes_text(r) else ''}", fontsize=8)
+                else:
+                    ax.axis("off")
+                    ax.text(0.5, 0.5, f"the reference ({ref}) of the runs that follow",
+                            ha="center", va="center", fontsize=8, transform=ax.transAxes)
+                continue
+            img = load_rgb(os.path.join(d, r["image"]))
+            if i % 2 == 0:
+                ax.imshow(img)
+                e = rel_l2_pct(r, ref)
+                ax.set_title(f"{r['scene']}: {r['method']} ({r.get('backend', 'cpu')})"
+                             f"{' · ' + axes_text(r) if axes_text(r) else ''}\n"
+                             f"{r['samples'] if 'samples' in r else '—'} samples · "
+                             f"rel L2 {'—' if e is None else f'{e:.2f}%'} · "
+                             f"{r['median_ms'].get('total', 0):.0f} ms", fontsize=8)
+                continue
+            rp = t["ref_image"]
+            if rp and os.path.exists(os.path.join(d, rp)):
+                refimg = load_rgb(os.path.join(d, rp))
+                if refimg.shape == img.shape:
+                    diff = (img - refimg).mean(axis=2) if img.ndim == 3 else img - refimg
+                    diff_im = ax.imshow(diff, cmap="RdBu_r", vmin=-DIFF_FULL, vmax=DIFF_FULL)
+                    ax.set_title(f"minus {ref} (signed)", fontsize=8)
+                    continue
+            ax.text(0.5, 0.5, "no reference image", ha="center", va="center", fontsize=8,
+                    transform=ax.transAxes)
+        numbers = [t["n"] for t in page if "n" in t]
+        span = f"runs {numbers[0]}–{numbers[-1]} of {len(shown)}" if numbers else "references"
+        title = f"{short_title(res)} — gallery page {p + 1}/{len(pages)} ({span})"
+        lines = textwrap.wrap(title, 100) + [machine_text(res, [t["run"] for t in page])]
+        fig.suptitle("\n".join(lines), fontsize=10)
+        h = fig.get_figheight()
+        fig.tight_layout(rect=(0, 1.0 / h, 1, 1 - (0.1 + 0.2 * len(lines)) / h))
+        if diff_im is not None:
+            cax = fig.add_axes([0.3, 0.55 / h, 0.4, 0.12 / h])
+            cb = fig.colorbar(diff_im, cax=cax, orientation="horizontal")
+            cb.set_label(f"image − {ref}, mean over channels of the PNGs (red: brighter); "
+                         f"full colour at ±{DIFF_FULL}", fontsize=8)
+            cb.ax.tick_params(labelsize=7)
+        name = f"page-{p + 1:02d}.png"
+        fig.savefig(os.path.join(d, "gallery", name), dpi=90)
+        plt.close(fig)
+        files.append(name)
+    index = {"pages": files, "runs": len(shown), "per_page": per_page, "reference": ref,
+             "diff_full": DIFF_FULL}
+    with open(os.path.join(d, "gallery", "index.json"), "w") as f:
+        json.dump(index, f, indent=2)
+    return index
 
 
 def main():
-    if len(sys.argv) != 2:
-        print(__doc__)
-        return 2
-    d = sys.argv[1]
-    with open(os.path.join(d, "results.json")) as f:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("dir")
+    ap.add_argument("--per-page", type=int, default=12, help="gallery tiles per page (default 12)")
+    ap.add_argument("--no-gallery", action="store_true", help="plots only")
+    a = ap.parse_args()
+    if a.per_page < 1:
+        ap.error(f"--per-page {a.per_page}: must be at least 1")
+    path = os.path.join(a.dir, "results.json")
+    if not os.path.exists(path):
+        ap.error(f"'{path}' does not exist (run `scatterlab experiment CONFIG -o {a.dir}` first)")
+    with open(path) as f:
         res = json.load(f)
-    runs = res["runs"]
-    refs = res.get("references", [])
-    ref = refs[0] if refs else None
-    os.makedirs(os.path.join(d, "plots"), exist_ok=True)
-    p = lambda name: os.path.join(d, "plots", name)  # noqa: E731
-    total = lambda r: r["median_ms"].get("total")  # noqa: E731
+    os.makedirs(os.path.join(a.dir, "plots"), exist_ok=True)
+    for f in os.listdir(os.path.join(a.dir, "plots")):
+        if f.endswith((".png", ".svg")):
+            os.remove(os.path.join(a.dir, "plots", f))
+    style = Style(res["runs"], res.get("stages", []))
     made = []
-
-    # Error vs samples: every successful run with a sample count, grouped by everything except
-    # the samples axis (so a samples sweep gives a line; fixed-sample runs give points).
-    if ref:
-        data = defaultdict(list)
-        for r in runs:
-            if r.get("status") != "ok" or "samples" not in r or ref not in r.get("errors", {}):
-                continue
-            other = tuple(sorted((k, json.dumps(v)) for k, v in r["axes"].items()
-                                 if k not in ("samples", "epsilon")))
-            data[(r["sweep"], r["scene"], label(r), other)].append(
-                (r["samples"], 100.0 * r["errors"][ref]["rel_l2"]))
-        if line_plot(p("error_vs_samples.png"), data, "samples",
-                     f"relative L2 error vs {ref} (%)", "Error vs samples", logx=True):
-            made.append("error_vs_samples.png")
-
-    def res_x(v):
-        return v if isinstance(v, (int, float)) else v[0]
-
-    if line_plot(p("time_vs_resolution.png"), series(runs, "resolution", total),
-                 "volume resolution (voxels per axis)", "frame time (ms, median)",
-                 "Time vs volume resolution", logx=True, logy=True, xfun=res_x):
-        made.append("time_vs_resolution.png")
-    if line_plot(p("time_vs_lights.png"), series(runs, "lights", total), "number of lights",
-                 "frame time (ms, median)", "Time vs number of lights", logx=True, logy=True):
-        made.append("time_vs_lights.png")
-    if line_plot(p("time_vs_image_size.png"), series(runs, "image_size", total),
-                 "pixels", "frame time (ms, median)", "Time vs image size", logy=True,
-                 xfun=lambda v: v[0] * v[1]):
-        made.append("time_vs_image_size.png")
-
-    # Per-stage breakdown: stacked horizontal bars.
-    ok = [r for r in runs if r.get("status") == "ok"]
-    stages = res.get("stages", [])
-    if ok and stages:
-        ok = ok[:60]
-        fig, ax = plt.subplots(figsize=(7.5, 0.28 * len(ok) + 1.6))
-        left = [0.0] * len(ok)
-        for s in stages:
-            vals = [r["median_ms"].get(s, 0.0) for r in ok]
-            ax.barh(range(len(ok)), vals, left=left, label=s)
-            left = [a + b for a, b in zip(left, vals)]
-        ax.set_yticks(range(len(ok)))
-        ax.set_yticklabels([r["id"] for r in ok], fontsize=6)
-        ax.invert_yaxis()
-        ax.set_xscale("symlog", linthresh=1.0)
-        ax.set_xlabel("median time per stage (ms, stacked; symlog axis)")
-        ax.set_title("Per-stage time breakdown")
-        ax.legend(fontsize=7, loc="lower right")
-        fig.tight_layout()
-        fig.savefig(p("stage_breakdown.png"), dpi=110)
-        plt.close(fig)
-        made.append("stage_breakdown.png")
-    print("plots:", ", ".join(made) if made else "none")
+    sweep_figures(res, style, a.dir, made)
+    with open(os.path.join(a.dir, "plots", "index.json"), "w") as f:
+        json.dump(made, f, indent=2)
+    print("plots:", ", ".join(m["file"] for m in made) if made else "none")
+    if not a.no_gallery and res.get("gallery") != "off":
+        g = gallery(res, a.dir, a.per_page)
+        print(f"gallery: {g['runs']} runs on {len(g['pages'])} pages")
     return 0
 
 

@@ -25,6 +25,7 @@ Reference& ReferenceCache::get(const RunSpec& r, const MethodSpec& ref, const Re
   if (it != cache_.end()) return it->second;
   Reference& rc = cache_[base];
   rc.name = ref.name;
+  rc.file = base + ".png";
   try {
     if (fs::exists(out_.path(base + ".exr")) && fs::exists(out_.path(base + ".json"))) {
       rc.image = readExr(out_.path(base + ".exr"));

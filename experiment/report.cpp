@@ -6,11 +6,33 @@
 #include <filesystem>
 #include <set>
 
+#include "core/scene.h"
 #include "experiment/detail.h"
 
 namespace scatterlab::detail {
 
 namespace fs = std::filesystem;
+
+std::string machineLine(const Json& m) {
+  if (!m.contains("cpu_model"))
+    return "unknown (" + std::to_string(m.value("runs", 0)) +
+           " runs from records written before machine facts)";
+  std::string s = m.value("cpu_model", "?") + ", " + std::to_string(m.value("cores_used", 0)) +
+                  " of " + std::to_string(m.value("logical_cpus", 0)) + " logical CPUs used";
+  const Json la = m.value("load_avg_start", Json());
+  if (la.is_array() && la.size() == 3)
+    s += ", load average " + fmt(la[0].get<double>(), "%.2f") + " / " +
+         fmt(la[1].get<double>(), "%.2f") + " / " + fmt(la[2].get<double>(), "%.2f") +
+         " (1/5/15 min) at the start";
+  std::string gpus;
+  for (const Json& g : m.value("gpu_renderers", Json::array()))
+    gpus += (gpus.empty() ? "" : ", ") + g.get<std::string>();
+  s += "; GPU: " + (gpus.empty() ? std::string("not used") : gpus);
+  s += "; host `" + m.value("hostname", "?") + "`, " + m.value("os", "?") + ", commit `" +
+       m.value("commit", "?") + "`";
+  if (m.contains("runs")) s += " (" + std::to_string(m["runs"].get<int>()) + " runs)";
+  return s;
+}
 
 void reportHeader(std::ostream& md, const ExperimentResult& res, const std::string& configPath,
                   const std::string& memoryMethod) {
@@ -31,6 +53,12 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
         "pixels); relative L1 = Σ|a−b|/Σ|b|; visibly wrong = share of pixels where some channel "
         "of the PNG transform (exposure 0, clamp, sRGB) differs by more than "
      << kVisibleThreshold << ". Peak host memory: " << memoryMethod << ", MiB, whole process.\n\n";
+  const ResultFacts facts(plan, res.runs);
+  if (facts.machines.size() > 1)
+    md << "**These runs come from " << facts.machines.size()
+       << " different machines or commits** (below): compare times only between runs of one "
+          "machine.\n\n";
+  for (const Json& m : facts.machines) md << "Machine: " << machineLine(m) << ".\n\n";
   if (plan.defaultReference)
     md << "Reference: the default, `exact` with march_step = delta1 = ½ voxel, checked by "
           "halving both once more (see *Reference convergence*).\n\n";
@@ -54,8 +82,11 @@ namespace {
 
 void sweepTableHeader(std::ostream& md, const ExperimentPlan& plan, const SweepSpec& sw) {
   md << "| run | scene | method | backend |";
-  for (const Axis& a : sw.axes) md << " " << a.name << " |";
-  md << " samples | time (ms) | fps |";
+  // A `samples` axis is the budget asked for; the count column is what the method used
+  // (adaptive splits beyond its budget's initial set).
+  for (const Axis& a : sw.axes)
+    md << " " << (a.name == "samples" ? "sample budget" : a.name) << " |";
+  md << " samples used | time (ms) | fps |";
   if (!sw.paperFps.empty()) md << " paper fps |";
   if (!sw.baseline.empty()) md << " speed-up vs " << sw.baseline << " |";
   const std::string& head = plan.references[0].name;
@@ -164,6 +195,14 @@ void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out)
   if (!plotsNote.empty()) {
     md << "No plots: " << plotsNote << ".\n";
     out.log("plots: " + plotsNote);
+    return;
+  }
+  if (fs::exists(out.path("plots/index.json"))) {
+    const Json index = readJsonFile(out.path("plots/index.json"));
+    for (const Json& p : index)
+      md << p.value("caption", "") << " ([SVG](plots/" << p.value("svg", "") << ")):\n\n!["
+         << p.value("file", "") << "](plots/" << p.value("file", "") << ")\n\n";
+    if (index.empty()) md << "No sweep of this experiment has data for a plot.\n";
     return;
   }
   std::vector<std::string> pngs;

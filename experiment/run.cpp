@@ -99,22 +99,32 @@ RunRecord newRecord(const RunSpec& r, const ExperimentPlan& plan) {
 class Runner {
  public:
   Runner(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
-         const ExperimentOptions& opt, bool progressBar)
-      : res_(res),
+         const ExperimentOptions& opt, bool progressBar, const std::vector<char>& selected,
+         const Json& machine)
+      : selected_(selected),
+        machine_(machine),
+        res_(res),
         plan_(res.plan),
         out_(out),
         refs_(refs),
         mem_(mem),
         opt_(opt),
-        bar_{progressBar, int(res.plan.runs.size())} {}
+        bar_{progressBar, int(std::count(selected.begin(), selected.end(), 1))} {}
 
   void runAll() {
-    for (const RunSpec& r : plan_.runs) {
+    for (std::size_t i = 0; i < plan_.runs.size(); ++i) {
+      if (!selected_[i]) continue;
+      const RunSpec& r = plan_.runs[i];
       const std::string recordPath = out_.path("runs/" + r.id + ".json");
+      if (opt_.recordsOnly) {
+        takeRecord(r, recordPath);
+        continue;
+      }
       if (resume(r, recordPath)) continue;
       bar_.draw(r.id);
       const auto t0 = std::chrono::steady_clock::now();
       RunRecord rec = newRecord(r, plan_);
+      rec.machine = machine_;
       try {
         render(r, rec);
         writeText(recordPath, rec.toJson().dump(2) + "\n");
@@ -153,6 +163,22 @@ class Runner {
       out_.log(r.id + ": unreadable record in runs/ (" + std::string(e.what()) + "); redoing it");
     }
     return false;
+  }
+
+  /// Merge mode: the record as the shard left it, failed or not (mergeShards has checked that
+  /// it exists and that its hash is the plan's).
+  void takeRecord(const RunSpec& r, const std::string& recordPath) {
+    RunRecord old = RunRecord::fromJson(readJsonFile(recordPath));
+    if (old.hash != r.hash)
+      throw ConfigError("merge: '" + recordPath + "' was rendered with another configuration " +
+                        "than the config now gives (hash " + old.hash + ", expected " + r.hash +
+                        ")");
+    old.resumed = true;
+    if (old.status == "ok")
+      ++res_.resumed;
+    else
+      ++res_.failed;
+    res_.runs.push_back(std::move(old));
   }
 
   /// Warm-up, then the timed repetitions; per-stage medians, memory, images and errors into
@@ -203,6 +229,7 @@ class Runner {
                         refSpec.sets == m.sets;
       Reference& ref = refs_.get(r, refSpec, same ? &last : nullptr);
       if (!ref.ok) throw Error("reference '" + refSpec.name + "' failed: " + ref.error);
+      rec.referenceImages[refSpec.name] = ref.file;
       rec.errors.push_back(compareImages(last.image, ref.image, mask));
       if (!ref.check.is_null()) rec.referenceChecks[refSpec.name] = ref.check;
     }
@@ -255,6 +282,8 @@ class Runner {
     }
   }
 
+  const std::vector<char>& selected_;
+  const Json& machine_;
   ExperimentResult& res_;
   const ExperimentPlan& plan_;
   OutputDir& out_;
@@ -275,8 +304,9 @@ MemoryMeasure chooseMemoryMeasure() {
 }
 
 void runAll(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
-            const ExperimentOptions& opt, bool progressBar) {
-  Runner(res, out, refs, mem, opt, progressBar).runAll();
+            const ExperimentOptions& opt, bool progressBar, const std::vector<char>& selected,
+            const Json& machine) {
+  Runner(res, out, refs, mem, opt, progressBar, selected, machine).runAll();
 }
 
 }  // namespace scatterlab::detail

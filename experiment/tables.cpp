@@ -88,6 +88,8 @@ Json RunRecord::toJson() const {
   j["memory_method"] = memoryMethod;
   if (samples) j["samples"] = *samples;
   j["image"] = image;
+  j["reference_images"] = referenceImages;
+  j["machine"] = machine;
   j["paper"] = paper;
   j["config"] = config;
   return j;
@@ -123,6 +125,8 @@ RunRecord RunRecord::fromJson(const Json& j) {
   r.memoryMethod = j.value("memory_method", "");
   if (j.contains("samples")) r.samples = j["samples"].get<long long>();
   r.image = j.value("image", "");
+  r.referenceImages = j.value("reference_images", Json::object());
+  r.machine = j.value("machine", Json::object());
   r.paper = j.value("paper", Json::object());
   r.config = j.value("config", Json::object());
   return r;
@@ -141,6 +145,28 @@ ResultFacts::ResultFacts(const ExperimentPlan& plan, const std::vector<RunRecord
     for (const auto& [a, v] : rec.axes.items())
       if (std::find(axisNames.begin(), axisNames.end(), a) == axisNames.end())
         axisNames.push_back(a);
+    if (rec.status != "ok") continue;
+    const Json& m = rec.machine;
+    Json* found = nullptr;
+    for (Json& k : machines)
+      if (k.value("hostname", "") == m.value("hostname", "") &&
+          k.value("cpu_model", "") == m.value("cpu_model", "") &&
+          k.value("cores_used", 0) == m.value("cores_used", 0) &&
+          k.value("commit", "") == m.value("commit", ""))
+        found = &k;
+    if (!found) {
+      Json k = m;
+      k["gpu_renderers"] = Json::array();
+      k["runs"] = 0;
+      machines.push_back(k);
+      found = &machines.back();
+    }
+    (*found)["runs"] = (*found)["runs"].get<int>() + 1;
+    const std::string device = rec.stats.value("device", "");
+    if (rec.stats.value("backend", "") == "gpu" && !device.empty() &&
+        std::find((*found)["gpu_renderers"].begin(), (*found)["gpu_renderers"].end(), device) ==
+            (*found)["gpu_renderers"].end())
+      (*found)["gpu_renderers"].push_back(device);
   }
 }
 
@@ -209,7 +235,7 @@ void csvHeader(std::ostream& csv, const ResultFacts& facts) {
   for (const auto& r : facts.plan.references)
     if (r.converge) csv << ",ref_step_voxels_" << r.name << ",ref_halving_change_" << r.name;
   csv << ",speedup_vs_baseline,dominant_stage,peak_host_mib,paper_rel_error,paper_fps,paper_"
-         "samples,resumed,error\n";
+         "samples,host,cpu_model,cores_used,load_avg_1min,commit,device,resumed,error\n";
 }
 
 void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
@@ -257,8 +283,16 @@ void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
       << csvField(ok ? ResultFacts::dominantStage(rec) : "") << ","
       << (ok ? fmt(rec.peakHostMiB, "%.1f") : "") << ","
       << paperValue(rec.paper, "rel_error", "%.4f") << "," << paperValue(rec.paper, "fps", "%.2f")
-      << "," << paperValue(rec.paper, "samples", "%.0f") << "," << (rec.resumed ? 1 : 0) << ","
-      << csvField(rec.error) << "\n";
+      << "," << paperValue(rec.paper, "samples", "%.0f");
+  // The machine (runs merged from several machines stay told apart) and the device it used.
+  const Json m = rec.machine.is_object() ? rec.machine : Json::object();
+  const Json load = m.value("load_avg_start", Json());
+  csv << "," << csvField(m.value("hostname", "")) << "," << csvField(m.value("cpu_model", ""))
+      << "," << (m.contains("cores_used") ? std::to_string(m["cores_used"].get<int>()) : "") << ","
+      << (load.is_array() && !load.empty() ? fmt(load[0].get<double>(), "%.2f") : "") << ","
+      << csvField(m.value("commit", "")) << ","
+      << csvField(rec.stats.is_object() ? rec.stats.value("device", "") : "") << ","
+      << (rec.resumed ? 1 : 0) << "," << csvField(rec.error) << "\n";
 }
 
 }  // namespace
@@ -303,6 +337,10 @@ Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
   jres["memory_method"] = memoryMethod;
   jres["default_reference"] = plan.defaultReference;
   jres["reference_checks"] = referenceChecks(facts);
+  jres["machine"] = res.machine;
+  jres["gallery"] = plan.gallery;  // plots.py makes no gallery pages for "off"
+
+  jres["machines"] = facts.machines;
   for (const RunRecord& rec : facts.runs) {
     const bool ok = rec.status == "ok";
     const RunRecord* b = ok ? facts.baselineOf(rec) : nullptr;

@@ -319,3 +319,49 @@ TEST_F(Cli, UnknownBackendIsAUsageError) {
   EXPECT_NE(r.code, 0);
   EXPECT_FALSE(fs::exists(out("x.exr")));
 }
+
+TEST_F(Cli, ExperimentShardAndMergeBadInputs) {
+  write("scene.json", tinyScene().dump());
+  const std::string cfg = write("exp.json", R"({"scene": "scene.json", "references": ["exact"],
+      "methods": ["per-voxel"], "repetitions": 1, "warmup": 0})");
+  // Usage errors: exit 2, nothing written.
+  for (const char* bad : {"3/2", "0/2", "x", "1/0", "1/2/3"}) {
+    const RunResult r = run("experiment " + cfg + " -o " + out("o") + " --shard " + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find("expected K/N with 1 <= K <= N"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out("o"))) << bad;
+  }
+  RunResult r = run("experiment -o " + out("o"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("give CONFIG and -o DIR"), std::string::npos) << r.output;
+  r = run("experiment merge " + out("s1") + " -o " + out("m") + " --shard 1/2");
+  EXPECT_EQ(r.code, 2) << r.output;
+  // Bad input: exit 1, one message naming it, no merged output.
+  r = run("experiment merge " + out("nowhere") + " -o " + out("m"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("nowhere' is not a directory"), std::string::npos) << r.output;
+  r = run("experiment " + cfg + " -o " + out("s1") + " --shard 1/2 -q --no-plots");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = run("experiment merge " + out("s1") + " -o " + out("m"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("shard(s) 2 of 2 missing"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out("m")));
+  // --list: the run ids, of one shard with --shard; a bad config is named, exit 1.
+  r = run("experiment " + cfg + " --list");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output, "per-voxel\n");
+  r = run("experiment " + cfg + " --list --shard 2/2");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  r = run("experiment " +
+          write("bad.json", R"({"scene": "scene.json", "methods": ["per-voxel"], "bogus": 1})") +
+          " --list");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("bogus"), std::string::npos) << r.output;
+  // Shard 2 of 2 has no run (one run, one reference group): its manifest still completes the set.
+  r = run("experiment " + cfg + " -o " + out("s2") + " --shard 2/2 -q --no-plots");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = run("experiment merge " + out("s1") + " " + out("s2") + " -o " + out("m") + " -q --no-plots");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out("m") + "/results.json"));
+}

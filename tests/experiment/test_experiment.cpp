@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 
 #include "api/scatterlab.h"
 #include "experiment/experiment.h"
@@ -196,8 +197,10 @@ TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
     std::ifstream csv(out / "results.csv");
     std::string header, line;
     std::getline(csv, header);
-    for (const char* col : {"axis_samples", "axis_resolution", "total_ms", "rel_l2_vs_exact",
-                            "speedup_vs_baseline", "peak_host_mib", "sampling_ms"})
+    for (const char* col :
+         {"axis_samples", "axis_resolution", "total_ms", "rel_l2_vs_exact", "speedup_vs_baseline",
+          "peak_host_mib", "sampling_ms", ",host,", ",cpu_model,", ",cores_used,",
+          ",load_avg_1min,", ",commit,", ",device,"})
       EXPECT_NE(header.find(col), std::string::npos) << col << " in " << header;
     int rows = 0;
     while (std::getline(csv, line)) ++rows;
@@ -210,12 +213,41 @@ TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
     EXPECT_NE(report.find("## Sweep `res`"), std::string::npos);
     EXPECT_NE(report.find("speed-up vs per-voxel"), std::string::npos);
     EXPECT_NE(report.find("## Gallery"), std::string::npos);
+    // The samples axis is the budget; the count column what was used (no `samples | samples`).
+    EXPECT_NE(report.find("| sample budget | samples used |"), std::string::npos);
+    EXPECT_EQ(report.find("| samples | samples |"), std::string::npos);
+    // The machine, in the report and in every record.
+    EXPECT_NE(report.find("Machine: "), std::string::npos);
+    EXPECT_EQ(j["machines"].size(), 1u);
+    for (const char* k : {"cpu_model", "cores_used", "load_avg_start", "commit", "hostname"}) {
+      EXPECT_TRUE(j["machine"].contains(k)) << k;
+      EXPECT_TRUE(j["runs"][0]["machine"].contains(k)) << k;
+    }
+    EXPECT_GE(j["machine"]["cores_used"].get<int>(), 1);
+    EXPECT_EQ(j["machines"][0]["runs"], 6);
   }
   if (!findPlotPython().empty()) {
     EXPECT_TRUE(r.plotsNote.empty()) << r.plotsNote;
-    EXPECT_TRUE(fs::exists(out / "plots" / "error_vs_samples.png"));
-    EXPECT_TRUE(fs::exists(out / "plots" / "time_vs_resolution.png"));
-    EXPECT_TRUE(fs::exists(out / "plots" / "stage_breakdown.png"));
+    // One figure per question and sweep, PNG and SVG, listed with captions in the report.
+    const Json index = readJsonFile((out / "plots" / "index.json").string());
+    std::set<std::string> files;
+    for (const Json& p : index) files.insert(p["file"].get<std::string>());
+    EXPECT_EQ(files, (std::set<std::string>{"error_vs_samples__budget.png", "pareto__budget.png",
+                                            "stages__budget.png", "time_vs_resolution__res.png",
+                                            "pareto__res.png", "stages__res.png"}));
+    for (const std::string& f : files) {
+      EXPECT_TRUE(fs::exists(out / "plots" / f)) << f;
+      EXPECT_TRUE(fs::exists(out / "plots" / fs::path(f).replace_extension(".svg"))) << f;
+    }
+    // Every run in the gallery: 6 tiles fit one page.
+    const Json gallery = readJsonFile((out / "gallery" / "index.json").string());
+    EXPECT_EQ(gallery["runs"], 6);
+    EXPECT_EQ(gallery["pages"], Json({"page-01.png"}));
+    EXPECT_TRUE(fs::exists(out / "gallery" / "page-01.png"));
+    std::ifstream md(out / "report.md");
+    const std::string report((std::istreambuf_iterator<char>(md)), {});
+    EXPECT_NE(report.find("6 of the 6 successful runs on 1 page"), std::string::npos);
+    EXPECT_NE(report.find("](plots/time_vs_resolution__res.png)"), std::string::npos);
   } else {
     EXPECT_FALSE(r.plotsNote.empty());
   }
@@ -237,6 +269,76 @@ TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
   r = runExperiment((dir / "exp.json").string(), out.string(), opt);
   EXPECT_EQ(r.rendered, 2);  // the budget sweep's two runs
   EXPECT_EQ(r.resumed, 4);
+}
+
+TEST_F(ExperimentTest, ShardsMergeIntoTheSingleProcessResults) {
+  writeJson(dir / "exp.json", tinyConfig());
+  const std::string cfg = (dir / "exp.json").string();
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const ExperimentResult whole = runExperiment(cfg, (dir / "whole").string(), opt);
+  ASSERT_EQ(whole.failed, 0);
+
+  // The slices: deterministic, every run in exactly one, runs sharing a reference together
+  // (the tiny config has 3 reference groups for 2 shards: the budget sweep, res 12, res 16).
+  const std::vector<int> owner = shardOf(whole.plan, 2);
+  EXPECT_EQ(owner, shardOf(parseExperiment(cfg), 2));
+  std::map<std::string, int> groupShard;
+  for (std::size_t i = 0; i < owner.size(); ++i) {
+    const RunSpec& r = whole.plan.runs[i];
+    const std::string g =
+        r.sweep + (r.axes.contains("resolution") ? r.axes["resolution"].dump() : "");
+    if (groupShard.count(g)) EXPECT_EQ(groupShard[g], owner[i]) << r.id;
+    groupShard[g] = owner[i];
+  }
+  EXPECT_EQ(std::count(owner.begin(), owner.end(), 0) + std::count(owner.begin(), owner.end(), 1),
+            6);
+  EXPECT_GT(std::count(owner.begin(), owner.end(), 1), 0);
+
+  std::size_t sharded = 0;
+  for (int k = 1; k <= 2; ++k) {
+    opt.shardIndex = k;
+    opt.shardCount = 2;
+    const ExperimentResult s =
+        runExperiment(cfg, (dir / ("shard" + std::to_string(k))).string(), opt);
+    sharded += s.runs.size();
+    EXPECT_TRUE(fs::exists(dir / ("shard" + std::to_string(k)) /
+                           ("shard-" + std::to_string(k) + "-of-2.json")));
+    EXPECT_FALSE(fs::exists(dir / ("shard" + std::to_string(k)) / "report.md"));
+  }
+  EXPECT_EQ(sharded, 6u);
+  opt.shardIndex = opt.shardCount = 0;
+
+  // A missing shard is named, and nothing is written.
+  try {
+    mergeShards({(dir / "shard1").string()}, (dir / "partial").string(), opt);
+    ADD_FAILURE() << "merge without shard 2 did not throw";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard(s) 2 of 2 missing"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "partial"));
+  opt.shardIndex = 3;
+  opt.shardCount = 2;
+  EXPECT_THROW(runExperiment(cfg, (dir / "bad").string(), opt), ConfigError);
+  opt.shardIndex = opt.shardCount = 0;
+
+  // Merged: the same runs, errors and sample counts as the single process (deterministic
+  // renders: equal to the last bit), nothing rendered.
+  const ExperimentResult merged = mergeShards(
+      {(dir / "shard1").string(), (dir / "shard2").string()}, (dir / "merged").string(), opt);
+  EXPECT_EQ(merged.rendered, 0);
+  ASSERT_EQ(merged.runs.size(), whole.runs.size());
+  for (std::size_t i = 0; i < whole.runs.size(); ++i) {
+    const RunRecord &a = whole.runs[i], &b = merged.runs[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.samples, b.samples) << a.id;
+    ASSERT_EQ(a.errors.size(), b.errors.size());
+    EXPECT_EQ(a.errors[0].relL2, b.errors[0].relL2) << a.id;
+    EXPECT_EQ(a.errors[0].relL1, b.errors[0].relL1) << a.id;
+  }
+  for (const char* f : {"results.csv", "results.json", "report.md"})
+    EXPECT_TRUE(fs::exists(dir / "merged" / f)) << f;
 }
 
 TEST_F(ExperimentTest, FailingRunIsLoggedAndTheSweepGoesOn) {

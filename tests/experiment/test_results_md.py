@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""ctest ResultsMd.*: scripts/results_md.py merges into an existing RESULTS.md.
+
+A fake fig3 results.json (one run, a machine record) and an old RESULTS.md with Fig. 3, Table 2
+and Fidelity sections: after the script, Fig. 3 holds the new run and the machine from the
+results, Table 2 (no new results) keeps its old body under a note, Fidelity is untouched, and a
+second run changes nothing.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+OLD = """# Results beside the paper's
+
+Old header with a fixed sentence about shared machines.
+
+## Fig. 3: interpolation schemes (relative L2 against per-voxel)
+
+| old fig3 row |
+
+## Table 2: frame rate (fps) and speed-up over per-voxel
+
+### resolution
+
+| old table2 row |
+
+## Fidelity (issue 11): every method against `exact` where users look
+
+| old fidelity row |
+"""
+MACHINE = {"cpu_model": "Test CPU 9000", "cores_used": 3, "logical_cpus": 8,
+           "load_avg_start": [1.5, 1.25, 1.0], "hostname": "testhost", "commit": "abc123",
+           "gpu_renderers": [], "runs": 1}
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="scatterlab-resultsmd-")
+    failures = []
+
+    def check(cond, what):
+        print(("ok   " if cond else "FAIL ") + what)
+        if not cond:
+            failures.append(what)
+
+    try:
+        fig3 = os.path.join(tmp, "fig3")
+        os.makedirs(fig3)
+        run = {"id": "gradient", "status": "ok", "registered_method": "gradient", "samples": 800,
+               "errors": {"per-voxel": {"rel_l2": 0.0222}}, "paper": {"rel_error": 0.043},
+               "median_ms": {"total": 313.0}}
+        with open(os.path.join(fig3, "results.json"), "w") as f:
+            json.dump({"references": ["per-voxel"], "runs": [run], "machine": MACHINE,
+                       "machines": [MACHINE]}, f)
+        out = os.path.join(tmp, "RESULTS.md")
+        with open(out, "w") as f:
+            f.write(OLD)
+        cmd = [sys.executable, os.path.join(ROOT, "scripts", "results_md.py"), "--fig3", fig3,
+               "--fig45", os.path.join(tmp, "none45"), "--table2", os.path.join(tmp, "none2"),
+               "-o", out]
+        check(subprocess.run(cmd).returncode == 0, "results_md.py exits 0")
+        text = open(out).read()
+        check("| gradient | gradient | 800 | 2.22% | 4.30% | 313 |" in text, "new Fig. 3 row")
+        check("old fig3 row" not in text, "old Fig. 3 row replaced")
+        check("Machine: Test CPU 9000, 3 of 8 CPUs used, load average 1.50 / 1.25 / 1.00" in text
+              and "commit `abc123`" in text, "machine of the Fig. 3 results")
+        check("shared machines" not in text, "no fixed sentence about the machine")
+        t2 = text.split("## Table 2")[1].split("\n## ")[0]
+        check("### resolution" in t2 and "| old table2 row |" in t2 and "kept from the previous" in t2,
+              "Table 2 without new results keeps its body")
+        check("## Fidelity (issue 11)" in text and "| old fidelity row |" in text, "Fidelity kept")
+        check("Not run (no " in text.split("## Fig. 4/5")[1].split("\n## ")[0],
+              "Fig. 4/5 with neither results nor a previous section: Not run")
+        check(subprocess.run(cmd).returncode == 0 and open(out).read() == text,
+              "a second run changes nothing")
+    finally:
+        if not failures:
+            shutil.rmtree(tmp, ignore_errors=True)
+    print("FAILED" if failures else "PASSED", len(failures), "failure(s)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
