@@ -4,6 +4,8 @@
 #include <tiny_obj_loader.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "core/atomic_file.h"
@@ -77,6 +79,26 @@ glm::mat4 parseTransform(Params t) {
   return glm::scale(m, scale);
 }
 
+/// tinyobjloader reads "nan" as 0 without a word: every vertex line's coordinates are checked
+/// here first, so a NaN or infinite vertex is an error naming its line.
+void checkVertices(const std::filesystem::path& file, const std::string& key) {
+  std::ifstream in(file);
+  std::string line;
+  for (long long n = 1; std::getline(in, line); ++n) {
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+    const char* c = line.c_str() + 1;
+    for (int k = 0; k < 3; ++k) {
+      char* end = nullptr;
+      const double v = std::strtod(c, &end);
+      if (end == c || !std::isfinite(v))
+        throw IoError(key + ": line " + std::to_string(n) + " of '" + file.string() +
+                      "': vertex coordinate " + std::to_string(k + 1) +
+                      " is not a finite number ('" + line + "')");
+      c = end;
+    }
+  }
+}
+
 Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec3> albedo) {
   const std::string rel = p.string("file");
   const std::filesystem::path file =
@@ -93,6 +115,7 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   else
     p.allow("transform");
 
+  checkVertices(file, key);
   tinyobj::ObjReaderConfig cfg;
   cfg.triangulate = true;
   cfg.vertex_color = false;

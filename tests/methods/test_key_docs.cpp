@@ -76,7 +76,8 @@ std::set<std::string> keysTheCodeReads() {
   initialize();
   std::set<std::string> read;
   Params::ReadLog log;
-  for (const char* name : {"glow", "shaft", "dusty_room", "fig3", "smoke", "cloud"}) {
+  for (const char* name : {"glow", "shaft", "dusty_room", "fig3", "smoke", "cloud", "window",
+                           "bunny_spot", "cornell_fog"}) {
     const std::string file = std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/" + name + ".json";
     Scene base;
     try {
