@@ -34,6 +34,16 @@ void printSceneInfo(const std::string& path) {
                 l.direction.z, l.type == Light::Type::Directional ? "irradiance" : "intensity",
                 l.intensity.x, l.intensity.y, l.intensity.z);
   }
+  if (s.objects) {
+    int i = 0;
+    for (const ObjectInfo& o : s.objects->objects()) {
+      std::printf("  objects[%d]: %s, bounds [%g %g %g]..[%g %g %g]", i++, o.type.c_str(),
+                  o.bounds.min.x, o.bounds.min.y, o.bounds.min.z, o.bounds.max.x, o.bounds.max.y,
+                  o.bounds.max.z);
+      if (o.type != "sphere") std::printf(", %lld triangles", o.triangles);
+      std::printf("\n");
+    }
+  }
   const Camera& c = s.camera;
   std::printf("  camera: [%g %g %g] -> [%g %g %g], fov_y %g deg, %dx%d\n", c.position.x,
               c.position.y, c.position.z, c.lookAt.x, c.lookAt.y, c.lookAt.z, c.fovYDeg, c.width,
@@ -84,12 +94,11 @@ void printVdbInfo(const std::string& path) {
       continue;
     }
     const IVec3 d = g.indexMax - g.indexMin + 1;
-    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x,
-                g.indexMin.y, g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y,
-                d.z);
+    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x, g.indexMin.y,
+                g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y, d.z);
     std::printf("    world box    [%g %g %g]..[%g %g %g] (voxel cells, axis-aligned)\n",
-                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z,
-                g.worldBounds.max.x, g.worldBounds.max.y, g.worldBounds.max.z);
+                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z, g.worldBounds.max.x,
+                g.worldBounds.max.y, g.worldBounds.max.z);
     std::printf("    active       %llu voxels (%llu active tiles, %llu leaf nodes)\n",
                 (unsigned long long)g.activeVoxels, (unsigned long long)g.activeTiles,
                 (unsigned long long)g.leafNodes);
@@ -109,10 +118,11 @@ void printSogInfo(const std::string& path) {
   std::printf("  lattice        [%g %g %g]..[%g %g %g], %dx%dx%d\n", h.bounds().min.x,
               h.bounds().min.y, h.bounds().min.z, h.bounds().max.x, h.bounds().max.y,
               h.bounds().max.z, n.x, n.y, n.z);
-  std::printf("  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
-              "threshold %g\n",
-              h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(),
-              double(h.step()), double(m.threshold));
+  std::printf(
+      "  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
+      "threshold %g\n",
+      h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(), double(h.step()),
+      double(m.threshold));
 }
 
 Action addInfo(CLI::App& app) {
@@ -120,7 +130,8 @@ Action addInfo(CLI::App& app) {
   auto gpuFlag = std::make_shared<bool>(false);
   CLI::App* c = app.add_subcommand("info", "Describe a scene (.json), image (.exr) or volume");
   c->add_option("file", *file, "File to describe");
-  c->add_flag("--gpu", *gpuFlag, "Print the OpenGL vendor, renderer and version of the GPU backend");
+  c->add_flag("--gpu", *gpuFlag,
+              "Print the OpenGL vendor, renderer and version of the GPU backend");
   return [file, gpuFlag]() {
     if (*gpuFlag) printGpuInfo();
     if (file->empty()) {

@@ -35,6 +35,8 @@ namespace {
 /// Albedo of each primitive of one Embree geometry: one value, or one per triangle.
 struct GeometryAlbedo {
   std::vector<Vec3> perPrim;
+  /// Shading normals, 3 per triangle (the OBJ's `vn`), or empty: flat shading.
+  std::vector<Vec3> normals;
   Vec3 at(unsigned prim) const { return perPrim.size() == 1 ? perPrim[0] : perPrim[prim]; }
 };
 
@@ -53,7 +55,8 @@ Vec3 finiteVec3(Params& p, const std::string& key, std::optional<Vec3> def = std
 struct Mesh {
   std::vector<Vec3> vertices;
   std::vector<glm::uvec3> triangles;
-  std::vector<Vec3> albedo;  ///< one, or one per triangle
+  std::vector<Vec3> albedo;   ///< one, or one per triangle
+  std::vector<Vec3> normals;  ///< 3 per triangle (world space) when every corner has a `vn`
 };
 
 /// Object-to-world matrix of a mesh's `transform` (translate · Rz · Ry · Rx · scale).
@@ -137,8 +140,9 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
                     std::to_string(v.z) + ")");
     mesh.vertices.push_back(w);
   }
-  bool anyMaterial = false;
+  bool anyMaterial = false, allNormals = !attrib.normals.empty();
   std::vector<Vec3> perTri;
+  const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
   for (const auto& shape : reader.GetShapes()) {
     const auto& idx = shape.mesh.indices;
     std::size_t off = 0;
@@ -152,6 +156,18 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
             throw IoError(key + ": face " + std::to_string(f + 1) + " of '" + file.string() +
                           "' refers to a vertex that does not exist");
           tri[k] = unsigned(vi);
+          const int ni = idx[off + k].normal_index;
+          if (ni < 0 || std::size_t(3 * ni + 2) >= attrib.normals.size()) {
+            allNormals = false;
+          } else if (allNormals) {
+            const Vec3 n = normalMatrix * Vec3(attrib.normals[3 * ni], attrib.normals[3 * ni + 1],
+                                               attrib.normals[3 * ni + 2]);
+            const float len = glm::length(n);
+            if (!(len > 0.0f) || !std::isfinite(len))
+              allNormals = false;
+            else
+              mesh.normals.push_back(n / len);
+          }
         }
         mesh.triangles.push_back(tri);
         const int mat = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
@@ -171,6 +187,7 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
     throw IoError(key + ": '" + file.string() +
                   "' holds no triangles (faces with 3 or more "
                   "vertices)");
+  if (!allNormals) mesh.normals.clear();
   if (albedo)
     mesh.albedo = {*albedo};
   else if (anyMaterial)
@@ -209,7 +226,7 @@ struct SceneObjects::Impl {
   }
 
   void addTriangles(const std::vector<Vec3>& v, const std::vector<glm::uvec3>& tris,
-                    std::vector<Vec3> alb, ObjectInfo& o) {
+                    std::vector<Vec3> alb, ObjectInfo& o, std::vector<Vec3> normals = {}) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
         g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), v.size()));
@@ -224,18 +241,20 @@ struct SceneObjects::Impl {
     }
     for (std::size_t i = 0; i < tris.size(); ++i)
       for (int k = 0; k < 3; ++k) ib[3 * i + k] = tris[i][k];
-    commit(g, std::move(alb));
+    const unsigned id = commit(g, std::move(alb));
+    albedo[id].normals = std::move(normals);
     o.triangles = (long long)tris.size();
     triangles += o.triangles;
   }
 
-  void commit(RTCGeometry g, std::vector<Vec3> alb) {
+  unsigned commit(RTCGeometry g, std::vector<Vec3> alb) {
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
     check("building a geometry");
     if (albedo.size() <= id) albedo.resize(id + 1);
     albedo[id].perPrim = std::move(alb);
+    return id;
   }
 };
 
@@ -287,7 +306,8 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
       impl->addTriangles(v, tris, {albedo.value_or(Vec3(0.8f))}, o);
     } else {
       Mesh mesh = loadMesh(p, baseDir, albedo);
-      impl->addTriangles(mesh.vertices, mesh.triangles, std::move(mesh.albedo), o);
+      impl->addTriangles(mesh.vertices, mesh.triangles, std::move(mesh.albedo), o,
+                         std::move(mesh.normals));
     }
     p.finish();
     impl->bounds.min = glm::min(impl->bounds.min, o.bounds.min);
@@ -344,7 +364,15 @@ bool SceneObjects::intersect(const Ray& r, float tmin, float tmax, SurfaceHit& h
   const float len = glm::length(n);
   n = len > 0.0f ? n / len : -r.dir;
   hit.normal = glm::dot(n, r.dir) > 0.0f ? -n : n;
-  hit.albedo = impl_->albedo[rh.hit.geomID].at(rh.hit.primID);
+  const GeometryAlbedo& g = impl_->albedo[rh.hit.geomID];
+  hit.albedo = g.at(rh.hit.primID);
+  hit.shading = hit.normal;
+  if (!g.normals.empty()) {
+    const Vec3* c = &g.normals[3 * std::size_t(rh.hit.primID)];
+    const Vec3 ns = (1.0f - rh.hit.u - rh.hit.v) * c[0] + rh.hit.u * c[1] + rh.hit.v * c[2];
+    const float len = glm::length(ns);
+    if (len > 0.0f) hit.shading = glm::dot(ns, hit.normal) < 0.0f ? -ns / len : ns / len;
+  }
   hit.object = int(rh.hit.geomID);
   return true;
 }

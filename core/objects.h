@@ -21,8 +21,11 @@ struct SurfaceHit {
   float t = 0.0f;       ///< ray parameter of the hit (world units along the unit direction)
   Vec3 position{0.0f};  ///< world point
   Vec3 normal{0.0f};    ///< unit geometric normal, turned to face the ray's origin
-  Vec3 albedo{0.0f};    ///< Lambertian albedo (RGB, [0, 1])
-  int object = -1;      ///< index into the scene's `objects` array
+  /// Unit shading normal on the same side: the mesh's interpolated vertex normals where its
+  /// OBJ has them (`vn`), else the geometric normal.
+  Vec3 shading{0.0f};
+  Vec3 albedo{0.0f};  ///< Lambertian albedo (RGB, [0, 1])
+  int object = -1;    ///< index into the scene's `objects` array
 };
 
 /// What one parsed object is (for reports and `scatterlab info`).

@@ -115,8 +115,9 @@ class SurfaceRadiance {
     for (const Light& l : lights_) {
       Light::Incident inc;
       if (!l.incident(p, inc)) continue;
-      const float cosine = glm::dot(h.normal, inc.toLight);
-      if (cosine <= 0.0f) continue;
+      // The light must be in front of the face itself; the cosine is the shading normal's.
+      const float cosine = glm::dot(h.shading, inc.toLight);
+      if (cosine <= 0.0f || glm::dot(h.normal, inc.toLight) <= 0.0f) continue;
       if (objects_ && objects_->occluded(p, inc.toLight, 0.0f, inc.distance)) continue;
       const float tau =
           opticalDepth(density_, p, lightSegmentEnd(l, inc, density_.bounds(), p), delta1_);

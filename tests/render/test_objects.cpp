@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
 
 #include "core/metrics.h"
 #include "core/transport.h"
+#include "media/temp_dir.h"
 #include "support/scenes.h"
 
 using namespace scatterlab;
@@ -313,4 +315,19 @@ TEST(Objects, DynamicSamplingRefinesAlongTheShadowBoundary) {
   // 1000 initial grid samples (0.23): 3.1x concentration. Limit 2x.
   EXPECT_GT(withShare, 2.0 * bandShare)
       << withNear << "/" << withAll << " vs " << freeNear << "/" << freeAll;
+}
+
+TEST(Objects, MeshVertexNormalsShade) {
+  // One triangle facing the camera whose OBJ normals all lean 36.87° up: with the sun shining
+  // from the camera, L = ρ/π·E·cos(36.87°) = ρ/π·E·0.8 (flat shading would give ρ/π·E).
+  scatterlab::testing::TempDir dir("objects_vn");
+  std::ofstream(dir.file("tri.obj")) << "v -5 -5 0.5\nv 5 -5 0.5\nv 0 5 0.5\nvn 0 0.6 -0.8\n"
+                                        "f 1//1 2//1 3//1\n";
+  Json doc = homogeneousBoxDoc(0.0f, 0.0f, 1.0f, Vec3(0.0f), 1.0f, 5, 5, 8);
+  doc["lights"] = Json::array(
+      {{{"type", "directional"}, {"direction", {0, 0, 1}}, {"irradiance", {2.0, 2.0, 2.0}}}});
+  doc["objects"] =
+      Json::array({{{"type", "mesh"}, {"file", dir.file("tri.obj")}, {"albedo", 0.5}}});
+  const Image img = render(sceneFromJson(doc), {{"method", "exact"}});
+  EXPECT_NEAR(img.at(2, 2).x, 0.5 / kPi * 2.0 * 0.8, 1e-5);
 }
