@@ -155,5 +155,27 @@ TEST(KeyDocs, EverySceneKeyReadIsNamedInTheDocs) {
   }
 }
 
+TEST(KeyDocs, ObjectKeyTableMatchesTheDocs) {
+  // The KeyDoc table at the top of core/objects.cpp and the `objects[i]` table of
+  // scene-format.md name the same keys (transform's sub-keys are rows of their own there).
+  const std::string doc = readDoc("scene-format.md");
+  const std::size_t from = doc.find("## `objects[i]`");
+  ASSERT_NE(from, std::string::npos);
+  std::istringstream in(doc.substr(from, doc.find("\n## ", from + 1) - from));
+  std::set<std::string> documented;
+  const std::regex cell("^\\| `([a-z_.]+)`(, `([a-z_.]+)`)? \\|");
+  std::smatch m;
+  for (std::string line; std::getline(in, line);)
+    if (std::regex_search(line, m, cell)) {
+      documented.insert(m[1].str());
+      if (m[3].matched) documented.insert(m[3].str());
+    }
+  std::set<std::string> table;
+  for (const KeyDoc& d : objectKeyDocs()) table.insert(std::string(d.name));
+  for (const std::string& k : table) EXPECT_TRUE(documented.count(k)) << k << " not documented";
+  for (const std::string& k : documented)
+    EXPECT_TRUE(table.count(k) || k.rfind("transform.", 0) == 0) << k << " not in the KeyDoc table";
+}
+
 }  // namespace
 }  // namespace scatterlab
