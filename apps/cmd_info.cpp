@@ -94,11 +94,12 @@ void printVdbInfo(const std::string& path) {
       continue;
     }
     const IVec3 d = g.indexMax - g.indexMin + 1;
-    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x, g.indexMin.y,
-                g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y, d.z);
+    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x,
+                g.indexMin.y, g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y,
+                d.z);
     std::printf("    world box    [%g %g %g]..[%g %g %g] (voxel cells, axis-aligned)\n",
-                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z, g.worldBounds.max.x,
-                g.worldBounds.max.y, g.worldBounds.max.z);
+                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z,
+                g.worldBounds.max.x, g.worldBounds.max.y, g.worldBounds.max.z);
     std::printf("    active       %llu voxels (%llu active tiles, %llu leaf nodes)\n",
                 (unsigned long long)g.activeVoxels, (unsigned long long)g.activeTiles,
                 (unsigned long long)g.leafNodes);
@@ -118,11 +119,10 @@ void printSogInfo(const std::string& path) {
   std::printf("  lattice        [%g %g %g]..[%g %g %g], %dx%dx%d\n", h.bounds().min.x,
               h.bounds().min.y, h.bounds().min.z, h.bounds().max.x, h.bounds().max.y,
               h.bounds().max.z, n.x, n.y, n.z);
-  std::printf(
-      "  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
-      "threshold %g\n",
-      h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(), double(h.step()),
-      double(m.threshold));
+  std::printf("  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
+              "threshold %g\n",
+              h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(),
+              double(h.step()), double(m.threshold));
 }
 
 Action addInfo(CLI::App& app) {
@@ -130,8 +130,7 @@ Action addInfo(CLI::App& app) {
   auto gpuFlag = std::make_shared<bool>(false);
   CLI::App* c = app.add_subcommand("info", "Describe a scene (.json), image (.exr) or volume");
   c->add_option("file", *file, "File to describe");
-  c->add_flag("--gpu", *gpuFlag,
-              "Print the OpenGL vendor, renderer and version of the GPU backend");
+  c->add_flag("--gpu", *gpuFlag, "Print the OpenGL vendor, renderer and version of the GPU backend");
   return [file, gpuFlag]() {
     if (*gpuFlag) printGpuInfo();
     if (file->empty()) {
