@@ -40,10 +40,6 @@ struct GeometryAlbedo {
   Vec3 at(unsigned prim) const { return perPrim.size() == 1 ? perPrim[0] : perPrim[prim]; }
 };
 
-std::string where(const Params& p, const std::string& key) {
-  return p.keyPath(key);
-}
-
 /// A vec3 whose components must be finite (Params::vec3 checks only the range).
 Vec3 finiteVec3(Params& p, const std::string& key, std::optional<Vec3> def = std::nullopt) {
   const Vec3 v = p.vec3(key, def);
@@ -106,7 +102,7 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   const std::string rel = p.string("file");
   const std::filesystem::path file =
       std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : baseDir / rel;
-  const std::string key = where(p, "file");
+  const std::string key = p.keyPath("file");
   try {
     checkReadableFile(file.string(), "OBJ mesh");
   } catch (const IoError& e) {
@@ -280,7 +276,7 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
     if (o.type == "sphere") {
       const Vec3 c = finiteVec3(p, "center");
       const double r = p.number("radius", std::nullopt, Interval::above(0));
-      if (!std::isfinite(r)) p.fail("radius", "must be finite");
+      if (!std::isfinite(float(r))) p.fail("radius", "must be finite (in single precision)");
       RTCGeometry g = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
       auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
           g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
