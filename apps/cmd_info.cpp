@@ -34,6 +34,16 @@ void printSceneInfo(const std::string& path) {
                 l.direction.z, l.type == Light::Type::Directional ? "irradiance" : "intensity",
                 l.intensity.x, l.intensity.y, l.intensity.z);
   }
+  if (s.objects) {
+    int i = 0;
+    for (const ObjectInfo& o : s.objects->objects()) {
+      std::printf("  objects[%d]: %s, bounds [%g %g %g]..[%g %g %g]", i++, o.type.c_str(),
+                  o.bounds.min.x, o.bounds.min.y, o.bounds.min.z, o.bounds.max.x, o.bounds.max.y,
+                  o.bounds.max.z);
+      if (o.type != "sphere") std::printf(", %lld triangles", o.triangles);
+      std::printf("\n");
+    }
+  }
   const Camera& c = s.camera;
   std::printf("  camera: [%g %g %g] -> [%g %g %g], fov_y %g deg, %dx%d\n", c.position.x,
               c.position.y, c.position.z, c.lookAt.x, c.lookAt.y, c.lookAt.z, c.fovYDeg, c.width,

@@ -12,6 +12,8 @@ struct Camera {
   float fovYDeg = 40.0f;  ///< vertical field of view in degrees, in (0, 180)
   int width = 320;
   int height = 240;
+  /// Samples per pixel: a k x k grid of stratum centres (k² = spp), averaged (box filter).
+  int spp = 1;
 
   /// Orthonormal frame: forward (towards look_at), right, true up. Throws ConfigError when
   /// position == look_at or up is parallel to the view direction.
@@ -26,9 +28,12 @@ struct Camera {
     Vec3 origin, forward, right, up;
     float sx, sy;  ///< tan(fov/2) * aspect, tan(fov/2)
     int width, height;
-    Ray operator()(int px, int py) const {
-      const float u = ((px + 0.5f) / width * 2.0f - 1.0f) * sx;
-      const float v = (1.0f - (py + 0.5f) / height * 2.0f) * sy;
+    Ray operator()(int px, int py) const { return at(px + 0.5f, py + 0.5f); }
+    /// The ray through continuous image coordinates (fx, fy): x right, y down, pixel (i, j)
+    /// covering [i, i+1) x [j, j+1).
+    Ray at(float fx, float fy) const {
+      const float u = (fx / width * 2.0f - 1.0f) * sx;
+      const float v = (1.0f - fy / height * 2.0f) * sy;
       return Ray{origin, glm::normalize(forward + u * right + v * up)};
     }
   };

@@ -14,9 +14,21 @@ namespace {
 /// The backend a method runs on: "cpu" and "gpu" as asked (an error where the method or this
 /// build has no such variant), "auto" the GPU when its backend prefers itself now (a hardware
 /// GPU) and the method runs there, else the CPU. `note` says why, for "auto".
-Backend chooseBackend(const std::string& name, const MethodEntry& m, const std::string& asked,
-                      std::string* note) {
+Backend chooseBackend(const Scene& scene, const std::string& name, const MethodEntry& m,
+                      const std::string& asked, std::string* note) {
   const BackendEntry& gpu = backends()[int(Backend::Gpu)];
+  // What the GPU backend cannot render yet: refused when asked for, avoided by "auto".
+  std::string gpuLacks;
+  if (scene.objects)
+    gpuLacks = "objects are not supported on the GPU backend yet (scene has " +
+               std::to_string(scene.objects->objects().size()) + "); use --backend cpu";
+  else if (scene.camera.spp > 1)
+    gpuLacks = "camera.spp > 1 is not supported on the GPU backend yet; use --backend cpu";
+  if (asked == "gpu" && !gpuLacks.empty()) throw ConfigError(gpuLacks);
+  if (asked == "auto" && !gpuLacks.empty() && m.runsOn(Backend::Cpu) && m.runsOn(Backend::Gpu)) {
+    *note = "auto: " + gpuLacks.substr(0, gpuLacks.find(';')) + "; using the CPU";
+    return Backend::Cpu;
+  }
   if (asked == "cpu") {
     if (!m.runsOn(Backend::Cpu))
       throw ConfigError("method '" + name + "' has no CPU variant; use --backend gpu");
@@ -51,7 +63,7 @@ std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& meth
   const MethodEntry& entry =
       methods().get(name, methodOverride.empty() ? "render.method" : "--method");
   std::string note;
-  const Backend b = chooseBackend(name, entry, asked, &note);
+  const Backend b = chooseBackend(scene, name, entry, asked, &note);
   auto method = entry.create(p, scene, b, note);
   // Keys of other registered methods are tolerated (and reported); the rest is an error.
   std::vector<std::string> ignored;

@@ -1,5 +1,6 @@
 #include "core/scene.h"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -68,6 +69,11 @@ Camera parseCamera(Params p) {
   c.fovYDeg = p.real("fov_y_deg", 40.0, Interval::open(0, 180));
   c.width = int(p.integer("width", 320, Interval::closed(1, 16384)));
   c.height = int(p.integer("height", 240, Interval::closed(1, 16384)));
+  c.spp = int(p.integer("spp", 1, Interval::closed(1, 1024)));
+  const int k = int(std::lround(std::sqrt(double(c.spp))));
+  if (k * k != c.spp)
+    p.fail("spp", "value " + std::to_string(c.spp) +
+                      " is not a perfect square; allowed: 1, 4, 9, 16, ... 1024 (k x k strata)");
   p.finish();
   if (c.position == c.lookAt) p.fail("look_at", "must differ from camera.position");
   if (glm::length(glm::cross(c.lookAt - c.position, c.up)) == 0.0f)
@@ -126,6 +132,12 @@ Scene parseScene(const Json& doc, const std::filesystem::path& baseDir) {
   for (Params l : root.children("lights", /*required=*/true)) s.lights.push_back(parseLight(l));
   s.camera = parseCamera(root.child("camera"));
   s.background = root.rgb("background", Vec3(0.0f));
+  if (root.has("objects")) {
+    auto items = root.children("objects");
+    if (!items.empty()) s.objects = SceneObjects::parse(std::move(items), baseDir);
+  } else {
+    root.allow("objects");
+  }
   if (root.has("render")) {
     if (!doc["render"].is_object()) Params(doc["render"], "render");  // throws: not an object
     s.render = doc["render"];

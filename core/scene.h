@@ -10,6 +10,7 @@
 #include "core/camera.h"
 #include "core/density_model.h"
 #include "core/light.h"
+#include "core/objects.h"
 #include "core/params.h"
 #include "core/phase.h"
 
@@ -33,6 +34,8 @@ struct Scene {
   std::vector<Light> lights;
   Camera camera;
   Vec3 background{0.0f};
+  /// Occluders and surfaces (the `objects` array); null when the scene has none.
+  std::shared_ptr<const SceneObjects> objects;
   Json render = Json::object();   ///< the "render" object, parsed by the chosen method
   std::filesystem::path baseDir;  ///< directory of the scene file
 };

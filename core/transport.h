@@ -68,7 +68,8 @@ class SourceRadiance {
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
         density_(density),
-        delta1_(delta1) {}
+        delta1_(delta1),
+        objects_(scene.objects.get()) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -76,6 +77,7 @@ class SourceRadiance {
     for (const Light& l : lights_) {
       Light::Incident inc;
       if (!l.incident(x, inc)) continue;
+      if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
       const float tau =
           opticalDepth(density_, x, lightSegmentEnd(l, inc, density_.bounds(), x), delta1_);
       s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
@@ -89,6 +91,47 @@ class SourceRadiance {
   float sigmaT_;
   const DensityGrid& density_;
   float delta1_;
+  const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
+};
+
+/// The radiance leaving a Lambertian surface point towards any direction (DESIGN.md §2):
+/// L_p = albedo/π · Σ_l E_l(p)·max(0, n·ω_l)·V_l(p)·T(p, l), with V_l through the scene's
+/// objects (shadow rays leave p offset by the objects' epsilon along n) and T traced through
+/// the density volume with step delta1. Every method shades surfaces with this, per pixel.
+class SurfaceRadiance {
+ public:
+  /// References must outlive this object.
+  SurfaceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
+      : lights_(scene.lights),
+        sigmaT_(scene.medium.sigmaT),
+        density_(density),
+        delta1_(delta1),
+        objects_(scene.objects.get()) {}
+
+  Vec3 operator()(const SurfaceHit& h) const {
+    if (h.albedo == Vec3(0.0f)) return Vec3(0.0f);
+    const Vec3 p = h.position + h.normal * (objects_ ? objects_->epsilon() : 0.0f);
+    Vec3 e(0.0f);
+    for (const Light& l : lights_) {
+      Light::Incident inc;
+      if (!l.incident(p, inc)) continue;
+      // The light must be in front of the face itself; the cosine is the shading normal's.
+      const float cosine = glm::dot(h.shading, inc.toLight);
+      if (cosine <= 0.0f || glm::dot(h.normal, inc.toLight) <= 0.0f) continue;
+      if (objects_ && objects_->occluded(p, inc.toLight, 0.0f, inc.distance)) continue;
+      const float tau =
+          opticalDepth(density_, p, lightSegmentEnd(l, inc, density_.bounds(), p), delta1_);
+      e += inc.irradiance * (cosine * std::exp(-sigmaT_ * tau));
+    }
+    return h.albedo * e * (1.0f / kPi);
+  }
+
+ private:
+  const std::vector<Light>& lights_;
+  float sigmaT_;
+  const DensityGrid& density_;
+  float delta1_;
+  const SceneObjects* objects_;
 };
 
 /// The singular-light factorization (docs/fidelity.md): S(x, ω) = A(x, ω) ⊙ V(x, ω), per RGB
@@ -131,7 +174,8 @@ class FactoredSourceRadiance {
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
         density_(density),
-        delta1_(delta1) {
+        delta1_(delta1),
+        objects_(scene.objects.get()) {
     for (const Light& l : lights_) lit_ = glm::max(lit_, l.intensity);
   }
 
@@ -145,7 +189,7 @@ class FactoredSourceRadiance {
         outside = true;
         continue;
       }
-      s += t.w * (t.cone * transmittance(x, t.end));
+      s += t.w * (t.cone * transmittance(x, t));
       a += t.w * t.cone;
     }
     Vec3 v(0.0f), free(-1.0f);
@@ -164,14 +208,17 @@ class FactoredSourceRadiance {
   /// One light's analytic weight w = E⁰·f (cone not applied), its cone factor, and the far end
   /// of the segment to trace.
   struct Term {
-    Vec3 w, end;
+    Vec3 w, end, toLight;
     float cone = 1.0f;
+    float distance = 0.0f;  ///< to the light (infinity: directional), for visibility
   };
   bool term(std::size_t i, const Vec3& x, const Vec3& toViewer, Term& t) const {
     const Light& l = lights_[i];
     Light::Geometry g;
     if (!l.geometry(x, g)) return false;
     t.cone = g.cone;
+    t.toLight = g.toLight;
+    t.distance = g.distance;
     Vec3 e0;
     if (l.type == Light::Type::Directional) {
       e0 = l.intensity;
@@ -184,8 +231,10 @@ class FactoredSourceRadiance {
     t.w = e0 * phase_.eval(-g.toLight, toViewer);
     return true;
   }
-  float transmittance(const Vec3& x, const Vec3& end) const {
-    return std::exp(-sigmaT_ * opticalDepth(density_, x, end, delta1_));
+  /// V_l·T towards the light of `t` (objects block it entirely).
+  float transmittance(const Vec3& x, const Term& t) const {
+    if (objects_ && objects_->occluded(x, t.toLight, 0.0f, t.distance)) return 0.0f;
+    return std::exp(-sigmaT_ * opticalDepth(density_, x, t.end, delta1_));
   }
   /// V with every cone ignored (every light traced).
   Vec3 freeV(const Vec3& x, const Vec3& toViewer) const {
@@ -193,7 +242,7 @@ class FactoredSourceRadiance {
     for (std::size_t i = 0; i < lights_.size(); ++i) {
       Term t;
       if (!term(i, x, toViewer, t)) continue;
-      s += t.w * (transmittance(x, t.end));
+      s += t.w * transmittance(x, t);
       a += t.w;
     }
     Vec3 v(0.0f);
@@ -206,6 +255,7 @@ class FactoredSourceRadiance {
   float sigmaT_;
   const DensityGrid& density_;
   float delta1_;
+  const SceneObjects* objects_;
   Vec3 lit_{0.0f};  ///< channels some light emits in
 };
 

@@ -11,7 +11,10 @@ namespace {
 class RayMarcher : public Integrator {
  public:
   explicit RayMarcher(const PipelineSettings& s)
-      : march_(s.march), slicingGiven_(s.slicingGiven), factored_(s.factorLights) {}
+      : march_(s.march),
+        slicingGiven_(s.slicingGiven),
+        factored_(s.factorLights),
+        delta1_(s.delta1) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     const HostFrame& f = static_cast<const HostFrame&>(frame);
     const RadianceGrid& radiance = *f.radiance;
@@ -23,10 +26,10 @@ class RayMarcher : public Integrator {
       const auto lookup = [&](const Vec3& x, const Vec3& toViewer) {
         return radiance.sampleIndex(x * s + o) * A(x, toViewer);
       };
-      return marchImage(scene, *f.density, lookup, march_, progress);
+      return marchImage(scene, *f.density, lookup, march_, progress, delta1_);
     }
     const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
-    return marchImage(scene, *f.density, lookup, march_, progress);
+    return marchImage(scene, *f.density, lookup, march_, progress, delta1_);
   }
   void describe(RenderStats& stats) const override {
     // The CPU marcher steps along each ray: a slicing the scene asks for has no meaning here.
@@ -37,6 +40,7 @@ class RayMarcher : public Integrator {
   MarchSettings march_;
   bool slicingGiven_;
   bool factored_;
+  float delta1_;
 };
 
 class ExactIntegrator : public Integrator {
@@ -47,7 +51,7 @@ class ExactIntegrator : public Integrator {
     const DensityGrid& density = frame.hostDensity();
     if (progress) progress->restart("exact", scene.camera.height);
     const SourceRadiance source(scene, density, delta1_);
-    return marchImage(scene, density, source, march_, progress);
+    return marchImage(scene, density, source, march_, progress, delta1_);
   }
 
  private:

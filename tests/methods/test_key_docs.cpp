@@ -76,7 +76,8 @@ std::set<std::string> keysTheCodeReads() {
   initialize();
   std::set<std::string> read;
   Params::ReadLog log;
-  for (const char* name : {"glow", "shaft", "dusty_room", "fig3", "smoke", "cloud"}) {
+  for (const char* name : {"glow", "shaft", "dusty_room", "fig3", "smoke", "cloud", "window",
+                           "bunny_spot", "cornell_fog"}) {
     const std::string file = std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/" + name + ".json";
     Scene base;
     try {
@@ -152,6 +153,28 @@ TEST(KeyDocs, EverySceneKeyReadIsNamedInTheDocs) {
     EXPECT_TRUE(words.count(leaf))
         << path << " is read but '" << leaf << "' appears in neither scene-format.md nor media.md";
   }
+}
+
+TEST(KeyDocs, ObjectKeyTableMatchesTheDocs) {
+  // The KeyDoc table at the top of core/objects.cpp and the `objects[i]` table of
+  // scene-format.md name the same keys (transform's sub-keys are rows of their own there).
+  const std::string doc = readDoc("scene-format.md");
+  const std::size_t from = doc.find("## `objects[i]`");
+  ASSERT_NE(from, std::string::npos);
+  std::istringstream in(doc.substr(from, doc.find("\n## ", from + 1) - from));
+  std::set<std::string> documented;
+  const std::regex cell("^\\| `([a-z_.]+)`(, `([a-z_.]+)`)? \\|");
+  std::smatch m;
+  for (std::string line; std::getline(in, line);)
+    if (std::regex_search(line, m, cell)) {
+      documented.insert(m[1].str());
+      if (m[3].matched) documented.insert(m[3].str());
+    }
+  std::set<std::string> table;
+  for (const KeyDoc& d : objectKeyDocs()) table.insert(std::string(d.name));
+  for (const std::string& k : table) EXPECT_TRUE(documented.count(k)) << k << " not documented";
+  for (const std::string& k : documented)
+    EXPECT_TRUE(table.count(k) || k.rfind("transform.", 0) == 0) << k << " not in the KeyDoc table";
 }
 
 }  // namespace
