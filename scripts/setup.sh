@@ -11,7 +11,7 @@ PACKAGES=(
   libopenexr-dev libpng-dev libopenvdb-dev libboost-iostreams-dev
   libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-matplotlib
+  python3 python3-matplotlib python3-dev python3-numpy pybind11-dev
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
