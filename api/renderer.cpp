@@ -6,8 +6,7 @@
 
 namespace scatterlab {
 
-Renderer::Renderer(Json doc, std::filesystem::path baseDir, std::string method,
-                   std::string backend)
+Renderer::Renderer(Json doc, std::filesystem::path baseDir, std::string method, std::string backend)
     : baseDir_(std::move(baseDir)), methodName_(std::move(method)), backend_(std::move(backend)) {
   const double t = documentTime(doc);
   rebuild(doc, t);

@@ -51,7 +51,7 @@ Action addRender(CLI::App& app) {
     std::string scene, out, png, method, backend = "auto", stats, samplesPng, densityVdb,
                                          radianceVdb;
     std::vector<std::string> sets;
-    std::string frames;
+    std::string frames, tonemap = "linear";
     double fps = 24.0;
     float exposure = 0.0f;
     bool quiet = false;
@@ -83,6 +83,10 @@ Action addRender(CLI::App& app) {
       ->take_all()
       ->allow_extra_args(false);
   c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)");
+  c->add_option("--tonemap", o->tonemap,
+                "Tone curve of the PNG previews (--png, a .png -o, --samples-png): linear "
+                "(clamp, the default), filmic (Hable) or aces (Narkowicz); after --exposure")
+      ->check(CLI::IsMember({"linear", "filmic", "aces"}));
   c->add_option("--frames", o->frames,
                 "Render frames A..B (inclusive) of an animation at time = frame / fps (light "
                 "paths, procedural time, .sog sequences), writing OUT.{frame:04}.exr (and the "
@@ -108,6 +112,7 @@ Action addRender(CLI::App& app) {
                 "'radiance'); CPU methods that build one (not exact)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
+    const ToneCurve curve = parseToneCurve(o->tonemap);
     Renderer renderer = Renderer::fromFile(o->scene, o->sets, o->method, o->backend);
     const Scene& scene = renderer.scene();
     const Method& method = renderer.method();
@@ -133,8 +138,8 @@ Action addRender(CLI::App& app) {
     const auto timeOf = [&](int f) { return f / o->fps; };
     // Refuse unwritable outputs before spending time on the render.
     for (int f : frames)
-      for (const std::string* p : {&o->out, &o->png, &o->stats, &o->samplesPng, &o->densityVdb,
-                                   &o->radianceVdb})
+      for (const std::string* p :
+           {&o->out, &o->png, &o->stats, &o->samplesPng, &o->densityVdb, &o->radianceVdb})
         if (!p->empty()) checkWritablePath(framePath(*p, f));
 
     const bool sequence = frames.size() > 1 || frames[0] >= 0;
@@ -151,13 +156,13 @@ Action addRender(CLI::App& app) {
       const Scene& frameScene = renderer.scene();
       out.stage(framePath(o->out, f), [&](const std::string& tmp) {
         if (imageFormat(o->out) == "png")
-          writePng(r.image, tmp, o->exposure);
+          writePng(r.image, tmp, o->exposure, curve);
         else
           writeExr(r.image, tmp);
       });
       if (!o->png.empty())
         out.stage(framePath(o->png, f),
-                  [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure); });
+                  [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure, curve); });
       if (!o->stats.empty())
         out.stage(framePath(o->stats, f), [&](const std::string& tmp) {
           std::ofstream file(tmp);
@@ -170,7 +175,7 @@ Action addRender(CLI::App& app) {
                             "' used no radiance samples");
         const Image view = drawSamples(r.image, r.samples, frameScene.camera);
         out.stage(framePath(o->samplesPng, f),
-                  [&](const std::string& tmp) { writePng(view, tmp, o->exposure); });
+                  [&](const std::string& tmp) { writePng(view, tmp, o->exposure, curve); });
       }
       const auto noVolume = [&](const char* option, const char* what) {
         return ConfigError(std::string(option) + ": method '" + r.stats.method + "' (" +
@@ -179,13 +184,18 @@ Action addRender(CLI::App& app) {
       };
       if (!o->densityVdb.empty()) {
         if (!r.density) throw noVolume("--density-vdb", "density");
-        out.stage(framePath(o->densityVdb, f),
-                  [&](const std::string& tmp) { writeVdb(tmp, *r.density); });
+        out.stage(framePath(o->densityVdb, f), [&](const std::string& tmp) {
+          writeVdb(tmp, *r.density, "density",
+                   {frameScene.medium.sigmaT, frameScene.medium.albedo});
+        });
       }
       if (!o->radianceVdb.empty()) {
         if (!r.radiance) throw noVolume("--radiance-vdb", "source-radiance");
-        out.stage(framePath(o->radianceVdb, f),
-                  [&](const std::string& tmp) { writeVdb(tmp, *r.radiance); });
+        out.stage(framePath(o->radianceVdb, f), [&](const std::string& tmp) {
+          writeVdb(tmp, *r.radiance, "radiance",
+                   {frameScene.medium.sigmaT, frameScene.medium.albedo,
+                    "world units; radiance S per unit solid angle"});
+        });
       }
       if (sequence) {
         progress.advance();
@@ -214,8 +224,8 @@ Action addRender(CLI::App& app) {
         return sequence ? framePath(p, f0) + " .. " + framePath(p, f1) : p;
       };
       std::printf("wrote %s", shown(o->out).c_str());
-      for (const std::string* extra : {&o->png, &o->stats, &o->samplesPng, &o->densityVdb,
-                                       &o->radianceVdb})
+      for (const std::string* extra :
+           {&o->png, &o->stats, &o->samplesPng, &o->densityVdb, &o->radianceVdb})
         if (!extra->empty()) std::printf(", %s", shown(*extra).c_str());
       std::printf("\n");
     }

@@ -45,8 +45,8 @@ void animationRenderer(benchmark::State& state, std::string method, std::string 
     }
   }
   benchmark::DoNotOptimize(checksum);
-  const double ms = std::chrono::duration<double, std::milli>(
-                        std::chrono::steady_clock::now() - start).count();
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   state.counters["ms_per_frame"] = ms / (double(state.iterations()) * kFrames);
 }
 
@@ -64,8 +64,8 @@ void animationSeparate(benchmark::State& state, std::string method, std::string 
     }
   }
   benchmark::DoNotOptimize(checksum);
-  const double ms = std::chrono::duration<double, std::milli>(
-                        std::chrono::steady_clock::now() - start).count();
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   state.counters["ms_per_frame"] = ms / (double(state.iterations()) * kFrames);
 }
 

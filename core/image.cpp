@@ -7,6 +7,8 @@
 #include <ImfOutputFile.h>
 #include <png.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -70,13 +72,53 @@ float toneMapSrgb(float linear, float exposure) {
   return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
-void writePng(const Image& img, const std::string& path, float exposure) {
+ToneCurve parseToneCurve(const std::string& name, const std::string& key) {
+  if (name == "linear") return ToneCurve::Linear;
+  if (name == "filmic") return ToneCurve::Filmic;
+  if (name == "aces") return ToneCurve::Aces;
+  throw ConfigError("'" + key + "': unknown tone curve '" + name +
+                    "' (allowed: linear, filmic, aces)");
+}
+
+namespace {
+
+/// Hable's filmic operator (Uncharted 2): shoulder 0.15, linear 0.50, angle 0.10, toe 0.20,
+/// toe numerator 0.02, denominator 0.30.
+float hable(float x) {
+  const float A = 0.15f, B = 0.50f, C = 0.10f, D = 0.20f, E = 0.02f, F = 0.30f;
+  return ((x * (A * x + C * B) + D * E) / (x * (A * x + B) + D * F)) - E / F;
+}
+
+}  // namespace
+
+float toneCurve(float v, ToneCurve curve) {
+  if (!(v > 0.0f)) return 0.0f;  // also maps NaN to 0
+  switch (curve) {
+    case ToneCurve::Linear:
+      return std::min(v, 1.0f);
+    case ToneCurve::Filmic: {
+      constexpr float kWhite = 11.2f;
+      return std::min(1.0f, hable(v) / hable(kWhite));
+    }
+    case ToneCurve::Aces:
+      // Narkowicz 2015, "ACES Filmic Tone Mapping Curve".
+      return std::clamp(v * (2.51f * v + 0.03f) / (v * (2.43f * v + 0.59f) + 0.14f), 0.0f, 1.0f);
+  }
+  return 0.0f;
+}
+
+void writePng(const Image& img, const std::string& path, float exposure, ToneCurve curve) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
   std::vector<unsigned char> buf(size_t(img.width()) * img.height() * 3);
+  const float scale = std::exp2(exposure);
   for (size_t i = 0; i < img.pixels().size(); ++i)
     for (int c = 0; c < 3; ++c)
-      buf[3 * i + c] =
-          static_cast<unsigned char>(toneMapSrgb(img.pixels()[i][c], exposure) * 255.0f + 0.5f);
+      buf[3 * i + c] = static_cast<unsigned char>(
+          (curve == ToneCurve::Linear
+               ? toneMapSrgb(img.pixels()[i][c], exposure)
+               : toneMapSrgb(toneCurve(img.pixels()[i][c] * scale, curve), 0.0f)) *
+              255.0f +
+          0.5f);
   writeAtomically(path, [&](const std::string& tmp) {
     png_image pi;
     std::memset(&pi, 0, sizeof(pi));

@@ -39,8 +39,22 @@ Image readExr(const std::string& path);
 /// encode with the sRGB transfer curve.
 float toneMapSrgb(float linear, float exposure = 0.0f);
 
-/// Writes an 8-bit sRGB PNG (toneMapSrgb) atomically. Throws IoError.
-void writePng(const Image& img, const std::string& path, float exposure = 0.0f);
+/// Tone curve applied before the sRGB encoding of PNG previews (`render --tonemap`, README):
+/// Linear clamps at 1 (the default; what PSNR and "visibly wrong" use);
+/// Filmic is Hable's Uncharted 2 curve normalised to white 11.2; Aces is Narkowicz's fit of the
+/// ACES reference rendering transform. Both roll highlights off instead of clipping them.
+enum class ToneCurve { Linear, Filmic, Aces };
+
+/// Parses "linear", "filmic" or "aces"; ConfigError naming `key` and the allowed names else.
+ToneCurve parseToneCurve(const std::string& name, const std::string& key = "--tonemap");
+
+/// The curve on one linear value (after exposure), in [0, 1]; NaN and negatives give 0.
+float toneCurve(float v, ToneCurve curve);
+
+/// Writes an 8-bit sRGB PNG atomically: 2^exposure, then `curve`, then the sRGB encoding
+/// (toneMapSrgb when Linear). Throws IoError.
+void writePng(const Image& img, const std::string& path, float exposure = 0.0f,
+              ToneCurve curve = ToneCurve::Linear);
 
 /// Error of `img` against `ref` over all pixels and channels (docs/metrics.md). Computed in
 /// core/metrics.cpp, the one implementation used by `compare` and the experiment harness.

@@ -290,7 +290,8 @@ void applyOverride(Json& doc, const std::string& assignment) {
     if (node->is_array()) {
       // lights.0.position: a decimal index into an existing element (arrays never grow here,
       // so a typo cannot create a light with every other key missing).
-      const bool digits = part.size() <= 9 && part.find_first_not_of("0123456789") == std::string::npos;
+      const bool digits =
+          part.size() <= 9 && part.find_first_not_of("0123456789") == std::string::npos;
       if (!digits)
         throw ConfigError("--set '" + assignment + "': '" + walked + "' is an array of " +
                           std::to_string(node->size()) + "; '" + part +

@@ -117,8 +117,7 @@ Medium parseMedium(Params p, LoadContext ctx) {
 
 }  // namespace
 
-Scene parseScene(const Json& doc, const std::filesystem::path& baseDir,
-                 const Medium* keepMedium) {
+Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Medium* keepMedium) {
   Params root(doc, "");
   Scene s;
   s.baseDir = baseDir;
@@ -158,7 +157,8 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
   for (const auto& o : overrides) applyOverride(doc, o);
   try {
     // Light paths are evaluated at the document's own time (core/animation.h).
-    return parseScene(sceneAtTime(doc, documentTime(doc)), std::filesystem::path(path).parent_path());
+    return parseScene(sceneAtTime(doc, documentTime(doc)),
+                      std::filesystem::path(path).parent_path());
   } catch (const ConfigError& e) {
     throw ConfigError(path + ": " + e.what());
   }

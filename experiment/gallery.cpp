@@ -8,7 +8,6 @@
 
 #include "experiment/detail.h"
 
-
 namespace scatterlab {
 
 std::string findPlotPython() {

@@ -7,9 +7,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <filesystem>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 
 #include "api/scatterlab.h"
@@ -158,8 +158,9 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("lights", [](const PyScene& s) { return s.parsed.lights.size(); })
       .def_property_readonly("bounds",
                              [](const PyScene& s) { return boundsTuple(s.parsed.medium.bounds); })
-      .def_property_readonly("document", [](const PyScene& s) { return fromJson(s.doc); },
-                             "The scene as a dict (a copy)")
+      .def_property_readonly(
+          "document", [](const PyScene& s) { return fromJson(s.doc); },
+          "The scene as a dict (a copy)")
       .def("__repr__", [](const PyScene& s) {
         return "<scatterlab.Scene " + std::to_string(s.parsed.camera.width) + "x" +
                std::to_string(s.parsed.camera.height) + ", " +
@@ -219,7 +220,8 @@ PYBIND11_MODULE(_core, m) {
           "set",
           [](Renderer& r, const std::string& key, const py::object& value) {
             const std::string a =
-                key + "=" + py::str(py::module_::import("json").attr("dumps")(value)).cast<std::string>();
+                key + "=" +
+                py::str(py::module_::import("json").attr("dumps")(value)).cast<std::string>();
             py::gil_scoped_release unlocked;
             r.set(a);
           },
@@ -259,7 +261,8 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "compare",
       [](const py::array& a, const py::array& b) {
-        const Image img = arrayImage(a, "compare: image"), ref = arrayImage(b, "compare: reference");
+        const Image img = arrayImage(a, "compare: image"),
+                    ref = arrayImage(b, "compare: reference");
         ImageError e;
         {
           py::gil_scoped_release unlocked;

@@ -16,11 +16,13 @@ int main() {
         {"resolution", 32},
         {"sigma_t", 2.0},
         {"albedo", 0.7}}},
-      {"lights", Json::array({{{"type", "point"},
-                               {"position", {0.5, 1.3, 0.5}},
-                               {"intensity", {3, 3, 3}}}})},
+      {"lights",
+       Json::array({{{"type", "point"}, {"position", {0.5, 1.3, 0.5}}, {"intensity", {3, 3, 3}}}})},
       {"camera",
-       {{"position", {0.5, 0.5, -2}}, {"look_at", {0.5, 0.5, 0.5}}, {"width", 24}, {"height", 18}}}};
+       {{"position", {0.5, 0.5, -2}},
+        {"look_at", {0.5, 0.5, 0.5}},
+        {"width", 24},
+        {"height", 18}}}};
   try {
     Renderer renderer(doc, ".", "per-voxel", "cpu");
     renderer.render();

@@ -98,14 +98,17 @@ TEST(Scene, OverridesIndexArrays) {
   const Scene s = parseScene(d, ".");
   EXPECT_FLOAT_EQ(s.lights[0].position.z, 0.25f);
   // Out of range, not an index, and a key below a number: each names the path.
-  EXPECT_NE(configMessage([&] { applyOverride(d, "lights.1.position=[0,0,0]"); })
-                .find("index 1 out of range: 'lights' has 1 element"),
+  EXPECT_NE(configMessage([&] {
+              applyOverride(d, "lights.1.position=[0,0,0]");
+            }).find("index 1 out of range: 'lights' has 1 element"),
             std::string::npos);
-  EXPECT_NE(configMessage([&] { applyOverride(d, "lights.first.position=[0,0,0]"); })
-                .find("'lights' is an array of 1; 'first' is not an element index"),
+  EXPECT_NE(configMessage([&] {
+              applyOverride(d, "lights.first.position=[0,0,0]");
+            }).find("'lights' is an array of 1; 'first' is not an element index"),
             std::string::npos);
-  EXPECT_NE(configMessage([&] { applyOverride(d, "lights.0.position.2.x=1"); })
-                .find("'lights.0.position.2' is not an object or an array"),
+  EXPECT_NE(configMessage([&] {
+              applyOverride(d, "lights.0.position.2.x=1");
+            }).find("'lights.0.position.2' is not an object or an array"),
             std::string::npos);
   EXPECT_EQ(d["lights"].size(), 1u);  // nothing appended
 }
