@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include "api/scatterlab.h"
+#ifdef SCATTERLAB_HAS_GPU
 #include "gpu/context.h"
+#endif
 #include "support/scenes.h"
 
 namespace scatterlab {
@@ -102,8 +104,12 @@ TEST(Renderer, KeptDensityEqualsFreshRenderCpu) {
 }
 
 TEST(Renderer, KeptDensityEqualsFreshRenderGpu) {
+#ifdef SCATTERLAB_HAS_GPU
   std::string why;
   if (!gpu::tryContext(&why)) GTEST_SKIP() << why;
+#else
+  GTEST_SKIP() << "built without the GPU backend";
+#endif
   initialize();
   Renderer r(blobDoc(), ".", "gradient", "gpu");
   r.render();

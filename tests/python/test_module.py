@@ -112,7 +112,7 @@ class Errors(unittest.TestCase):
             sl.load_scene("no_such_scene.json")
         with self.assertRaisesRegex(sl.ConfigError, "index 3 out of range: 'lights' has 1 element"):
             sl.load_scene(box_scene(), overrides={"lights.3.position": [0, 0, 0]})
-        with self.assertRaisesRegex(sl.ConfigError, "render.method"):
+        with self.assertRaisesRegex(sl.ConfigError, "unknown method .nonsense.; allowed: .adaptive."):
             sl.render(sl.load_scene(box_scene()), method="nonsense")
         self.assertTrue(issubclass(sl.ConfigError, sl.Error))
         self.assertTrue(issubclass(sl.Error, RuntimeError))
@@ -170,9 +170,9 @@ class RendererObject(unittest.TestCase):
         t.join()
         elapsed = time.perf_counter() - start
         # With the GIL held through the render, this thread could not run at all; released,
-        # it ticks about once per ms.
-        if elapsed > 0.05:
-            self.assertGreater(ticks, 10, f"{ticks} ticks in {elapsed:.3f} s")
+        # it ticks about once per ms. The render takes 0.33 s here (measured on the 2-core VM),
+        # so ~300 ticks; 10 leaves room for a loaded machine.
+        self.assertGreater(ticks, 10, f"{ticks} ticks in {elapsed:.3f} s")
         self.assertEqual(result["img"].shape, (120, 160, 3))
 
 
