@@ -95,7 +95,7 @@ TEST(Scene, OverridesIndexArrays) {
   applyOverride(d, "lights.0.position.2=0.25");
   EXPECT_EQ(d["lights"][0]["intensity"], Json::parse("[1,2,3]"));
   EXPECT_EQ(d["lights"][0]["position"][2], 0.25);
-  const Scene s = parseScene(d, ".");
+  const Scene s = sceneFromJson(d);
   EXPECT_FLOAT_EQ(s.lights[0].position.z, 0.25f);
   // Out of range, not an index, and a key below a number: each names the path.
   EXPECT_NE(configMessage([&] {
