@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -142,4 +144,45 @@ TEST_F(CliFrames, OutputExtensionDecidesTheFormat) {
   r = run("render " + scene + " -o " + out("g.exr") + " --tonemap reinhard");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--tonemap"), std::string::npos) << r.output;
+}
+
+TEST_F(CliFrames, InfoReadsPngAndPrintsJson) {
+  const std::string scene = writeScene(movingScene());
+  ASSERT_EQ(run("render " + scene + " -o " + out("i.exr") + " --png " + out("i.png") + " -q").code,
+            0);
+  const scatterlab::Image exr = scatterlab::readExr(out("i.exr"));
+  // The PNG's mean red as writePng quantises it: floor(toneMapSrgb(v)·255 + 0.5) / 255.
+  double pngRed = 0.0, exrRed = 0.0;
+  for (const scatterlab::Vec3& p : exr.pixels()) {
+    pngRed += std::floor(scatterlab::toneMapSrgb(p.x) * 255.0f + 0.5f) / 255.0;
+    exrRed += p.x;
+  }
+  pngRed /= double(exr.pixels().size());
+  exrRed /= double(exr.pixels().size());
+
+  RunResult r = run("info " + out("i.png") + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  Json j = Json::parse(r.output);
+  EXPECT_EQ(j["kind"], "image");
+  EXPECT_EQ(j["format"], "PNG");
+  EXPECT_EQ(j["width"], 16);
+  EXPECT_EQ(j["height"], 12);
+  EXPECT_EQ(j["bit_depth"], 8);
+  EXPECT_NEAR(j["mean"][0].get<double>(), pngRed, 1e-6);
+
+  r = run("info " + out("i.exr") + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  j = Json::parse(r.output);
+  EXPECT_EQ(j["format"], "OpenEXR");
+  EXPECT_NEAR(j["mean"][0].get<double>(), exrRed, 1e-6 * std::max(1.0, exrRed));
+
+  r = run("info " + scene + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  j = Json::parse(r.output);
+  EXPECT_EQ(j["kind"], "scene");
+  EXPECT_EQ(j["camera"]["width"], 16);
+  EXPECT_EQ(j["lights"][0]["type"], "point");
+
+  r = run("info " + out("i.png"));  // the text form names the format
+  EXPECT_NE(r.output.find("16x12 PNG, 8-bit RGB"), std::string::npos) << r.output;
 }
