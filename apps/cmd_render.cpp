@@ -4,6 +4,8 @@
 #include <fstream>
 #include <optional>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
@@ -33,6 +35,30 @@ std::string imageFormat(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
   return ext == ".exr" ? "exr" : ext == ".png" ? "png" : "";
+}
+
+/// Provenance and camera for the EXR header: scatterlab version, method, backend, device, scene
+/// file, frame time; worldToCamera (glm::lookAt: right-handed, the camera looking down −z) and
+/// worldToNDC (that times glm::perspective with the scene's vertical field of view and aspect,
+/// near 0.01, far 1000: OpenGL clip space, x and y in [−1, 1] after the divide, y up).
+ExrAttributes exrAttributes(const Scene& scene, const RenderStats& st, const std::string& file,
+                            double time) {
+  ExrAttributes a;
+  a.strings = {{"scatterlab:version", version()},  {"scatterlab:method", st.method},
+               {"scatterlab:backend", st.backend}, {"scatterlab:device", st.device},
+               {"scatterlab:scene", file},         {"scatterlab:time", std::to_string(time)}};
+  const Camera& c = scene.camera;
+  const glm::mat4 view = glm::lookAt(c.position, c.lookAt, c.up);
+  const glm::mat4 proj =
+      glm::perspective(glm::radians(c.fovYDeg), float(c.width) / float(c.height), 0.01f, 1000.0f);
+  const auto flat = [](const glm::mat4& m) {
+    std::array<float, 16> f{};
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) f[size_t(4 * i + j)] = m[i][j];
+    return f;
+  };
+  a.matrices = {{"worldToCamera", flat(view)}, {"worldToNDC", flat(proj * view)}};
+  return a;
 }
 
 /// OUT.exr -> OUT.0007.exr: the frame number, 4 digits, before the extension.
@@ -158,7 +184,7 @@ Action addRender(CLI::App& app) {
         if (imageFormat(o->out) == "png")
           writePng(r.image, tmp, o->exposure, curve);
         else
-          writeExr(r.image, tmp);
+          writeExr(r.image, tmp, exrAttributes(frameScene, r.stats, o->scene, renderer.time()));
       });
       if (!o->png.empty())
         out.stage(framePath(o->png, f),

@@ -4,7 +4,9 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <png.h>
 
 #include <algorithm>
@@ -17,12 +19,24 @@
 
 namespace scatterlab {
 
-void writeExr(const Image& img, const std::string& path) {
+void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
+  const bool hasAlpha = !img.alpha().empty();
+  if (hasAlpha && img.alpha().size() != img.pixels().size())
+    throw IoError("cannot write EXR '" + path + "': alpha has " +
+                  std::to_string(img.alpha().size()) + " values for " +
+                  std::to_string(img.pixels().size()) + " pixels");
   writeAtomically(path, [&](const std::string& tmp) {
     try {
       Imf::Header header(img.width(), img.height());
       for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+      if (hasAlpha) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
+      for (const auto& [name, value] : attributes.strings)
+        header.insert(name, Imf::StringAttribute(value));
+      for (const auto& [name, m] : attributes.matrices)
+        header.insert(name, Imf::M44fAttribute(Imath::M44f(m[0], m[1], m[2], m[3], m[4], m[5], m[6],
+                                                           m[7], m[8], m[9], m[10], m[11], m[12],
+                                                           m[13], m[14], m[15])));
       Imf::OutputFile file(tmp.c_str(), header);
       Imf::FrameBuffer fb;
       char* base = const_cast<char*>(reinterpret_cast<const char*>(img.pixels().data()));
@@ -30,6 +44,11 @@ void writeExr(const Image& img, const std::string& path) {
       fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
       fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
       fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+      if (hasAlpha)
+        fb.insert("A",
+                  Imf::Slice(Imf::FLOAT,
+                             const_cast<char*>(reinterpret_cast<const char*>(img.alpha().data())),
+                             sizeof(float), sizeof(float) * img.width()));
       file.setFrameBuffer(fb);
       file.writePixels(img.height());
     } catch (const std::exception& e) {
@@ -55,6 +74,12 @@ Image readExr(const std::string& path) {
     fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
     fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
     fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    if (ch.findChannel("A")) {
+      img.alpha().assign(size_t(w) * h, 0.0f);
+      char* abase = reinterpret_cast<char*>(img.alpha().data()) -
+                    (dw.min.x * sizeof(float) + dw.min.y * sizeof(float) * w);
+      fb.insert("A", Imf::Slice(Imf::FLOAT, abase, sizeof(float), sizeof(float) * w, 1, 1, 0.0));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return img;

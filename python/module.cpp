@@ -63,9 +63,21 @@ PyScene makeScene(Json doc, std::filesystem::path baseDir, const std::string& na
   return s;
 }
 
-py::array_t<float> imageArray(const Image& img) {
-  py::array_t<float> a({img.height(), img.width(), 3});
-  std::memcpy(a.mutable_data(), img.pixels().data(), img.pixels().size() * sizeof(Vec3));
+/// (H, W, 3), or (H, W, 4) with the alpha (1 − view transmittance) as the 4th channel.
+py::array_t<float> imageArray(const Image& img, bool rgba = false) {
+  if (!rgba) {
+    py::array_t<float> a({img.height(), img.width(), 3});
+    std::memcpy(a.mutable_data(), img.pixels().data(), img.pixels().size() * sizeof(Vec3));
+    return a;
+  }
+  if (img.alpha().size() != img.pixels().size())
+    throw ConfigError("rgba=True: the image has no alpha channel");
+  py::array_t<float> a({img.height(), img.width(), 4});
+  float* out = a.mutable_data();
+  for (size_t i = 0; i < img.pixels().size(); ++i) {
+    for (int c = 0; c < 3; ++c) out[4 * i + c] = img.pixels()[i][c];
+    out[4 * i + 3] = img.alpha()[i];
+  }
   return a;
 }
 
@@ -98,14 +110,14 @@ py::tuple boundsTuple(const Box& b) {
 }
 
 /// (image, stats) or, with volumes, (image, stats, {"density", "radiance", "bounds"}).
-py::tuple resultTuple(const RenderResult& r, bool volumes, const Box& bounds) {
+py::tuple resultTuple(const RenderResult& r, bool volumes, const Box& bounds, bool rgba) {
   py::object stats = fromJson(r.stats.toJson());
-  if (!volumes) return py::make_tuple(imageArray(r.image), stats);
+  if (!volumes) return py::make_tuple(imageArray(r.image, rgba), stats);
   py::dict v;
   v["density"] = r.density ? py::object(densityArray(*r.density)) : py::none();
   v["radiance"] = r.radiance ? py::object(radianceArray(*r.radiance)) : py::none();
   v["bounds"] = boundsTuple(bounds);
-  return py::make_tuple(imageArray(r.image), stats, v);
+  return py::make_tuple(imageArray(r.image, rgba), stats, v);
 }
 
 py::dict errorDict(const ImageError& e) {
@@ -194,17 +206,18 @@ PYBIND11_MODULE(_core, m) {
 
   m.def(
       "render",
-      [](const PyScene& s, const std::string& method, const std::string& backend, bool volumes) {
+      [](const PyScene& s, const std::string& method, const std::string& backend, bool volumes,
+         bool rgba) {
         RenderResult r;
         {
           py::gil_scoped_release unlocked;
           Renderer renderer(s.doc, s.baseDir, method, backend);
           r = renderer.render(nullptr);
         }
-        return resultTuple(r, volumes, s.parsed.medium.bounds);
+        return resultTuple(r, volumes, s.parsed.medium.bounds, rgba);
       },
       py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto",
-      py::arg("volumes") = false,
+      py::arg("volumes") = false, py::arg("rgba") = false,
       "Renders the scene: (image float32 (H,W,3), stats dict), plus a dict of the method's "
       "density and radiance volumes with volumes=True");
 
@@ -235,15 +248,16 @@ PYBIND11_MODULE(_core, m) {
           "Animation time: light paths and a medium that moves with time")
       .def(
           "render",
-          [](Renderer& r, bool volumes) {
+          [](Renderer& r, bool volumes, bool rgba) {
             RenderResult res;
             {
               py::gil_scoped_release unlocked;
               res = r.render(nullptr);
             }
-            return resultTuple(res, volumes, r.scene().medium.bounds);
+            return resultTuple(res, volumes, r.scene().medium.bounds, rgba);
           },
-          py::arg("volumes") = false, "(image, stats[, volumes]) as scatterlab.render");
+          py::arg("volumes") = false, py::arg("rgba") = false,
+          "(image, stats[, volumes]) as scatterlab.render");
 
   m.def(
       "density_volume",
@@ -275,8 +289,10 @@ PYBIND11_MODULE(_core, m) {
       "visibly_wrong");
 
   m.def(
-      "read_exr", [](const std::string& path) { return imageArray(readExr(path)); },
-      py::arg("path"), "R, G, B of an OpenEXR file as float32 (H, W, 3)");
+      "read_exr",
+      [](const std::string& path, bool rgba) { return imageArray(readExr(path), rgba); },
+      py::arg("path"), py::arg("rgba") = false,
+      "R, G, B of an OpenEXR file as float32 (H, W, 3); with rgba=True (H, W, 4) with A");
   m.def(
       "write_exr",
       [](const py::array& img, const std::string& path) {

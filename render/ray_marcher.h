@@ -2,7 +2,8 @@
 /// The CPU ray marcher (the integrator stage): for each pixel, march the camera ray through the
 /// medium box and sum in-scattering, front to back:
 ///   L += T · (σs/σt) · (1 − exp(−σt·D·Δt)) · S(x_mid),   T *= exp(−σt·D·Δt),
-/// which is exact for D and S constant over each step; then L += T · background.
+/// which is exact for D and S constant over each step; then L += T · background, and the
+/// pixel's alpha is 1 − T (Image::alpha, for compositing).
 /// `source(x, toViewer)` supplies S: traced (exact method) or looked up in a volume.
 
 #include <tbb/blocked_range.h>
@@ -23,6 +24,7 @@ Image marchImage(const Scene& scene, const DensityGrid& density, const Source& s
   const Medium& m = scene.medium;
   const float sigmaT = m.sigmaT, ratio = m.albedo;  // σs/σt = Ω
   Image img(cam.width, cam.height);
+  img.alpha().assign(img.pixels().size(), 0.0f);
   tbb::parallel_for(tbb::blocked_range<int>(0, cam.height),
                     [&](const tbb::blocked_range<int>& rows) {
                       for (int y = rows.begin(); y < rows.end(); ++y) {
@@ -47,6 +49,7 @@ Image marchImage(const Scene& scene, const DensityGrid& density, const Source& s
                             }
                           }
                           img.at(x, y) = L + T * scene.background;
+                          img.alpha()[size_t(y) * cam.width + x] = 1.0f - T;
                         }
                         if (progress) progress->advance(1);
                       }

@@ -56,6 +56,17 @@ class LoadAndRender(unittest.TestCase):
             tool = sl.read_exr(out)
             self.assertEqual(np.abs(img - tool).max(), 0.0)
             self.assertGreater(img.mean(), 0.0)
+            # The EXR's A channel is the render's alpha, 1 - transmittance of the view ray.
+            rgba, _ = sl.render(sl.load_scene(path), method="exact", backend="cpu", rgba=True)
+            self.assertEqual(rgba.shape, (18, 24, 4))
+            self.assertEqual(np.abs(rgba - sl.read_exr(out, rgba=True)).max(), 0.0)
+
+    def test_alpha_is_beer_lambert(self):
+        # 25x33 so the centre pixel's ray crosses the unit box along +z: T = exp(-sigma_t D).
+        rgba, _ = sl.render(sl.load_scene(box_scene(width=33, height=25, value=0.8)),
+                            method="exact", backend="cpu", rgba=True)
+        self.assertAlmostEqual(float(rgba[12, 16, 3]), 1 - np.exp(-2.0 * 0.8), places=5)
+        self.assertEqual(float(rgba[0, 0, 3]), 0.0)
 
     def test_volumes(self):
         scene = sl.load_scene(box_scene(value=0.8, resolution=8))
