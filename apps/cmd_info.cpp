@@ -55,7 +55,9 @@ void printImageInfo(const std::string& path) {
     sum += glm::dvec3(p);
   }
   sum /= double(std::max<size_t>(1, img.pixels().size()));
-  std::printf("image %s: %dx%d RGB float\n", path.c_str(), img.width(), img.height());
+  std::printf(
+      "image %s: %dx%d %s\n", path.c_str(), img.width(), img.height(),
+      img.alpha().empty() ? "RGB float" : "RGBA float (A = 1 - transmittance of the view ray)");
   std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", lo.x, lo.y, lo.z, hi.x, hi.y,
               hi.z, sum.x, sum.y, sum.z);
 }
@@ -164,8 +166,9 @@ Json describeScene(const std::string& path) {
 
 Json describeExr(const std::string& path) {
   const Image img = readExr(path);
-  Json j = {{"file", path},         {"kind", "image"},        {"format", "OpenEXR"},
-            {"width", img.width()}, {"height", img.height()}, {"channels", "RGB float (linear)"}};
+  Json j = {{"file", path},           {"kind", "image"},
+            {"format", "OpenEXR"},    {"width", img.width()},
+            {"height", img.height()}, {"channels", img.alpha().empty() ? "RGB" : "RGBA"}};
   j.update(pixelStats(img.pixels()));
   return j;
 }

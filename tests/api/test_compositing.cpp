@@ -47,7 +47,8 @@ TEST(Compositing, AlphaIsOneMinusTransmittanceOfExact) {
   const Image img = render(boxDoc(Vec3(0.0f)), "exact", "cpu");
   // Beer–Lambert along the centre ray: T = exp(−σt·D·1).
   const float alpha = img.alpha()[size_t(12) * 33 + 16];
-  EXPECT_NEAR(alpha, 1.0 - std::exp(-2.0 * 0.8), 1e-5);
+  // Measured 3.0e-8 (float exp per step; constant density, so the steps are exact).
+  EXPECT_NEAR(alpha, 1.0 - std::exp(-2.0 * 0.8), 5e-8);
   // A corner ray misses the box: nothing in front of the plate.
   EXPECT_EQ(img.alpha()[0], 0.0f);
 }
@@ -58,7 +59,8 @@ TEST(Compositing, FogOverAPlateCpu) {
     SCOPED_TRACE(method);
     const Image black = render(boxDoc(Vec3(0.0f)), method, "cpu");
     const Image over = render(boxDoc(plate), method, "cpu");
-    EXPECT_LT(compositeError(black, over, plate), 1e-5);
+    // Measured 6.0e-8 for each (float rounding of L + T·plate against L + (1 − (1 − T))·plate).
+    EXPECT_LT(compositeError(black, over, plate), 1e-7);
   }
 }
 
@@ -69,10 +71,12 @@ TEST(Compositing, FogOverAPlateGpu) {
   const Vec3 plate(0.3f, 0.5f, 0.7f);
   const Image black = render(boxDoc(Vec3(0.0f)), "gradient", "gpu");
   const Image over = render(boxDoc(plate), "gradient", "gpu");
-  EXPECT_LT(compositeError(black, over, plate), 1e-5);
-  // The slice marcher's transmittance agrees with the CPU marcher's (centre pixel).
+  // Measured 1.8e-7 on llvmpipe (the blend unit's float arithmetic).
+  EXPECT_LT(compositeError(black, over, plate), 3e-7);
+  // The slice marcher's transmittance agrees with the CPU marcher's (centre pixel): measured
+  // equal to 1e-8 on llvmpipe; 1e-5 leaves room for a hardware GPU's exp.
   const Image cpu = render(boxDoc(Vec3(0.0f)), "gradient", "cpu");
-  EXPECT_NEAR(black.alpha()[size_t(12) * 33 + 16], cpu.alpha()[size_t(12) * 33 + 16], 2e-3);
+  EXPECT_NEAR(black.alpha()[size_t(12) * 33 + 16], cpu.alpha()[size_t(12) * 33 + 16], 1e-5);
 #else
   GTEST_SKIP() << "built without the GPU backend";
 #endif

@@ -174,6 +174,7 @@ TEST_F(CliFrames, InfoReadsPngAndPrintsJson) {
   ASSERT_EQ(r.code, 0) << r.output;
   j = Json::parse(r.output);
   EXPECT_EQ(j["format"], "OpenEXR");
+  EXPECT_EQ(j["channels"], "RGBA");  // A = 1 - transmittance (tests/api/test_compositing.cpp)
   EXPECT_NEAR(j["mean"][0].get<double>(), exrRed, 1e-6 * std::max(1.0, exrRed));
 
   r = run("info " + scene + " --json");
