@@ -7,11 +7,18 @@
 ///   auto method = scatterlab::createMethod(scene, "exact", "cpu");
 ///   scatterlab::RenderResult r = method->render(scene, nullptr);
 ///   scatterlab::writeExr(r.image, "glow.exr");
+///
+/// Re-rendering while lights, camera or time change: scatterlab::Renderer (api/renderer.h).
+/// Building a medium in code: the density models of media/procedural.h and media/dense_grid.h.
 
+#include "api/renderer.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/method.h"
+#include "core/metrics.h"
 #include "core/scene.h"
+#include "media/dense_grid.h"
+#include "media/procedural.h"
 
 namespace scatterlab {
 

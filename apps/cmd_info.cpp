@@ -1,3 +1,5 @@
+#include <png.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -63,9 +65,188 @@ void printImageInfo(const std::string& path) {
     sum += glm::dvec3(p);
   }
   sum /= double(std::max<size_t>(1, img.pixels().size()));
-  std::printf("image %s: %dx%d RGB float\n", path.c_str(), img.width(), img.height());
+  std::printf(
+      "image %s: %dx%d %s\n", path.c_str(), img.width(), img.height(),
+      img.alpha().empty() ? "RGB float" : "RGBA float (A = 1 - transmittance of the view ray)");
   std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", lo.x, lo.y, lo.z, hi.x, hi.y,
               hi.z, sum.x, sum.y, sum.z);
+}
+
+namespace {
+
+Json vec(const Vec3& v) {
+  return {v.x, v.y, v.z};
+}
+
+/// min, max, mean per channel of RGB pixels.
+Json pixelStats(const std::vector<Vec3>& px) {
+  Vec3 lo(kInfinity), hi(-kInfinity);
+  glm::dvec3 sum(0.0);
+  for (const Vec3& p : px) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+    sum += glm::dvec3(p);
+  }
+  sum /= double(std::max<size_t>(1, px.size()));
+  return {{"min", vec(lo)}, {"max", vec(hi)}, {"mean", {sum.x, sum.y, sum.z}}};
+}
+
+/// An 8-bit (or 16-bit, reduced) PNG as RGB in [0, 1], the stored (display-encoded) values.
+Image readPngRgb(const std::string& path, int* bitDepth, int* colorType) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&img, path.c_str()))
+    throw IoError("cannot read PNG '" + path + "': " + img.message);
+  img.format = PNG_FORMAT_RGB;
+  std::vector<unsigned char> buf(PNG_IMAGE_SIZE(img));
+  if (!png_image_finish_read(&img, nullptr, buf.data(), 0, nullptr)) {
+    png_image_free(&img);
+    throw IoError("cannot read PNG '" + path + "': " + img.message);
+  }
+  // The header's own depth and colour type, for the description.
+  FILE* f = std::fopen(path.c_str(), "rb");
+  unsigned char head[26] = {};
+  if (f) {
+    if (std::fread(head, 1, sizeof head, f) != sizeof head) head[24] = head[25] = 0;
+    std::fclose(f);
+  }
+  *bitDepth = head[24];
+  *colorType = head[25];
+  Image out(int(img.width), int(img.height));
+  for (size_t i = 0; i < out.pixels().size(); ++i)
+    out.pixels()[i] = Vec3(buf[3 * i], buf[3 * i + 1], buf[3 * i + 2]) / 255.0f;
+  return out;
+}
+
+const char* pngColorType(int t) {
+  switch (t) {
+    case 0:
+      return "gray";
+    case 2:
+      return "RGB";
+    case 3:
+      return "palette";
+    case 4:
+      return "gray + alpha";
+    case 6:
+      return "RGBA";
+  }
+  return "unknown";
+}
+
+}  // namespace
+
+Json describeScene(const std::string& path) {
+  const Scene s = loadScene(path);
+  createMethod(s);  // validates the render settings
+  const Medium& m = s.medium;
+  Json lights = Json::array();
+  for (const Light& l : s.lights) {
+    const bool dir = l.type == Light::Type::Directional;
+    Json j = {{"type", l.type == Light::Type::Point  ? "point"
+                       : l.type == Light::Type::Spot ? "spot"
+                                                     : "directional"},
+              {dir ? "irradiance" : "intensity", vec(l.intensity)}};
+    if (!dir) j["position"] = vec(l.position);
+    if (l.type != Light::Type::Point) j["direction"] = vec(l.direction);
+    lights.push_back(j);
+  }
+  const Camera& c = s.camera;
+  return {{"file", path},
+          {"kind", "scene"},
+          {"medium",
+           {{"bounds", {{"min", vec(m.bounds.min)}, {"max", vec(m.bounds.max)}}},
+            {"resolution", {m.resolution.x, m.resolution.y, m.resolution.z}},
+            {"sigma_t", m.sigmaT},
+            {"albedo", m.albedo},
+            {"phase", m.phase.type == Phase::Type::Isotropic
+                          ? Json{{"type", "isotropic"}}
+                          : Json{{"type", "henyey-greenstein"}, {"g", m.phase.g}}},
+            {"density", {{"type", m.density->type()}, {"description", m.density->describe()}}}}},
+          {"lights", lights},
+          {"camera",
+           {{"position", vec(c.position)},
+            {"look_at", vec(c.lookAt)},
+            {"up", vec(c.up)},
+            {"fov_y_deg", c.fovYDeg},
+            {"width", c.width},
+            {"height", c.height}}},
+          {"render", s.render}};
+}
+
+Json describeExr(const std::string& path) {
+  const Image img = readExr(path);
+  Json j = {{"file", path},           {"kind", "image"},
+            {"format", "OpenEXR"},    {"width", img.width()},
+            {"height", img.height()}, {"channels", img.alpha().empty() ? "RGB" : "RGBA"}};
+  j.update(pixelStats(img.pixels()));
+  return j;
+}
+
+void printPngInfo(const std::string& path) {
+  int depth = 0, type = 0;
+  const Image img = readPngRgb(path, &depth, &type);
+  const Json st = pixelStats(img.pixels());
+  std::printf("image %s: %dx%d PNG, %d-bit %s (display-encoded values in [0, 1])\n", path.c_str(),
+              img.width(), img.height(), depth, pngColorType(type));
+  const auto v = [&](const char* k, int a) { return st[k][a].get<double>(); };
+  std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", v("min", 0), v("min", 1),
+              v("min", 2), v("max", 0), v("max", 1), v("max", 2), v("mean", 0), v("mean", 1),
+              v("mean", 2));
+}
+
+Json describePng(const std::string& path) {
+  int depth = 0, type = 0;
+  const Image img = readPngRgb(path, &depth, &type);
+  Json j = {{"file", path},
+            {"kind", "image"},
+            {"format", "PNG"},
+            {"width", img.width()},
+            {"height", img.height()},
+            {"bit_depth", depth},
+            {"color_type", pngColorType(type)}};
+  j.update(pixelStats(img.pixels()));
+  return j;
+}
+
+Json describeVdb(const std::string& path) {
+  Json grids = Json::array();
+  for (const VdbGridInfo& g : inspectVdb(path)) {
+    Json j = {{"name", g.name},
+              {"value_type", g.valueType},
+              {"class", g.gridClass},
+              {"affine", g.affine},
+              {"saved_as_half", g.savedAsHalf},
+              {"voxel_size", {g.voxelSize.x, g.voxelSize.y, g.voxelSize.z}},
+              {"active_voxels", g.activeVoxels},
+              {"active_tiles", g.activeTiles},
+              {"leaf_nodes", g.leafNodes},
+              {"empty", g.empty}};
+    if (!g.empty) {
+      j["index_min"] = {g.indexMin.x, g.indexMin.y, g.indexMin.z};
+      j["index_max"] = {g.indexMax.x, g.indexMax.y, g.indexMax.z};
+      j["world_bounds"] = {{"min", vec(g.worldBounds.min)}, {"max", vec(g.worldBounds.max)}};
+    }
+    if (g.hasValueRange) j["values"] = {g.valueMin, g.valueMax};
+    grids.push_back(j);
+  }
+  return {{"file", path}, {"kind", "OpenVDB"}, {"grids", grids}};
+}
+
+Json describeSog(const std::string& path) {
+  const SogModel m = readSog(path);
+  const ResidualHash& h = m.residual;
+  const IVec3 n = h.dims();
+  return {{"file", path},
+          {"kind", "sum-of-Gaussians model"},
+          {"bytes", m.fileBytes()},
+          {"gaussians", m.gaussians.size()},
+          {"lattice",
+           {{"min", vec(h.bounds().min)}, {"max", vec(h.bounds().max)}, {"dims", {n.x, n.y, n.z}}}},
+          {"residual_entries", h.size()},
+          {"hash_bits", h.bits()},
+          {"step", h.step()},
+          {"threshold", m.threshold}};
 }
 
 /// `info --gpu`: the OpenGL device the GPU backend would use (creates the context).
@@ -94,12 +275,11 @@ void printVdbInfo(const std::string& path) {
       continue;
     }
     const IVec3 d = g.indexMax - g.indexMin + 1;
-    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x,
-                g.indexMin.y, g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y,
-                d.z);
+    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x, g.indexMin.y,
+                g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y, d.z);
     std::printf("    world box    [%g %g %g]..[%g %g %g] (voxel cells, axis-aligned)\n",
-                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z,
-                g.worldBounds.max.x, g.worldBounds.max.y, g.worldBounds.max.z);
+                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z, g.worldBounds.max.x,
+                g.worldBounds.max.y, g.worldBounds.max.z);
     std::printf("    active       %llu voxels (%llu active tiles, %llu leaf nodes)\n",
                 (unsigned long long)g.activeVoxels, (unsigned long long)g.activeTiles,
                 (unsigned long long)g.leafNodes);
@@ -119,19 +299,24 @@ void printSogInfo(const std::string& path) {
   std::printf("  lattice        [%g %g %g]..[%g %g %g], %dx%dx%d\n", h.bounds().min.x,
               h.bounds().min.y, h.bounds().min.z, h.bounds().max.x, h.bounds().max.y,
               h.bounds().max.z, n.x, n.y, n.z);
-  std::printf("  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
-              "threshold %g\n",
-              h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(),
-              double(h.step()), double(m.threshold));
+  std::printf(
+      "  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
+      "threshold %g\n",
+      h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(), double(h.step()),
+      double(m.threshold));
 }
 
 Action addInfo(CLI::App& app) {
   auto file = std::make_shared<std::string>();
-  auto gpuFlag = std::make_shared<bool>(false);
-  CLI::App* c = app.add_subcommand("info", "Describe a scene (.json), image (.exr) or volume");
+  auto gpuFlag = std::make_shared<bool>(false), jsonFlag = std::make_shared<bool>(false);
+  CLI::App* c = app.add_subcommand(
+      "info", "Describe a scene (.json), image (.exr, .png), volume (.vdb) or model (.sog)");
   c->add_option("file", *file, "File to describe");
-  c->add_flag("--gpu", *gpuFlag, "Print the OpenGL vendor, renderer and version of the GPU backend");
-  return [file, gpuFlag]() {
+  c->add_flag("--gpu", *gpuFlag,
+              "Print the OpenGL vendor, renderer and version of the GPU backend");
+  c->add_flag("--json", *jsonFlag, "Print the file's facts as one JSON object (not with --gpu)");
+  return [file, gpuFlag, jsonFlag]() {
+    if (*jsonFlag && *gpuFlag) throw ConfigError("info: --json describes a FILE, not --gpu");
     if (*gpuFlag) printGpuInfo();
     if (file->empty()) {
       if (*gpuFlag) return 0;
@@ -141,7 +326,10 @@ Action addInfo(CLI::App& app) {
     std::string ext = std::filesystem::path(*file).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (const InfoHandler* h = findInfoHandler(ext)) {
-      h->print(*file);
+      if (*jsonFlag)
+        std::printf("%s\n", h->describe(*file).dump(2).c_str());
+      else
+        h->print(*file);
       return 0;
     }
     std::string known;
@@ -152,10 +340,11 @@ Action addInfo(CLI::App& app) {
 
 const std::vector<InfoHandler>& infoHandlers() {
   static const std::vector<InfoHandler> h = {
-      {".json", "scene", printSceneInfo},
-      {".exr", "OpenEXR image", printImageInfo},
-      {".vdb", "OpenVDB volume", printVdbInfo},
-      {".sog", "sum-of-Gaussians model", printSogInfo},
+      {".json", "scene", printSceneInfo, describeScene},
+      {".exr", "OpenEXR image", printImageInfo, describeExr},
+      {".png", "PNG image", printPngInfo, describePng},
+      {".vdb", "OpenVDB volume", printVdbInfo, describeVdb},
+      {".sog", "sum-of-Gaussians model", printSogInfo, describeSog},
   };
   return h;
 }

@@ -1,5 +1,10 @@
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <optional>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
@@ -9,18 +14,89 @@
 
 namespace scatterlab::cli {
 
+namespace {
+
+/// "A:B" (inclusive, 0 <= A <= B, at most 100000 frames) -> {A, B}; nullopt when malformed.
+std::optional<std::pair<int, int>> parseFrames(const std::string& text) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) return std::nullopt;
+  const std::string a = text.substr(0, colon), b = text.substr(colon + 1);
+  const auto digits = [](const std::string& s) {
+    return s.size() <= 6 && s.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (!digits(a) || !digits(b)) return std::nullopt;
+  const int first = std::stoi(a), last = std::stoi(b);
+  if (first > last || last - first >= 100000) return std::nullopt;
+  return std::make_pair(first, last);
+}
+
+/// The image format `-o` asks for, by extension (case-insensitive): "exr", "png" or "".
+std::string imageFormat(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
+  return ext == ".exr" ? "exr" : ext == ".png" ? "png" : "";
+}
+
+/// Provenance and camera for the EXR header: scatterlab version, method, backend, device, scene
+/// file, frame time; worldToCamera (glm::lookAt: right-handed, the camera looking down −z) and
+/// worldToNDC (that times glm::perspective with the scene's vertical field of view and aspect,
+/// near 0.01, far 1000: OpenGL clip space, x and y in [−1, 1] after the divide, y up).
+ExrAttributes exrAttributes(const Scene& scene, const RenderStats& st, const std::string& file,
+                            double time) {
+  ExrAttributes a;
+  a.strings = {{"scatterlab:version", version()},  {"scatterlab:method", st.method},
+               {"scatterlab:backend", st.backend}, {"scatterlab:device", st.device},
+               {"scatterlab:scene", file},         {"scatterlab:time", std::to_string(time)}};
+  const Camera& c = scene.camera;
+  const glm::mat4 view = glm::lookAt(c.position, c.lookAt, c.up);
+  const glm::mat4 proj =
+      glm::perspective(glm::radians(c.fovYDeg), float(c.width) / float(c.height), 0.01f, 1000.0f);
+  const auto flat = [](const glm::mat4& m) {
+    std::array<float, 16> f{};
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) f[size_t(4 * i + j)] = m[i][j];
+    return f;
+  };
+  a.matrices = {{"worldToCamera", flat(view)}, {"worldToNDC", flat(proj * view)}};
+  return a;
+}
+
+/// OUT.exr -> OUT.0007.exr: the frame number, 4 digits, before the extension.
+std::string framePath(const std::string& path, int frame) {
+  if (path.empty() || frame < 0) return path;
+  const std::filesystem::path p(path);
+  char num[16];
+  std::snprintf(num, sizeof num, ".%04d", frame);
+  return (p.parent_path() / (p.stem().string() + num + p.extension().string())).string();
+}
+
+}  // namespace
+
 Action addRender(CLI::App& app) {
   struct Opts {
     std::string scene, out, png, method, backend = "auto", stats, samplesPng, densityVdb,
                                          radianceVdb;
     std::vector<std::string> sets;
+    std::string frames, tonemap = "linear";
+    double fps = 24.0;
     float exposure = 0.0f;
     bool quiet = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* c = app.add_subcommand("render", "Render a scene file to OpenEXR (and PNG)");
   c->add_option("scene", o->scene, "Scene file (JSON)")->required();
-  c->add_option("-o,--output", o->out, "Output OpenEXR image (linear RGB float)")->required();
+  c->add_option("-o,--output", o->out,
+                "Output image; the extension decides the format: .exr (linear RGB float) or "
+                ".png (tone-mapped sRGB, as --png)")
+      ->required()
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            // A directory is left to checkWritablePath, which says so.
+            return imageFormat(v).empty() && !std::filesystem::is_directory(v)
+                       ? "'" + v + "' has an unknown extension: expected .exr or .png"
+                       : "";
+          },
+          "FILE.exr|FILE.png"));
   c->add_option("--png", o->png, "Also write a tone-mapped sRGB PNG");
   c->add_option("--method", o->method,
                 "Rendering method (overrides render.method): exact, per-voxel, ...");
@@ -33,6 +109,24 @@ Action addRender(CLI::App& app) {
       ->take_all()
       ->allow_extra_args(false);
   c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)");
+  c->add_option("--tonemap", o->tonemap,
+                "Tone curve of the PNG previews (--png, a .png -o, --samples-png): linear "
+                "(clamp, the default), filmic (Hable) or aces (Narkowicz); after --exposure")
+      ->check(CLI::IsMember({"linear", "filmic", "aces"}));
+  c->add_option("--frames", o->frames,
+                "Render frames A..B (inclusive) of an animation at time = frame / fps (light "
+                "paths, procedural time, .sog sequences), writing OUT.{frame:04}.exr (and the "
+                "same numbering for --png, --stats and the VDBs)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            return parseFrames(v) ? ""
+                                  : "'" + v +
+                                        "' is not a frame range: expected A:B with integers "
+                                        "0 <= A <= B (at most 100000 frames), e.g. 0:47";
+          },
+          "A:B"));
+  c->add_option("--fps", o->fps, "Frames per unit of scene time for --frames (default 24)")
+      ->check(CLI::PositiveNumber);
   c->add_option("--samples-png", o->samplesPng,
                 "Also write a PNG of the radiance samples over the dimmed image, coloured by "
                 "level (white initial, green/yellow/red finer); sample-based methods only");
@@ -44,11 +138,13 @@ Action addRender(CLI::App& app) {
                 "'radiance'); CPU methods that build one (not exact)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
-    const Scene scene = loadScene(o->scene, o->sets);
-    auto method = createMethod(scene, o->method, o->backend);
-    if (!method->ignoredKeys.empty()) {
+    const ToneCurve curve = parseToneCurve(o->tonemap);
+    Renderer renderer = Renderer::fromFile(o->scene, o->sets, o->method, o->backend);
+    const Scene& scene = renderer.scene();
+    const Method& method = renderer.method();
+    if (!method.ignoredKeys.empty()) {
       std::string list;
-      for (const std::string& k : method->ignoredKeys)
+      for (const std::string& k : method.ignoredKeys)
         list += (list.empty() ? "'" : ", '") + k + "'";
       std::fprintf(
           stderr, "scatterlab: warning: ignoring %s (read by other methods, not '%s')\n",
@@ -56,60 +152,107 @@ Action addRender(CLI::App& app) {
           (o->method.empty() ? scene.render.value("method", std::string("exact")) : o->method)
               .c_str());
     }
+    // The frames: one unnumbered render, or A..B of a sequence. Every frame's scene is checked
+    // (light paths) before the first render, so a bad key fails before anything is written.
+    std::vector<int> frames{-1};
+    if (!o->frames.empty()) {
+      const auto [first, last] = *parseFrames(o->frames);
+      frames.clear();
+      for (int f = first; f <= last; ++f) frames.push_back(f);
+      sceneAtTime(renderer.document(), 0.0);
+    }
+    const auto timeOf = [&](int f) { return f / o->fps; };
     // Refuse unwritable outputs before spending time on the render.
-    checkWritablePath(o->out);
-    if (!o->png.empty()) checkWritablePath(o->png);
-    if (!o->stats.empty()) checkWritablePath(o->stats);
-    if (!o->samplesPng.empty()) checkWritablePath(o->samplesPng);
-    if (!o->densityVdb.empty()) checkWritablePath(o->densityVdb);
-    if (!o->radianceVdb.empty()) checkWritablePath(o->radianceVdb);
+    for (int f : frames)
+      for (const std::string* p :
+           {&o->out, &o->png, &o->stats, &o->samplesPng, &o->densityVdb, &o->radianceVdb})
+        if (!p->empty()) checkWritablePath(framePath(*p, f));
 
-    Progress progress("render", 1, !o->quiet);
-    RenderResult r = method->render(scene, &progress);
-    progress.restart("write", 1);
-
+    const bool sequence = frames.size() > 1 || frames[0] >= 0;
+    Progress progress(sequence ? "frames" : "render", sequence ? (long long)frames.size() : 1,
+                      !o->quiet);
+    // One set of pending outputs for the whole sequence: on any error no frame is left.
     PendingOutputs out;
-    out.stage(o->out, [&](const std::string& tmp) { writeExr(r.image, tmp); });
-    if (!o->png.empty())
-      out.stage(o->png, [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure); });
-    if (!o->stats.empty())
-      out.stage(o->stats, [&](const std::string& tmp) {
-        std::ofstream f(tmp);
-        f << r.stats.toJson().dump(2) << "\n";
-        if (!f) throw IoError("cannot write stats '" + o->stats + "'");
+    std::vector<RenderStats> summaries;  // per frame, for the summary line
+    for (int f : frames) {
+      if (f >= 0) renderer.setTime(timeOf(f));
+      RenderResult r = renderer.render(sequence ? nullptr : &progress);
+      if (f >= 0) r.stats.extra["frame"] = f;
+      if (!sequence) progress.restart("write", 1);
+      const Scene& frameScene = renderer.scene();
+      out.stage(framePath(o->out, f), [&](const std::string& tmp) {
+        if (imageFormat(o->out) == "png")
+          writePng(r.image, tmp, o->exposure, curve);
+        else
+          writeExr(r.image, tmp, exrAttributes(frameScene, r.stats, o->scene, renderer.time()));
       });
-    if (!o->samplesPng.empty()) {
-      if (r.samples.empty())
-        throw ConfigError("--samples-png: method '" + r.stats.method +
-                          "' used no radiance samples");
-      const Image view = drawSamples(r.image, r.samples, scene.camera);
-      out.stage(o->samplesPng, [&](const std::string& tmp) { writePng(view, tmp, o->exposure); });
-    }
-    const auto noVolume = [&](const char* option, const char* what) {
-      return ConfigError(std::string(option) + ": method '" + r.stats.method + "' (" +
-                         r.stats.backend + ") has no " + what +
-                         " volume on the host; use a CPU method that builds one");
-    };
-    if (!o->densityVdb.empty()) {
-      if (!r.density) throw noVolume("--density-vdb", "density");
-      out.stage(o->densityVdb, [&](const std::string& tmp) { writeVdb(tmp, *r.density); });
-    }
-    if (!o->radianceVdb.empty()) {
-      if (!r.radiance) throw noVolume("--radiance-vdb", "source-radiance");
-      out.stage(o->radianceVdb, [&](const std::string& tmp) { writeVdb(tmp, *r.radiance); });
+      if (!o->png.empty())
+        out.stage(framePath(o->png, f),
+                  [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure, curve); });
+      if (!o->stats.empty())
+        out.stage(framePath(o->stats, f), [&](const std::string& tmp) {
+          std::ofstream file(tmp);
+          file << r.stats.toJson().dump(2) << "\n";
+          if (!file) throw IoError("cannot write stats '" + framePath(o->stats, f) + "'");
+        });
+      if (!o->samplesPng.empty()) {
+        if (r.samples.empty())
+          throw ConfigError("--samples-png: method '" + r.stats.method +
+                            "' used no radiance samples");
+        const Image view = drawSamples(r.image, r.samples, frameScene.camera);
+        out.stage(framePath(o->samplesPng, f),
+                  [&](const std::string& tmp) { writePng(view, tmp, o->exposure, curve); });
+      }
+      const auto noVolume = [&](const char* option, const char* what) {
+        return ConfigError(std::string(option) + ": method '" + r.stats.method + "' (" +
+                           r.stats.backend + ") has no " + what +
+                           " volume on the host; use a CPU method that builds one");
+      };
+      if (!o->densityVdb.empty()) {
+        if (!r.density) throw noVolume("--density-vdb", "density");
+        out.stage(framePath(o->densityVdb, f), [&](const std::string& tmp) {
+          writeVdb(tmp, *r.density, "density",
+                   {frameScene.medium.sigmaT, frameScene.medium.albedo});
+        });
+      }
+      if (!o->radianceVdb.empty()) {
+        if (!r.radiance) throw noVolume("--radiance-vdb", "source-radiance");
+        out.stage(framePath(o->radianceVdb, f), [&](const std::string& tmp) {
+          writeVdb(tmp, *r.radiance, "radiance",
+                   {frameScene.medium.sigmaT, frameScene.medium.albedo,
+                    "world units; radiance S per unit solid angle"});
+        });
+      }
+      if (sequence) {
+        progress.advance();
+        if (!o->quiet)
+          std::fprintf(stderr, "\rframe %04d: %.1f ms%s\n", f, r.stats.totalMs(),
+                       r.stats.extra.value("density_reused", false) ? " (density reused)" : "");
+      }
+      summaries.push_back(std::move(r.stats));
     }
     out.commit();
     if (!o->quiet) {
-      std::printf("%s (%s, %s): %dx%d in %.1f ms\n", r.stats.method.c_str(),
-                  r.stats.backend.c_str(), r.stats.device.c_str(), r.stats.width, r.stats.height,
-                  r.stats.totalMs());
-      if (r.stats.extra.contains("backend_choice"))
-        std::printf("%s\n", r.stats.extra["backend_choice"].get<std::string>().c_str());
-      std::printf("wrote %s", o->out.c_str());
-      if (!o->png.empty()) std::printf(", %s", o->png.c_str());
-      if (!o->stats.empty()) std::printf(", %s", o->stats.c_str());
-      for (const std::string* extra : {&o->samplesPng, &o->densityVdb, &o->radianceVdb})
-        if (!extra->empty()) std::printf(", %s", extra->c_str());
+      const RenderStats& st = summaries.back();
+      double total = 0.0;
+      for (const RenderStats& r : summaries) total += r.totalMs();
+      std::printf("%s (%s, %s): %dx%d", st.method.c_str(), st.backend.c_str(), st.device.c_str(),
+                  st.width, st.height);
+      if (sequence)
+        std::printf(", %zu frames in %.1f ms (%.1f ms per frame)\n", summaries.size(), total,
+                    total / summaries.size());
+      else
+        std::printf(" in %.1f ms\n", total);
+      if (st.extra.contains("backend_choice"))
+        std::printf("%s\n", st.extra["backend_choice"].get<std::string>().c_str());
+      const int f0 = frames.front(), f1 = frames.back();
+      const auto shown = [&](const std::string& p) {
+        return sequence ? framePath(p, f0) + " .. " + framePath(p, f1) : p;
+      };
+      std::printf("wrote %s", shown(o->out).c_str());
+      for (const std::string* extra :
+           {&o->png, &o->stats, &o->samplesPng, &o->densityVdb, &o->radianceVdb})
+        if (!extra->empty()) std::printf(", %s", shown(*extra).c_str());
       std::printf("\n");
     }
     return 0;

@@ -4,9 +4,13 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <png.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -15,12 +19,24 @@
 
 namespace scatterlab {
 
-void writeExr(const Image& img, const std::string& path) {
+void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
+  const bool hasAlpha = !img.alpha().empty();
+  if (hasAlpha && img.alpha().size() != img.pixels().size())
+    throw IoError("cannot write EXR '" + path + "': alpha has " +
+                  std::to_string(img.alpha().size()) + " values for " +
+                  std::to_string(img.pixels().size()) + " pixels");
   writeAtomically(path, [&](const std::string& tmp) {
     try {
       Imf::Header header(img.width(), img.height());
       for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+      if (hasAlpha) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
+      for (const auto& [name, value] : attributes.strings)
+        header.insert(name, Imf::StringAttribute(value));
+      for (const auto& [name, m] : attributes.matrices)
+        header.insert(name, Imf::M44fAttribute(Imath::M44f(m[0], m[1], m[2], m[3], m[4], m[5], m[6],
+                                                           m[7], m[8], m[9], m[10], m[11], m[12],
+                                                           m[13], m[14], m[15])));
       Imf::OutputFile file(tmp.c_str(), header);
       Imf::FrameBuffer fb;
       char* base = const_cast<char*>(reinterpret_cast<const char*>(img.pixels().data()));
@@ -28,6 +44,11 @@ void writeExr(const Image& img, const std::string& path) {
       fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
       fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
       fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+      if (hasAlpha)
+        fb.insert("A",
+                  Imf::Slice(Imf::FLOAT,
+                             const_cast<char*>(reinterpret_cast<const char*>(img.alpha().data())),
+                             sizeof(float), sizeof(float) * img.width()));
       file.setFrameBuffer(fb);
       file.writePixels(img.height());
     } catch (const std::exception& e) {
@@ -53,6 +74,12 @@ Image readExr(const std::string& path) {
     fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
     fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
     fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    if (ch.findChannel("A")) {
+      img.alpha().assign(size_t(w) * h, 0.0f);
+      char* abase = reinterpret_cast<char*>(img.alpha().data()) -
+                    (dw.min.x * sizeof(float) + dw.min.y * sizeof(float) * w);
+      fb.insert("A", Imf::Slice(Imf::FLOAT, abase, sizeof(float), sizeof(float) * w, 1, 1, 0.0));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return img;
@@ -70,13 +97,53 @@ float toneMapSrgb(float linear, float exposure) {
   return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
-void writePng(const Image& img, const std::string& path, float exposure) {
+ToneCurve parseToneCurve(const std::string& name, const std::string& key) {
+  if (name == "linear") return ToneCurve::Linear;
+  if (name == "filmic") return ToneCurve::Filmic;
+  if (name == "aces") return ToneCurve::Aces;
+  throw ConfigError("'" + key + "': unknown tone curve '" + name +
+                    "' (allowed: linear, filmic, aces)");
+}
+
+namespace {
+
+/// Hable's filmic operator (Uncharted 2): shoulder 0.15, linear 0.50, angle 0.10, toe 0.20,
+/// toe numerator 0.02, denominator 0.30.
+float hable(float x) {
+  const float A = 0.15f, B = 0.50f, C = 0.10f, D = 0.20f, E = 0.02f, F = 0.30f;
+  return ((x * (A * x + C * B) + D * E) / (x * (A * x + B) + D * F)) - E / F;
+}
+
+}  // namespace
+
+float toneCurve(float v, ToneCurve curve) {
+  if (!(v > 0.0f)) return 0.0f;  // also maps NaN to 0
+  switch (curve) {
+    case ToneCurve::Linear:
+      return std::min(v, 1.0f);
+    case ToneCurve::Filmic: {
+      constexpr float kWhite = 11.2f;
+      return std::min(1.0f, hable(v) / hable(kWhite));
+    }
+    case ToneCurve::Aces:
+      // Narkowicz 2015, "ACES Filmic Tone Mapping Curve".
+      return std::clamp(v * (2.51f * v + 0.03f) / (v * (2.43f * v + 0.59f) + 0.14f), 0.0f, 1.0f);
+  }
+  return 0.0f;
+}
+
+void writePng(const Image& img, const std::string& path, float exposure, ToneCurve curve) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
   std::vector<unsigned char> buf(size_t(img.width()) * img.height() * 3);
+  const float scale = std::exp2(exposure);
   for (size_t i = 0; i < img.pixels().size(); ++i)
     for (int c = 0; c < 3; ++c)
-      buf[3 * i + c] =
-          static_cast<unsigned char>(toneMapSrgb(img.pixels()[i][c], exposure) * 255.0f + 0.5f);
+      buf[3 * i + c] = static_cast<unsigned char>(
+          (curve == ToneCurve::Linear
+               ? toneMapSrgb(img.pixels()[i][c], exposure)
+               : toneMapSrgb(toneCurve(img.pixels()[i][c] * scale, curve), 0.0f)) *
+              255.0f +
+          0.5f);
   writeAtomically(path, [&](const std::string& tmp) {
     png_image pi;
     std::memset(&pi, 0, sizeof(pi));

@@ -1,8 +1,10 @@
 #pragma once
 /// Linear RGB float images, OpenEXR and PNG I/O, image error measures (docs/metrics.md).
 
+#include <array>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/math.h"
@@ -21,26 +23,56 @@ class Image {
   const Vec3& at(int x, int y) const { return pixels_[size_t(y) * width_ + x]; }
   std::vector<Vec3>& pixels() { return pixels_; }
   const std::vector<Vec3>& pixels() const { return pixels_; }
+  /// Coverage for compositing, row-major like pixels(): A = 1 − transmittance of the view ray
+  /// through the medium, so that image + (1 − A)·plate puts the fog over a plate. Empty when
+  /// the integrator does not record it (the GPU slice marcher); written as the EXR's A channel.
+  std::vector<float>& alpha() { return alpha_; }
+  const std::vector<float>& alpha() const { return alpha_; }
 
  private:
   int width_ = 0, height_ = 0;
   std::vector<Vec3> pixels_;
+  std::vector<float> alpha_;
+};
+
+/// Header attributes of an EXR (render's provenance and camera, for compositing).
+struct ExrAttributes {
+  std::vector<std::pair<std::string, std::string>> strings;
+  /// 4×4 matrices stored as Imath::M44f in its row-vector convention (p' = p·M), i.e. the
+  /// 16 floats of a glm::mat4 in glm's memory order; e.g. OpenEXR's standard "worldToCamera"
+  /// and "worldToNDC" (as pbrt-v4 writes them).
+  std::vector<std::pair<std::string, std::array<float, 16>>> matrices;
 };
 
 /// Writes a 32-bit float RGB OpenEXR file atomically (temporary file, then rename); on any
 /// failure no file is left at `path`. Throws IoError.
-void writeExr(const Image& img, const std::string& path);
+void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes = {});
 
-/// Reads the R, G, B channels of an OpenEXR file (missing channels read as 0; a file with none
-/// of them is an error). Throws IoError naming the file.
+/// Reads the R, G, B channels (and A into alpha(), when the file has it) of an OpenEXR file
+/// (missing channels read as 0; a file with none of them is an error). Throws IoError naming the
+/// file.
 Image readExr(const std::string& path);
 
 /// Display transform used for PNG output and PSNR: multiply by 2^exposure, clamp to [0, 1],
 /// encode with the sRGB transfer curve.
 float toneMapSrgb(float linear, float exposure = 0.0f);
 
-/// Writes an 8-bit sRGB PNG (toneMapSrgb) atomically. Throws IoError.
-void writePng(const Image& img, const std::string& path, float exposure = 0.0f);
+/// Tone curve applied before the sRGB encoding of PNG previews (`render --tonemap`, README):
+/// Linear clamps at 1 (the default; what PSNR and "visibly wrong" use);
+/// Filmic is Hable's Uncharted 2 curve normalised to white 11.2; Aces is Narkowicz's fit of the
+/// ACES reference rendering transform. Both roll highlights off instead of clipping them.
+enum class ToneCurve { Linear, Filmic, Aces };
+
+/// Parses "linear", "filmic" or "aces"; ConfigError naming `key` and the allowed names else.
+ToneCurve parseToneCurve(const std::string& name, const std::string& key = "--tonemap");
+
+/// The curve on one linear value (after exposure), in [0, 1]; NaN and negatives give 0.
+float toneCurve(float v, ToneCurve curve);
+
+/// Writes an 8-bit sRGB PNG atomically: 2^exposure, then `curve`, then the sRGB encoding
+/// (toneMapSrgb when Linear). Throws IoError.
+void writePng(const Image& img, const std::string& path, float exposure = 0.0f,
+              ToneCurve curve = ToneCurve::Linear);
 
 /// Error of `img` against `ref` over all pixels and channels (docs/metrics.md). Computed in
 /// core/metrics.cpp, the one implementation used by `compare` and the experiment harness.

@@ -40,6 +40,13 @@ class Method {
   /// (dotted paths, e.g. "render.sampler"); set by createMethod. The tool lists them once on
   /// stderr.
   std::vector<std::string> ignoredKeys;
+
+  /// When true, a volume-pipeline method keeps its frame (density volume, GL context and
+  /// textures) between render() calls and skips the density stage while the scene's medium is
+  /// the same one (same density model object, box and resolution); stats then hold
+  /// "density_reused": true. Off by default (every render builds its own volumes); set by
+  /// scatterlab::Renderer (api/renderer.h). Methods without a density stage ignore it.
+  bool retainDensity = false;
 };
 
 /// A registered method (methods/register.cpp registers each built-in one once).

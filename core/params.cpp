@@ -285,15 +285,40 @@ void applyOverride(Json& doc, const std::string& assignment) {
     const size_t dot = path.find('.', start);
     const std::string part = path.substr(start, dot == std::string::npos ? dot : dot - start);
     if (part.empty()) throw ConfigError("--set '" + assignment + "': empty key in path");
-    if (!node->is_object())
-      throw ConfigError("--set '" + assignment + "': '" + walked + "' is not an object");
-    walked += (walked.empty() ? "" : ".") + part;
-    if (dot == std::string::npos) {
-      (*node)[part] = value;
-      return;
+    const std::string here = walked + (walked.empty() ? "" : ".") + part;
+    Json* next = nullptr;
+    if (node->is_array()) {
+      // lights.0.position: a decimal index into an existing element (arrays never grow here,
+      // so a typo cannot create a light with every other key missing).
+      const bool digits =
+          part.size() <= 9 && part.find_first_not_of("0123456789") == std::string::npos;
+      if (!digits)
+        throw ConfigError("--set '" + assignment + "': '" + walked + "' is an array of " +
+                          std::to_string(node->size()) + "; '" + part +
+                          "' is not an element index (0, 1, ...)");
+      const size_t index = std::stoul(part);
+      if (index >= node->size())
+        throw ConfigError("--set '" + assignment + "': index " + part + " out of range: '" +
+                          walked + "' has " + std::to_string(node->size()) + " element" +
+                          (node->size() == 1 ? "" : "s"));
+      if (dot == std::string::npos) {
+        (*node)[index] = value;
+        return;
+      }
+      next = &(*node)[index];
+    } else if (node->is_object()) {
+      if (dot == std::string::npos) {
+        (*node)[part] = value;
+        return;
+      }
+      if (!node->contains(part)) (*node)[part] = Json::object();
+      next = &(*node)[part];
+    } else {
+      throw ConfigError("--set '" + assignment + "': '" + walked +
+                        "' is not an object or an array");
     }
-    if (!node->contains(part)) (*node)[part] = Json::object();
-    node = &(*node)[part];
+    node = next;
+    walked = here;
     start = dot + 1;
   }
 }

@@ -133,7 +133,10 @@ class Params {
 Interval stepRange(float diagonal);
 
 /// Applies `--set a.b.c=VALUE`: VALUE is parsed as JSON where it parses, else taken as a
-/// string; missing objects on the way are created; a non-object on the way is an error.
+/// string; missing objects on the way are created. A part that is a decimal number addresses
+/// an element of an existing array (`lights.0.position`); an index past the end, or a part that
+/// is not an index on an array, or a key below a value that is neither object nor array, is a
+/// ConfigError naming the path.
 void applyOverride(Json& doc, const std::string& assignment);
 
 /// Short printable form of a JSON value for messages (truncated).

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/animation.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 
@@ -122,13 +123,18 @@ Medium parseMedium(Params p, LoadContext ctx) {
 
 }  // namespace
 
-Scene parseScene(const Json& doc, const std::filesystem::path& baseDir) {
+Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Medium* keepMedium) {
   Params root(doc, "");
   Scene s;
   s.baseDir = baseDir;
   LoadContext ctx;
   ctx.baseDir = baseDir;
-  s.medium = parseMedium(root.child("medium"), ctx);
+  if (keepMedium) {
+    s.medium = *keepMedium;
+    root.allow("medium");
+  } else {
+    s.medium = parseMedium(root.child("medium"), ctx);
+  }
   for (Params l : root.children("lights", /*required=*/true)) s.lights.push_back(parseLight(l));
   s.camera = parseCamera(root.child("camera"));
   s.background = root.rgb("background", Vec3(0.0f));
@@ -162,7 +168,9 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
   Json doc = readJsonFile(path);
   for (const auto& o : overrides) applyOverride(doc, o);
   try {
-    return parseScene(doc, std::filesystem::path(path).parent_path());
+    // Light paths are evaluated at the document's own time (core/animation.h).
+    return parseScene(sceneAtTime(doc, documentTime(doc)),
+                      std::filesystem::path(path).parent_path());
   } catch (const ConfigError& e) {
     throw ConfigError(path + ": " + e.what());
   }

@@ -41,8 +41,11 @@ struct Scene {
 };
 
 /// Parses a scene document. Throws ConfigError naming the key, the value and what is allowed;
-/// IoError for files the scene refers to.
-Scene parseScene(const Json& doc, const std::filesystem::path& baseDir);
+/// IoError for files the scene refers to. With `keepMedium`, the document's medium is not read
+/// (nor its files loaded) and the scene takes *keepMedium instead: re-parsing lights, camera
+/// and render settings over a medium already built (api/renderer.h).
+Scene parseScene(const Json& doc, const std::filesystem::path& baseDir,
+                 const Medium* keepMedium = nullptr);
 
 /// Reads the JSON file at `path` (IoError when missing, a directory or malformed), applies the
 /// `--set` overrides in order, and parses it.

@@ -129,6 +129,9 @@ class Frame {
   virtual const DensityGrid& hostDensity() = 0;
   /// Waits until the work queued so far is done, so that a stage's wall time is its own.
   virtual void sync() {}
+  /// Forgets per-render state (device timers) before a frame whose density is kept is rendered
+  /// again (Method::retainDensity).
+  virtual void newRender() {}
   /// Writes the backend's facts into `stats`: device, and e.g. per-pass device times.
   virtual void report(RenderStats& stats) = 0;
   /// The density and source-radiance volumes in host memory, for export; null where they

@@ -189,6 +189,10 @@ void reportFailures(std::ostream& md, const ExperimentResult& res);
 void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vector<RunRecord>& runs,
                   ReferenceCache& refs, OutputDir& out, bool plotted);
 
+/// The plot script: $SCATTERLAB_PLOTS_SCRIPT, else <dir of the executable>/../share/scatterlab/
+/// plots.py (the build tree and an installed prefix have that layout); "" when neither is known.
+std::string plotScript();
+
 /// Calls experiment/plots.py on the output directory (when `opt.plots`); returns why there are
 /// no plots, or "" when they were made.
 std::string makePlots(const ExperimentOptions& opt, const OutputDir& out);

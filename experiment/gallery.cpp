@@ -9,10 +9,6 @@
 #include "core/scene.h"
 #include "experiment/detail.h"
 
-#ifndef SCATTERLAB_SOURCE_DIR
-#define SCATTERLAB_SOURCE_DIR "."
-#endif
-
 namespace scatterlab {
 
 std::string findPlotPython() {
@@ -197,11 +193,22 @@ void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vecto
   }
 }
 
+std::string plotScript() {
+  if (const char* env = std::getenv("SCATTERLAB_PLOTS_SCRIPT")) return env;
+  // <prefix>/bin/scatterlab -> <prefix>/share/scatterlab/plots.py; the build tree has the same
+  // layout (experiment/CMakeLists.txt copies the script there).
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return "";
+  return (exe.parent_path().parent_path() / "share" / "scatterlab" / "plots.py").string();
+}
+
 std::string makePlots(const ExperimentOptions& opt, const OutputDir& out) {
   if (!opt.plots) return "plots not requested (--no-plots)";
-  const char* env = std::getenv("SCATTERLAB_PLOTS_SCRIPT");
-  const std::string script =
-      env ? env : (fs::path(SCATTERLAB_SOURCE_DIR) / "experiment" / "plots.py").string();
+  const std::string script = plotScript();
+  if (script.empty())
+    return "plot script not found ($SCATTERLAB_PLOTS_SCRIPT, or share/scatterlab/plots.py beside "
+           "the executable's bin/)";
   if (!fs::exists(script)) return "plot script '" + script + "' not found";
   const std::string py = findPlotPython();
   if (py.empty())

@@ -18,6 +18,11 @@ const DensityGrid& GpuFrame::hostDensity() {
   return *host_;
 }
 
+void GpuFrame::newRender() {
+  context();  // the queries are deleted in the frame's context
+  timer = StageTimer();
+}
+
 void GpuFrame::sync() {
   glFinish();
 }

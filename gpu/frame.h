@@ -23,6 +23,8 @@ class GpuFrame : public Frame {
   void buildDensity(const Scene& scene) override;
   const DensityGrid& hostDensity() override;
   void sync() override;
+  /// Drops the pass timings of the previous render (the volumes stay).
+  void newRender() override;
   /// backend "gpu", device = GL_RENDERER, gpu_ms per pass, density_construction, gl_version,
   /// egl_platform.
   void report(RenderStats& stats) override;

@@ -322,10 +322,14 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
                     rgba.data());
   checkGl("slice march read-back");
   Image img(w, h);
+  img.alpha().resize(size_t(w) * h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const float* p = &rgba[(size_t(y) * w + x) * 4];
       img.at(x, y) = Vec3(p[0], p[1], p[2]);
+      // The alpha channel blends as ZERO, SRC_ALPHA from a clear of 1: the view ray's
+      // transmittance, the product of the slabs'.
+      img.alpha()[size_t(y) * w + x] = 1.0f - p[3];
     }
   return img;
 }

@@ -213,6 +213,17 @@ std::unique_ptr<VdbDensity> VdbDensity::load(const std::string& path, const std:
   if (d->info_.empty)
     throw ConfigError("grid '" + gridName + "' of VDB file '" + path + "' has no active voxels");
   d->bounds_ = d->info_.worldBounds;
+  // A scatterlab export names its whole box (zero margins are inactive, background 0).
+  const auto lo = fg->getMetadata<openvdb::Vec3DMetadata>(kVdbBoundsMin);
+  const auto hi = fg->getMetadata<openvdb::Vec3DMetadata>(kVdbBoundsMax);
+  if (lo && hi) {
+    const Box box{Vec3(lo->value().x(), lo->value().y(), lo->value().z()),
+                  Vec3(hi->value().x(), hi->value().y(), hi->value().z())};
+    if (!box.valid())
+      throw ConfigError("grid '" + gridName + "' of VDB file '" + path + "': metadata " +
+                        kVdbBoundsMin + " must be below " + kVdbBoundsMax + " in every axis");
+    d->bounds_ = box;
+  }
   return d;
 }
 
@@ -292,7 +303,21 @@ void writeGrids(const std::string& path, openvdb::GridBase::Ptr grid) {
 
 }  // namespace
 
-void writeVdb(const std::string& path, const DensityGrid& grid, const std::string& name) {
+namespace {
+
+/// The box and the medium facts of an exported volume, as grid metadata.
+void addMetadata(GridBase& g, const Box& b, const VolumeMetadata& meta) {
+  g.insertMeta(kVdbBoundsMin, openvdb::Vec3DMetadata(Vec3d(b.min.x, b.min.y, b.min.z)));
+  g.insertMeta(kVdbBoundsMax, openvdb::Vec3DMetadata(Vec3d(b.max.x, b.max.y, b.max.z)));
+  if (std::isfinite(meta.sigmaT)) g.insertMeta("sigma_t", openvdb::FloatMetadata(meta.sigmaT));
+  if (std::isfinite(meta.albedo)) g.insertMeta("albedo", openvdb::FloatMetadata(meta.albedo));
+  if (!meta.units.empty()) g.insertMeta("units", openvdb::StringMetadata(meta.units));
+}
+
+}  // namespace
+
+void writeVdb(const std::string& path, const DensityGrid& grid, const std::string& name,
+              const VolumeMetadata& meta) {
   ensureOpenVdbInitialized();
   const IVec3 n = grid.dims();
   FloatGrid::Ptr g = FloatGrid::create(0.0f);
@@ -304,10 +329,12 @@ void writeVdb(const std::string& path, const DensityGrid& grid, const std::strin
   g->setTransform(cellTransform(grid.bounds(), n));
   g->setName(name);
   g->setGridClass(openvdb::GRID_FOG_VOLUME);
+  addMetadata(*g, grid.bounds(), meta);
   writeGrids(path, g);
 }
 
-void writeVdb(const std::string& path, const RadianceGrid& grid, const std::string& name) {
+void writeVdb(const std::string& path, const RadianceGrid& grid, const std::string& name,
+              const VolumeMetadata& meta) {
   ensureOpenVdbInitialized();
   const IVec3 n = grid.dims();
   openvdb::Vec3SGrid::Ptr g = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
@@ -320,6 +347,7 @@ void writeVdb(const std::string& path, const RadianceGrid& grid, const std::stri
   g->setTransform(cellTransform(grid.bounds(), n));
   g->setName(name);
   g->setVectorType(openvdb::VEC_INVARIANT);
+  addMetadata(*g, grid.bounds(), meta);
   writeGrids(path, g);
 }
 

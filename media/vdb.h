@@ -4,6 +4,7 @@
 /// vdb.cpp so that only one translation unit pays for them.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -79,14 +80,30 @@ class VdbDensity : public DensityModel {
 DensityGrid loadVdbAsDense(const std::string& path, const std::string& gridName,
                            std::int64_t maxVoxels = kMaxGridVoxels);
 
+/// What an exported volume says about its medium, as grid metadata (docs/media.md): `sigma_t`
+/// and `albedo` (float, written when finite) and `units` (string). Blender and Houdini show
+/// them; scatterlab reads nothing but the box back.
+struct VolumeMetadata {
+  float sigmaT = std::numeric_limits<float>::quiet_NaN();
+  float albedo = std::numeric_limits<float>::quiet_NaN();
+  std::string units = "world units; density per unit length times sigma_t";
+};
+
+/// Grid metadata holding the whole box a volume covers (Vec3d, world space): written by
+/// writeVdb, read by VdbDensity::load as the natural bounds, so zero-density margins (inactive
+/// voxels, background 0) are not lost when an export is read back.
+inline constexpr const char* kVdbBoundsMin = "scatterlab_bounds_min";
+inline constexpr const char* kVdbBoundsMax = "scatterlab_bounds_max";
+
 /// Writes `grid` as a FloatGrid (fog volume, background 0, zeros inactive) named `name` whose
 /// voxel (i, j, k) is the grid's cell (i, j, k): index-to-world = scale by the cell size, then
-/// translate to the centre of cell 0. Written to a temporary and renamed (no partial file).
-void writeVdb(const std::string& path, const DensityGrid& grid,
-              const std::string& name = "density");
+/// translate to the centre of cell 0. The grid's whole box and `meta` go into the grid's
+/// metadata. Written to a temporary and renamed (no partial file).
+void writeVdb(const std::string& path, const DensityGrid& grid, const std::string& name = "density",
+              const VolumeMetadata& meta = {});
 
 /// Same for a source-radiance volume: a Vec3SGrid (RGB) named `name`.
 void writeVdb(const std::string& path, const RadianceGrid& grid,
-              const std::string& name = "radiance");
+              const std::string& name = "radiance", const VolumeMetadata& meta = {});
 
 }  // namespace scatterlab

@@ -40,7 +40,14 @@ class PipelineMethod : public Method {
     st.backend = backendName(backend_);
     st.width = scene.camera.width;
     st.height = scene.camera.height;
-    std::unique_ptr<Frame> frame = backends()[int(backend_)].makeFrame();
+    // The density stage is skipped when the kept frame was built from this very medium.
+    const bool reuse = retainDensity && frame_ && kept_.density == scene.medium.density &&
+                       kept_.bounds.min == scene.medium.bounds.min &&
+                       kept_.bounds.max == scene.medium.bounds.max &&
+                       kept_.resolution == scene.medium.resolution;
+    std::unique_ptr<Frame> frame =
+        reuse ? std::move(frame_) : backends()[int(backend_)].makeFrame();
+    if (reuse) frame->newRender();
     // Every stage: a progress phase, and a wall time that ends when the backend's work is done.
     const auto stage = [&](const char* name, const auto& body) {
       if (progress) progress->restart(name, 1);
@@ -48,7 +55,8 @@ class PipelineMethod : public Method {
       body();
       frame->sync();
     };
-    stage("density", [&] { frame->buildDensity(scene); });
+    if (!reuse) stage("density", [&] { frame->buildDensity(scene); });
+    if (retainDensity) st.extra["density_reused"] = reuse;
     std::vector<RadianceSample> samples;
     if (sampler)
       stage("sampling", [&] { samples = sampler->generate(scene, frame->hostDensity()); });
@@ -93,10 +101,16 @@ class PipelineMethod : public Method {
     r.density = frame->exportDensity();
     r.radiance = frame->exportRadiance();
     r.samples = std::move(samples);
+    if (retainDensity) {
+      kept_ = scene.medium;
+      frame_ = std::move(frame);
+    }
     return r;
   }
 
  private:
+  std::unique_ptr<Frame> frame_;  ///< kept between renders when retainDensity
+  Medium kept_;                   ///< the medium frame_'s density was built from
   MethodDesc desc_;
   Backend backend_;
   PipelineSettings settings_;

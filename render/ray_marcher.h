@@ -2,11 +2,13 @@
 /// The CPU ray marcher (the integrator stage): for each pixel, march the camera ray through the
 /// medium box and sum in-scattering, front to back:
 ///   L += T · (σs/σt) · (1 − exp(−σt·D·Δt)) · S(x_mid),   T *= exp(−σt·D·Δt),
-/// which is exact for D and S constant over each step; then L += T · background.
+/// which is exact for D and S constant over each step; then L += T · background, and the
+/// pixel's alpha is 1 − T (Image::alpha, for compositing).
 /// `source(x, toViewer)` supplies S: traced (exact method) or looked up in a volume.
 /// With scene objects, the march stops at the first surface and adds T·L_p (SurfaceRadiance,
-/// traced per pixel with step `surfaceDelta1`) instead of T·background. camera.spp > 1
-/// averages k x k rays through the stratum centres of each pixel.
+/// traced per pixel with step `surfaceDelta1`) instead of T·background, and alpha is 1 (the
+/// surface is opaque). camera.spp > 1
+/// averages k x k rays (radiance and alpha) through the stratum centres of each pixel.
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -30,7 +32,12 @@ Image marchImage(const Scene& scene, const DensityGrid& density, const Source& s
   const SurfaceRadiance surface(scene, density, surfaceDelta1 > 0.0f ? surfaceDelta1 : ms.step);
   // One camera ray: in-scattering up to the first surface (or the box exit), then T·L_p of
   // the surface or T·background.
-  const auto radiance = [&](const Ray& r) {
+  // Radiance and alpha: 1 − T of the medium, 1 where an (opaque) surface is hit.
+  struct Shaded {
+    Vec3 L;
+    float alpha;
+  };
+  const auto radiance = [&](const Ray& r) -> Shaded {
     Vec3 L(0.0f);
     float T = 1.0f;
     SurfaceHit hit;
@@ -54,28 +61,37 @@ Image marchImage(const Scene& scene, const DensityGrid& density, const Source& s
         }
       }
     }
-    if (!hasHit) return L + T * scene.background;
+    if (!hasHit) return {L + T * scene.background, 1.0f - T};
     // Below min_transmittance the surface's share is below it too (as for the medium).
-    return T > ms.minTransmittance ? L + T * surface(hit) : L;
+    return {T > ms.minTransmittance ? L + T * surface(hit) : L, 1.0f};
   };
   const int k = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
   const float inv = 1.0f / float(k * k);
   Image img(cam.width, cam.height);
+  img.alpha().assign(img.pixels().size(), 0.0f);
   tbb::parallel_for(tbb::blocked_range<int>(0, cam.height),
                     [&](const tbb::blocked_range<int>& rows) {
                       for (int y = rows.begin(); y < rows.end(); ++y) {
                         for (int x = 0; x < cam.width; ++x) {
                           if (k == 1) {
-                            img.at(x, y) = radiance(rays(x, y));
+                            const Shaded sh = radiance(rays(x, y));
+                            img.at(x, y) = sh.L;
+                            img.alpha()[size_t(y) * cam.width + x] = sh.alpha;
                             continue;
                           }
                           // k x k stratum centres, box filter.
                           Vec3 sum(0.0f);
+                          float alpha = 0.0f;
                           for (int j = 0; j < k; ++j)
-                            for (int i = 0; i < k; ++i)
-                              sum += radiance(rays.at(float(x) + (float(i) + 0.5f) / float(k),
-                                                      float(y) + (float(j) + 0.5f) / float(k)));
+                            for (int i = 0; i < k; ++i) {
+                              const Shaded sh =
+                                  radiance(rays.at(float(x) + (float(i) + 0.5f) / float(k),
+                                                   float(y) + (float(j) + 0.5f) / float(k)));
+                              sum += sh.L;
+                              alpha += sh.alpha;
+                            }
                           img.at(x, y) = sum * inv;
+                          img.alpha()[size_t(y) * cam.width + x] = alpha * inv;
                         }
                         if (progress) progress->advance(1);
                       }

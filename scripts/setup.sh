@@ -12,7 +12,7 @@ PACKAGES=(
   libembree-dev libtinyobjloader-dev
   libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-matplotlib python3-distributed
+  python3 python3-matplotlib python3-distributed python3-dev python3-numpy pybind11-dev
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -27,5 +27,9 @@ if ((${#missing[@]})); then
 fi
 
 JOBS=${SCATTERLAB_JOBS:-2}
-cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+# The Python that the python3-* packages above serve is Debian's /usr/bin/python3; another
+# python3 first on PATH (pyenv, conda, a venv) has none of them.
+PYTHON_ARGS=()
+[ -x /usr/bin/python3 ] && PYTHON_ARGS=(-DPython3_EXECUTABLE=/usr/bin/python3)
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release "${PYTHON_ARGS[@]}" >/dev/null
 cmake --build "$BUILD_DIR" -j "$JOBS"

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -117,4 +118,34 @@ TEST(Grid, SingleVoxelAxesAreConstantAlongThem) {
   EXPECT_FLOAT_EQ(g.sample(Vec3(0.7f, 0.5f + 1.0f / 6.0f, 0.2f)), 3.0f);
   EXPECT_FLOAT_EQ(g.sample(Vec3(0.5f, 0.99f, 0.5f)), 4.0f);
   EXPECT_FLOAT_EQ(g.sample(Vec3(0.5f, 0.01f, 0.5f)), 1.0f);
+}
+
+TEST(ToneCurve, PublishedValues) {
+  // Linear clamps; ACES (Narkowicz) maps 1 to 2.54/3.16 and mid-grey 0.18 to 0.2669; Hable's
+  // filmic normalised to white 11.2 maps 11.2 to 1 and 1 to 0.22066/0.72513 = 0.3043 (computed
+  // by hand from A..F = 0.15, 0.5, 0.1, 0.2, 0.02, 0.3).
+  EXPECT_FLOAT_EQ(toneCurve(0.5f, ToneCurve::Linear), 0.5f);
+  EXPECT_FLOAT_EQ(toneCurve(3.0f, ToneCurve::Linear), 1.0f);
+  EXPECT_NEAR(toneCurve(1.0f, ToneCurve::Aces), 2.54 / 3.16, 1e-6);
+  EXPECT_NEAR(toneCurve(0.18f, ToneCurve::Aces), 0.26690, 1e-4);
+  EXPECT_NEAR(toneCurve(11.2f, ToneCurve::Filmic), 1.0, 1e-6);
+  EXPECT_NEAR(toneCurve(1.0f, ToneCurve::Filmic), 0.3043, 1e-3);
+  for (ToneCurve c : {ToneCurve::Linear, ToneCurve::Filmic, ToneCurve::Aces}) {
+    EXPECT_EQ(toneCurve(-1.0f, c), 0.0f);
+    EXPECT_EQ(toneCurve(std::nanf(""), c), 0.0f);
+    float prev = 0.0f;  // monotone, within [0, 1]
+    for (float v = 0.01f; v < 50.0f; v *= 1.3f) {
+      const float t = toneCurve(v, c);
+      EXPECT_GE(t, prev);
+      EXPECT_LE(t, 1.0f);
+      prev = t;
+    }
+  }
+  EXPECT_EQ(parseToneCurve("aces"), ToneCurve::Aces);
+  try {
+    parseToneCurve("reinhard");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("allowed: linear, filmic, aces"), std::string::npos);
+  }
 }

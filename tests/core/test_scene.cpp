@@ -77,6 +77,42 @@ TEST(Scene, OverridesByDottedPath) {
   EXPECT_THROW(applyOverride(d, "a..b=1"), ConfigError);
 }
 
+/// Message of the ConfigError `f` throws ("" when it throws none).
+template <class F>
+std::string configMessage(F f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scene, OverridesIndexArrays) {
+  Json d = validDoc();
+  ASSERT_EQ(d["lights"].size(), 1u);
+  applyOverride(d, "lights.0.intensity=[1,2,3]");
+  applyOverride(d, "lights.0.position.2=0.25");
+  EXPECT_EQ(d["lights"][0]["intensity"], Json::parse("[1,2,3]"));
+  EXPECT_EQ(d["lights"][0]["position"][2], 0.25);
+  const Scene s = sceneFromJson(d);
+  EXPECT_FLOAT_EQ(s.lights[0].position.z, 0.25f);
+  // Out of range, not an index, and a key below a number: each names the path.
+  EXPECT_NE(configMessage([&] {
+              applyOverride(d, "lights.1.position=[0,0,0]");
+            }).find("index 1 out of range: 'lights' has 1 element"),
+            std::string::npos);
+  EXPECT_NE(configMessage([&] {
+              applyOverride(d, "lights.first.position=[0,0,0]");
+            }).find("'lights' is an array of 1; 'first' is not an element index"),
+            std::string::npos);
+  EXPECT_NE(configMessage([&] {
+              applyOverride(d, "lights.0.position.2.x=1");
+            }).find("'lights.0.position.2' is not an object or an array"),
+            std::string::npos);
+  EXPECT_EQ(d["lights"].size(), 1u);  // nothing appended
+}
+
 TEST(Scene, BadInputsNameKeyValueAndAllowed) {
   Json d;
   d = validDoc();

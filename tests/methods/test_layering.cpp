@@ -23,6 +23,8 @@ TEST(Layering, IncludesGoDownOnly) {
       {"gpu", {"core", "sampling"}},
       {"methods", {"core", "media", "sampling", "render", "gpu"}},
       {"experiment", {"core"}},
+      {"api", {"core", "media", "sampling", "render", "gpu", "methods", "experiment"}},
+      {"python", {"api", "core"}},
   };
   const std::regex inc("^#include \"([a-z_]+)/");
   int files = 0;

@@ -1,0 +1,74 @@
+#include "api/renderer.h"
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace scatterlab {
+
+Renderer::Renderer(Json doc, std::filesystem::path baseDir, std::string method, std::string backend)
+    : baseDir_(std::move(baseDir)), methodName_(std::move(method)), backend_(std::move(backend)) {
+  const double t = documentTime(doc);
+  rebuild(doc, t);
+}
+
+Renderer Renderer::fromFile(const std::string& path, const std::vector<std::string>& overrides,
+                            std::string method, std::string backend) {
+  Json doc = readJsonFile(path);
+  for (const auto& o : overrides) applyOverride(doc, o);
+  try {
+    return Renderer(std::move(doc), std::filesystem::path(path).parent_path(), std::move(method),
+                    std::move(backend));
+  } catch (const ConfigError& e) {
+    throw ConfigError(path + ": " + e.what());
+  }
+}
+
+Renderer::Renderer(Renderer&&) noexcept = default;
+Renderer& Renderer::operator=(Renderer&&) noexcept = default;
+Renderer::~Renderer() = default;
+
+void Renderer::rebuild(const Json& doc, double t) {
+  // Everything is parsed and created before anything is replaced: a bad value leaves the
+  // renderer as it was.
+  const Json work = sceneAtTime(doc, t);
+  const Json none;
+  const Json& medium = work.contains("medium") ? work["medium"] : none;
+  const Json& render = work.contains("render") ? work["render"] : none;
+  const bool sameMedium = method_ && medium == mediumDoc_;
+  Scene s = sameMedium ? parseScene(work, baseDir_, &scene_.medium) : parseScene(work, baseDir_);
+  std::unique_ptr<Method> m;
+  if (!sameMedium || render != renderDoc_) {
+    m = createMethod(s, methodName_, backend_);
+    m->retainDensity = true;
+  }
+  doc_ = doc;
+  time_ = t;
+  scene_ = std::move(s);
+  mediumDoc_ = medium;
+  renderDoc_ = render;
+  if (m) method_ = std::move(m);
+}
+
+void Renderer::set(const std::string& assignment) {
+  Json doc = doc_;
+  applyOverride(doc, assignment);
+  rebuild(doc, time_);
+}
+
+void Renderer::setTime(double t) {
+  if (!std::isfinite(t)) throw ConfigError("time must be finite, got " + std::to_string(t));
+  if (t != time_) rebuild(doc_, t);
+}
+
+Method& Renderer::method() {
+  return *method_;
+}
+
+RenderResult Renderer::render(Progress* progress) {
+  RenderResult r = method_->render(scene_, progress);
+  r.stats.extra["time"] = time_;
+  return r;
+}
+
+}  // namespace scatterlab

@@ -1,0 +1,80 @@
+#pragma once
+/// Renderer: one scene rendered again and again while lights, camera or time change, keeping
+/// what does not change (docs/library.md, "What a Renderer reuses").
+///
+///   scatterlab::Renderer r = scatterlab::Renderer::fromFile("data/scenes/glow.json");
+///   for (int f = 0; f < 48; ++f) {
+///     r.setTime(f / 24.0);              // light paths, a moving medium
+///     r.set("camera.fov_y_deg=35");     // any scene key, as --set
+///     scatterlab::writeExr(r.render().image, "frame.exr");
+///   }
+///
+/// Reused between render() calls: the method object with its parsed settings, and for the
+/// volume pipelines (per-voxel, gradient, adaptive, ...) the frame: the density volume, on the
+/// GPU backend also the GL context and the textures. Rebuilt: the density when the medium
+/// changes (a `medium.*` key, or setTime on a medium that moves with time: procedural models
+/// with a rate, velocity or wind, .sog sequences); the method (and with it the density) when a
+/// `render.*` key changes. Samples, radiance volume and image are computed every render (they
+/// depend on the lights). `exact` marches the kept density volume too.
+///
+/// Light paths: a light may carry `"path": [{"t": T, "position": [x,y,z]}, ...]` with strictly
+/// increasing T; its position at time t is the linear interpolation (held constant before the
+/// first and after the last key). Not thread-safe: one Renderer per thread.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/animation.h"
+#include "core/method.h"
+#include "core/scene.h"
+
+namespace scatterlab {
+
+class Renderer {
+ public:
+  /// A renderer of the scene document `doc` (relative paths resolve from `baseDir`) with
+  /// `method` ("" = render.method) on `backend` ("cpu", "gpu" or "auto"), as createMethod.
+  /// Parses the scene now: throws ConfigError / IoError as loadScene does.
+  Renderer(Json doc, std::filesystem::path baseDir, std::string method = "",
+           std::string backend = "auto");
+  /// The scene file `path` with `--set` overrides applied in order.
+  static Renderer fromFile(const std::string& path, const std::vector<std::string>& overrides = {},
+                           std::string method = "", std::string backend = "auto");
+  Renderer(Renderer&&) noexcept;
+  Renderer& operator=(Renderer&&) noexcept;
+  ~Renderer();
+
+  /// Applies a `--set` assignment ("lights.0.position=[0.5,1,0.5]") to the scene. On error
+  /// (bad path or value) throws ConfigError and the renderer keeps its previous scene.
+  void set(const std::string& assignment);
+  /// Sets the animation time (default: the document's medium.density.time, else 0).
+  void setTime(double t);
+  double time() const { return time_; }
+
+  /// Renders the current scene. `progress` may be null. Stats hold "time" and, for volume
+  /// pipelines, "density_reused".
+  RenderResult render(Progress* progress = nullptr);
+
+  /// The scene as the next render() will see it.
+  const Scene& scene() const { return scene_; }
+  /// The scene document (with light paths), after every set().
+  const Json& document() const { return doc_; }
+  /// The method (created on the first render() after a render.* change).
+  Method& method();
+
+ private:
+  void rebuild(const Json& doc, double t);
+
+  Json doc_;
+  std::filesystem::path baseDir_;
+  std::string methodName_, backend_;
+  double time_ = 0.0;
+  Scene scene_;
+  Json mediumDoc_, renderDoc_;  ///< what scene_.medium and method_ were made from
+  std::unique_ptr<Method> method_;
+};
+
+}  // namespace scatterlab

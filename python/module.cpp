@@ -1,0 +1,309 @@
+/// scatterlab._core: the Python binding (pybind11 + numpy). The package python/scatterlab
+/// re-exports it; docs/python.md is the user's reference. Images are float32 (H, W, 3) arrays,
+/// row 0 at the top; volumes are (nz, ny, nx[, 3]) arrays indexed [k, j, i] over the medium box.
+/// The GIL is released while scenes load, methods render and images are compared.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+
+#include "api/scatterlab.h"
+#include "core/stages.h"
+
+namespace py = pybind11;
+using namespace scatterlab;
+
+namespace {
+
+Json toJson(const py::handle& obj) {
+  const std::string text = py::str(py::module_::import("json").attr("dumps")(obj));
+  return Json::parse(text);
+}
+
+py::object fromJson(const Json& j) {
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+/// `overrides`: None, a dict {"camera.width": 64, ...} (values JSON-encoded) or a list of
+/// "key=VALUE" strings, as --set.
+std::vector<std::string> assignments(const py::object& overrides) {
+  std::vector<std::string> out;
+  if (overrides.is_none()) return out;
+  if (py::isinstance<py::dict>(overrides)) {
+    const py::object dumps = py::module_::import("json").attr("dumps");
+    for (auto [k, v] : overrides.cast<py::dict>())
+      out.push_back(py::str(k).cast<std::string>() + "=" + py::str(dumps(v)).cast<std::string>());
+    return out;
+  }
+  if (py::isinstance<py::str>(overrides))
+    throw ConfigError("overrides: expected a dict or a list of 'key=VALUE' strings, got a str");
+  for (const py::handle& a : overrides) out.push_back(py::str(a).cast<std::string>());
+  return out;
+}
+
+/// A scene document, validated: what load_scene returns and Renderer/render take.
+struct PyScene {
+  Json doc;
+  std::filesystem::path baseDir;
+  Scene parsed;  ///< at the document's time (light paths evaluated)
+};
+
+PyScene makeScene(Json doc, std::filesystem::path baseDir, const std::string& name) {
+  PyScene s{std::move(doc), std::move(baseDir), {}};
+  try {
+    s.parsed = parseScene(sceneAtTime(s.doc, 0.0), s.baseDir);
+  } catch (const ConfigError& e) {
+    throw ConfigError(name.empty() ? std::string(e.what()) : name + ": " + e.what());
+  }
+  return s;
+}
+
+/// (H, W, 3), or (H, W, 4) with the alpha (1 − view transmittance) as the 4th channel.
+py::array_t<float> imageArray(const Image& img, bool rgba = false) {
+  if (!rgba) {
+    py::array_t<float> a({img.height(), img.width(), 3});
+    std::memcpy(a.mutable_data(), img.pixels().data(), img.pixels().size() * sizeof(Vec3));
+    return a;
+  }
+  if (img.alpha().size() != img.pixels().size())
+    throw ConfigError("rgba=True: the image has no alpha channel");
+  py::array_t<float> a({img.height(), img.width(), 4});
+  float* out = a.mutable_data();
+  for (size_t i = 0; i < img.pixels().size(); ++i) {
+    for (int c = 0; c < 3; ++c) out[4 * i + c] = img.pixels()[i][c];
+    out[4 * i + 3] = img.alpha()[i];
+  }
+  return a;
+}
+
+Image arrayImage(const py::array& any, const char* what) {
+  const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(any);
+  if (!a || a.ndim() != 3 || a.shape(2) != 3)
+    throw ConfigError(std::string(what) + ": expected a float array of shape (H, W, 3)");
+  Image img(int(a.shape(1)), int(a.shape(0)));
+  std::memcpy(img.pixels().data(), a.data(), img.pixels().size() * sizeof(Vec3));
+  return img;
+}
+
+py::array_t<float> densityArray(const DensityGrid& g) {
+  const IVec3 d = g.dims();
+  py::array_t<float> a({d.z, d.y, d.x});
+  std::memcpy(a.mutable_data(), g.data().data(), g.data().size() * sizeof(float));
+  return a;
+}
+
+py::array_t<float> radianceArray(const RadianceGrid& g) {
+  const IVec3 d = g.dims();
+  py::array_t<float> a({d.z, d.y, d.x, 3});
+  std::memcpy(a.mutable_data(), g.data().data(), g.data().size() * sizeof(Vec3));
+  return a;
+}
+
+py::tuple boundsTuple(const Box& b) {
+  return py::make_tuple(py::make_tuple(b.min.x, b.min.y, b.min.z),
+                        py::make_tuple(b.max.x, b.max.y, b.max.z));
+}
+
+/// (image, stats) or, with volumes, (image, stats, {"density", "radiance", "bounds"}).
+py::tuple resultTuple(const RenderResult& r, bool volumes, const Box& bounds, bool rgba) {
+  py::object stats = fromJson(r.stats.toJson());
+  if (!volumes) return py::make_tuple(imageArray(r.image, rgba), stats);
+  py::dict v;
+  v["density"] = r.density ? py::object(densityArray(*r.density)) : py::none();
+  v["radiance"] = r.radiance ? py::object(radianceArray(*r.radiance)) : py::none();
+  v["bounds"] = boundsTuple(bounds);
+  return py::make_tuple(imageArray(r.image, rgba), stats, v);
+}
+
+py::dict errorDict(const ImageError& e) {
+  py::dict d;
+  d["rel_l2"] = e.relL2;
+  d["rel_l1"] = e.relL1;
+  d["psnr"] = e.psnr;
+  d["max_abs"] = e.maxAbs;
+  d["visibly_wrong"] = e.visiblyWrong;
+  if (!std::isnan(e.maskedRelL2)) {
+    d["masked_rel_l2"] = e.maskedRelL2;
+    d["mask_radius"] = e.maskRadius;
+    d["masked_lights"] = e.maskedLights;
+  }
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "scatterlab: real-time single-scattering participating media (C++ core)";
+  initialize();
+  m.attr("__version__") = version();
+
+  // One Python exception per C++ type, same message; all derive from scatterlab.Error.
+  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  static py::exception<ConfigError> configError(m, "ConfigError", error.ptr());
+  static py::exception<IoError> ioError(m, "IoError", error.ptr());
+  static py::exception<LimitError> limitError(m, "LimitError", error.ptr());
+  static py::exception<GpuError> gpuError(m, "GpuError", error.ptr());
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const ConfigError& e) {
+      configError(e.what());
+    } catch (const IoError& e) {
+      ioError(e.what());
+    } catch (const LimitError& e) {
+      limitError(e.what());
+    } catch (const GpuError& e) {
+      gpuError(e.what());
+    } catch (const Error& e) {
+      error(e.what());
+    }
+  });
+
+  py::class_<PyScene>(m, "Scene", "A validated scene document (load_scene)")
+      .def_property_readonly("width", [](const PyScene& s) { return s.parsed.camera.width; })
+      .def_property_readonly("height", [](const PyScene& s) { return s.parsed.camera.height; })
+      .def_property_readonly("lights", [](const PyScene& s) { return s.parsed.lights.size(); })
+      .def_property_readonly("bounds",
+                             [](const PyScene& s) { return boundsTuple(s.parsed.medium.bounds); })
+      .def_property_readonly(
+          "document", [](const PyScene& s) { return fromJson(s.doc); },
+          "The scene as a dict (a copy)")
+      .def("__repr__", [](const PyScene& s) {
+        return "<scatterlab.Scene " + std::to_string(s.parsed.camera.width) + "x" +
+               std::to_string(s.parsed.camera.height) + ", " +
+               std::to_string(s.parsed.lights.size()) + " light(s), density '" +
+               s.parsed.medium.density->type() + "'>";
+      });
+
+  m.def(
+      "load_scene",
+      [](const py::object& source, const py::object& overrides, const py::object& baseDir) {
+        const std::vector<std::string> sets = assignments(overrides);
+        if (py::isinstance<py::dict>(source)) {
+          Json doc = toJson(source);
+          for (const auto& a : sets) applyOverride(doc, a);
+          const std::filesystem::path base =
+              baseDir.is_none() ? std::filesystem::current_path()
+                                : std::filesystem::path(py::str(baseDir).cast<std::string>());
+          py::gil_scoped_release unlocked;
+          return makeScene(std::move(doc), base, "");
+        }
+        const std::string path = py::str(source);
+        py::gil_scoped_release unlocked;
+        Json doc = readJsonFile(path);
+        for (const auto& a : sets) applyOverride(doc, a);
+        return makeScene(std::move(doc), std::filesystem::path(path).parent_path(), path);
+      },
+      py::arg("source"), py::arg("overrides") = py::none(), py::arg("base_dir") = py::none(),
+      "Scene from a JSON file path or a dict; overrides: {'camera.width': 64} or ['k=v'] as "
+      "--set; base_dir: where a dict's relative file names resolve (default: the working "
+      "directory)");
+
+  m.def(
+      "render",
+      [](const PyScene& s, const std::string& method, const std::string& backend, bool volumes,
+         bool rgba) {
+        RenderResult r;
+        {
+          py::gil_scoped_release unlocked;
+          Renderer renderer(s.doc, s.baseDir, method, backend);
+          r = renderer.render(nullptr);
+        }
+        return resultTuple(r, volumes, s.parsed.medium.bounds, rgba);
+      },
+      py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto",
+      py::arg("volumes") = false, py::arg("rgba") = false,
+      "Renders the scene: (image float32 (H,W,3), stats dict), plus a dict of the method's "
+      "density and radiance volumes with volumes=True");
+
+  py::class_<Renderer>(m, "Renderer",
+                       "Re-renders one scene as lights, camera or time change, keeping the "
+                       "density volume, fitted model and GL context (docs/python.md)")
+      .def(py::init([](const PyScene& s, const std::string& method, const std::string& backend) {
+             py::gil_scoped_release unlocked;
+             return Renderer(s.doc, s.baseDir, method, backend);
+           }),
+           py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto")
+      .def(
+          "set",
+          [](Renderer& r, const std::string& key, const py::object& value) {
+            const std::string a =
+                key + "=" +
+                py::str(py::module_::import("json").attr("dumps")(value)).cast<std::string>();
+            py::gil_scoped_release unlocked;
+            r.set(a);
+          },
+          py::arg("key"), py::arg("value"), "Sets a scene key by dotted path (lights.0.position)")
+      .def_property(
+          "time", &Renderer::time,
+          [](Renderer& r, double t) {
+            py::gil_scoped_release unlocked;
+            r.setTime(t);
+          },
+          "Animation time: light paths and a medium that moves with time")
+      .def(
+          "render",
+          [](Renderer& r, bool volumes, bool rgba) {
+            RenderResult res;
+            {
+              py::gil_scoped_release unlocked;
+              res = r.render(nullptr);
+            }
+            return resultTuple(res, volumes, r.scene().medium.bounds, rgba);
+          },
+          py::arg("volumes") = false, py::arg("rgba") = false,
+          "(image, stats[, volumes]) as scatterlab.render");
+
+  m.def(
+      "density_volume",
+      [](const PyScene& s) {
+        DensityGrid g;
+        {
+          py::gil_scoped_release unlocked;
+          g = buildDensityVolume(s.parsed);
+        }
+        return densityArray(g);
+      },
+      py::arg("scene"),
+      "The scene's density volume, float32 (nz, ny, nx) of cell-centre values over its box");
+
+  m.def(
+      "compare",
+      [](const py::array& a, const py::array& b) {
+        const Image img = arrayImage(a, "compare: image"),
+                    ref = arrayImage(b, "compare: reference");
+        ImageError e;
+        {
+          py::gil_scoped_release unlocked;
+          e = compareImages(img, ref);
+        }
+        return errorDict(e);
+      },
+      py::arg("image"), py::arg("reference"),
+      "Error of image against reference (docs/metrics.md): rel_l2, rel_l1, psnr, max_abs, "
+      "visibly_wrong");
+
+  m.def(
+      "read_exr",
+      [](const std::string& path, bool rgba) { return imageArray(readExr(path), rgba); },
+      py::arg("path"), py::arg("rgba") = false,
+      "R, G, B of an OpenEXR file as float32 (H, W, 3); with rgba=True (H, W, 4) with A");
+  m.def(
+      "write_exr",
+      [](const py::array& img, const std::string& path) {
+        writeExr(arrayImage(img, "write_exr: image"), path);
+      },
+      py::arg("image"), py::arg("path"), "Writes a float32 (H, W, 3) array as OpenEXR");
+  m.def(
+      "write_png",
+      [](const py::array& img, const std::string& path, float exposure) {
+        writePng(arrayImage(img, "write_png: image"), path, exposure);
+      },
+      py::arg("image"), py::arg("path"), py::arg("exposure") = 0.0f,
+      "Writes an sRGB PNG (exposure in stops, clamp, sRGB curve)");
+}

@@ -1,0 +1,157 @@
+// scatterlab::Renderer (api/renderer.h): re-rendering over a kept density must equal a fresh
+// render; light paths; what moves with time; errors leave the renderer as it was.
+#include <gtest/gtest.h>
+
+#include "api/scatterlab.h"
+#ifdef SCATTERLAB_HAS_GPU
+#include "gpu/context.h"
+#endif
+#include "support/scenes.h"
+
+namespace scatterlab {
+namespace {
+
+using testing::homogeneousBoxDoc;
+
+/// Gaussian blobs (one moving with `velocity`) in the unit box, a point light, 32x24 px.
+Json blobDoc(Vec3 velocity = Vec3(0.0f)) {
+  Json doc = homogeneousBoxDoc(1.0f, 3.0f, 0.7f, Vec3(0.5f, 1.3f, 0.5f), 3.0f, 32, 24, 24);
+  doc["medium"]["density"] = {
+      {"type", "gaussians"},
+      {"blobs", Json::array({{{"center", {0.5, 0.5, 0.5}}, {"radius", 0.2}, {"weight", 1.0}},
+                             {{"center", {0.3, 0.6, 0.4}},
+                              {"radius", 0.12},
+                              {"weight", 0.8},
+                              {"velocity", {velocity.x, velocity.y, velocity.z}}}})}};
+  return doc;
+}
+
+Image freshRender(Json doc, const std::string& method, const std::string& backend) {
+  initialize();
+  const Scene s = parseScene(doc, ".");
+  return createMethod(s, method, backend)->render(s, nullptr).image;
+}
+
+double maxAbsDiff(const Image& a, const Image& b) {
+  return compareImages(a, b).maxAbs;
+}
+
+TEST(LightPath, InterpolatesLinearlyAndHoldsAtTheEnds) {
+  const Json light = Json::parse(R"({"path": [{"t": 1, "position": [0,0,0]},
+                                              {"t": 3, "position": [2,4,0]},
+                                              {"t": 4, "position": [2,4,8]}]})");
+  const std::vector<PathKey> path = readLightPath(light, "lights[0]");
+  ASSERT_EQ(path.size(), 3u);
+  EXPECT_EQ(pathPosition(path, 0.0), Vec3(0, 0, 0));
+  EXPECT_EQ(pathPosition(path, 2.0), Vec3(1, 2, 0));
+  EXPECT_EQ(pathPosition(path, 3.5), Vec3(2, 4, 4));
+  EXPECT_EQ(pathPosition(path, 9.0), Vec3(2, 4, 8));
+}
+
+TEST(LightPath, BadPathsNameTheKey) {
+  const auto message = [](const char* text) -> std::string {
+    try {
+      readLightPath(Json::parse(text), "lights[2]");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message(R"({"path": [{"t": 0, "position": [0,0,0]}, {"t": 0, "position": [1,0,0]}]})")
+                .find("'lights[2].path[1].t'"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"path": [{"t": 0, "position": [0,0,0]}, {"t": -1, "position": [1,0,0]}]})")
+                .find("strictly increase"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"path": []})").find("'lights[2].path': expected a non-empty array"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"path": [{"t": 0}]})").find("lights[2].path[0].position"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"path": [{"t": 0, "position": [0,0,0], "speed": 1}]})").find("speed"),
+            std::string::npos);
+}
+
+TEST(Renderer, WhatMovesWithTime) {
+  EXPECT_FALSE(densityMovesWithTime(blobDoc()["medium"]["density"]));
+  EXPECT_TRUE(densityMovesWithTime(blobDoc(Vec3(0.1f, 0, 0))["medium"]["density"]));
+  EXPECT_FALSE(densityMovesWithTime(Json::parse(R"({"type": "uniform", "value": 1})")));
+  EXPECT_TRUE(densityMovesWithTime(Json::parse(R"({"type": "uniform", "value": 1, "rate": 2})")));
+  EXPECT_FALSE(densityMovesWithTime(Json::parse(R"({"type": "vdb", "file": "x.vdb"})")));
+  EXPECT_TRUE(densityMovesWithTime(Json::parse(R"({"type": "sog", "frames": ["a.sog"]})")));
+  EXPECT_TRUE(densityMovesWithTime(Json::parse(R"({"type": "dusty-room"})")));
+}
+
+/// Moving the light over a kept density gives the image a fresh render gives, for every
+/// volume pipeline on the CPU.
+TEST(Renderer, KeptDensityEqualsFreshRenderCpu) {
+  initialize();
+  for (const char* method : {"per-voxel", "gradient", "adaptive"}) {
+    SCOPED_TRACE(method);
+    Renderer r(blobDoc(), ".", method, "cpu");
+    const RenderResult first = r.render();
+    EXPECT_FALSE(first.stats.extra.at("density_reused").get<bool>());
+    r.set("lights.0.position=[0.2,1.1,0.3]");
+    r.set("camera.fov_y_deg=35");
+    const RenderResult second = r.render();
+    EXPECT_TRUE(second.stats.extra.at("density_reused").get<bool>());
+    // The density stage is skipped altogether.
+    for (const auto& [stage, ms] : second.stats.timingsMs) EXPECT_NE(stage, "density");
+    Json moved = blobDoc();
+    applyOverride(moved, "lights.0.position=[0.2,1.1,0.3]");
+    applyOverride(moved, "camera.fov_y_deg=35");
+    EXPECT_EQ(maxAbsDiff(second.image, freshRender(moved, method, "cpu")), 0.0);
+  }
+}
+
+TEST(Renderer, KeptDensityEqualsFreshRenderGpu) {
+#ifdef SCATTERLAB_HAS_GPU
+  std::string why;
+  if (!gpu::tryContext(&why)) GTEST_SKIP() << why;
+#else
+  GTEST_SKIP() << "built without the GPU backend";
+#endif
+  initialize();
+  Renderer r(blobDoc(), ".", "gradient", "gpu");
+  r.render();
+  r.set("lights.0.position=[0.2,1.1,0.3]");
+  const RenderResult second = r.render();
+  EXPECT_TRUE(second.stats.extra.at("density_reused").get<bool>());
+  Json moved = blobDoc();
+  applyOverride(moved, "lights.0.position=[0.2,1.1,0.3]");
+  const Image fresh = freshRender(moved, "gradient", "gpu");
+  EXPECT_EQ(maxAbsDiff(second.image, fresh), 0.0);
+  // Pass timings are those of this render alone (not summed with the first one's).
+  EXPECT_FALSE(second.stats.extra.at("gpu_ms").contains("density"));
+}
+
+TEST(Renderer, MovingMediumIsRebuiltAtTheNewTime) {
+  initialize();
+  const Json doc = blobDoc(Vec3(0.2f, 0, 0));
+  Renderer r(doc, ".", "per-voxel", "cpu");
+  r.render();
+  r.setTime(0.5);
+  const RenderResult later = r.render();
+  EXPECT_FALSE(later.stats.extra.at("density_reused").get<bool>());
+  Json at = doc;
+  at["medium"]["density"]["time"] = 0.5;
+  EXPECT_EQ(maxAbsDiff(later.image, freshRender(at, "per-voxel", "cpu")), 0.0);
+  // A still medium keeps its density across times.
+  Renderer still(blobDoc(), ".", "per-voxel", "cpu");
+  still.render();
+  still.setTime(0.5);
+  EXPECT_TRUE(still.render().stats.extra.at("density_reused").get<bool>());
+}
+
+TEST(Renderer, BadSetLeavesTheSceneAsItWas) {
+  initialize();
+  Renderer r(blobDoc(), ".", "per-voxel", "cpu");
+  EXPECT_THROW(r.set("lights.4.position=[0,0,0]"), ConfigError);
+  EXPECT_THROW(r.set("camera.width=0"), ConfigError);
+  EXPECT_THROW(r.set("render.nonsense=1"), ConfigError);
+  EXPECT_EQ(r.scene().camera.width, 32);
+  EXPECT_EQ(r.document(), blobDoc());
+  EXPECT_NO_THROW(r.render());
+}
+
+}  // namespace
+}  // namespace scatterlab

@@ -1,0 +1,45 @@
+# ctest driver (tests/CMakeLists.txt): install the build into a prefix, move the prefix (the
+# package must be relocatable), configure tests/consumer against it, build, run its tests,
+# compile the same program through pkg-config, and import the Python module from the prefix.
+# -D: BUILD_DIR, SOURCE_DIR (tests/consumer), WORK_DIR, GENERATOR, CXX, PYTHON.
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  message(STATUS "$ ${ARGN}\n${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGN}")
+  endif()
+endfunction()
+
+file(REMOVE_RECURSE ${WORK_DIR})
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/staging)
+file(RENAME ${WORK_DIR}/staging ${WORK_DIR}/prefix)
+set(P ${WORK_DIR}/prefix)
+foreach(f bin/scatterlab include/scatterlab/api/scatterlab.h share/scatterlab/plots.py)
+  if(NOT EXISTS ${P}/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+
+run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR}
+    -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${P})
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(${CMAKE_CTEST_COMMAND} --test-dir ${WORK_DIR}/build --output-on-failure)
+
+# pkg-config: the same program, compiled and linked with the flags of scatterlab.pc.
+file(GLOB pcdir ${P}/lib*/pkgconfig ${P}/lib/*/pkgconfig)
+execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pcdir}
+                pkg-config --cflags --libs scatterlab
+                OUTPUT_VARIABLE flags RESULT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config --cflags --libs scatterlab failed")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags}")
+run(${CXX} -std=c++20 -O1 ${SOURCE_DIR}/main.cpp -o ${WORK_DIR}/consumer_pc ${flags})
+run(${WORK_DIR}/consumer_pc)
+
+# Python: the module from the prefix, one PYTHONPATH.
+file(GLOB pydir ${P}/lib/python3*/dist-packages ${P}/lib/python3*/site-packages)
+if(PYTHON)
+  run(${CMAKE_COMMAND} -E env PYTHONPATH=${pydir} ${PYTHON} -c
+      "import scatterlab as sl; print(sl.__file__, sl.__version__); assert sl.__version__.startswith('0.2')")
+endif()
