@@ -44,6 +44,13 @@ Action addRender(CLI::App& app) {
                 "'radiance'); CPU methods that build one (not exact)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
+    checkDistinctPaths({{"scene", o->scene},
+                        {"--output", o->out},
+                        {"--png", o->png},
+                        {"--stats", o->stats},
+                        {"--samples-png", o->samplesPng},
+                        {"--density-vdb", o->densityVdb},
+                        {"--radiance-vdb", o->radianceVdb}});
     const Scene scene = loadScene(o->scene, o->sets);
     auto method = createMethod(scene, o->method, o->backend);
     if (!method->ignoredKeys.empty()) {
@@ -73,11 +80,7 @@ Action addRender(CLI::App& app) {
     if (!o->png.empty())
       out.stage(o->png, [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure); });
     if (!o->stats.empty())
-      out.stage(o->stats, [&](const std::string& tmp) {
-        std::ofstream f(tmp);
-        f << r.stats.toJson().dump(2) << "\n";
-        if (!f) throw IoError("cannot write stats '" + o->stats + "'");
-      });
+      out.stageStream(o->stats, [&](std::ostream& f) { f << r.stats.toJson().dump(2) << "\n"; });
     if (!o->samplesPng.empty()) {
       if (r.samples.empty())
         throw ConfigError("--samples-png: method '" + r.stats.method +

@@ -29,12 +29,7 @@ std::string readText(const std::string& path) {
 }
 
 void writeText(const std::string& path, const std::string& text) {
-  writeAtomically(path, [&](const std::string& tmp) {
-    std::ofstream f(tmp, std::ios::binary);
-    f << text;
-    f.close();
-    if (!f) throw IoError("cannot write '" + path + "'");
-  });
+  writeBytesAtomically(path, text);
 }
 
 std::string fileSafe(std::string s) {
