@@ -48,9 +48,14 @@ std::string Interval::describe() const {
 
 std::string describeValue(const Json& v) {
   // Long strings are cut before dump() so a megabyte value is never copied into a message.
+  // Invalid UTF-8 (a --set VALUE taken as a string is not checked) is replaced, not thrown
+  // (dump's default throws type_error 316: found by fuzz/fuzz_set.cpp).
+  const auto dump = [](const Json& j) {
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
+  };
   std::string s = v.is_string() && v.get_ref<const std::string&>().size() > 60
-                      ? Json(v.get_ref<const std::string&>().substr(0, 60)).dump()
-                      : v.dump();
+                      ? dump(Json(v.get_ref<const std::string&>().substr(0, 60)))
+                      : dump(v);
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
 }

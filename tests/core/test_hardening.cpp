@@ -154,3 +154,13 @@ TEST(GridLookups, NonFiniteCoordinatesReadAnEdgeVoxelNotMemory) {
   EXPECT_EQ(g.sampleIndex(Vec3(0.5f, 0.0f, 0.0f)), 0.5f);
   EXPECT_EQ(g.sample(Vec3(nan)), 0.0f);  // outside the box: zero
 }
+
+TEST(StrictJson, InvalidUtf8InASetValueIsDescribedNotThrown) {
+  // Found by fuzz/fuzz_set.cpp: a --set VALUE that is not JSON (here: not UTF-8) is kept as a
+  // string, and describing it in a message threw json type_error 316 ("internal error").
+  const std::string e = sceneError({"lights=[{\"\x88\x86pe\":\"point\"}]"});
+  EXPECT_TRUE(has(e, "'lights'")) << e;
+  Json doc = Json::object();
+  applyOverride(doc, "name=\x88\x86");
+  EXPECT_NO_THROW(describeValue(doc));
+}

@@ -130,6 +130,7 @@ TEST_F(ExperimentTest, BadConfigsNameTheKey) {
 
   // No 'references' means the default (`exact`, converged); an empty list is an error.
   c = tinyConfig();
+  c["references"] = Json::array();
   e = expectConfigError(c);
   EXPECT_NE(e.find("references"), std::string::npos) << e;
 
