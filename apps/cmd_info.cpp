@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -45,17 +46,31 @@ void printSceneInfo(const std::string& path) {
 
 void printImageInfo(const std::string& path) {
   const Image img = readExr(path);
+  // Statistics over finite values; NaN and inf are counted, not folded in (a NaN made the
+  // mean "-nan" and hid where it came from).
   Vec3 lo(kInfinity), hi(-kInfinity);
-  glm::dvec3 sum(0.0);
-  for (const Vec3& p : img.pixels()) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-    sum += glm::dvec3(p);
-  }
-  sum /= double(std::max<size_t>(1, img.pixels().size()));
+  glm::dvec3 sum(0.0), count(0.0);
+  size_t nans = 0, infs = 0;
+  for (const Vec3& p : img.pixels())
+    for (int c = 0; c < 3; ++c) {
+      if (std::isnan(p[c])) {
+        ++nans;
+      } else if (std::isinf(p[c])) {
+        ++infs;
+      } else {
+        lo[c] = std::min(lo[c], p[c]);
+        hi[c] = std::max(hi[c], p[c]);
+        sum[c] += p[c];
+        count[c] += 1.0;
+      }
+    }
+  sum /= glm::max(count, glm::dvec3(1.0));
   std::printf("image %s: %dx%d RGB float\n", path.c_str(), img.width(), img.height());
   std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", lo.x, lo.y, lo.z, hi.x, hi.y,
               hi.z, sum.x, sum.y, sum.z);
+  if (nans + infs > 0)
+    std::printf("  non-finite: %zu NaN and %zu inf channel values (left out of min/max/mean)\n",
+                nans, infs);
 }
 
 /// `info --gpu`: the OpenGL device the GPU backend would use (creates the context).
@@ -84,12 +99,11 @@ void printVdbInfo(const std::string& path) {
       continue;
     }
     const IVec3 d = g.indexMax - g.indexMin + 1;
-    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x,
-                g.indexMin.y, g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y,
-                d.z);
+    std::printf("    index box    [%d %d %d]..[%d %d %d] (%dx%dx%d)\n", g.indexMin.x, g.indexMin.y,
+                g.indexMin.z, g.indexMax.x, g.indexMax.y, g.indexMax.z, d.x, d.y, d.z);
     std::printf("    world box    [%g %g %g]..[%g %g %g] (voxel cells, axis-aligned)\n",
-                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z,
-                g.worldBounds.max.x, g.worldBounds.max.y, g.worldBounds.max.z);
+                g.worldBounds.min.x, g.worldBounds.min.y, g.worldBounds.min.z, g.worldBounds.max.x,
+                g.worldBounds.max.y, g.worldBounds.max.z);
     std::printf("    active       %llu voxels (%llu active tiles, %llu leaf nodes)\n",
                 (unsigned long long)g.activeVoxels, (unsigned long long)g.activeTiles,
                 (unsigned long long)g.leafNodes);
@@ -109,10 +123,11 @@ void printSogInfo(const std::string& path) {
   std::printf("  lattice        [%g %g %g]..[%g %g %g], %dx%dx%d\n", h.bounds().min.x,
               h.bounds().min.y, h.bounds().min.z, h.bounds().max.x, h.bounds().max.y,
               h.bounds().max.z, n.x, n.y, n.z);
-  std::printf("  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
-              "threshold %g\n",
-              h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(),
-              double(h.step()), double(m.threshold));
+  std::printf(
+      "  residual hash  %zu entries (%.3f%% of the lattice), %d-bit, step %g, "
+      "threshold %g\n",
+      h.size(), 100.0 * double(h.size()) / (double(n.x) * n.y * n.z), h.bits(), double(h.step()),
+      double(m.threshold));
 }
 
 Action addInfo(CLI::App& app) {
@@ -120,7 +135,8 @@ Action addInfo(CLI::App& app) {
   auto gpuFlag = std::make_shared<bool>(false);
   CLI::App* c = app.add_subcommand("info", "Describe a scene (.json), image (.exr) or volume");
   c->add_option("file", *file, "File to describe");
-  c->add_flag("--gpu", *gpuFlag, "Print the OpenGL vendor, renderer and version of the GPU backend");
+  c->add_flag("--gpu", *gpuFlag,
+              "Print the OpenGL vendor, renderer and version of the GPU backend");
   return [file, gpuFlag]() {
     if (*gpuFlag) printGpuInfo();
     if (file->empty()) {

@@ -387,3 +387,15 @@ TEST_F(Cli, FullDiskDuringVdbExportExits1AndLeavesNothing) {
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string(), "scene.json") << "left behind: " << e.path();
 }
+
+TEST_F(Cli, InfoCountsNonFinitePixelsInsteadOfPrintingNanMeans) {
+  scatterlab::Image img(2, 1);
+  img.pixels()[0] = scatterlab::Vec3(1.0f, 2.0f, 3.0f);
+  img.pixels()[1] = scatterlab::Vec3(std::nanf(""), INFINITY, 5.0f);
+  scatterlab::writeExr(img, out("nan.exr"));
+  const RunResult r = run("info " + out("nan.exr"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("mean [1 2 4]"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 NaN and 1 inf"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("nan ]"), std::string::npos) << r.output;
+}
