@@ -65,6 +65,8 @@ Action addCompare(CLI::App& app) {
           "K >= 0")
       ->needs(scene);
   return [o]() {
+    checkDistinctPaths({{"image", o->image}, {"--diff", o->diff}});
+    checkDistinctPaths({{"reference", o->reference}, {"--diff", o->diff}});
     const Image a = readExr(o->image), b = readExr(o->reference);
     // Everything is read and checked before the --diff PNG is written: no partial output.
     std::optional<LightMask> mask;

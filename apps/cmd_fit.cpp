@@ -84,6 +84,11 @@ int runFit(const FitArgs& a) {
     outputs.push_back(sequence ? frameName(a.output, f) : a.output);
     checkWritablePath(outputs.back());
   }
+  // An output must not overwrite an input (the same input twice is a legitimate sequence).
+  for (size_t f = 0; f < a.inputs.size(); ++f)
+    for (size_t g = 0; g < outputs.size(); ++g)
+      checkDistinctPaths({{"input " + a.inputs[f], a.inputs[f]},
+                          {"--output (frame " + std::to_string(g) + ")", outputs[g]}});
   if (!a.imageScene.empty()) {
     if (!a.imageCheck)
       throw ConfigError("fit: --image-scene and --no-image-check contradict each other");

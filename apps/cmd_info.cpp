@@ -1,6 +1,7 @@
 #include <png.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -57,19 +58,33 @@ void printSceneInfo(const std::string& path) {
 
 void printImageInfo(const std::string& path) {
   const Image img = readExr(path);
+  // Statistics over finite values; NaN and inf are counted, not folded in (a NaN made the
+  // mean "-nan" and hid where it came from).
   Vec3 lo(kInfinity), hi(-kInfinity);
-  glm::dvec3 sum(0.0);
-  for (const Vec3& p : img.pixels()) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-    sum += glm::dvec3(p);
-  }
-  sum /= double(std::max<size_t>(1, img.pixels().size()));
+  glm::dvec3 sum(0.0), count(0.0);
+  size_t nans = 0, infs = 0;
+  for (const Vec3& p : img.pixels())
+    for (int c = 0; c < 3; ++c) {
+      if (std::isnan(p[c])) {
+        ++nans;
+      } else if (std::isinf(p[c])) {
+        ++infs;
+      } else {
+        lo[c] = std::min(lo[c], p[c]);
+        hi[c] = std::max(hi[c], p[c]);
+        sum[c] += p[c];
+        count[c] += 1.0;
+      }
+    }
+  sum /= glm::max(count, glm::dvec3(1.0));
   std::printf(
       "image %s: %dx%d %s\n", path.c_str(), img.width(), img.height(),
       img.alpha().empty() ? "RGB float" : "RGBA float (A = 1 - transmittance of the view ray)");
   std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", lo.x, lo.y, lo.z, hi.x, hi.y,
               hi.z, sum.x, sum.y, sum.z);
+  if (nans + infs > 0)
+    std::printf("  non-finite: %zu NaN and %zu inf channel values (left out of min/max/mean)\n",
+                nans, infs);
 }
 
 namespace {
@@ -78,17 +93,27 @@ Json vec(const Vec3& v) {
   return {v.x, v.y, v.z};
 }
 
-/// min, max, mean per channel of RGB pixels.
+/// min, max, mean per channel of RGB pixels over finite values; NaN and inf counted apart.
 Json pixelStats(const std::vector<Vec3>& px) {
   Vec3 lo(kInfinity), hi(-kInfinity);
-  glm::dvec3 sum(0.0);
-  for (const Vec3& p : px) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-    sum += glm::dvec3(p);
-  }
-  sum /= double(std::max<size_t>(1, px.size()));
-  return {{"min", vec(lo)}, {"max", vec(hi)}, {"mean", {sum.x, sum.y, sum.z}}};
+  glm::dvec3 sum(0.0), count(0.0);
+  size_t nans = 0, infs = 0;
+  for (const Vec3& p : px)
+    for (int c = 0; c < 3; ++c) {
+      if (std::isnan(p[c])) {
+        ++nans;
+      } else if (std::isinf(p[c])) {
+        ++infs;
+      } else {
+        lo[c] = std::min(lo[c], p[c]);
+        hi[c] = std::max(hi[c], p[c]);
+        sum[c] += p[c];
+        count[c] += 1.0;
+      }
+    }
+  sum /= glm::max(count, glm::dvec3(1.0));
+  return {{"min", vec(lo)},   {"max", vec(hi)},      {"mean", {sum.x, sum.y, sum.z}},
+          {"nan", nans},      {"inf", infs}};
 }
 
 /// An 8-bit (or 16-bit, reduced) PNG as RGB in [0, 1], the stored (display-encoded) values.

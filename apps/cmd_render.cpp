@@ -138,6 +138,13 @@ Action addRender(CLI::App& app) {
                 "'radiance'); CPU methods that build one (not exact)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
+    checkDistinctPaths({{"scene", o->scene},
+                        {"--output", o->out},
+                        {"--png", o->png},
+                        {"--stats", o->stats},
+                        {"--samples-png", o->samplesPng},
+                        {"--density-vdb", o->densityVdb},
+                        {"--radiance-vdb", o->radianceVdb}});
     const ToneCurve curve = parseToneCurve(o->tonemap);
     Renderer renderer = Renderer::fromFile(o->scene, o->sets, o->method, o->backend);
     const Scene& scene = renderer.scene();
@@ -190,11 +197,8 @@ Action addRender(CLI::App& app) {
         out.stage(framePath(o->png, f),
                   [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure, curve); });
       if (!o->stats.empty())
-        out.stage(framePath(o->stats, f), [&](const std::string& tmp) {
-          std::ofstream file(tmp);
-          file << r.stats.toJson().dump(2) << "\n";
-          if (!file) throw IoError("cannot write stats '" + framePath(o->stats, f) + "'");
-        });
+        out.stageStream(framePath(o->stats, f),
+                        [&](std::ostream& file) { file << r.stats.toJson().dump(2) << "\n"; });
       if (!o->samplesPng.empty()) {
         if (r.samples.empty())
           throw ConfigError("--samples-png: method '" + r.stats.method +

@@ -26,13 +26,22 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // Usage errors exit with 2 (the project's rule), whatever CLI11's own code; --help is 0.
-    return app.exit(e) == 0 ? 0 : 2;
+    // --help and --version are CLI11 "errors" with code 0: let CLI11 print them.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    // Usage errors exit with 2 (the project's rule), whatever CLI11's own code (105, 106, 109,
+    // ...), with the same prefix as every other error.
+    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
+                 e.what());
+    return 2;
   }
   try {
     scatterlab::initialize();
     for (auto& [sub, action] : cmds)
       if (sub->parsed()) return action();
+  } catch (const scatterlab::cli::UsageError& e) {
+    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
+                 e.what());
+    return 2;
   } catch (const scatterlab::Error& e) {
     std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
     return 1;

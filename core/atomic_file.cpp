@@ -1,9 +1,13 @@
 #include "core/atomic_file.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <streambuf>
 #include <vector>
 
 #include "core/error.h"
@@ -26,7 +30,106 @@ std::string tempPathFor(const std::string& path) {
   return (p.parent_path() / name).string();
 }
 
+/// A write-only, seekable streambuf over a file descriptor that remembers the first failed
+/// write(2)/lseek(2) (std::ofstream forgets: a failed flush in its destructor is silent).
+class CheckedFileBuf : public std::streambuf {
+ public:
+  explicit CheckedFileBuf(int fd) : fd_(fd), buf_(std::size_t(1) << 16) { reset(); }
+  /// errno of the first failure, 0 when none.
+  int error() const { return err_; }
+  bool drain() {
+    for (const char* p = pbase(); p < pptr() && err_ == 0;) {
+      const ssize_t w = ::write(fd_, p, std::size_t(pptr() - p));
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) {
+        err_ = w < 0 ? errno : EIO;
+        break;
+      }
+      p += w;
+    }
+    reset();
+    return err_ == 0;
+  }
+
+ protected:
+  int_type overflow(int_type ch) override {
+    if (!drain()) return traits_type::eof();
+    if (!traits_type::eq_int_type(ch, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(ch);
+      pbump(1);
+    }
+    return traits_type::not_eof(ch);
+  }
+  int sync() override { return drain() ? 0 : -1; }
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
+    if (!drain()) return pos_type(off_type(-1));
+    const int whence = dir == std::ios_base::beg   ? SEEK_SET
+                       : dir == std::ios_base::cur ? SEEK_CUR
+                                                   : SEEK_END;
+    const off_t r = ::lseek(fd_, off_t(off), whence);
+    if (r < 0) {
+      err_ = errno;
+      return pos_type(off_type(-1));
+    }
+    return pos_type(off_type(r));
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+
+ private:
+  void reset() { setp(buf_.data(), buf_.data() + buf_.size()); }
+  int fd_;
+  int err_ = 0;
+  std::vector<char> buf_;
+};
+
+/// Writes `write`'s output to `tmp` (created new), checking every step; throws IoError naming
+/// `path` (the requested output, never the temporary).
+void writeChecked(const std::string& path, const std::string& tmp,
+                  const std::function<void(std::ostream&)>& write) {
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) throw IoError("cannot write '" + path + "': " + std::strerror(errno));
+  int err = 0;
+  try {
+    CheckedFileBuf buf(fd);
+    std::ostream os(&buf);
+    write(os);
+    os.flush();
+    err = buf.error();
+    if (!err && !os) err = EIO;
+    if (!err && ::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) err = errno;
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  if (::close(fd) != 0 && !err) err = errno;
+  if (err) throw IoError("cannot write '" + path + "': " + std::strerror(err));
+}
+
+/// Rethrows an IoError whose message names the temporary `tmp` with `path` in its place.
+[[noreturn]] void rethrowNaming(const std::string& tmp, const std::string& path) {
+  try {
+    throw;
+  } catch (const IoError& e) {
+    std::string m = e.what();
+    for (std::size_t at; (at = m.find(tmp)) != std::string::npos;) m.replace(at, tmp.size(), path);
+    throw IoError(m);
+  }
+}
+
 }  // namespace
+
+void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  PendingOutputs out;
+  out.stageStream(path, write);
+  out.commit();
+}
+
+void writeBytesAtomically(const std::string& path, std::string_view bytes) {
+  writeFileAtomically(
+      path, [&](std::ostream& os) { os.write(bytes.data(), std::streamsize(bytes.size())); });
+}
 
 void checkWritablePath(const std::string& path) {
   if (path.empty()) throw IoError("output path is empty");
@@ -59,12 +162,21 @@ void PendingOutputs::stage(const std::string& path,
   Item item{tempPathFor(path), path};
   try {
     write(item.tmp);
+  } catch (const IoError&) {
+    std::error_code ec;
+    fs::remove(item.tmp, ec);
+    rethrowNaming(item.tmp, path);
   } catch (...) {
     std::error_code ec;
     fs::remove(item.tmp, ec);
     throw;
   }
   items_.push_back(item);
+}
+
+void PendingOutputs::stageStream(const std::string& path,
+                                 const std::function<void(std::ostream&)>& write) {
+  stage(path, [&](const std::string& tmp) { writeChecked(path, tmp, write); });
 }
 
 void PendingOutputs::commit() {

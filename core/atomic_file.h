@@ -2,9 +2,22 @@
 /// Write-then-rename: outputs appear complete or not at all.
 
 #include <functional>
+#include <ostream>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace scatterlab {
+
+/// The one writer of output files. write(os) writes the whole contents to `os`, a seekable
+/// ostream over a new temporary file beside `path`; every write, the final flush, fsync and
+/// close are checked, and only then is the temporary renamed onto `path`. Any failure (full
+/// disk, file size limit, I/O error, or write throwing) removes the temporary, leaves `path`
+/// untouched and throws IoError naming `path` and the system's reason.
+void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write);
+
+/// writeFileAtomically with fixed contents.
+void writeBytesAtomically(const std::string& path, std::string_view bytes);
 
 /// Calls write(tmpPath) with a temporary path in the same directory as `path`, then renames it
 /// onto `path`. If write throws, or the rename fails, the temporary is removed and the error is
@@ -20,7 +33,11 @@ class PendingOutputs {
   PendingOutputs& operator=(const PendingOutputs&) = delete;
   ~PendingOutputs();
 
+  /// Writes through a writer that takes a file name (one that may itself write atomically);
+  /// an IoError naming the temporary is rethrown naming `path`.
   void stage(const std::string& path, const std::function<void(const std::string&)>& write);
+  /// Writes through the checked stream of writeFileAtomically.
+  void stageStream(const std::string& path, const std::function<void(std::ostream&)>& write);
   void commit();
 
  private:

@@ -63,9 +63,14 @@ class Grid3 {
   }
 
   /// Trilinear lookup at continuous index coordinates u (voxel centre i at u = i), clamped to
-  /// the outermost centres. The caller guarantees u lies within the box.
+  /// the outermost centres. Any u is safe (NaN reads voxel 0); callers keep u within the box.
   T sampleIndex(Vec3 u) const {
-    u = glm::clamp(u, Vec3(0.0f), maxIndex_);
+    // `u > 0 ? u : 0` maps NaN to 0 (a comparison with NaN is false) and compiles to maxss, so
+    // no NaN or infinite coordinate can become a wild index (glm::clamp passes NaN through).
+    for (int a = 0; a < 3; ++a) {
+      u[a] = u[a] > 0.0f ? u[a] : 0.0f;
+      u[a] = u[a] < maxIndex_[a] ? u[a] : maxIndex_[a];
+    }
     // Base corner clamped to dims-2 so the +1 neighbour exists; along an axis of one voxel the
     // neighbour offset is 0.
     const IVec3 b = glm::min(IVec3(u), maxBase_);

@@ -3,6 +3,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
@@ -19,6 +20,27 @@
 
 namespace scatterlab {
 
+namespace {
+
+/// OpenEXR output into the checked stream of writeFileAtomically (OpenEXR's own StdOFStream
+/// leaves the final flush of its std::ofstream unchecked).
+class ExrOStream : public Imf::OStream {
+ public:
+  ExrOStream(std::ostream& os, const std::string& name) : Imf::OStream(name.c_str()), os_(os) {}
+  void write(const char c[], int n) override {
+    if (!os_.write(c, n)) throw IoError("write failed");
+  }
+  uint64_t tellp() override { return uint64_t(os_.tellp()); }
+  void seekp(uint64_t pos) override {
+    if (!os_.seekp(std::streamoff(pos))) throw IoError("seek failed");
+  }
+
+ private:
+  std::ostream& os_;
+};
+
+}  // namespace
+
 void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
   const bool hasAlpha = !img.alpha().empty();
@@ -26,7 +48,7 @@ void writeExr(const Image& img, const std::string& path, const ExrAttributes& at
     throw IoError("cannot write EXR '" + path + "': alpha has " +
                   std::to_string(img.alpha().size()) + " values for " +
                   std::to_string(img.pixels().size()) + " pixels");
-  writeAtomically(path, [&](const std::string& tmp) {
+  writeFileAtomically(path, [&](std::ostream& os) {
     try {
       Imf::Header header(img.width(), img.height());
       for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
@@ -37,7 +59,8 @@ void writeExr(const Image& img, const std::string& path, const ExrAttributes& at
         header.insert(name, Imf::M44fAttribute(Imath::M44f(m[0], m[1], m[2], m[3], m[4], m[5], m[6],
                                                            m[7], m[8], m[9], m[10], m[11], m[12],
                                                            m[13], m[14], m[15])));
-      Imf::OutputFile file(tmp.c_str(), header);
+      ExrOStream stream(os, path);
+      Imf::OutputFile file(stream, header);
       Imf::FrameBuffer fb;
       char* base = const_cast<char*>(reinterpret_cast<const char*>(img.pixels().data()));
       const size_t xs = sizeof(Vec3), ys = sizeof(Vec3) * img.width();
@@ -144,16 +167,21 @@ void writePng(const Image& img, const std::string& path, float exposure, ToneCur
                : toneMapSrgb(toneCurve(img.pixels()[i][c] * scale, curve), 0.0f)) *
               255.0f +
           0.5f);
-  writeAtomically(path, [&](const std::string& tmp) {
-    png_image pi;
-    std::memset(&pi, 0, sizeof(pi));
-    pi.version = PNG_IMAGE_VERSION;
-    pi.width = img.width();
-    pi.height = img.height();
-    pi.format = PNG_FORMAT_RGB;
-    if (!png_image_write_to_file(&pi, tmp.c_str(), 0, buf.data(), 0, nullptr))
-      throw IoError("cannot write PNG '" + path + "': " + pi.message);
-  });
+  // Encoded in memory (libpng's simplified API), then written by the one checked writer.
+  png_image pi;
+  std::memset(&pi, 0, sizeof(pi));
+  pi.version = PNG_IMAGE_VERSION;
+  pi.width = img.width();
+  pi.height = img.height();
+  pi.format = PNG_FORMAT_RGB;
+  png_alloc_size_t size = 0;
+  if (!png_image_write_to_memory(&pi, nullptr, &size, 0, buf.data(), 0, nullptr))
+    throw IoError("cannot write PNG '" + path + "': " + pi.message);
+  std::string bytes(size, '\0');
+  if (!png_image_write_to_memory(&pi, bytes.data(), &size, 0, buf.data(), 0, nullptr))
+    throw IoError("cannot write PNG '" + path + "': " + pi.message);
+  bytes.resize(size);
+  writeBytesAtomically(path, bytes);
 }
 
 }  // namespace scatterlab

@@ -1,5 +1,8 @@
 #include "core/params.h"
 
+#include <algorithm>
+#include <cfloat>
+#include <climits>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -44,10 +47,90 @@ std::string Interval::describe() const {
 }
 
 std::string describeValue(const Json& v) {
-  std::string s = v.dump();
+  // Long strings are cut before dump() so a megabyte value is never copied into a message.
+  // Invalid UTF-8 (a --set VALUE taken as a string is not checked) is replaced, not thrown
+  // (dump's default throws type_error 316: found by fuzz/fuzz_set.cpp).
+  const auto dump = [](const Json& j) {
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
+  };
+  std::string s = v.is_string() && v.get_ref<const std::string&>().size() > 60
+                      ? dump(Json(v.get_ref<const std::string&>().substr(0, 60)))
+                      : dump(v);
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
 }
+
+namespace {
+
+/// Thrown from the parser callback; turned into an IoError with the origin by parseJson.
+struct JsonRuleBroken {
+  std::string why;
+};
+
+}  // namespace
+
+Json parseJson(std::string_view text, const std::string& origin) {
+  // The callback sees every container start and key in order, so a stack of key sets (one per
+  // open object) finds duplicates, and its depth argument bounds the nesting before the parser
+  // builds anything deeper.
+  std::vector<std::set<std::string>> keys;
+  std::vector<bool> isObject;
+  const Json::parser_callback_t cb = [&](int depth, Json::parse_event_t ev, Json& parsed) {
+    switch (ev) {
+      case Json::parse_event_t::object_start:
+      case Json::parse_event_t::array_start:
+        if (depth >= kMaxJsonDepth)
+          throw JsonRuleBroken{"nesting deeper than " + std::to_string(kMaxJsonDepth) +
+                               " levels of arrays/objects"};
+        isObject.push_back(ev == Json::parse_event_t::object_start);
+        if (isObject.back()) keys.emplace_back();
+        break;
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        if (!isObject.empty()) {
+          if (isObject.back()) keys.pop_back();
+          isObject.pop_back();
+        }
+        break;
+      case Json::parse_event_t::key:
+        if (!keys.empty() && !keys.back().insert(parsed.get<std::string>()).second)
+          throw JsonRuleBroken{"duplicate key " + describeValue(parsed) +
+                               " in one object (each key may appear once)"};
+        break;
+      default:
+        break;
+    }
+    return true;
+  };
+  try {
+    return Json::parse(text.begin(), text.end(), cb, /*allow_exceptions=*/true,
+                       /*ignore_comments=*/true);
+  } catch (const JsonRuleBroken& e) {
+    throw IoError(origin + ": " + e.why);
+  } catch (const Json::out_of_range& e) {
+    // 406: a number beyond double range; the library reports it without the position.
+    std::string what = e.what();
+    const auto at = what.find("] ");
+    throw IoError(origin + ": " + (at == std::string::npos ? what : what.substr(at + 2)) +
+                  " (numbers must be finite and within +-1.8e308)");
+  } catch (const Json::exception& e) {
+    std::string what = e.what();
+    const auto at = what.find("] ");
+    throw IoError(origin +
+                  ": malformed JSON: " + (at == std::string::npos ? what : what.substr(at + 2)));
+  }
+}
+
+namespace {
+
+/// Fails unless every component fits a float: narrowing a larger double gives inf.
+void checkFloat(const Params& p, const std::string& key, double v, const std::string& what) {
+  if (std::abs(v) > double(FLT_MAX))
+    p.fail(key,
+           what + " " + fmt(v) + " is beyond single precision; allowed: |value| <= 3.40282e+38");
+}
+
+}  // namespace
 
 Params::Params(const Json& j, std::string path)
     : Params(std::make_shared<const Json>(j), nullptr, std::move(path)) {}
@@ -131,6 +214,12 @@ double Params::number(const std::string& key, std::optional<double> def, const I
   return v;
 }
 
+float Params::real(const std::string& key, std::optional<double> def, const Interval& range) {
+  const double v = number(key, def, range);
+  checkFloat(*this, key, v, "value");
+  return float(v);
+}
+
 long long Params::integer(const std::string& key, std::optional<long long> def,
                           const Interval& range) {
   mark(key);
@@ -140,7 +229,10 @@ long long Params::integer(const std::string& key, std::optional<long long> def,
     v = *def;
   } else {
     const Json& j = (*j_)[key];
-    if (j.is_number_integer() || j.is_number_unsigned()) {
+    if (j.is_number_unsigned() && j.get<unsigned long long>() > (unsigned long long)LLONG_MAX) {
+      fail(key, "value " + std::to_string(j.get<unsigned long long>()) +
+                    " is out of range; allowed: " + range.describe());
+    } else if (j.is_number_integer() || j.is_number_unsigned()) {
       v = j.get<long long>();
     } else if (j.is_number_float() && std::floor(j.get<double>()) == j.get<double>() &&
                std::abs(j.get<double>()) < 9e15) {
@@ -203,6 +295,7 @@ Vec3 Params::vec3(const std::string& key, std::optional<Vec3> def, const Interva
     if (!std::isfinite(x) || !range.contains(x))
       fail(key, "component " + std::to_string(i) + " = " + fmt(x) +
                     " is out of range; allowed: " + range.describe());
+    checkFloat(*this, key, x, "component " + std::to_string(i) + " =");
     v[i] = float(x);
   }
   return v;
@@ -276,8 +369,14 @@ void applyOverride(Json& doc, const std::string& assignment) {
   if (eq == std::string::npos || eq == 0)
     throw ConfigError("--set '" + assignment + "': expected key.path=VALUE");
   const std::string path = assignment.substr(0, eq), text = assignment.substr(eq + 1);
-  Json value = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (value.is_discarded()) value = text;
+  // JSON where it parses; text that is not JSON at all is a string; JSON that breaks a rule
+  // (too deep, duplicate key, 1e400) is an error rather than silently a string.
+  const Json value = Json::accept(text, /*ignore_comments=*/true)
+                         ? parseJson(text, "--set " + describeValue(Json(assignment)))
+                         : Json(text);
+  if (std::count(path.begin(), path.end(), '.') >= kMaxJsonDepth)
+    throw ConfigError("--set '" + path.substr(0, 60) + "...': key path deeper than " +
+                      std::to_string(kMaxJsonDepth) + " levels");
   Json* node = &doc;
   std::string walked;
   size_t start = 0;

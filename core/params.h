@@ -65,10 +65,9 @@ class Params {
 
   double number(const std::string& key, std::optional<double> def = std::nullopt,
                 const Interval& range = {});
+  /// A number that must also fit a float (|v| <= FLT_MAX), so narrowing never gives inf.
   float real(const std::string& key, std::optional<double> def = std::nullopt,
-             const Interval& range = {}) {
-    return float(number(key, def, range));
-  }
+             const Interval& range = {});
   long long integer(const std::string& key, std::optional<long long> def = std::nullopt,
                     const Interval& range = {});
   bool boolean(const std::string& key, std::optional<bool> def = std::nullopt);
@@ -79,7 +78,7 @@ class Params {
   /// A voxel resolution: an integer n (meaning n³) or [nx, ny, nz] of integers, each in
   /// [1, 4096], at most 512³ voxels in all (the one rule for every resolution key).
   IVec3 resolution(const std::string& key, std::optional<IVec3> def = std::nullopt);
-  /// Array of 3 numbers, each within `range`.
+  /// Array of 3 numbers, each within `range` and within float range.
   Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt,
             const Interval& range = {});
   /// Either a number (broadcast to RGB) or an array of 3 numbers.
@@ -131,6 +130,15 @@ class Params {
 /// diagonal is `diagonal`: (diagonal·1e-6, diagonal], so that no ray takes more than ~10^6
 /// steps. One definition for every step key.
 Interval stepRange(float diagonal);
+
+/// Deepest nesting of arrays and objects a JSON document may have (scene files nest 4 deep;
+/// the bound keeps every recursive walk of a document, dump() included, far from the stack).
+inline constexpr int kMaxJsonDepth = 64;
+
+/// Parses JSON text strictly: comments allowed; nesting deeper than kMaxJsonDepth, a key
+/// repeated in one object, and numbers outside double range (1e400) are errors. Throws
+/// IoError whose message starts with `origin` (a file name or "--set 'k=v'") and says where.
+Json parseJson(std::string_view text, const std::string& origin);
 
 /// Applies `--set a.b.c=VALUE`: VALUE is parsed as JSON where it parses, else taken as a
 /// string; missing objects on the way are created. A part that is a decimal number addresses

@@ -1,6 +1,7 @@
 #include "core/scene.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -30,19 +31,43 @@ Phase parsePhase(Params p) {
   return ph;
 }
 
-Light parseLight(Params p) {
+/// Farthest a light or the camera may be from the medium: 1e6 box diagonals from its centre.
+/// Beyond that single precision has nothing left of the box (and |x|² overflows near 1e19).
+constexpr double kMaxDistanceInDiagonals = 1e6;
+
+/// Checks that `key` (a point already read) lies within kMaxDistanceInDiagonals of the box.
+void checkNearMedium(const Params& p, const std::string& key, const Vec3& x, const Box& box) {
+  const glm::dvec3 c = 0.5 * (glm::dvec3(box.min) + glm::dvec3(box.max));
+  const double diag = glm::length(glm::dvec3(box.max) - glm::dvec3(box.min));
+  const double d = glm::length(glm::dvec3(x) - c);
+  if (!(d <= kMaxDistanceInDiagonals * diag)) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " is %.3g box diagonals (of %.3g) from the medium's centre",
+                  d / diag, diag);
+    p.fail(key, "point " + describeValue(p.json()[key]) + buf + "; allowed: at most 1e6");
+  }
+}
+
+/// A non-zero direction, normalised in double so that huge finite components do not overflow.
+Vec3 direction(Params& p, const std::string& key) {
+  const glm::dvec3 d(p.vec3(key));
+  const double len = glm::length(d);
+  if (!(len > 0.0)) p.fail(key, "must not be the zero vector");
+  return Vec3(d / len);
+}
+
+Light parseLight(Params p, const Box& box) {
   Light l;
   const std::string t = p.choice("type", {"point", "spot", "directional"});
   const Interval positive = Interval::atLeast(0);
   if (t == "point" || t == "spot") {
     l.type = t == "point" ? Light::Type::Point : Light::Type::Spot;
     l.position = p.vec3("position");
+    checkNearMedium(p, "position", l.position, box);
     l.intensity = p.rgb("intensity", std::nullopt, positive);
   }
   if (t == "spot") {
-    const Vec3 d = p.vec3("direction");
-    if (glm::length(d) == 0.0f) p.fail("direction", "must not be the zero vector");
-    l.direction = glm::normalize(d);
+    l.direction = direction(p, "direction");
     const float outer = p.real("outer_deg", std::nullopt, Interval{0, 180, true, false});
     const float inner = p.real("inner_deg", 0.0, Interval::closed(0, 180));
     if (inner > outer)
@@ -53,20 +78,20 @@ Light parseLight(Params p) {
   }
   if (t == "directional") {
     l.type = Light::Type::Directional;
-    const Vec3 d = p.vec3("direction");
-    if (glm::length(d) == 0.0f) p.fail("direction", "must not be the zero vector");
-    l.direction = glm::normalize(d);
+    l.direction = direction(p, "direction");
     l.intensity = p.rgb("irradiance", std::nullopt, positive);
   }
   p.finish();
   return l;
 }
 
-Camera parseCamera(Params p) {
+Camera parseCamera(Params p, const Box& box) {
   Camera c;
   c.position = p.vec3("position");
+  checkNearMedium(p, "position", c.position, box);
   c.lookAt = p.vec3("look_at");
-  c.up = p.vec3("up", Vec3(0, 1, 0));
+  checkNearMedium(p, "look_at", c.lookAt, box);
+  c.up = p.has("up") ? direction(p, "up") : p.vec3("up", Vec3(0, 1, 0));
   c.fovYDeg = p.real("fov_y_deg", 40.0, Interval::open(0, 180));
   c.width = int(p.integer("width", 320, Interval::closed(1, 16384)));
   c.height = int(p.integer("height", 240, Interval::closed(1, 16384)));
@@ -76,10 +101,44 @@ Camera parseCamera(Params p) {
     p.fail("spp", "value " + std::to_string(c.spp) +
                       " is not a perfect square; allowed: 1, 4, 9, 16, ... 1024 (k x k strata)");
   p.finish();
-  if (c.position == c.lookAt) p.fail("look_at", "must differ from camera.position");
-  if (glm::length(glm::cross(c.lookAt - c.position, c.up)) == 0.0f)
-    p.fail("up", "must not be parallel to the view direction (look_at - position)");
+  // In double, and with the tolerance Camera::frame applies in float, so that a camera this
+  // accepts can always build its frame.
+  const glm::dvec3 view = glm::dvec3(c.lookAt) - glm::dvec3(c.position);
+  const double viewLength = glm::length(view);
+  if (!(viewLength > 1e-6 * glm::length(glm::dvec3(c.position) - glm::dvec3(box.center()))) ||
+      !(viewLength > 0.0) || Vec3(view) == Vec3(0.0f))
+    p.fail("look_at", "must differ from camera.position (distance " + std::to_string(viewLength) +
+                          " is too small for single precision)");
+  if (!(glm::length(glm::cross(view / viewLength, glm::dvec3(c.up))) >= 1e-3))
+    p.fail("up", "must not be parallel to the view direction (look_at - position); the angle " +
+                     std::string("between them must be at least 0.06 degrees"));
   return c;
+}
+
+/// A box the maths holds in: coordinates within +-1e15 and every axis wider than 1e-6 relative
+/// to its coordinates (narrower boxes leave single precision no voxels to tell apart).
+void checkBox(const Params& p, const std::string& key, const Box& box) {
+  const auto show = [](const Vec3& v) {
+    // Appended piecewise: GCC 12 reports a false -Wrestrict for "[" + std::string.
+    std::string s("[");
+    s += std::to_string(v.x);
+    s += ", ";
+    s += std::to_string(v.y);
+    s += ", ";
+    s += std::to_string(v.z);
+    s += "]";
+    return s;
+  };
+  for (int a = 0; a < 3; ++a) {
+    const double lo = box.min[a], hi = box.max[a];
+    if (!(std::abs(lo) <= 1e15 && std::abs(hi) <= 1e15))
+      p.fail(key, "medium box " + show(box.min) + " - " + show(box.max) +
+                      " has coordinates beyond +-1e15");
+    if (!(hi - lo >= 1e-6 * std::max(1.0, std::max(std::abs(lo), std::abs(hi)))))
+      p.fail(key, "medium box " + show(box.min) + " - " + show(box.max) +
+                      " is too thin: every axis must be wider than 1e-6 (relative to its " +
+                      "coordinates)");
+  }
 }
 
 Medium parseMedium(Params p, LoadContext ctx) {
@@ -92,6 +151,7 @@ Medium parseMedium(Params p, LoadContext ctx) {
     if (!m.bounds.valid())
       b.fail("max", "must exceed min in every axis (min " + describeValue(b.json()["min"]) +
                         ", max " + describeValue(b.json()["max"]) + ")");
+    checkBox(b, "max", m.bounds);
     ctx.mediumBounds = m.bounds;
   } else {
     p.allow("bounds");
@@ -104,9 +164,10 @@ Medium parseMedium(Params p, LoadContext ctx) {
     d.finish();
   }
   if (!ctx.mediumBounds) {
-    if (auto nb = m.density->naturalBounds())
+    if (auto nb = m.density->naturalBounds()) {
       m.bounds = *nb;
-    else
+      checkBox(p, "density", m.bounds);
+    } else
       p.fail("bounds", "required for density type '" + m.density->type() +
                            "' (expected {\"min\": [x,y,z], \"max\": [x,y,z]})");
   }
@@ -135,8 +196,9 @@ Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Me
   } else {
     s.medium = parseMedium(root.child("medium"), ctx);
   }
-  for (Params l : root.children("lights", /*required=*/true)) s.lights.push_back(parseLight(l));
-  s.camera = parseCamera(root.child("camera"));
+  for (Params l : root.children("lights", /*required=*/true))
+    s.lights.push_back(parseLight(l, s.medium.bounds));
+  s.camera = parseCamera(root.child("camera"), s.medium.bounds);
   s.background = root.rgb("background", Vec3(0.0f));
   if (root.has("objects")) {
     auto items = root.children("objects");
@@ -155,13 +217,12 @@ Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Me
 
 Json readJsonFile(const std::string& path) {
   checkReadableFile(path, "JSON file");
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open '" + path + "'");
-  try {
-    return Json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const Json::parse_error& e) {
-    throw IoError("malformed JSON in '" + path + "': " + e.what());
-  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) throw IoError("cannot read '" + path + "'");
+  return parseJson(text.str(), "'" + path + "'");
 }
 
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides) {

@@ -3,7 +3,11 @@
 
 #include "experiment/detail.h"
 
+#include <signal.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <sstream>
@@ -29,12 +33,7 @@ std::string readText(const std::string& path) {
 }
 
 void writeText(const std::string& path, const std::string& text) {
-  writeAtomically(path, [&](const std::string& tmp) {
-    std::ofstream f(tmp, std::ios::binary);
-    f << text;
-    f.close();
-    if (!f) throw IoError("cannot write '" + path + "'");
-  });
+  writeBytesAtomically(path, text);
 }
 
 std::string fileSafe(std::string s) {
@@ -68,7 +67,30 @@ std::string nowIso() {
   return b;
 }
 
+/// Removes temporaries of core/atomic_file ('.NAME.tmpPID_N') that a killed process left in
+/// `dir` and its subfolders: resume would otherwise never remove them. Temporaries of live
+/// processes (a concurrent writer) are kept.
+static void removeStaleTemporaries(const fs::path& dir) {
+  std::error_code ec;
+  std::vector<fs::path> stale;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::end(it);
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto at = name.rfind(".tmp");
+    if (name.empty() || name[0] != '.' || at == std::string::npos) continue;
+    const std::string tail = name.substr(at + 4);
+    const auto underscore = tail.find('_');
+    if (underscore == std::string::npos || underscore == 0 ||
+        tail.find_first_not_of("0123456789_") != std::string::npos)
+      continue;
+    const long pid = std::strtol(tail.substr(0, underscore).c_str(), nullptr, 10);
+    if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) stale.push_back(it->path());
+  }
+  for (const fs::path& p : stale) fs::remove(p, ec);
+}
+
 OutputDir::OutputDir(const std::string& dir) : dir_(dir) {
+  if (fs::is_directory(dir)) removeStaleTemporaries(dir);
   fs::create_directories(fs::path(dir) / "runs");
   fs::create_directories(fs::path(dir) / "images");
   fs::create_directories(fs::path(dir) / "references");

@@ -1,5 +1,7 @@
 #include "gpu/register.h"
 
+#include <cstdlib>
+
 #include "core/stages.h"
 #include "gpu/context.h"
 #include "gpu/dynamic_sampling.h"
@@ -32,6 +34,9 @@ class GpuRefiner : public SampleRefiner {
 /// slower than the CPU variants.
 bool preferGpu(std::string* why) {
   std::string reason;
+  // Mesa's libEGL prints warnings (no DRI device, ...) while probing; the probe's outcome is
+  // reported in `why`, so keep a CPU render quiet. A user's own EGL_LOG_LEVEL wins.
+  ::setenv("EGL_LOG_LEVEL", "fatal", /*overwrite=*/0);
   Context* ctx = tryContext(&reason);
   if (!ctx) {
     *why = "auto: no GPU context (" + reason + "); using the CPU";

@@ -217,11 +217,7 @@ void writeSog(const std::string& path, const SogModel& m) {
       put(s, c);
   }
   put(s, fnv1a(s.data(), s.size()));
-  writeAtomically(path, [&](const std::string& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out.write(s.data(), std::streamsize(s.size())) || !out.flush())
-      throw IoError("cannot write '" + path + "'");
-  });
+  writeBytesAtomically(path, s);
 }
 
 SogModel readSog(const std::string& path) {

@@ -289,12 +289,12 @@ openvdb::math::Transform::Ptr cellTransform(const Box& bounds, IVec3 dims) {
 
 void writeGrids(const std::string& path, openvdb::GridBase::Ptr grid) {
   checkWritablePath(path);
-  writeAtomically(path, [&](const std::string& tmp) {
+  // io::Stream into the checked stream (io::File writes through an unchecked std::ofstream: a
+  // full disk left a truncated file with exit 0); io::File reads the streamed layout back.
+  writeFileAtomically(path, [&](std::ostream& os) {
     try {
-      openvdb::io::File file(tmp);
       openvdb::GridPtrVec grids{grid};
-      file.write(grids);
-      file.close();
+      openvdb::io::Stream(os).write(grids);
     } catch (const openvdb::Exception& e) {
       throw IoError("cannot write VDB file '" + path + "': " + e.what());
     }

@@ -12,7 +12,7 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "true, false",
        "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
        "back at each march step (singular lights); methods with samples"},
-      {"log_space", "bool", "true for adaptive, else false (false with paper)",
+      {"log_space", "bool", "false",
        "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "dynamic sampling then measures its error on V; methods with samples"},
@@ -57,10 +57,10 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     s.factorLights = p.boolean("factor_lights", d.extended && !s.paper);
     if (s.paper && s.factorLights)
       p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
-    // On by default where dynamic sampling splits (measured, docs/fidelity.md: with adaptive it
-    // removes the perforated sheet's leak and halves the chimney's error; with gradient alone,
-    // whose samples are not placed by the error, it loses on glows and smoke1).
-    s.logSpace = p.boolean("log_space", s.factorLights && !d.refiner.empty());
+    // Off by default (measured, docs/fidelity.md): with adaptive it wins on dense self-shadowing
+    // smoke (chimney, smoke1) and loses with lamps inside fog and, badly, at the hard shadows
+    // of scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV.
+    s.logSpace = p.boolean("log_space", false);
     // Off by default: measured (docs/fidelity.md) a clear win with adaptive on occluders (the
     // perforated sheet, the chimney trail) but 3-30x the frame time and worse on smoke1.
     s.occlusionWeights = p.boolean("occlusion_weights", false);

@@ -365,3 +365,83 @@ TEST_F(Cli, ExperimentShardAndMergeBadInputs) {
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::exists(out("m") + "/results.json"));
 }
+
+// --- Issue 17: inputs that crashed, exited with CLI11's codes or left partial files. ---
+
+TEST_F(Cli, UsageErrorsExit2WithThePrefix) {
+  const std::string scene = writeScene(tinyScene());
+  for (const std::string& args :
+       {"render " + scene + " -o " + out("o.exr") + " --bogus",            // CLI11 code 109
+        std::string("render"),                                             // 106: required missing
+        "render " + scene + " -o " + out("o.exr") + " --backend nope"}) {  // 105: validation
+    const RunResult r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
+    EXPECT_EQ(r.output.rfind("scatterlab: error: ", 0), 0u) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(out("o.exr")));
+}
+
+TEST_F(Cli, DuplicateOutputPathsAreAUsageError) {
+  const std::string scene = writeScene(tinyScene());
+  RunResult r =
+      run("render " + scene + " -o " + out("o.exr") + " --png " + dir_.string() + "/./o.exr");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--output and --png name the same file"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out("o.exr")));
+  r = run("render " + scene + " -o " + out("o.exr") + " --stats " + scene);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("scene and --stats"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, ExtremeValuesFailWithTheKeyNotASegfault) {
+  // Each crashed with exit 139 or rendered inf/NaN with exit 0 before.
+  const std::string scene = writeScene(tinyScene());
+  expectRenderFails(scene, {"'camera.position'", "beyond single precision"},
+                    "--set camera.position=[0.5,0.5,-1e39]");
+  expectRenderFails(scene, {"'camera.up'"}, "--set camera.up=[0,1e300,0]");
+  expectRenderFails(scene, {"'background'"}, "--set background=1e39");
+  expectRenderFails(scene, {"'camera.position'", "box diagonals"},
+                    "--set camera.position=[1e20,0.5,-2]");
+  expectRenderFails(write("big.json", "{\"medium\": {\"sigma_t\": 1e400}}"),
+                    {"big.json", "number overflow"});
+  expectRenderFails(write("deep.json", std::string(100000, '[') + std::string(100000, ']')),
+                    {"deep.json", "nesting deeper than 64"});
+  expectRenderFails(write("dup.json", "{\"camera\": {}, \"camera\": {}}"),
+                    {"dup.json", "duplicate key \"camera\""});
+}
+
+TEST_F(Cli, FullDiskDuringVdbExportExits1AndLeavesNothing) {
+  // bash's `ulimit -f 64` (KiB) fails write(2) with EFBIG like a full disk fails it with ENOSPC;
+  // SIGXFSZ is ignored so the write fails instead of killing the process. The density volume
+  // (64^3 floats) exceeds the limit; the EXR and stats would fit.
+  Json doc = tinyScene();
+  doc["medium"]["resolution"] = 64;
+  doc["render"]["method"] = "per-voxel";
+  const std::string scene = writeScene(doc);
+  const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f 64; exec " +
+                          std::string(SCATTERLAB_CLI) + " render " + scene + " -q -o " +
+                          out("o.exr") + " --stats " + out("s.json") + " --density-vdb " +
+                          out("d.vdb") + "\" 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) output.append(buf.data(), n);
+  const int status = pclose(p);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+  EXPECT_NE(output.find("cannot write '" + out("d.vdb") + "'"), std::string::npos) << output;
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string(), "scene.json") << "left behind: " << e.path();
+}
+
+TEST_F(Cli, InfoCountsNonFinitePixelsInsteadOfPrintingNanMeans) {
+  scatterlab::Image img(2, 1);
+  img.pixels()[0] = scatterlab::Vec3(1.0f, 2.0f, 3.0f);
+  img.pixels()[1] = scatterlab::Vec3(std::nanf(""), INFINITY, 5.0f);
+  scatterlab::writeExr(img, out("nan.exr"));
+  const RunResult r = run("info " + out("nan.exr"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("mean [1 2 4]"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 NaN and 1 inf"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("nan ]"), std::string::npos) << r.output;
+}

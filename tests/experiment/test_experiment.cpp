@@ -504,4 +504,48 @@ TEST_F(ExperimentTest, LightsAxisReplicatesOnARing) {
 }
 
 }  // namespace
+// Issue 17: 64 axes x 2 values overflowed the run count to 0 (exit 0 having done nothing), and
+// 10 axes x 10 values ate memory for minutes before rendering anything.
+TEST_F(ExperimentTest, RunCountIsBoundedBeforeExpanding) {
+  for (const int axes : {64, 10}) {
+    Json c = tinyConfig();
+    Json ax = Json::object();
+    for (int i = 0; i < axes; ++i) {
+      Json vals = Json::array();
+      for (int v = 0; v < (axes == 64 ? 2 : 10); ++v) vals.push_back(v);
+      ax["render.x" + std::to_string(i)] = vals;
+    }
+    c["sweeps"] = {{{"name", "huge"}, {"axes", ax}}};
+    writeJson(dir / "huge.json", c);
+    try {
+      parseExperiment((dir / "huge.json").string());
+      ADD_FAILURE() << axes << " axes: no error";
+    } catch (const LimitError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("'sweeps.huge.axes'"), std::string::npos) << m;
+      EXPECT_NE(m.find("limit of 100000 runs"), std::string::npos) << m;
+    }
+  }
+}
+
+// A temporary left by a killed writer (pid no longer alive) is removed when the output
+// directory is reused; one of a live process (this one) is kept.
+TEST_F(ExperimentTest, StaleTemporariesAreRemovedOnResume) {
+  fs::create_directories(dir / "out" / "runs");
+  const fs::path stale = dir / "out" / "runs" / ".a.json.tmp999999999_3";
+  const fs::path live = dir / "out" / "runs" / (".b.json.tmp" + std::to_string(::getpid()) + "_0");
+  std::ofstream(stale) << "partial";
+  std::ofstream(live) << "in progress";
+  Json c = tinyConfig();
+  c.erase("sweeps");
+  c["methods"] = {"per-voxel"};
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(live));
+}
+
 }  // namespace scatterlab

@@ -14,6 +14,7 @@
 #include "media/temp_dir.h"
 #include "media/vdb.h"
 #include "support/scenes.h"
+#include "support/shared_data.h"
 
 namespace scatterlab {
 namespace {
@@ -57,6 +58,7 @@ TEST(SogFit, RecoversExactSumOfGaussians) {
 }
 
 TEST(SogFit, SmokeErrorFallsWithGaussianCountAndResidualMeetsTwoPercent) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const DensityGrid& D = smokeHalf();
   double prev = 1e9;
   for (int n : {64, 256, 1024}) {
@@ -150,6 +152,7 @@ Image renderExact(Scene scene, std::shared_ptr<const DensityModel> d) {
 }
 
 TEST(SogFit, Smoke1RenderedWithin3PercentOfTheGrid) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   if (!std::filesystem::exists(kVdb + "smoke1.vdb"))
     GTEST_SKIP() << "needs ../shared/data/vdb/smoke1.vdb (the shared data checkout is absent)";
   // Issue 11.6: 256 Gaussians at default settings, the smoke demo scene, exact.
@@ -210,6 +213,7 @@ TEST(SogModel, SplattingEqualsEvaluationAtCellCentres) {
 }
 
 TEST(SogModel, SplattingEqualsEvaluationForFittedSmoke) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   SogFitOptions o;
   o.gaussians = 64;
   o.fitVoxels = 20 * 20 * 20;
@@ -272,6 +276,7 @@ std::string ioMessage(const std::string& p) {
 }
 
 TEST(SogFile, TruncatedForeignCorruptAreIoErrors) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("sog");
   const std::string good = tmp.file("good.sog");
   writeSog(good, smallModel());

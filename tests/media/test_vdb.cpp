@@ -13,6 +13,7 @@
 #include "media/temp_dir.h"
 #include "media/vdb.h"
 #include "support/scenes.h"
+#include "support/shared_data.h"
 
 namespace scatterlab {
 namespace {
@@ -25,6 +26,7 @@ const VdbGridInfo& only(const std::vector<VdbGridInfo>& v) {
 }
 
 TEST(Vdb, Smoke1MatchesSidecar) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto infos = inspectVdb(kVdb + "smoke1.vdb");
   const VdbGridInfo& g = only(infos);
   EXPECT_EQ(g.name, "density");
@@ -46,6 +48,7 @@ TEST(Vdb, Smoke1MatchesSidecar) {
 }
 
 TEST(Vdb, CloudMatchesSidecarIncludingActiveTiles) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const VdbGridInfo g = only(inspectVdb(kVdb + "wdas_cloud_sixteenth.vdb"));
   EXPECT_EQ(g.name, "density");
   EXPECT_EQ(g.indexMin, IVec3(-66, -21, -90));
@@ -76,6 +79,7 @@ TEST(Vdb, CloudMatchesSidecarIncludingActiveTiles) {
 }
 
 TEST(Vdb, DragonRotatedTransformGivesRotatedWorldBounds) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto d = VdbDensity::load(kVdb + "dragon_with_xform.vdb", "density");
   const VdbGridInfo& g = d->info();
   EXPECT_EQ(g.indexMin, IVec3(-70, 1, -31));
@@ -104,6 +108,7 @@ TEST(Vdb, DragonRotatedTransformGivesRotatedWorldBounds) {
 }
 
 TEST(Vdb, EvalEqualsBuildAtCellCentres) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto d = VdbDensity::load(kVdb + "dragon_with_xform.vdb", "density");
   DensityGrid grid(*d->naturalBounds(), IVec3(24, 20, 18));
   d->build(grid);
@@ -114,6 +119,7 @@ TEST(Vdb, EvalEqualsBuildAtCellCentres) {
 }
 
 TEST(Vdb, Smoke1NativeDenseMatchesVoxels) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto d = VdbDensity::load(kVdb + "smoke1.vdb", "density");
   EXPECT_EQ(d->nativeDims(), IVec3(111, 222, 112));
   DensityGrid grid(*d->naturalBounds(), d->nativeDims());
@@ -200,6 +206,7 @@ TEST(Vdb, ExportThenRerenderEqualsOriginal) {
 }
 
 TEST(Vdb, VdbToDenseToVdbRoundTripKeepsSmokeValues) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("vdb_roundtrip2");
   const DensityGrid dense = loadVdbAsDense(kVdb + "smoke1.vdb", "density");
   const std::string path = tmp.file("smoke_again.vdb");
@@ -252,6 +259,7 @@ TEST(Vdb, RadianceGridWritesVec3Grid) {
 }
 
 TEST(Vdb, SceneWithVdbDefaultsBoxToGridBounds) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const Json doc = {
       {"medium",
        {{"density", {{"type", "vdb"}, {"file", kVdb + "smoke1.vdb"}, {"grid", "density"}}},
@@ -296,6 +304,7 @@ TEST(VdbErrors, NotAVdb) {
 }
 
 TEST(VdbErrors, TruncatedVdb) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("vdb_err");
   std::ifstream in(kVdb + "smoke1.vdb", std::ios::binary);
   const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -308,6 +317,7 @@ TEST(VdbErrors, TruncatedVdb) {
 }
 
 TEST(VdbErrors, MissingGridListsGrids) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const std::string m =
       messageOf<ConfigError>([&] { VdbDensity::load(kVdb + "smoke1.vdb", "temperature"); });
   EXPECT_NE(m.find("temperature"), std::string::npos) << m;
@@ -341,6 +351,7 @@ TEST(VdbErrors, NonAffineTransform) {
 }
 
 TEST(VdbErrors, SceneKeyNamedInGridError) {
+  SCATTERLAB_REQUIRE_SHARED_DATA();
   const Json doc = {
       {"medium", {{"density", {{"type", "vdb"}, {"file", kVdb + "smoke1.vdb"}, {"grid", "nope"}}}}},
       {"lights", Json::array({{{"type", "point"}, {"position", {0, 0, 0}}, {"intensity", 1}}})},

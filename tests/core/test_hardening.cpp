@@ -1,0 +1,166 @@
+// Regression tests of issue 17 (inputs that crashed or misbehaved): strict JSON, values beyond
+// single precision, degenerate cameras, far-away points, NaN-safe grid lookups.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/grid.h"
+#include "core/params.h"
+#include "support/scenes.h"
+
+using namespace scatterlab;
+using scatterlab::testing::sceneFromJson;
+
+namespace {
+
+Json validDoc() {
+  return Json::parse(R"({
+    "medium": {"bounds": {"min": [0,0,0], "max": [1,1,1]},
+               "density": {"type": "gaussians", "blobs": [{"center": [0.5,0.5,0.5], "radius": 0.2, "weight": 1.0}]},
+               "resolution": 8},
+    "lights": [{"type": "point", "position": [0.5,1.4,0.5], "intensity": [4,4,4]}],
+    "camera": {"position": [0.5,0.5,-2], "look_at": [0.5,0.5,0.5], "up": [0,1,0],
+               "width": 8, "height": 6}})");
+}
+
+/// The message of the error `f` throws (type E), or "" when it throws nothing.
+template <class E, class F>
+std::string messageOf(F&& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// Applies `--set` assignments to the valid document and parses it; returns the ConfigError.
+std::string sceneError(std::initializer_list<std::string> sets) {
+  Json doc = validDoc();
+  for (const auto& s : sets) applyOverride(doc, s);
+  return messageOf<ConfigError>([&] { sceneFromJson(doc); });
+}
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+}  // namespace
+
+TEST(StrictJson, DepthLimitIsAClearErrorNotAStackOverflow) {
+  const auto nested = [](int n) { return std::string(n, '[') + std::string(n, ']'); };
+  EXPECT_EQ(parseJson(nested(kMaxJsonDepth), "x").size(), 1u);  // 64 levels are fine
+  const std::string e65 = messageOf<IoError>([&] { parseJson(nested(kMaxJsonDepth + 1), "'a'"); });
+  EXPECT_TRUE(has(e65, "'a': nesting deeper than 64")) << e65;
+  // 100 000 levels crashed the JSON library (recursion while dumping into the message).
+  const std::string deep = messageOf<IoError>([&] { parseJson(nested(100000), "'deep.json'"); });
+  EXPECT_TRUE(has(deep, "'deep.json': nesting deeper than 64")) << deep;
+  const std::string unclosed =
+      messageOf<IoError>([&] { parseJson(std::string(100000, '{'), "'u.json'"); });
+  EXPECT_TRUE(has(unclosed, "'u.json'")) << unclosed;
+}
+
+TEST(StrictJson, DuplicateKeysOverflowAndSyntaxNameTheOrigin) {
+  const std::string dup =
+      messageOf<IoError>([] { parseJson(R"({"a": {"b": 1, "b": 2}})", "'s'"); });
+  EXPECT_TRUE(has(dup, "'s': duplicate key \"b\"")) << dup;
+  // The same key in sibling objects is fine.
+  EXPECT_EQ(parseJson(R"([{"b": 1}, {"b": 2}])", "s")[1]["b"], 2);
+  const std::string big = messageOf<IoError>([] { parseJson(R"({"a": 1e400})", "'big.json'"); });
+  EXPECT_TRUE(has(big, "'big.json': number overflow parsing '1e400'")) << big;
+  const std::string syntax = messageOf<IoError>([] { parseJson("{\"a\": ,}", "'bad.json'"); });
+  EXPECT_TRUE(has(syntax, "'bad.json': malformed JSON")) << syntax;
+  EXPECT_FALSE(has(syntax, "json.exception")) << syntax;
+  EXPECT_EQ(parseJson("// comment\n{\"a\": 2}", "s")["a"], 2);
+}
+
+TEST(StrictJson, SetRejectsDeepPathsAndValuesButKeepsStrings) {
+  Json doc = Json::object();
+  std::string path;
+  for (int i = 0; i < 100; ++i) path += "a.";
+  EXPECT_TRUE(
+      has(messageOf<ConfigError>([&] { applyOverride(doc, path + "b=1"); }), "deeper than 64"));
+  EXPECT_TRUE(has(messageOf<IoError>([&] {
+                    applyOverride(doc, "x=" + std::string(70, '[') + std::string(70, ']'));
+                  }),
+                  "nesting deeper than 64"));
+  applyOverride(doc, "name=plain text");
+  EXPECT_EQ(doc["name"], "plain text");
+  applyOverride(doc, "n=1e400");  // not JSON (out of double range): kept as the string
+  EXPECT_EQ(doc["n"], "1e400");
+}
+
+TEST(FiniteValues, NumbersBeyondSinglePrecisionNameTheKey) {
+  // Each of these rendered inf/NaN images with exit 0 or crashed (exit 139) before.
+  EXPECT_TRUE(has(sceneError({"camera.position=[0.5,0.5,-1e39]"}), "'camera.position'"));
+  EXPECT_TRUE(has(sceneError({"camera.up=[0,1e300,0]"}), "beyond single precision"));
+  EXPECT_TRUE(has(sceneError({"background=1e39"}), "'background': value 1e+39 is beyond"));
+  const std::string i =
+      sceneError({R"(lights=[{"type":"point","position":[0.5,2,0.5],"intensity":1e39}])"});
+  EXPECT_TRUE(has(i, "'lights[0].intensity'")) << i;
+  const std::string w = sceneError(
+      {R"(medium.density={"type":"gaussians","blobs":[{"center":[0.5,0.5,0.5],"radius":0.2,"weight":1e39}]})"});
+  EXPECT_TRUE(has(w, "weight")) << w;
+  // Finite in float, but |x|² overflows float: ~1e20 ended in a wild read.
+  const std::string far = sceneError({"camera.position=[1e20,0.5,-2]"});
+  EXPECT_TRUE(has(far, "'camera.position'") && has(far, "box diagonals")) << far;
+  EXPECT_TRUE(
+      has(sceneError({R"(lights=[{"type":"point","position":[0.5,3e7,0.5],"intensity":1}])"}),
+          "'lights[0].position'"));
+  // 1e6 diagonals is the bound: 1.7e6 units from a unit box's centre is allowed.
+  EXPECT_EQ(sceneError({"camera.position=[0.5,0.5,-1.7e6]"}), "");
+  EXPECT_TRUE(has(sceneError({"medium.bounds.max=[1,1,1e16]"}), "beyond +-1e15"));
+  EXPECT_TRUE(has(sceneError({"medium.bounds.max=[1,1,1e-9]"}), "too thin"));
+}
+
+TEST(FiniteValues, IntegersBeyondLongLongAreReportedAsWritten) {
+  const std::string e = sceneError({"camera.width=18446744073709551615"});
+  EXPECT_TRUE(has(e, "18446744073709551615")) << e;
+  EXPECT_FALSE(has(e, "-1 ")) << e;
+}
+
+TEST(CameraDegeneracies, AreRejectedAtParseTime) {
+  EXPECT_TRUE(has(sceneError({"camera.look_at=[0.5,0.5,-2]"}), "'camera.look_at'"));
+  EXPECT_TRUE(has(sceneError({"camera.up=[0,0,1]"}), "'camera.up': must not be parallel"));
+  EXPECT_TRUE(has(sceneError({"camera.up=[0,0,0]"}), "'camera.up': must not be the zero"));
+  // Nearly parallel (1e-5 rad) is refused; 0.1 rad off is fine.
+  EXPECT_TRUE(has(sceneError({"camera.up=[0,1e-5,1]"}), "parallel"));
+  EXPECT_EQ(sceneError({"camera.up=[0,0.1,1]"}), "");
+  // A huge but finite up is normalised in double: accepted and a unit vector.
+  Json doc = validDoc();
+  applyOverride(doc, "camera.up=[0,1e30,0]");
+  const Scene s = sceneFromJson(doc);
+  EXPECT_FLOAT_EQ(glm::length(s.camera.up), 1.0f);
+  Vec3 f, r, u;
+  s.camera.frame(f, r, u);
+  EXPECT_NEAR(u.y, 1.0f, 1e-6f);
+}
+
+TEST(GridLookups, NonFiniteCoordinatesReadAnEdgeVoxelNotMemory) {
+  // 2x2x2 grid with distinct corners: value = i + 2j + 4k.
+  DensityGrid g(Box{Vec3(0), Vec3(1)}, IVec3(2));
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) g.at(i, j, k) = float(i + 2 * j + 4 * k);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(g.sampleIndex(Vec3(nan)), 0.0f);
+  EXPECT_EQ(g.sampleIndex(Vec3(-inf)), 0.0f);
+  EXPECT_EQ(g.sampleIndex(Vec3(inf)), 7.0f);
+  EXPECT_EQ(g.sampleIndex(Vec3(1e30f, nan, -1e30f)), 1.0f);
+  EXPECT_EQ(g.sampleIndex(Vec3(0.5f, 0.0f, 0.0f)), 0.5f);
+  EXPECT_EQ(g.sample(Vec3(nan)), 0.0f);  // outside the box: zero
+}
+
+TEST(StrictJson, InvalidUtf8InASetValueIsDescribedNotThrown) {
+  // Found by fuzz/fuzz_set.cpp: a --set VALUE that is not JSON (here: not UTF-8) is kept as a
+  // string, and describing it in a message threw json type_error 316 ("internal error").
+  const std::string e = sceneError({"lights=[{\"\x88\x86pe\":\"point\"}]"});
+  EXPECT_TRUE(has(e, "'lights'")) << e;
+  Json doc = Json::object();
+  applyOverride(doc, "name=\x88\x86");
+  EXPECT_NO_THROW(describeValue(doc));
+}
