@@ -112,8 +112,11 @@ Json pixelStats(const std::vector<Vec3>& px) {
       }
     }
   sum /= glm::max(count, glm::dvec3(1.0));
-  return {{"min", vec(lo)},   {"max", vec(hi)},      {"mean", {sum.x, sum.y, sum.z}},
-          {"nan", nans},      {"inf", infs}};
+  return {{"min", vec(lo)},
+          {"max", vec(hi)},
+          {"mean", {sum.x, sum.y, sum.z}},
+          {"nan", nans},
+          {"inf", infs}};
 }
 
 /// An 8-bit (or 16-bit, reduced) PNG as RGB in [0, 1], the stored (display-encoded) values.

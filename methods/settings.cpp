@@ -12,8 +12,7 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "true, false",
        "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
        "back at each march step (singular lights); methods with samples"},
-      {"log_space", "bool", "false",
-       "true, false (true needs factor_lights)",
+      {"log_space", "bool", "false", "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "dynamic sampling then measures its error on V; methods with samples"},
       {"occlusion_weights", "bool", "false", "true, false",

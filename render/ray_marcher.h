@@ -69,33 +69,32 @@ Image marchImage(const Scene& scene, const DensityGrid& density, const Source& s
   const float inv = 1.0f / float(k * k);
   Image img(cam.width, cam.height);
   img.alpha().assign(img.pixels().size(), 0.0f);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height),
-                    [&](const tbb::blocked_range<int>& rows) {
-                      for (int y = rows.begin(); y < rows.end(); ++y) {
-                        for (int x = 0; x < cam.width; ++x) {
-                          if (k == 1) {
-                            const Shaded sh = radiance(rays(x, y));
-                            img.at(x, y) = sh.L;
-                            img.alpha()[size_t(y) * cam.width + x] = sh.alpha;
-                            continue;
-                          }
-                          // k x k stratum centres, box filter.
-                          Vec3 sum(0.0f);
-                          float alpha = 0.0f;
-                          for (int j = 0; j < k; ++j)
-                            for (int i = 0; i < k; ++i) {
-                              const Shaded sh =
-                                  radiance(rays.at(float(x) + (float(i) + 0.5f) / float(k),
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, cam.height), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+          for (int x = 0; x < cam.width; ++x) {
+            if (k == 1) {
+              const Shaded sh = radiance(rays(x, y));
+              img.at(x, y) = sh.L;
+              img.alpha()[size_t(y) * cam.width + x] = sh.alpha;
+              continue;
+            }
+            // k x k stratum centres, box filter.
+            Vec3 sum(0.0f);
+            float alpha = 0.0f;
+            for (int j = 0; j < k; ++j)
+              for (int i = 0; i < k; ++i) {
+                const Shaded sh = radiance(rays.at(float(x) + (float(i) + 0.5f) / float(k),
                                                    float(y) + (float(j) + 0.5f) / float(k)));
-                              sum += sh.L;
-                              alpha += sh.alpha;
-                            }
-                          img.at(x, y) = sum * inv;
-                          img.alpha()[size_t(y) * cam.width + x] = alpha * inv;
-                        }
-                        if (progress) progress->advance(1);
-                      }
-                    });
+                sum += sh.L;
+                alpha += sh.alpha;
+              }
+            img.at(x, y) = sum * inv;
+            img.alpha()[size_t(y) * cam.width + x] = alpha * inv;
+          }
+          if (progress) progress->advance(1);
+        }
+      });
   return img;
 }
 
