@@ -56,37 +56,6 @@ void printSceneInfo(const std::string& path) {
   (void)method;
 }
 
-void printImageInfo(const std::string& path) {
-  const Image img = readExr(path);
-  // Statistics over finite values; NaN and inf are counted, not folded in (a NaN made the
-  // mean "-nan" and hid where it came from).
-  Vec3 lo(kInfinity), hi(-kInfinity);
-  glm::dvec3 sum(0.0), count(0.0);
-  size_t nans = 0, infs = 0;
-  for (const Vec3& p : img.pixels())
-    for (int c = 0; c < 3; ++c) {
-      if (std::isnan(p[c])) {
-        ++nans;
-      } else if (std::isinf(p[c])) {
-        ++infs;
-      } else {
-        lo[c] = std::min(lo[c], p[c]);
-        hi[c] = std::max(hi[c], p[c]);
-        sum[c] += p[c];
-        count[c] += 1.0;
-      }
-    }
-  sum /= glm::max(count, glm::dvec3(1.0));
-  std::printf(
-      "image %s: %dx%d %s\n", path.c_str(), img.width(), img.height(),
-      img.alpha().empty() ? "RGB float" : "RGBA float (A = 1 - transmittance of the view ray)");
-  std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", lo.x, lo.y, lo.z, hi.x, hi.y,
-              hi.z, sum.x, sum.y, sum.z);
-  if (nans + infs > 0)
-    std::printf("  non-finite: %zu NaN and %zu inf channel values (left out of min/max/mean)\n",
-                nans, infs);
-}
-
 namespace {
 
 Json vec(const Vec3& v) {
@@ -117,6 +86,18 @@ Json pixelStats(const std::vector<Vec3>& px) {
           {"mean", {sum.x, sum.y, sum.z}},
           {"nan", nans},
           {"inf", infs}};
+}
+
+/// The "min / max / mean" line of pixelStats(), and the count of non-finite values if any.
+void printStats(const Json& st) {
+  const auto v = [&](const char* k, int a) { return st[k][a].get<double>(); };
+  std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", v("min", 0), v("min", 1),
+              v("min", 2), v("max", 0), v("max", 1), v("max", 2), v("mean", 0), v("mean", 1),
+              v("mean", 2));
+  const auto nans = st["nan"].get<size_t>(), infs = st["inf"].get<size_t>();
+  if (nans + infs > 0)
+    std::printf("  non-finite: %zu NaN and %zu inf channel values (left out of min/max/mean)\n",
+                nans, infs);
 }
 
 /// An 8-bit (or 16-bit, reduced) PNG as RGB in [0, 1], the stored (display-encoded) values.
@@ -202,6 +183,16 @@ Json describeScene(const std::string& path) {
           {"render", s.render}};
 }
 
+void printImageInfo(const std::string& path) {
+  const Image img = readExr(path);
+  std::printf(
+      "image %s: %dx%d %s\n", path.c_str(), img.width(), img.height(),
+      img.alpha().empty() ? "RGB float" : "RGBA float (A = 1 - transmittance of the view ray)");
+  // Statistics over finite values; NaN and inf are counted, not folded in (a NaN made the
+  // mean "-nan" and hid where it came from).
+  printStats(pixelStats(img.pixels()));
+}
+
 Json describeExr(const std::string& path) {
   const Image img = readExr(path);
   Json j = {{"file", path},           {"kind", "image"},
@@ -217,10 +208,7 @@ void printPngInfo(const std::string& path) {
   const Json st = pixelStats(img.pixels());
   std::printf("image %s: %dx%d PNG, %d-bit %s (display-encoded values in [0, 1])\n", path.c_str(),
               img.width(), img.height(), depth, pngColorType(type));
-  const auto v = [&](const char* k, int a) { return st[k][a].get<double>(); };
-  std::printf("  min [%g %g %g]  max [%g %g %g]  mean [%g %g %g]\n", v("min", 0), v("min", 1),
-              v("min", 2), v("max", 0), v("max", 1), v("max", 2), v("mean", 0), v("mean", 1),
-              v("mean", 2));
+  printStats(st);
 }
 
 Json describePng(const std::string& path) {

@@ -11,39 +11,19 @@
 #include <fstream>
 
 #include "api/scatterlab.h"
+#include "support/cli.h"
 
 namespace fs = std::filesystem;
 using scatterlab::Json;
 
 namespace {
 
-struct RunResult {
-  int code;
-  std::string output;
-};
+using scatterlab::testing::run;
+using scatterlab::testing::RunResult;
 
-RunResult run(const std::string& args) {
-  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-class Cli : public ::testing::Test {
+class Cli : public scatterlab::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    // The pid: several worktrees on one machine share /tmp and may run these tests at once.
-    dir_ = fs::temp_directory_path() /
-           ("scatterlab_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  Cli() : TempDirTest("scatterlab_cli") {}
 
   static Json tinyScene() {
     return Json::parse(R"({
@@ -55,13 +35,7 @@ class Cli : public ::testing::Test {
                  "width": 16, "height": 12},
       "render": {"method": "exact"}})");
   }
-  std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
   std::string writeScene(const Json& j) const { return write("scene.json", j.dump(2)); }
-  std::string out(const std::string& name) const { return (dir_ / name).string(); }
 
   /// Runs a render expected to fail; checks exit code, message fragments, and no outputs.
   void expectRenderFails(const std::string& scene, std::initializer_list<std::string> fragments,
@@ -79,8 +53,6 @@ class Cli : public ::testing::Test {
     for (const auto& e : fs::directory_iterator(dir_))
       EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
   }
-
-  fs::path dir_;
 };
 
 }  // namespace

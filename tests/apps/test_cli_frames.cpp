@@ -12,38 +12,19 @@
 #include <fstream>
 
 #include "api/scatterlab.h"
+#include "support/cli.h"
 
 namespace fs = std::filesystem;
 using scatterlab::Json;
 
 namespace {
 
-struct RunResult {
-  int code;
-  std::string output;
-};
+using scatterlab::testing::run;
+using scatterlab::testing::RunResult;
 
-RunResult run(const std::string& args) {
-  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-class CliFrames : public ::testing::Test {
+class CliFrames : public scatterlab::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("scatterlab_frames_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  CliFrames() : TempDirTest("scatterlab_frames") {}
 
   /// A blob lit by a lamp moving from x = 0.25 to x = 0.75 over t in [0, 2] (exact in binary).
   static Json movingScene() {
@@ -56,19 +37,12 @@ class CliFrames : public ::testing::Test {
       "camera": {"position": [0.5,0.5,-2], "look_at": [0.5,0.5,0.5], "width": 16, "height": 12},
       "render": {"method": "per-voxel"}})");
   }
-  std::string writeScene(const Json& j) const {
-    const fs::path p = dir_ / "scene.json";
-    std::ofstream(p) << j.dump(2);
-    return p.string();
-  }
-  std::string out(const std::string& name) const { return (dir_ / name).string(); }
+  std::string writeScene(const Json& j) const { return write("scene.json", j.dump(2)); }
   /// No file in the directory but the scene.
   void expectNothingWritten() const {
     for (const auto& e : fs::directory_iterator(dir_))
       EXPECT_EQ(e.path().filename(), "scene.json") << e.path();
   }
-
-  fs::path dir_;
 };
 
 }  // namespace

@@ -11,38 +11,19 @@
 #include <fstream>
 
 #include "api/scatterlab.h"
+#include "support/cli.h"
 
 namespace fs = std::filesystem;
 using scatterlab::Json;
 
 namespace {
 
-struct RunResult {
-  int code;
-  std::string output;
-};
+using scatterlab::testing::run;
+using scatterlab::testing::RunResult;
 
-RunResult run(const std::string& args) {
-  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-class ObjectsCli : public ::testing::Test {
+class ObjectsCli : public scatterlab::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("scatterlab_objects_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  ObjectsCli() : TempDirTest("scatterlab_objects") {}
 
   /// A tiny scene holding `objects`.
   std::string scene(const Json& objects, const Json& lights = nullptr) const {
@@ -55,10 +36,6 @@ class ObjectsCli : public ::testing::Test {
     if (!lights.is_null()) doc["lights"] = lights;
     return write("scene.json", doc.dump());
   }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream((dir_ / name).string()) << text;
-    return (dir_ / name).string();
-  }
   /// Renders and expects failure with every string of `expected` in the message, and no image.
   void expectError(const Json& objects, const std::vector<std::string>& expected,
                    const std::string& extra = "") {
@@ -69,8 +46,6 @@ class ObjectsCli : public ::testing::Test {
       EXPECT_NE(r.output.find(e), std::string::npos) << "missing '" << e << "' in: " << r.output;
     EXPECT_FALSE(fs::exists(out)) << r.output;
   }
-
-  fs::path dir_;
 };
 
 const Json kSphere = {{"type", "sphere"}, {"center", {0.5, 0.5, 0.5}}, {"radius", 0.2}};

@@ -10,6 +10,7 @@
 #include "core/metrics.h"
 #include "core/transport.h"
 #include "media/temp_dir.h"
+#include "support/quadrature.h"
 #include "support/scenes.h"
 
 using namespace scatterlab;
@@ -20,20 +21,8 @@ namespace {
 
 using DVec3 = glm::dvec3;
 
-/// Adaptive Simpson quadrature in double precision.
-double simpson(const std::function<double(double)>& f, double a, double b, double fa, double fm,
-               double fb, double whole, double tol, int depth) {
-  const double m = 0.5 * (a + b), lm = 0.5 * (a + m), rm = 0.5 * (m + b);
-  const double flm = f(lm), frm = f(rm);
-  const double left = (m - a) / 6 * (fa + 4 * flm + fm), right = (b - m) / 6 * (fm + 4 * frm + fb);
-  if (depth <= 0 || std::abs(left + right - whole) <= 15 * tol)
-    return left + right + (left + right - whole) / 15;
-  return simpson(f, a, m, fa, flm, fm, left, tol / 2, depth - 1) +
-         simpson(f, m, b, fm, frm, fb, right, tol / 2, depth - 1);
-}
 double integrate(const std::function<double(double)>& f, double a, double b) {
-  const double fa = f(a), fb = f(b), fm = f(0.5 * (a + b));
-  return simpson(f, a, b, fa, fm, fb, (b - a) / 6 * (fa + 4 * fm + fb), 1e-11, 40);
+  return scatterlab::testing::integrate(f, a, b, 1e-11, 40);
 }
 
 /// Length of the segment o + t·d, t in [0, tmax], inside the unit box (double precision).

@@ -1,0 +1,63 @@
+#pragma once
+/// What the tool's end-to-end tests share: running `scatterlab` (SCATTERLAB_CLI) with its exit
+/// code and output, and a fixture owning a fresh directory per test.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace scatterlab::testing {
+
+struct RunResult {
+  int code;
+  std::string output;  ///< stdout and stderr together
+};
+
+/// Runs `scatterlab ARGS` through the shell; code is the exit status (-1 when killed).
+inline RunResult run(const std::string& args) {
+  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+/// A fresh directory per test under the system's temporary directory, removed afterwards. The
+/// pid is in its name: several worktrees on one machine share /tmp and may run these at once.
+class TempDirTest : public ::testing::Test {
+ protected:
+  explicit TempDirTest(std::string prefix) : prefix_(std::move(prefix)) {}
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           (prefix_ + "_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  /// Writes `text` to dir/name; returns the path.
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::filesystem::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  /// The path of dir/name (not created).
+  std::string out(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::filesystem::path dir_;
+
+ private:
+  std::string prefix_;
+};
+
+}  // namespace scatterlab::testing
