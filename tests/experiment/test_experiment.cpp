@@ -289,7 +289,9 @@ TEST_F(ExperimentTest, ShardsMergeIntoTheSingleProcessResults) {
     const RunSpec& r = whole.plan.runs[i];
     const std::string g =
         r.sweep + (r.axes.contains("resolution") ? r.axes["resolution"].dump() : "");
-    if (groupShard.count(g)) EXPECT_EQ(groupShard[g], owner[i]) << r.id;
+    if (groupShard.count(g)) {
+      EXPECT_EQ(groupShard[g], owner[i]) << r.id;
+    }
     groupShard[g] = owner[i];
   }
   EXPECT_EQ(std::count(owner.begin(), owner.end(), 0) + std::count(owner.begin(), owner.end(), 1),
