@@ -307,50 +307,39 @@ TEST(GpuPerVoxelMethod, GlowSceneWithinHalfAPercent) {
 namespace scatterlab::testing {
 namespace {
 
-// Occlusion-aware weights (render.occlusion_weights): the GPU splat marches the density between
-// sample and voxel as the CPU gather does.
-TEST(GpuOcclusionWeights, AdaptiveMatchesCpu) {
-  SCATTERLAB_REQUIRE_GPU();
+/// `adaptive` with one extension key set to true, from 64 grid samples on the blob scene, on
+/// both backends: the same sample count, and the image difference (printed) returned.
+double adaptiveExtensionGpuVsCpu(const char* key, const Json& levels) {
   Scene scene = sceneFromJson(blobSceneDoc(20, 32, 24));
   scene.render = {{"method", "adaptive"},
-                  {"occlusion_weights", true},
+                  {key, true},
                   {"sampler", {{"type", "grid"}, {"count", 64}}},
-                  {"levels", {8}}};
+                  {"levels", levels}};
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const RenderResult gpu = createMethod(scene, "", "gpu")->render(scene, nullptr);
   expectNoGlError();
   EXPECT_EQ(*gpu.stats.samples, *cpu.stats.samples);
   const double err = relL2(gpu.image, cpu.image);
-  std::printf("adaptive with occlusion weights gpu vs cpu: relative L2 %.3g\n", err);
-  // Measured on llvmpipe 2026-11-23: 5.52e-7; ×1.5.
-  EXPECT_LT(err, 8.3e-7);
+  std::printf("adaptive with %s gpu vs cpu: %lld samples, relative L2 %.3g\n", key,
+              *gpu.stats.samples, err);
+  return err;
 }
 
-}  // namespace
-}  // namespace scatterlab::testing
-
-namespace scatterlab::testing {
-namespace {
+// Occlusion-aware weights (render.occlusion_weights): the GPU splat marches the density between
+// sample and voxel as the CPU gather does.
+TEST(GpuOcclusionWeights, AdaptiveMatchesCpu) {
+  SCATTERLAB_REQUIRE_GPU();
+  // Measured on llvmpipe 2026-11-23: 5.52e-7; ×1.5.
+  EXPECT_LT(adaptiveExtensionGpuVsCpu("occlusion_weights", {8}), 8.3e-7);
+}
 
 // Log space (render.log_space) with the bounded Taylor terms: the GPU error pass compares
 // exp(û) with exp(u) and clamps û to [ln kMinV, 0], the splat clamps before weighting and the
 // normalisation exponentiates, as the CPU does.
 TEST(GpuLogSpace, AdaptiveMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  Scene scene = sceneFromJson(blobSceneDoc(20, 32, 24));
-  scene.render = {{"method", "adaptive"},
-                  {"log_space", true},
-                  {"sampler", {{"type", "grid"}, {"count", 64}}},
-                  {"levels", {8, 10}}};
-  const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
-  const RenderResult gpu = createMethod(scene, "", "gpu")->render(scene, nullptr);
-  expectNoGlError();
-  EXPECT_EQ(*gpu.stats.samples, *cpu.stats.samples);
-  const double err = relL2(gpu.image, cpu.image);
-  std::printf("adaptive in log space gpu vs cpu: %lld samples, relative L2 %.3g\n",
-              *gpu.stats.samples, err);
   // Measured on llvmpipe 2026-11-23: 6.09e-7 (446 samples, as many as the CPU's); ×1.5.
-  EXPECT_LT(err, 9.2e-7);
+  EXPECT_LT(adaptiveExtensionGpuVsCpu("log_space", {8, 10}), 9.2e-7);
 }
 
 }  // namespace
