@@ -14,8 +14,10 @@
 /// GPU backend also the GL context and the textures. Rebuilt: the density when the medium
 /// changes (a `medium.*` key, or setTime on a medium that moves with time: procedural models
 /// with a rate, velocity or wind, .sog sequences); the method (and with it the density) when a
-/// `render.*` key changes. Samples, radiance volume and image are computed every render (they
-/// depend on the lights). `exact` marches the kept density volume too.
+/// `render.*` key changes. The sampler's sample points are kept with the density (a sampler
+/// reads only the medium); S and ∇S at them, dynamic sampling's splits, the radiance volume and
+/// the image are computed every render (they depend on the lights). `exact` marches the kept
+/// density volume too.
 ///
 /// Light paths: a light may carry `"path": [{"t": T, "position": [x,y,z]}, ...]` with strictly
 /// increasing T; its position at time t is the linear interpolation (held constant before the

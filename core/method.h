@@ -44,8 +44,10 @@ class Method {
   /// When true, a volume-pipeline method keeps its frame (density volume, GL context and
   /// textures) between render() calls and skips the density stage while the scene's medium is
   /// the same one (same density model object, box and resolution); stats then hold
-  /// "density_reused": true. Off by default (every render builds its own volumes); set by
-  /// scatterlab::Renderer (api/renderer.h). Methods without a density stage ignore it.
+  /// "density_reused": true; a sample-based method keeps its sampler's samples with it
+  /// ("samples_reused": true; S and ∇S are evaluated anew). Off by default (every render builds its
+  /// own volumes); set by scatterlab::Renderer (api/renderer.h). Methods without a density stage
+  /// ignore it.
   bool retainDensity = false;
 };
 

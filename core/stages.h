@@ -177,7 +177,9 @@ class Sampler {
  public:
   virtual ~Sampler() = default;
   /// Generates samples for the scene; `density` is its density volume. Deterministic for a
-  /// given scene and parameters.
+  /// given scene and parameters, and reads nothing of the scene but its medium (not the
+  /// lights, camera or objects): a method that keeps its density between renders
+  /// (Method::retainDensity) keeps the samples with it.
   virtual std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid& density) = 0;
 };
 

@@ -57,9 +57,19 @@ class PipelineMethod : public Method {
     };
     if (!reuse) stage("density", [&] { frame->buildDensity(scene); });
     if (retainDensity) st.extra["density_reused"] = reuse;
+    // A sampler reads only the medium and its density volume (Sampler), so with the density
+    // kept its samples are kept too; S and ∇S are evaluated anew (they depend on the lights).
     std::vector<RadianceSample> samples;
-    if (sampler)
+    if (sampler && reuse && keptSamples_) {
+      samples = *keptSamples_;
+      st.extra["samples_reused"] = true;
+    } else if (sampler) {
       stage("sampling", [&] { samples = sampler->generate(scene, frame->hostDensity()); });
+      if (retainDensity) {
+        keptSamples_ = samples;
+        st.extra["samples_reused"] = false;
+      }
+    }
     if (refiner) {
       DynamicSamplingResult ds;
       stage("dynamic_sampling",
@@ -110,7 +120,9 @@ class PipelineMethod : public Method {
 
  private:
   std::unique_ptr<Frame> frame_;  ///< kept between renders when retainDensity
-  Medium kept_;                   ///< the medium frame_'s density was built from
+  /// The sampler's output for frame_'s density (positions, radii, weights; S and ∇S zero).
+  std::optional<std::vector<RadianceSample>> keptSamples_;
+  Medium kept_;  ///< the medium frame_'s density was built from
   MethodDesc desc_;
   Backend backend_;
   PipelineSettings settings_;

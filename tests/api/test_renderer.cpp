@@ -94,8 +94,16 @@ TEST(Renderer, KeptDensityEqualsFreshRenderCpu) {
     r.set("camera.fov_y_deg=35");
     const RenderResult second = r.render();
     EXPECT_TRUE(second.stats.extra.at("density_reused").get<bool>());
-    // The density stage is skipped altogether.
-    for (const auto& [stage, ms] : second.stats.timingsMs) EXPECT_NE(stage, "density");
+    // The density stage is skipped altogether, and so is the sampler (it reads the medium
+    // only); S at the kept samples is evaluated for the moved light.
+    for (const auto& [stage, ms] : second.stats.timingsMs) {
+      EXPECT_NE(stage, "density");
+      EXPECT_NE(stage, "sampling");
+    }
+    if (std::string(method) != "per-voxel") {
+      EXPECT_FALSE(first.stats.extra.at("samples_reused").get<bool>());
+      EXPECT_TRUE(second.stats.extra.at("samples_reused").get<bool>());
+    }
     Json moved = blobDoc();
     applyOverride(moved, "lights.0.position=[0.2,1.1,0.3]");
     applyOverride(moved, "camera.fov_y_deg=35");
