@@ -2,10 +2,15 @@
 // core/light.h (Light::geometry, incident, spotFalloff), core/phase.h (Phase::evalCos), core/math.h
 // (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and core/transport.h
 // (opticalDepth, lightSegmentEnd, SourceRadiance); tests/gpu holds them in step (CPU == GPU).
-// With SL_OBJECTS (scene objects), shadow.glsl must come first: each light's term is multiplied
-// by its shadow-map visibility lightVisibility(light, x), the GPU's V_l.
+// With SL_OBJECTS (scene objects), shadow.glsl must be compiled with it: each light's term is
+// multiplied by its shadow-map visibility lightVisibility(light, x), the GPU's V_l.
 
 const float kInvFourPi = 1.0 / (4.0 * 3.14159265358979323846);
+
+#ifdef SL_OBJECTS
+// Defined by shadow.glsl, compiled into the same program (before or after this file).
+float lightVisibility(int light, vec3 worldPos);
+#endif
 const float kInf = 1.0 / 0.0;
 
 // One light: type 0 point, 1 spot, 2 directional (Light::Type order). Mirrored by gpu::GpuLight
