@@ -149,9 +149,12 @@ ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
   matrices_ = Buffer(matrices.size() * sizeof(glm::mat4), matrices.data(), 0, "shadow matrices");
   if (layers.empty()) return;
 
+  // Both programs are built before the timer starts (compiling is not the maps' cost).
   const Program& draw = cachedProgram("shadow map", [] {
     return graphicsProgram({"objects.vert.glsl"}, {"shadow_map.frag.glsl"}, {}, "shadow map");
   });
+  const Program& blur = cachedProgram(
+      "shadow blur", [] { return computeProgram({"shadow_blur.comp.glsl"}, {}, "shadow blur"); });
   ScopedGpuTimer t(timer, "shadow maps");
   const Texture depth = Texture::make2D(GL_DEPTH_COMPONENT32F, res, res, "shadow map depth");
   const Framebuffer fbo("shadow map");
@@ -186,8 +189,6 @@ ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
   checkGl("shadow maps");
   if (settings.type != ShadowMapSettings::Type::Vsm || settings.filter <= 1) return;
   // VSM: blur the moments (separable box filter), x into a scratch array, y back.
-  const Program& blur = cachedProgram(
-      "shadow blur", [] { return computeProgram({"shadow_blur.comp.glsl"}, {}, "shadow blur"); });
   const Texture scratch = Texture::make2DArray(GL_RG32F, res, res, layers_, "shadow blur scratch");
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
   blur.use();
