@@ -229,6 +229,35 @@ BENCHMARK(BM_GpuGradientSplat512)
     ->UseManualTime()
     ->Iterations(iters(2))
     ->Unit(benchmark::kMillisecond);
+/// Shadow maps of scene objects (docs/objects.md, GPU): rendering every light's layers and the
+/// VSM blur, default settings (VSM 1024², filter 3). Arg: 0 window (ortho + cube: 7 layers),
+/// 1 bunny_spot (one perspective map), 2 cornell_fog (one cube). The bunny is read from
+/// ../shared/data: that case skips when it is absent.
+void BM_GpuShadowMaps(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  const char* names[] = {"window", "bunny_spot", "cornell_fog"};
+  Scene s;
+  try {
+    s = loadScene(std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/" + names[state.range(0)] +
+                  ".json");
+  } catch (const IoError& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const gpu::ObjectGeometry geometry(*s.objects);
+  gpuLoop(state, [&](gpu::StageTimer& t) {
+    const gpu::ShadowMaps maps(s, geometry, ShadowMapSettings{}, &t);
+    benchmark::DoNotOptimize(maps.layers());
+  });
+  state.SetLabel(std::string(names[state.range(0)]) + ", " + gpu::context().info().renderer);
+}
+
+BENCHMARK(BM_GpuShadowMaps)
+    ->DenseRange(0, 2)
+    ->UseManualTime()
+    ->Iterations(iters(2))
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GpuPerVoxel)
     ->Arg(64)
     ->Arg(128)

@@ -19,10 +19,7 @@ Backend chooseBackend(const Scene& scene, const std::string& name, const MethodE
   const BackendEntry& gpu = backends()[int(Backend::Gpu)];
   // What the GPU backend cannot render yet: refused when asked for, avoided by "auto".
   std::string gpuLacks;
-  if (scene.objects)
-    gpuLacks = "objects are not supported on the GPU backend yet (scene has " +
-               std::to_string(scene.objects->objects().size()) + "); use --backend cpu";
-  else if (scene.camera.spp > 1)
+  if (scene.camera.spp > 1)
     gpuLacks = "camera.spp > 1 is not supported on the GPU backend yet; use --backend cpu";
   if (asked == "gpu" && !gpuLacks.empty()) throw ConfigError(gpuLacks);
   if (asked == "auto" && !gpuLacks.empty() && m.runsOn(Backend::Cpu) && m.runsOn(Backend::Gpu)) {

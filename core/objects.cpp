@@ -200,6 +200,7 @@ struct SceneObjects::Impl {
   RTCScene scene = nullptr;
   std::vector<GeometryAlbedo> albedo;  ///< by Embree geometry id
   std::vector<ObjectInfo> info;
+  std::vector<ObjectShape> shapes;
   long long triangles = 0;
   Box bounds{Vec3(kInfinity), Vec3(-kInfinity)};
   float eps = 1e-4f;
@@ -273,6 +274,7 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
     o.type = p.choice("type", {"sphere", "box", "mesh"});
     std::optional<Vec3> albedo;
     if (p.has("albedo")) albedo = p.rgb("albedo", std::nullopt, Interval::closed(0, 1));
+    ObjectShape shape;
     if (o.type == "sphere") {
       const Vec3 c = finiteVec3(p, "center");
       const double r = p.number("radius", std::nullopt, Interval::above(0));
@@ -286,6 +288,10 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
       vb[2] = c.z;
       vb[3] = float(r);
       impl->commit(g, {albedo.value_or(Vec3(0.8f))});
+      shape.kind = ObjectShape::Kind::Sphere;
+      shape.center = c;
+      shape.radius = float(r);
+      shape.albedo = {albedo.value_or(Vec3(0.8f))};
       impl->grow(o, c - Vec3(float(r)));
       impl->grow(o, c + Vec3(float(r)));
     } else if (o.type == "box") {
@@ -300,11 +306,18 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
                                             {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
                                             {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
       impl->addTriangles(v, tris, {albedo.value_or(Vec3(0.8f))}, o);
+      shape.vertices = std::move(v);
+      shape.triangles = tris;
+      shape.albedo = {albedo.value_or(Vec3(0.8f))};
     } else {
       Mesh mesh = loadMesh(p, baseDir, albedo);
-      impl->addTriangles(mesh.vertices, mesh.triangles, std::move(mesh.albedo), o,
-                         std::move(mesh.normals));
+      impl->addTriangles(mesh.vertices, mesh.triangles, mesh.albedo, o, mesh.normals);
+      shape.vertices = std::move(mesh.vertices);
+      shape.triangles = std::move(mesh.triangles);
+      shape.albedo = std::move(mesh.albedo);
+      shape.normals = std::move(mesh.normals);
     }
+    impl->shapes.push_back(std::move(shape));
     p.finish();
     impl->bounds.min = glm::min(impl->bounds.min, o.bounds.min);
     impl->bounds.max = glm::max(impl->bounds.max, o.bounds.max);
@@ -322,6 +335,9 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
 
 const std::vector<ObjectInfo>& SceneObjects::objects() const {
   return impl_->info;
+}
+const std::vector<ObjectShape>& SceneObjects::shapes() const {
+  return impl_->shapes;
 }
 long long SceneObjects::triangles() const {
   return impl_->triangles;

@@ -35,6 +35,19 @@ struct ObjectInfo {
   Box bounds;               ///< world-space bounds
 };
 
+/// One object's surface as a rasteriser needs it (the GPU backend's shadow maps and camera
+/// pass): a sphere's centre and radius, or triangles in world space. Same data as the BVH.
+struct ObjectShape {
+  enum class Kind { Sphere, Triangles };
+  Kind kind = Kind::Triangles;
+  Vec3 center{0.0f};                  ///< Sphere: centre (world)
+  float radius = 0.0f;                ///< Sphere: radius (world units)
+  std::vector<Vec3> vertices;         ///< Triangles: world-space vertices
+  std::vector<glm::uvec3> triangles;  ///< Triangles: indices into vertices
+  std::vector<Vec3> albedo;           ///< one value, or one per triangle
+  std::vector<Vec3> normals;          ///< Triangles: unit shading normals, 3 per triangle, or empty
+};
+
 class SceneObjects {
  public:
   /// Parses the `objects` array (each element an object read strictly: an unknown key or a
@@ -47,6 +60,8 @@ class SceneObjects {
   SceneObjects& operator=(const SceneObjects&) = delete;
 
   const std::vector<ObjectInfo>& objects() const;
+  /// The surfaces, by object index (for rasterisers; the CPU traces the BVH instead).
+  const std::vector<ObjectShape>& shapes() const;
   long long triangles() const;
   /// Union of the objects' bounds.
   Box bounds() const;

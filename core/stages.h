@@ -67,6 +67,24 @@ enum class Slicing {
   ViewPlanes,  ///< the paper's slabs perpendicular to the view axis
 };
 
+/// Shadow maps of the GPU backend (render.shadow_map, docs/objects.md): the visibility V_l of
+/// scene objects towards each light, where the CPU traces shadow rays. Accepted and unused on
+/// the CPU and without objects.
+struct ShadowMapSettings {
+  enum class Type { Vsm, Depth };
+  Type type = Type::Vsm;  ///< variance shadow maps (the paper's) or a plain depth compare
+  int resolution = 1024;  ///< texels per side of each map (a cube face for point lights)
+  /// Depth bias in texels: the world size of one texel at the point, times this, is taken off
+  /// the point's distance to the light (and surface points move this far along their normal).
+  float bias = 1.0f;
+  /// Filter width in texels (odd): VSM blurs the moments with a box filter this wide; depth
+  /// compare averages this many × this many compares (PCF); 1 = none.
+  int filter = 3;
+  /// VSM light-bleeding reduction: Chebyshev's bound p is remapped (p − b)/(1 − b), clamped.
+  float bleedReduction = 0.2f;
+  bool given = false;  ///< the scene set `shadow_map`
+};
+
 /// The settings every stage variant is built from, whichever backend runs it. Parsed once,
 /// with its key table, by parsePipelineSettings (methods/settings.h).
 struct PipelineSettings {
@@ -94,6 +112,7 @@ struct PipelineSettings {
   float delta1 = 0.0f;        ///< volume-tracing step towards the lights (the paper's Δ1)
   float delta2 = 0.0f;        ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
+  ShadowMapSettings shadowMap;
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.

@@ -52,6 +52,12 @@ inline constexpr GLuint kScanIn = 0;
 inline constexpr GLuint kScanOut = 1;
 inline constexpr GLuint kScanBlockSums = 2;
 inline constexpr GLuint kScanScannedSums = 3;
+/// GpuShadowLight[] per scene light (shadow.glsl, gpu/shadow_maps.h).
+inline constexpr GLuint kShadowLights = 12;
+/// mat4 world -> clip per shadow-map layer (shadow.glsl).
+inline constexpr GLuint kShadowMatrices = 13;
+/// GpuObjectVertex[]: the scene objects' triangles (objects.vert.glsl, gpu/objects.h).
+inline constexpr GLuint kObjectVertices = 14;
 
 // ---- texture units
 
@@ -59,6 +65,10 @@ inline constexpr GLuint kScanScannedSums = 3;
 inline constexpr GLuint kDensityTexture = 0;
 /// The source-radiance volume the slice marcher reads (sampler3D uRadiance).
 inline constexpr GLuint kRadianceTexture = 1;
+/// The shadow maps: RG32F 2D array of moments (sampler2DArray uShadowMaps, shadow.glsl).
+inline constexpr GLuint kShadowTexture = 2;
+/// The slice marcher's surface distances: R32F view-ray distance of the first surface.
+inline constexpr GLuint kSurfaceTexture = 3;
 
 // ---- image units
 
@@ -66,6 +76,9 @@ inline constexpr GLuint kRadianceTexture = 1;
 inline constexpr GLuint kSumsImage = 0;
 /// The RGBA32F source-radiance volume a compute pass writes.
 inline constexpr GLuint kRadianceImage = 1;
+/// The shadow-map blur's source and target layers (shadow_blur.comp.glsl).
+inline constexpr GLuint kBlurSource = 2;
+inline constexpr GLuint kBlurTarget = 3;
 
 }  // namespace binding
 
@@ -96,10 +109,17 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_SCAN_OUT", binding::kScanOut},
     {"BINDING_SCAN_BLOCK_SUMS", binding::kScanBlockSums},
     {"BINDING_SCAN_SCANNED_SUMS", binding::kScanScannedSums},
+    {"BINDING_SHADOW_LIGHTS", binding::kShadowLights},
+    {"BINDING_SHADOW_MATRICES", binding::kShadowMatrices},
+    {"BINDING_OBJECT_VERTICES", binding::kObjectVertices},
     {"BINDING_DENSITY_TEXTURE", binding::kDensityTexture},
     {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
+    {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
+    {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
     {"BINDING_SUMS_IMAGE", binding::kSumsImage},
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
+    {"BINDING_BLUR_SOURCE", binding::kBlurSource},
+    {"BINDING_BLUR_TARGET", binding::kBlurTarget},
 };
 
 }  // namespace scatterlab::gpu

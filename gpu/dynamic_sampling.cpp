@@ -144,9 +144,9 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
     defines.push_back("SL_BOUNDED");
     key += " bounded";
   }
-  const Program& program = cachedProgram(key, [&] {
-    return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, defines, key);
-  });
+  std::vector<std::string> files = {"common.glsl", "dynamic_error.comp.glsl"};
+  addShadowVariant(inputs.shadows(), key, files, defines);
+  const Program& program = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
   const std::size_t count = level.count;
   LevelEvaluationGpu e;
   e.samples.resize(count);
@@ -336,9 +336,10 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
                                          std::vector<RadianceSample> initial,
                                          DynamicSamplingGpuSteps steps,
                                          const DynamicSamplingSettings& settings, StageTimer* timer,
-                                         std::vector<std::vector<float>>* errorsOut) {
+                                         std::vector<std::vector<float>>* errorsOut,
+                                         const ShadowMaps* shadows) {
   context();
-  const TracingInputs inputs(scene, density, steps.delta1);
+  const TracingInputs inputs(scene, density, steps.delta1, shadows);
   return withSampleBudget(settings, [&](const DynamicSamplingSettings& s) {
     if (errorsOut) errorsOut->clear();  // the errors of the pass returned
     return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut);

@@ -39,13 +39,15 @@ struct DynamicSamplingGpuSteps {
 /// rounding of the threshold (compared in double, as on the CPU). `errors`, when given,
 /// receives E of every evaluated sample per split level (in evaluation order) of the pass
 /// returned. GPU times per pass go to `timer` (stages "ds evaluate+error", "ds split", "ds
-/// scan", "ds compact").
+/// scan", "ds compact"). `shadows`: the scene objects' shadow maps (null without objects), so
+/// that S at samples and probes carries V_l as on the CPU.
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
                                          std::vector<RadianceSample> initial,
                                          DynamicSamplingGpuSteps steps,
                                          const DynamicSamplingSettings& settings,
                                          StageTimer* timer = nullptr,
-                                         std::vector<std::vector<float>>* errors = nullptr);
+                                         std::vector<std::vector<float>>* errors = nullptr,
+                                         const ShadowMaps* shadows = nullptr);
 
 /// The sample list Q^k of one level, on the GPU.
 struct DynamicLevelGpu {

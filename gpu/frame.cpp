@@ -21,6 +21,7 @@ const DensityGrid& GpuFrame::hostDensity() {
 void GpuFrame::newRender() {
   context();  // the queries are deleted in the frame's context
   timer = StageTimer();
+  objects = SceneShadows();
 }
 
 void GpuFrame::sync() {
@@ -37,6 +38,12 @@ void GpuFrame::report(RenderStats& st) {
   st.extra["density_construction"] = splatted_ ? "gpu splat" : "cpu build + upload";
   st.extra["gl_version"] = ctx.info().version;
   st.extra["egl_platform"] = ctx.info().platform;
+  if (objects.maps) {
+    const ShadowMapSettings& sm = objects.maps->settings();
+    st.extra["shadow_map"] = {{"type", sm.type == ShadowMapSettings::Type::Vsm ? "vsm" : "depth"},
+                              {"resolution", sm.resolution},
+                              {"layers", objects.maps->layers()}};
+  }
 }
 
 // The stages' frame overrides: the passes on the frame's volumes, timed into its timer.
@@ -44,7 +51,8 @@ void GpuFrame::report(RenderStats& st) {
 void VolumeTracerGpu::evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                                bool gradients) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
-  evaluate(scene, f.density, samples, gradients, &f.timer);
+  const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
+  evaluate(scene, f.density, samples, gradients, &f.timer, shadows);
 }
 
 ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& scene,
@@ -62,13 +70,15 @@ ReconstructionStats PerVoxelGpu::reconstruct(Frame& frame, const Scene& scene,
                                              Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   ReconstructionStats st;
-  f.radiance = build(scene, f.density, scene.medium.bounds, dims, &st, &f.timer);
+  const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
+  f.radiance = build(scene, f.density, scene.medium.bounds, dims, &st, &f.timer, shadows);
   return st;
 }
 
 Image SliceMarcher::integrate(Frame& frame, const Scene& scene, Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
-  return integrate(scene, f.density, f.radiance, &f.timer, &slices_);
+  f.shadowMaps(scene, shadowMap_);
+  return integrate(scene, f.density, f.radiance, &f.timer, &slices_, &f.objects);
 }
 
 void SliceMarcher::describe(RenderStats& st) const {

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "core/stages.h"
+#include "gpu/stages.h"
 #include "gpu/timer.h"
 #include "gpu/volume.h"
 
@@ -23,14 +24,21 @@ class GpuFrame : public Frame {
   void buildDensity(const Scene& scene) override;
   const DensityGrid& hostDensity() override;
   void sync() override;
-  /// Drops the pass timings of the previous render (the volumes stay).
+  /// Drops the pass timings and the scene objects of the previous render (the volumes stay).
   void newRender() override;
   /// backend "gpu", device = GL_RENDERER, gpu_ms per pass, density_construction, gl_version,
   /// egl_platform.
   void report(RenderStats& stats) override;
 
+  /// The scene objects' triangles and shadow maps, built by the first stage that needs them
+  /// (SceneShadows::build; "shadow maps" in the timings).
+  const ShadowMaps* shadowMaps(const Scene& scene, const ShadowMapSettings& settings) {
+    return objects.build(scene, settings, &timer);
+  }
+
   Volume density, radiance;
   StageTimer timer;
+  SceneShadows objects;
 
  private:
   bool splatted_ = false;

@@ -82,6 +82,16 @@ Texture Texture::make3D(GLenum format, int w, int h, int d, std::string_view nam
   return t;
 }
 
+Texture Texture::make2DArray(GLenum format, int w, int h, int layers, std::string_view name) {
+  Texture t(GL_TEXTURE_2D_ARRAY, name);
+  glTextureStorage3D(t.id_, 1, format, w, h, layers);
+  glTextureParameteri(t.id_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(t.id_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T})
+    glTextureParameteri(t.id_, wrap, GL_CLAMP_TO_EDGE);
+  return t;
+}
+
 Framebuffer::Framebuffer(std::string_view name) {
   glCreateFramebuffers(1, &id_);
   label(GL_FRAMEBUFFER, id_, name);

@@ -85,6 +85,8 @@ class Texture : public GlObject<TextureDeleter> {
   /// A 3D texture of `format`, GL_LINEAR filtering, CLAMP_TO_EDGE: lookups at normalised
   /// coordinates (u + 0.5) / dims match Grid3::sampleIndex(u) inside the box.
   static Texture make3D(GLenum format, int w, int h, int d, std::string_view label);
+  /// A 2D array texture of `layers` layers, GL_LINEAR filtering, CLAMP_TO_EDGE.
+  static Texture make2DArray(GLenum format, int w, int h, int layers, std::string_view label);
   GLenum target() const { return target_; }
 
  private:

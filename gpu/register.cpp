@@ -17,17 +17,20 @@ namespace {
 /// evaluator is not used: the passes trace S, ∇S and the probes themselves).
 class GpuRefiner : public SampleRefiner {
  public:
-  GpuRefiner(DynamicSamplingSettings s, DynamicSamplingGpuSteps steps)
-      : s_(std::move(s)), steps_(steps) {}
+  GpuRefiner(DynamicSamplingSettings s, DynamicSamplingGpuSteps steps, ShadowMapSettings shadowMap)
+      : s_(std::move(s)), steps_(steps), shadowMap_(shadowMap) {}
   DynamicSamplingResult refine(Frame& frame, const Scene& scene,
                                std::vector<RadianceSample> initial, RadianceEvaluator&) override {
     GpuFrame& f = static_cast<GpuFrame&>(frame);
-    return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer);
+    const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
+    return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer, nullptr,
+                              shadows);
   }
 
  private:
   DynamicSamplingSettings s_;
   DynamicSamplingGpuSteps steps_;
+  ShadowMapSettings shadowMap_;  ///< the objects' visibility at samples and probes
 };
 
 /// Backend "auto" picks the GPU only on real hardware: llvmpipe runs the GL passes on the CPU,
@@ -57,26 +60,26 @@ void registerGpuStages() {
       BackendEntry{[] { return std::unique_ptr<Frame>(new GpuFrame()); }, preferGpu};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<RadianceEvaluator>(
-        new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace));
+        new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace, s.shadowMap));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(
         new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s)));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1));
+    return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1, s.shadowMap));
   });
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(
-        new SliceMarcher(s.march, s.slicing == Slicing::RaySteps, s.factorLights));
+    return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps,
+                                                        s.factorLights, s.delta1, s.shadowMap));
   });
   refiners().addVariant(
       "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
         DynamicSamplingSettings s = ds;
         s.delta1 = ps.delta1;
         s.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
-        return std::unique_ptr<SampleRefiner>(
-            new GpuRefiner(std::move(s), {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}));
+        return std::unique_ptr<SampleRefiner>(new GpuRefiner(
+            std::move(s), {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}, ps.shadowMap));
       });
 }
 

@@ -1,5 +1,6 @@
 #include "gpu/stages.h"
 
+#include <glm/gtc/type_ptr.hpp>
 #include <vector>
 
 #include "core/error.h"
@@ -11,8 +12,9 @@
 
 namespace scatterlab::gpu {
 
-TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1)
-    : scene_(scene), density_(density), delta1_(delta1) {
+TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1,
+                             const ShadowMaps* shadows)
+    : scene_(scene), density_(density), delta1_(delta1), shadows_(shadows) {
   std::vector<GpuLight> packed;
   packed.reserve(scene.lights.size());
   for (const Light& l : scene.lights) packed.push_back(packLight(l));
@@ -34,6 +36,16 @@ void TracingInputs::apply(const Program& p) const {
   setVec3(p, "uDensityOffset", density_.indexOffset());
   setIVec3(p, "uDensityDims", density_.dims);
   setVec3(p, "uEye", scene_.camera.position);
+  if (shadows_) shadows_->bind(p);
+}
+
+const ShadowMaps* SceneShadows::build(const Scene& scene, const ShadowMapSettings& settings,
+                                      StageTimer* timer) {
+  if (!scene.objects) return nullptr;
+  context();
+  if (!geometry) geometry = std::make_unique<ObjectGeometry>(*scene.objects);
+  if (!maps) maps = std::make_unique<ShadowMaps>(scene, *geometry, settings, timer);
+  return maps.get();
 }
 
 // ---------------------------------------------------------------- radiance evaluator
@@ -41,30 +53,30 @@ void TracingInputs::apply(const Program& p) const {
 void VolumeTracerGpu::evaluate(const Scene& scene, const DensityGrid& density,
                                std::span<RadianceSample> samples, bool gradients) {
   const Volume d = uploadDensity(density);
-  evaluate(scene, d, samples, gradients, nullptr);
+  SceneShadows objects;
+  evaluate(scene, d, samples, gradients, nullptr, objects.build(scene, shadowMap_, nullptr));
 }
 
 void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
-                               std::span<RadianceSample> samples, bool gradients,
-                               StageTimer* timer) {
+                               std::span<RadianceSample> samples, bool gradients, StageTimer* timer,
+                               const ShadowMaps* shadows) {
   context();
   if (samples.empty()) return;
   std::string key = gradients ? "volume tracer (S, grad S)" : "volume tracer (S)";
   if (factor_) key += log_ ? " ln V" : " V";
-  const Program& program = cachedProgram(key, [&] {
-    std::vector<std::string> defines;
-    if (gradients) defines.push_back("SL_GRADIENTS");
-    if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
-    if (log_) defines.push_back("SL_LOG_SPACE");
-    return computeProgram({"common.glsl", "volume_tracer.comp.glsl"}, defines, key);
-  });
+  std::vector<std::string> defines, files = {"common.glsl", "volume_tracer.comp.glsl"};
+  if (gradients) defines.push_back("SL_GRADIENTS");
+  if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
+  if (log_) defines.push_back("SL_LOG_SPACE");
+  addShadowVariant(shadows, key, files, defines);
+  const Program& program = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
   std::vector<GpuSamplePoint> pos;
   pos.reserve(samples.size());
   for (const RadianceSample& s : samples) pos.push_back({s.position});
   const Buffer positions(pos.size() * sizeof(GpuSamplePoint), pos.data(), 0, "sample positions");
   const Buffer results(samples.size() * sizeof(GpuRadianceRecord), nullptr, 0,
                        "sample S and grad S");
-  const TracingInputs inputs(scene, density, delta1_);
+  const TracingInputs inputs(scene, density, delta1_, shadows);
   {
     ScopedGpuTimer t(timer, "radiance evaluation");
     program.use();
@@ -182,21 +194,25 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
 ReconstructionStats PerVoxelGpu::reconstruct(const Scene& scene, const DensityGrid& density,
                                              std::span<const RadianceSample>, RadianceGrid& out) {
   const Volume d = uploadDensity(density);
-  const Volume v = build(scene, d, out.bounds(), out.dims(), nullptr, nullptr);
+  SceneShadows objects;
+  const Volume v = build(scene, d, out.bounds(), out.dims(), nullptr, nullptr,
+                         objects.build(scene, shadowMap_, nullptr));
   out = readRadiance(v);
   return {};
 }
 
 Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
-                          ReconstructionStats* stats, StageTimer* timer) {
+                          ReconstructionStats* stats, StageTimer* timer,
+                          const ShadowMaps* shadows) {
   context();
-  const Program& program = cachedProgram("per-voxel S", [] {
-    return computeProgram({"common.glsl", "per_voxel.comp.glsl"}, {}, "per-voxel S");
-  });
+  std::string key = "per-voxel S";
+  std::vector<std::string> defines, files = {"common.glsl", "per_voxel.comp.glsl"};
+  addShadowVariant(shadows, key, files, defines);
+  const Program& program = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)");
   const GpuPerVoxelCounters zeros;
   const Buffer counters(sizeof zeros, &zeros, 0, "per-voxel counters");
-  const TracingInputs inputs(scene, density, delta1_);
+  const TracingInputs inputs(scene, density, delta1_, shadows);
   {
     ScopedGpuTimer t(timer, "per-voxel S");
     program.use();
@@ -226,21 +242,47 @@ Image SliceMarcher::integrate(const Scene& scene, const DensityGrid& density,
                               const RadianceGrid& radiance) {
   const Volume d = uploadDensity(density);
   const Volume r = uploadRadiance(radiance);
-  return integrate(scene, d, r, nullptr);
+  SceneShadows objects;
+  objects.build(scene, shadowMap_, nullptr);
+  return integrate(scene, d, r, nullptr, nullptr, &objects);
 }
 
+namespace {
+
+/// World -> clip of the camera, consistent with Camera::rayGenerator and the slice marcher's
+/// pixel rays (GL row r = image row r, so clip y is flipped): x = q·right/sx, y = −q·up/sy,
+/// w = q·forward (q = p − eye), and z maps view depth [nearD, farD] to [−1, 1].
+glm::mat4 cameraViewProj(const Camera::RayGenerator& g, float nearD, float farD) {
+  const float a = (farD + nearD) / (farD - nearD), b = -2.0f * farD * nearD / (farD - nearD);
+  const auto row = [&](const Vec3& axis, float scale, float shift) {
+    return glm::vec4(axis * scale, -glm::dot(axis, g.origin) * scale + shift);
+  };
+  const glm::mat4 rows(row(g.right, 1.0f / g.sx, 0.0f), row(g.up, -1.0f / g.sy, 0.0f),
+                       row(g.forward, a, b), row(g.forward, 1.0f, 0.0f));
+  return glm::transpose(rows);
+}
+
+/// NDC z of view depth z under cameraViewProj(nearD, farD).
+float ndcDepth(float z, float nearD, float farD) {
+  z = std::max(z, nearD);
+  return (farD + nearD) / (farD - nearD) - 2.0f * farD * nearD / ((farD - nearD) * z);
+}
+
+}  // namespace
+
 Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
-                              StageTimer* timer, int* sliceCount) {
+                              StageTimer* timer, int* sliceCount, const SceneShadows* objects) {
   context();
+  const bool surfaces = objects && objects->geometry && objects->maps;
+  const ShadowMaps* shadows = surfaces ? objects->maps.get() : nullptr;
   std::string key = raySteps_ ? "slice marcher (ray steps)" : "slice marcher";
   if (factor_) key += " x A";
-  const Program& program = cachedProgram(key, [&] {
-    std::vector<std::string> defines;
-    if (raySteps_) defines.push_back("SL_RAY_STEPS");
-    if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
-    return graphicsProgram({"fullscreen.vert.glsl"}, {"common.glsl", "slice_march.frag.glsl"},
-                           defines, key);
-  });
+  std::vector<std::string> defines, files = {"common.glsl", "slice_march.frag.glsl"};
+  if (raySteps_) defines.push_back("SL_RAY_STEPS");
+  if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
+  addShadowVariant(shadows, key, files, defines);
+  const Program& program = cachedProgram(
+      key, [&] { return graphicsProgram({"fullscreen.vert.glsl"}, files, defines, key); });
   const Camera& cam = scene.camera;
   const auto gen = cam.rayGenerator();
   const Medium& m = scene.medium;
@@ -248,10 +290,8 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
   const Texture target = Texture::make2D(GL_RGBA32F, w, h, "slice marcher image");
   const Framebuffer fbo("slice marcher target");
   glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0);
-  if (glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw GpuError("slice marcher: RGBA32F image is not a complete framebuffer");
   const VertexArray vao("attribute-less");
-  const TracingInputs inputs(scene, density, 0.0f);
+  const TracingInputs inputs(scene, density, surfaces ? delta1_ : 0.0f, shadows);
 
   // View-depth range of the box (distance along the forward axis from the eye).
   const Box& b = density.bounds;
@@ -273,12 +313,71 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
                          ? std::max(1, int(std::ceil(glm::length(b.extent()) / settings_.step)) + 1)
                          : 0;
   if (sliceCount) *sliceCount = raySteps_ ? layers : n;
+  const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
+
+  // Scene objects: the surface pass fills the image with L_p (alpha 0: opaque), the depth
+  // buffer and the view-ray distance of the first surface.
+  Texture depth, distance;
+  float nearD = 1.0f, farD = 2.0f;
+  if (surfaces) {
+    farD = 0.0f;
+    Box all = b;
+    all.min = glm::min(all.min, scene.objects->bounds().min);
+    all.max = glm::max(all.max, scene.objects->bounds().max);
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 p((c & 1) ? all.max.x : all.min.x, (c & 2) ? all.max.y : all.min.y,
+                   (c & 4) ? all.max.z : all.min.z);
+      farD = std::max(farD, glm::dot(p - gen.origin, gen.forward));
+    }
+    farD = std::max(farD, 1e-6f) * 1.01f;
+    nearD = farD * 1e-5f;
+    depth = Texture::make2D(GL_DEPTH_COMPONENT32F, w, h, "slice marcher depth");
+    distance = Texture::make2D(GL_R32F, w, h, "slice marcher surface distance");
+    const Framebuffer surfaceFbo("slice marcher surfaces");
+    glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0);
+    glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT1, distance.id(), 0);
+    glNamedFramebufferTexture(surfaceFbo.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
+    const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(surfaceFbo.id(), 2, both);
+    if (glCheckNamedFramebufferStatus(surfaceFbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GpuError("slice marcher: the surface pass's framebuffer is not complete");
+    const std::string surfKey = "object surfaces";
+    std::vector<std::string> surfDefines, surfFiles = {"common.glsl", "surface.frag.glsl"};
+    std::string k = surfKey;
+    addShadowVariant(shadows, k, surfFiles, surfDefines);
+    const Program& surf = cachedProgram(
+        k, [&] { return graphicsProgram({"objects.vert.glsl"}, surfFiles, surfDefines, k); });
+    ScopedGpuTimer t(timer, "surfaces");
+    glBindFramebuffer(GL_FRAMEBUFFER, surfaceFbo.id());
+    glViewport(0, 0, w, h);
+    glClearBufferfv(GL_COLOR, 0, clear);
+    const float none[4] = {3.0e38f, 0.0f, 0.0f, 0.0f};
+    glClearBufferfv(GL_COLOR, 1, none);
+    const float one = 1.0f;
+    glClearBufferfv(GL_DEPTH, 0, &one);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_SCISSOR_TEST);
+    surf.use();
+    inputs.apply(surf);
+    glUniformMatrix4fv(surf.uniform("uViewProj"), 1, GL_FALSE,
+                       glm::value_ptr(cameraViewProj(gen, nearD, farD)));
+    glUniform1f(surf.uniform("uSurfaceOffset"), scene.objects->epsilon());
+    objects->geometry->draw();
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    checkGl("object surfaces");
+    glNamedFramebufferTexture(fbo.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
+  }
+  if (glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GpuError("slice marcher: RGBA32F image is not a complete framebuffer");
   {
     ScopedGpuTimer t(timer, "slice march");
     glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
     glViewport(0, 0, w, h);
-    const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
-    glClearBufferfv(GL_COLOR, 0, clear);
+    if (!surfaces) glClearBufferfv(GL_COLOR, 0, clear);
     program.use();
     inputs.apply(program);
     glBindTextureUnit(binding::kRadianceTexture, radiance.texture.id());
@@ -292,8 +391,19 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
     glUniform2f(program.uniform("uSize"), float(w), float(h));
     glUniform1f(program.uniform("uAlbedo"), m.albedo);
     const GLint nearLoc = program.uniform("uDepthNear"), farLoc = program.uniform("uDepthFar");
+    const GLint slabZLoc = program.uniform("uSlabNdcZ");
     glBindVertexArray(vao.id());
-    glDisable(GL_DEPTH_TEST);
+    if (surfaces) {
+      // Layers behind the first surface fail the depth test (view-plane slabs are drawn at
+      // their near plane's depth; ray-step layers at the nearest, and clipped per pixel).
+      glEnable(GL_DEPTH_TEST);
+      glDepthFunc(GL_LESS);
+      glDepthMask(GL_FALSE);
+      glBindTextureUnit(binding::kSurfaceTexture, distance.id());
+      glUniform1f(slabZLoc, -1.0f);
+    } else {
+      glDisable(GL_DEPTH_TEST);
+    }
     glDisable(GL_SCISSOR_TEST);
     glEnable(GL_BLEND);
     glBlendEquation(GL_FUNC_ADD);
@@ -310,10 +420,13 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
       for (int k = n - 1; k >= 0; --k) {
         glUniform1f(nearLoc, zmin + float(k) * dz);
         glUniform1f(farLoc, k == n - 1 ? zmax : zmin + float(k + 1) * dz);
+        if (surfaces) glUniform1f(slabZLoc, ndcDepth(zmin + float(k) * dz, nearD, farD));
         glDrawArrays(GL_TRIANGLES, 0, 3);
       }
     }
     glDisable(GL_BLEND);
+    glDisable(GL_DEPTH_TEST);
+    glDepthMask(GL_TRUE);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
   }
   checkGl("slice march");
@@ -328,7 +441,8 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
       const float* p = &rgba[(size_t(y) * w + x) * 4];
       img.at(x, y) = Vec3(p[0], p[1], p[2]);
       // The alpha channel blends as ZERO, SRC_ALPHA from a clear of 1: the view ray's
-      // transmittance, the product of the slabs'.
+      // transmittance, the product of the slabs'; 0 where a surface was drawn (alpha 1 as on
+      // the CPU: the surface is opaque).
       img.alpha()[size_t(y) * w + x] = 1.0f - p[3];
     }
   return img;

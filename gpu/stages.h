@@ -11,6 +11,7 @@
 #include <span>
 
 #include "core/stages.h"
+#include "gpu/shadow_maps.h"
 #include "gpu/timer.h"
 #include "gpu/volume.h"
 
@@ -21,15 +22,30 @@ namespace scatterlab::gpu {
 /// a current context.
 class TracingInputs {
  public:
-  TracingInputs(const Scene& scene, const Volume& density, float delta1);
+  /// `shadows`: the scene objects' shadow maps (null without objects); programs that trace
+  /// with these inputs must then be built with addShadowVariant(shadows(), ...).
+  TracingInputs(const Scene& scene, const Volume& density, float delta1,
+                const ShadowMaps* shadows = nullptr);
   /// Binds the buffers and texture and sets the uniforms of `program` (which must be in use).
   void apply(const Program& program) const;
+  const ShadowMaps* shadows() const { return shadows_; }
 
  private:
   const Scene& scene_;
   const Volume& density_;
   float delta1_;
+  const ShadowMaps* shadows_;
   Buffer lights_;
+};
+
+/// The scene objects on the GPU for one frame: their triangles and shadow maps (both null
+/// without objects). Built once per render by the first stage that needs them.
+struct SceneShadows {
+  std::unique_ptr<ObjectGeometry> geometry;
+  std::unique_ptr<ShadowMaps> maps;
+  /// Uploads the objects and renders the maps when the scene has objects and they are not
+  /// built yet; returns maps (null without objects). Needs the context.
+  const ShadowMaps* build(const Scene& scene, const ShadowMapSettings& settings, StageTimer* timer);
 };
 
 /// S and ∇S at every sample in one compute dispatch (GPU twin of the CPU volume tracer):
@@ -40,18 +56,26 @@ class VolumeTracerGpu : public RadianceEvaluator {
   /// delta1: tracing step towards the lights; delta2: central-difference step (world units).
   /// factorLights / logSpace: evaluate V = S / A (or ln V) instead of S, as the CPU evaluator
   /// does (PipelineSettings).
-  VolumeTracerGpu(float delta1, float delta2, bool factorLights = false, bool logSpace = false)
-      : delta1_(delta1), delta2_(delta2), factor_(factorLights), log_(factorLights && logSpace) {}
+  /// shadowMap: how scene objects' visibility is looked up (render.shadow_map).
+  VolumeTracerGpu(float delta1, float delta2, bool factorLights = false, bool logSpace = false,
+                  ShadowMapSettings shadowMap = {})
+      : delta1_(delta1),
+        delta2_(delta2),
+        factor_(factorLights),
+        log_(factorLights && logSpace),
+        shadowMap_(shadowMap) {}
   void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override;
   void evaluate(const Scene& scene, const DensityGrid& density, std::span<RadianceSample> samples,
                 bool gradients);
+  /// `shadows`: the objects' shadow maps (null without objects).
   void evaluate(const Scene& scene, const Volume& density, std::span<RadianceSample> samples,
-                bool gradients, StageTimer* timer);
+                bool gradients, StageTimer* timer, const ShadowMaps* shadows = nullptr);
 
  private:
   float delta1_, delta2_;
   bool factor_, log_;
+  ShadowMapSettings shadowMap_;
 };
 
 /// Radiance splatting (paper Sec. 4, Eq. 4) by rasterisation: for each z slice of the output
@@ -88,7 +112,8 @@ class GradientSplatGpu : public Reconstruction {
 /// ignores the samples.
 class PerVoxelGpu : public Reconstruction {
  public:
-  explicit PerVoxelGpu(float delta1) : delta1_(delta1) {}
+  explicit PerVoxelGpu(float delta1, ShadowMapSettings shadowMap = {})
+      : delta1_(delta1), shadowMap_(shadowMap) {}
   bool needsGradients() const override { return false; }
   bool usesSamples() const override { return false; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
@@ -96,12 +121,13 @@ class PerVoxelGpu : public Reconstruction {
                                   Progress* progress) override;
   ReconstructionStats reconstruct(const Scene& scene, const DensityGrid& density,
                                   std::span<const RadianceSample> samples, RadianceGrid& out);
-  /// `stats` receives traced and skipped.
+  /// `stats` receives traced and skipped; `shadows`: the objects' shadow maps (or null).
   Volume build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
-               ReconstructionStats* stats, StageTimer* timer);
+               ReconstructionStats* stats, StageTimer* timer, const ShadowMaps* shadows = nullptr);
 
  private:
   float delta1_;
+  ShadowMapSettings shadowMap_;
 };
 
 /// Slice-based ray marching (paper Sec. 6): slabs of view depth perpendicular to the camera's
@@ -112,22 +138,38 @@ class PerVoxelGpu : public Reconstruction {
 /// With `raySteps`, layer k is instead step n−1−k of each pixel's own ray (the CPU marcher's
 /// sample points exactly, composited the same way): it matches the CPU image where the planar
 /// slabs' different sample points matter (a point light inside the medium).
+/// Scene objects: a first pass rasterises them from the camera with a depth buffer into the
+/// framebuffer: their L_p = albedo/π·Σ_l E_l·max(0, n·ω_l)·V_l·T(p, l) per pixel (V_l from the
+/// shadow maps, T marched through the density with step delta1), alpha 0 (opaque), and their
+/// view-ray distance into a second attachment. The layers then composite over it: view-plane
+/// slabs entirely behind the surface fail the depth test (culled), and every layer's piece of
+/// a ray is clipped at the surface, as the CPU march stops there; T(camera, p)·L_p follows
+/// from the blending.
 class SliceMarcher : public Integrator {
  public:
   /// factorLights: the radiance volume holds V = S / A; A is multiplied back per layer.
-  explicit SliceMarcher(MarchSettings settings, bool raySteps = false, bool factorLights = false)
-      : settings_(settings), raySteps_(raySteps), factor_(factorLights) {}
+  /// delta1: the step of T(p, l) for surfaces; shadowMap: their visibility lookups.
+  explicit SliceMarcher(MarchSettings settings, bool raySteps = false, bool factorLights = false,
+                        float delta1 = 0.0f, ShadowMapSettings shadowMap = {})
+      : settings_(settings),
+        raySteps_(raySteps),
+        factor_(factorLights),
+        delta1_(delta1),
+        shadowMap_(shadowMap) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
   /// slicing and the number of slices of the last integrate().
   void describe(RenderStats& stats) const override;
   Image integrate(const Scene& scene, const DensityGrid& density, const RadianceGrid& radiance);
+  /// `objects`: the scene's objects and shadow maps (null or empty without objects).
   Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
-                  StageTimer* timer, int* slices = nullptr);
+                  StageTimer* timer, int* slices = nullptr, const SceneShadows* objects = nullptr);
 
  private:
   MarchSettings settings_;
   bool raySteps_;
   bool factor_;
+  float delta1_;
+  ShadowMapSettings shadowMap_;
   int slices_ = 0;
 };
 

@@ -39,9 +39,54 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "how S and ∇S are computed at the samples; methods with samples"},
       {"integrator", "string", "ray-marcher", "a registered integrator",
        "how the image is marched from the volumes; methods with a radiance volume"},
+      {"shadow_map", "object", "see shadowMapKeys()", "",
+       "the GPU backend's shadow maps of scene objects; accepted and unused on the CPU"},
   };
   return keys;
 }
+
+const std::vector<KeyDoc>& shadowMapKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"type", "string", "vsm", "vsm, depth",
+       "variance shadow maps (the paper's: filtered moments, Chebyshev bound) or a plain depth "
+       "compare"},
+      {"resolution", "int", "1024", "16…4096",
+       "texels per side of each map (spot: one, directional: one, point: six cube faces)"},
+      {"bias", "number", "1", "[0, 64]",
+       "depth bias in texels: the world size of one texel at the point times this; surface "
+       "points also move this far along their normal"},
+      {"filter", "int", "3", "odd, 1…31",
+       "filter width in texels: VSM box-blurs the moments, depth compare averages filter² "
+       "compares (PCF); 1 = none"},
+      {"bleed_reduction", "number", "0.2", "[0, 1)",
+       "VSM light-bleeding reduction: Chebyshev's p remapped to (p − b)/(1 − b), clamped"},
+  };
+  return keys;
+}
+
+namespace {
+
+/// render.shadow_map (shadowMapKeys()).
+ShadowMapSettings parseShadowMap(Params& p) {
+  ShadowMapSettings s;
+  s.given = p.has("shadow_map");
+  if (!s.given) {
+    p.allow("shadow_map");
+    return s;
+  }
+  Params sp = p.child("shadow_map");
+  s.type = sp.choice("type", {"vsm", "depth"}, "vsm") == "vsm" ? ShadowMapSettings::Type::Vsm
+                                                               : ShadowMapSettings::Type::Depth;
+  s.resolution = int(sp.integer("resolution", 1024, Interval::closed(16, 4096)));
+  s.bias = sp.real("bias", 1.0, Interval::closed(0, 64));
+  s.filter = int(sp.integer("filter", 3, Interval::closed(1, 31)));
+  if (s.filter % 2 == 0) sp.fail("filter", "must be odd (a kernel centred on the texel)");
+  s.bleedReduction = sp.real("bleed_reduction", 0.2, {0.0, 1.0, false, true});
+  sp.finish();
+  return s;
+}
+
+}  // namespace
 
 PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const MethodDesc& d) {
   PipelineSettings s;
@@ -50,6 +95,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   s.march.step = p.real("march_step", voxel, steps);
   s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
   s.delta1 = p.real("delta1", voxel, steps);
+  s.shadowMap = parseShadowMap(p);
   if (d.sampler) {
     s.delta2 = p.real("delta2", voxel, steps);
     s.paper = p.boolean("paper", false);
@@ -82,7 +128,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 }
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
-  std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
+  std::vector<std::string> k = {"march_step", "min_transmittance", "delta1", "shadow_map"};
   if (d.sampler)
     k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
                        "bounded_taylor", "sampler", "evaluator"});

@@ -37,6 +37,8 @@ struct MethodDesc {
 /// Key table of the pipeline settings (render keys; sampler.* and the refiner's keys have
 /// their own tables in sampling/).
 const std::vector<KeyDoc>& pipelineKeys();
+/// Key table of render.shadow_map (ShadowMapSettings).
+const std::vector<KeyDoc>& shadowMapKeys();
 
 /// Reads the keys `desc`'s stages use from the render object: march_step, min_transmittance,
 /// delta1 always; delta2 with samples; radiance_resolution and slicing with a radiance volume.

@@ -2,8 +2,15 @@
 // core/light.h (Light::geometry, incident, spotFalloff), core/phase.h (Phase::evalCos), core/math.h
 // (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and core/transport.h
 // (opticalDepth, lightSegmentEnd, SourceRadiance); tests/gpu holds them in step (CPU == GPU).
+// With SL_OBJECTS (scene objects), shadow.glsl must be compiled with it: each light's term is
+// multiplied by its shadow-map visibility lightVisibility(light, x), the GPU's V_l.
 
 const float kInvFourPi = 1.0 / (4.0 * 3.14159265358979323846);
+
+#ifdef SL_OBJECTS
+// Defined by shadow.glsl, compiled into the same program (before or after this file).
+float lightVisibility(int light, vec3 worldPos);
+#endif
 const float kInf = 1.0 / 0.0;
 
 // One light: type 0 point, 1 spot, 2 directional (Light::Type order). Mirrored by gpu::GpuLight
@@ -153,8 +160,15 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
       irradiance = l.intensityCosOuter.rgb * (f / dist2);
       segEnd = x + toLight * dist;
     }
+#ifdef SL_OBJECTS
+    // V_l through scene objects (shadow.glsl): the CPU skips a blocked light.
+    float vis = lightVisibility(li, x);
+    if (vis <= 0.0) continue;
+#else
+    const float vis = 1.0;
+#endif
     float tau = opticalDepth(x, segEnd, uDelta1);
-    s += irradiance * (phaseEvalCos(dot(-toLight, toViewer)) * exp(-uSigmaT * tau));
+    s += irradiance * (vis * phaseEvalCos(dot(-toLight, toViewer)) * exp(-uSigmaT * tau));
   }
   return s;
 }
@@ -175,6 +189,18 @@ bool lightTerm(int li, vec3 x, vec3 toViewer, out vec3 w, out float cone, out ve
   }
   w = e0 * phaseEvalCos(dot(-toLight, toViewer));
   return true;
+}
+
+// FactoredSourceRadiance::transmittance: V_l·T towards light li (objects block it; with
+// SL_OBJECTS V_l comes from the shadow maps of shadow.glsl).
+float lightTransmittance(int li, vec3 x, vec3 segEnd) {
+#ifdef SL_OBJECTS
+  float vis = lightVisibility(li, x);
+  if (vis <= 0.0) return 0.0;
+#else
+  const float vis = 1.0;
+#endif
+  return vis * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
 }
 
 // LightFactor::operator() (core/transport.h): A(x, ω), the lights' analytic, unshadowed source
@@ -203,7 +229,7 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
       outside = true;
       continue;
     }
-    s += w * (cone * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1)));
+    s += w * (cone * lightTransmittance(li, x, segEnd));
     a += w * cone;
   }
   vec3 v = vec3(0.0);
@@ -218,7 +244,7 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
       vec3 w, segEnd;
       float cone;
       if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
-      sf += w * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
+      sf += w * lightTransmittance(li, x, segEnd);
       af += w;
     }
     for (int c = 0; c < 3; ++c)

@@ -2,7 +2,8 @@
 // (perpendicular to the view direction) per draw, drawn far to near with blending
 // GL_ONE / GL_SRC_ALPHA: dst = rgb + alpha·dst. Per pixel, the slab's piece of the camera ray
 // is clipped to the box and treated as the CPU marcher treats one step:
-// rgb = Ω·(1 − a)·S(x_mid), a = exp(−σt·D(x_mid)·Δt).
+// rgb = Ω·(1 − a)·S(x_mid), a = exp(−σt·D(x_mid)·Δt). With SL_OBJECTS the ray ends at the
+// first object surface (gpu::SliceMarcher's surface pass).
 layout(binding = BINDING_RADIANCE_TEXTURE) uniform sampler3D uRadiance;
 uniform vec3 uRadScale;   // world -> radiance index
 uniform vec3 uRadOffset;
@@ -17,6 +18,10 @@ uniform float uDepthFar;
 uniform float uAlbedo;
 uniform int uLayer;      // SL_RAY_STEPS: layer index counted from the far end
 uniform float uStep;     // SL_RAY_STEPS: the CPU marcher's step
+#ifdef SL_OBJECTS
+// View-ray distance of the first object surface per pixel (3e38: none), from the surface pass.
+layout(binding = BINDING_SURFACE_TEXTURE) uniform sampler2D uSurfaceDistance;
+#endif
 layout(location = 0) out vec4 outColor;
 
 void main() {
@@ -27,6 +32,11 @@ void main() {
   vec3 dir = normalize(uForward + u * uRight + v * uUp);
   float t0, t1;
   if (!intersectBox(uEye, dir, 0.0, kInf, t0, t1) || !(t1 > t0)) discard;
+#ifdef SL_OBJECTS
+  // The march stops at the first surface (its L_p is in the framebuffer already).
+  t1 = min(t1, texelFetch(uSurfaceDistance, ivec2(gl_FragCoord.xy), 0).r);
+  if (!(t1 > t0)) discard;
+#endif
 #ifdef SL_RAY_STEPS
   // Variant: layer k is step n-1-k of this pixel's ray, exactly the CPU marcher's steps
   // (same sample points), still composited far to near with the same blending.

@@ -114,9 +114,10 @@ TEST_F(ObjectsCli, TransformScaleMustBePositive) {
       {"objects[0].transform", "rotate"});
 }
 
-TEST_F(ObjectsCli, GpuBackendRefusesObjects) {
-  expectError(Json::array({kSphere}), {"objects are not supported on the GPU backend yet"},
-              "--method gradient --backend gpu");
+TEST_F(ObjectsCli, GpuBackendRefusesSupersampling) {
+  // Objects render on the GPU (tests/gpu/test_objects.cpp); camera.spp > 1 does not yet.
+  expectError(Json::array({kSphere}), {"camera.spp > 1 is not supported on the GPU backend yet"},
+              "--method gradient --backend gpu --set camera.spp=4");
 }
 
 TEST_F(ObjectsCli, SppMustBeASquare) {

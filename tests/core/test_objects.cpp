@@ -78,3 +78,35 @@ TEST(SceneObjects, HitsAndOcclusion) {
   EXPECT_TRUE(s.objects->occluded(Vec3(0, 0, 7), Vec3(0, 0, 1), 0.0f, kInfinity));
   EXPECT_FALSE(s.objects->occluded(Vec3(0), Vec3(1, 0, 0), 0.0f, kInfinity));
 }
+
+TEST(SceneObjects, ShapesHandTheSurfacesToRasterisers) {
+  // shapes() (the GPU's input) holds what the BVH was built from, by object index: a sphere's
+  // centre and radius, a box's 8 corners and 12 triangles, a mesh's transformed vertices and
+  // per-triangle albedo from its .mtl.
+  scatterlab::testing::TempDir dir("objects_shapes");
+  std::ofstream(dir.file("t.mtl")) << "newmtl red\nKd 0.9 0.1 0.1\n";
+  std::ofstream(dir.file("t.obj"))
+      << "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl red\nf 1 2 3\nf 2 4 3\n";
+  Json doc = baseDoc();
+  doc["objects"] = Json::array(
+      {{{"type", "sphere"}, {"center", {1, 2, 3}}, {"radius", 0.5}, {"albedo", 0.25}},
+       {{"type", "box"}, {"min", {0, 0, 0}}, {"max", {1, 2, 3}}},
+       {{"type", "mesh"}, {"file", dir.file("t.obj")}, {"transform", {{"translate", {0, 0, 5}}}}}});
+  const Scene s = scatterlab::testing::sceneFromJson(doc);
+  const auto& shapes = s.objects->shapes();
+  ASSERT_EQ(shapes.size(), 3u);
+  EXPECT_EQ(shapes[0].kind, ObjectShape::Kind::Sphere);
+  expectVec(shapes[0].center, Vec3(1, 2, 3));
+  EXPECT_EQ(shapes[0].radius, 0.5f);
+  expectVec(shapes[0].albedo.at(0), Vec3(0.25f));
+  EXPECT_EQ(shapes[1].kind, ObjectShape::Kind::Triangles);
+  EXPECT_EQ(shapes[1].vertices.size(), 8u);
+  EXPECT_EQ(shapes[1].triangles.size(), 12u);
+  expectVec(shapes[1].albedo.at(0), Vec3(0.8f));  // the default
+  expectVec(shapes[1].vertices[7], Vec3(1, 2, 3));
+  ASSERT_EQ(shapes[2].triangles.size(), 2u);
+  expectVec(shapes[2].vertices[3], Vec3(1, 1, 5));
+  ASSERT_EQ(shapes[2].albedo.size(), 2u);
+  expectVec(shapes[2].albedo[1], Vec3(0.9f, 0.1f, 0.1f));
+  EXPECT_TRUE(shapes[2].normals.empty());  // no `vn`: flat shading
+}

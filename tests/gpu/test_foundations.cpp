@@ -82,7 +82,7 @@ TEST(GpuShaders, EveryEmbeddedFileIsPresent) {
 /// Every shader of the embedded table, in every variant it tests, compiles (and a compute
 /// shader links), so a new file or #ifdef SL_* is covered without editing this test. A stage
 /// file that does not compile alone is compiled after a library file (what the stages do with
-/// common.glsl); it must compile one way or the other.
+/// common.glsl), or after all of them; it must compile one way or the other.
 TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
   SCATTERLAB_REQUIRE_GPU();
   std::vector<std::string> libraries;
@@ -96,6 +96,9 @@ TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
     ++stageFiles;
     std::vector<std::vector<std::string>> fileSets = {{s.name}};
     for (const std::string& lib : libraries) fileSets.push_back({lib, s.name});
+    // Every library together (common.glsl with SL_OBJECTS needs shadow.glsl).
+    fileSets.push_back(libraries);
+    fileSets.back().push_back(s.name);
     std::string log;
     bool ok = false;
     for (const auto& files : fileSets) {

@@ -33,6 +33,7 @@ std::set<std::string> documentedRenderKeys(const std::string& doc) {
   while (std::getline(in, line)) {
     if (line.rfind("### Methods", 0) == 0) break;
     if (line.rfind("### `render.sampler`", 0) == 0) prefix = "sampler.";
+    if (line.rfind("### `render.shadow_map`", 0) == 0) prefix = "shadow_map.";
     if (std::regex_search(line, m, cell)) keys.insert(prefix + m[1].str());
   }
   return keys;
@@ -96,6 +97,12 @@ std::set<std::string> keysTheCodeReads() {
                          {"seed", 1},
                          {"radius_scale", 1.5},
                          {"skip_empty", true}};
+        else if (k == "shadow_map")
+          s.render[k] = {{"type", "depth"},
+                         {"resolution", 64},
+                         {"bias", 1},
+                         {"filter", 3},
+                         {"bleed_reduction", 0.2}};
         else if (k == "radiance_resolution")
           s.render[k] = 8;
         else if (k == "slicing")

@@ -9,6 +9,7 @@
 #include "core/stages.h"
 #include "methods/pipeline.h"
 #include "methods/register.h"
+#include "methods/settings.h"
 #include "support/scenes.h"
 
 namespace scatterlab {
@@ -123,6 +124,42 @@ TEST(MethodLayer, KeysOfOtherMethodsAreIgnoredAndListedUnknownKeysAreErrors) {
   const Scene bogus = loadScene(kGlow, with({"render.bogus=1"}));
   const std::string e = errorOf([&] { createMethod(bogus, "exact", "cpu"); });
   EXPECT_NE(e.find("unknown key 'render.bogus'"), std::string::npos) << e;
+}
+
+// render.shadow_map (the GPU's shadow maps of scene objects) is read with the other pipeline
+// keys on every backend: a bad value or an unknown key is an error naming it, and the
+// values reach the settings.
+TEST(MethodLayer, ShadowMapKeysAreValidatedOnEveryBackend) {
+  initialize();
+  const auto error = [](const std::string& set) {
+    const Scene s = loadScene(kGlow, with({"render.method=per-voxel", set}));
+    return errorOf([&] { createMethod(s, "", "cpu"); });
+  };
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"render.shadow_map.type=\"pcss\"", "'render.shadow_map.type'"},
+      {"render.shadow_map.resolution=8", "'render.shadow_map.resolution'"},
+      {"render.shadow_map.resolution=5000", "'render.shadow_map.resolution'"},
+      {"render.shadow_map.bias=-1", "'render.shadow_map.bias'"},
+      {"render.shadow_map.filter=4", "'render.shadow_map.filter'"},
+      {"render.shadow_map.bleed_reduction=1", "'render.shadow_map.bleed_reduction'"},
+      {"render.shadow_map.blur=3", "render.shadow_map.blur"},
+      {"render.shadow_map=3", "render.shadow_map"},
+  };
+  for (const auto& [set, key] : bad) {
+    const std::string e = error(set);
+    EXPECT_NE(e.find(key), std::string::npos) << set << ": " << e;
+  }
+  const Scene s = loadScene(kGlow, with({"render.method=per-voxel",
+                                         "render.shadow_map={\"type\": \"depth\", "
+                                         "\"resolution\": 64, \"filter\": 5, \"bias\": 2}"}));
+  Params p(s.render, "render");
+  const PipelineSettings ps = parsePipelineSettings(p, s, builtinMethods()[1]);
+  EXPECT_EQ(ps.shadowMap.type, ShadowMapSettings::Type::Depth);
+  EXPECT_EQ(ps.shadowMap.resolution, 64);
+  EXPECT_EQ(ps.shadowMap.filter, 5);
+  EXPECT_EQ(ps.shadowMap.bias, 2.0f);
+  EXPECT_FLOAT_EQ(ps.shadowMap.bleedReduction, 0.2f);
+  EXPECT_TRUE(ps.shadowMap.given);
 }
 
 // methodKeys() (what the tolerance of other methods' keys uses) is exactly what each method's
