@@ -22,6 +22,7 @@
 #include "core/image.h"
 #include "core/params.h"
 #include "core/progress.h"
+#include "core/realtime.h"
 #include "core/registry.h"
 #include "core/scene.h"
 #include "core/stats.h"
@@ -94,6 +95,10 @@ struct PipelineSettings {
   float delta1 = 0.0f;        ///< volume-tracing step towards the lights (the paper's Δ1)
   float delta2 = 0.0f;        ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
+  /// The keys of the integrators `light-space-march` and `radial-blur` (core/realtime.h); read
+  /// only for those methods, defaults otherwise.
+  LightSpaceMarchSettings lightSpaceMarch;
+  RadialBlurSettings radialBlur;
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.

@@ -66,6 +66,11 @@ inline constexpr GLuint kRadianceTexture = 1;
 inline constexpr GLuint kSumsImage = 0;
 /// The RGBA32F source-radiance volume a compute pass writes.
 inline constexpr GLuint kRadianceImage = 1;
+/// RGBA32F 2D images of the screen-space passes of light-space-march and radial-blur: the one a
+/// pass reads, the one it writes, and the base image (boundary term, alpha) it adds to.
+inline constexpr GLuint kScreenInImage = 2;
+inline constexpr GLuint kScreenOutImage = 3;
+inline constexpr GLuint kScreenBaseImage = 4;
 
 }  // namespace binding
 
@@ -100,6 +105,9 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
     {"BINDING_SUMS_IMAGE", binding::kSumsImage},
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
+    {"BINDING_SCREEN_IN_IMAGE", binding::kScreenInImage},
+    {"BINDING_SCREEN_OUT_IMAGE", binding::kScreenOutImage},
+    {"BINDING_SCREEN_BASE_IMAGE", binding::kScreenBaseImage},
 };
 
 }  // namespace scatterlab::gpu
