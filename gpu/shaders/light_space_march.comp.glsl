@@ -6,6 +6,11 @@
 //   SL_BLOCK_SUM: one direction of the separable M-wide sliding-window sum (blockWindowStart of
 //                 core/realtime.h) from "in" to "out"; the vertical pass adds "base" and writes
 //                 base's alpha.
+#ifndef SL_BLOCK_SUM
+#ifndef SL_MARCH
+#define SL_MARCH  // the default variant
+#endif
+#endif
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = BINDING_SCREEN_OUT_IMAGE) uniform writeonly image2D uOut;
 layout(rgba32f, binding = BINDING_SCREEN_BASE_IMAGE) uniform image2D uBase;

@@ -5,6 +5,11 @@
 //               through image point ((i + 1/2)·ds, (j + 1/2)·ds) (radialBlurPrePass) into "out";
 //   SL_BLUR:    per pixel, "out" += exposure·Σ_{i<n} decay^i·weight·P(φ_i)/n (radialBlur), P
 //               the pre-pass ("in") read bilinearly with its edge texels repeated.
+#if !defined(SL_PREPASS) && !defined(SL_BLUR)
+#ifndef SL_BASE
+#define SL_BASE  // the default variant
+#endif
+#endif
 layout(local_size_x = 8, local_size_y = 8) in;
 uniform ivec2 uImageSize;  // the full image
 

@@ -122,6 +122,8 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 64;
         else if (k == "samples")  // radial-blur
           s.render[k] = 8;
+        else if (k == "density" || k == "decay" || k == "guard_band")
+          s.render[k] = 0.5;
         else if (isBool(k))
           s.render[k] = false;
         else
