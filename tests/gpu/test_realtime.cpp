@@ -49,7 +49,7 @@ TEST(GpuLightSpaceMarch, MatchesCpu) {
 TEST(GpuRadialBlur, MatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
   Json doc = blobSceneDoc(20, 32, 24);
-  // Both lights, the spot's screen position far above the image (clamped to the guard band).
+  // Both lights: the point light in view, the spot just above the image (off screen).
   const Scene scene = sceneFromJson(doc);
   // Measured on llvmpipe: 1.37e-6 (full-resolution pre-pass), 1.61e-6 (downsample 2, decay 0.95).
   const std::vector<std::pair<Json, double>> cases = {
