@@ -22,6 +22,7 @@
 #include "core/image.h"
 #include "core/params.h"
 #include "core/progress.h"
+#include "core/realtime.h"
 #include "core/registry.h"
 #include "core/scene.h"
 #include "core/stats.h"
@@ -113,6 +114,10 @@ struct PipelineSettings {
   float delta2 = 0.0f;        ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
   ShadowMapSettings shadowMap;
+  /// The keys of the integrators `light-space-march` and `radial-blur` (core/realtime.h); read
+  /// only for those methods, defaults otherwise.
+  LightSpaceMarchSettings lightSpaceMarch;
+  RadialBlurSettings radialBlur;
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.

@@ -79,6 +79,11 @@ inline constexpr GLuint kRadianceImage = 1;
 /// The shadow-map blur's source and target layers (shadow_blur.comp.glsl).
 inline constexpr GLuint kBlurSource = 2;
 inline constexpr GLuint kBlurTarget = 3;
+/// RGBA32F 2D images of the screen-space passes of light-space-march and radial-blur: the one a
+/// pass reads, the one it writes, and the base image (boundary term, alpha) it adds to.
+inline constexpr GLuint kScreenInImage = 2;
+inline constexpr GLuint kScreenOutImage = 3;
+inline constexpr GLuint kScreenBaseImage = 4;
 
 }  // namespace binding
 
@@ -120,6 +125,9 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
     {"BINDING_BLUR_SOURCE", binding::kBlurSource},
     {"BINDING_BLUR_TARGET", binding::kBlurTarget},
+    {"BINDING_SCREEN_IN_IMAGE", binding::kScreenInImage},
+    {"BINDING_SCREEN_OUT_IMAGE", binding::kScreenOutImage},
+    {"BINDING_SCREEN_BASE_IMAGE", binding::kScreenBaseImage},
 };
 
 }  // namespace scatterlab::gpu

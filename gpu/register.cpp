@@ -6,6 +6,7 @@
 #include "gpu/context.h"
 #include "gpu/dynamic_sampling.h"
 #include "gpu/frame.h"
+#include "gpu/realtime.h"
 #include "gpu/stages.h"
 #include "sampling/dynamic_sampling.h"
 
@@ -72,6 +73,12 @@ void registerGpuStages() {
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps,
                                                         s.factorLights, s.delta1, s.shadowMap));
+  });
+  integrators().addVariant("light-space-march", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new LightSpaceMarchGpu(s.lightSpaceMarch, s.delta1));
+  });
+  integrators().addVariant("radial-blur", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new RadialBlurGpu(s.radialBlur, s.march));
   });
   refiners().addVariant(
       "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {

@@ -104,7 +104,7 @@ class PipelineMethod : public Method {
       st.samples = (long long)samples.size();
       st.extra["sampler"] = samplerType;
     }
-    st.extra["march_step"] = settings_.march.step;
+    if (desc_.viewMarch) st.extra["march_step"] = settings_.march.step;
     st.extra["delta1"] = settings_.delta1;
     if (!note_.empty()) st.extra["backend_choice"] = note_;
     if (!ignoredKeys.empty()) st.extra["ignored_keys"] = ignoredKeys;

@@ -24,6 +24,14 @@ const std::vector<MethodDesc>& builtinMethods() {
       {"adaptive", "gradient with dynamic sampling (paper Sec. 5: Eq. 5 error, grid splitting)",
        true, "dynamic", "gradient", "ray-marcher", true, /*extended=*/true,
        R"({"type": "grid", "count": 2000})"},
+      {"light-space-march",
+       "per-pixel march with shadow-map visibility and interleaved sampling (Tóth & Umenhoffer "
+       "2009)",
+       false, "", "", "light-space-march", false, false, "", /*viewMarch=*/false},
+      {"radial-blur",
+       "occlusion pre-pass and screen-space radial blur towards each light (Mitchell, GPU Gems "
+       "3 ch. 13)",
+       false, "", "", "radial-blur", false, false, ""},
   };
   return table;
 }

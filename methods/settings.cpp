@@ -64,6 +64,38 @@ const std::vector<KeyDoc>& shadowMapKeys() {
   return keys;
 }
 
+const std::vector<KeyDoc>& lightSpaceMarchKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"steps", "int", "128", "1…65536, at least interleave²",
+       "N: terms of each view ray's sum, equal steps from the visible surface (or the box's far "
+       "side) to the eye"},
+      {"interleave", "int", "4", "1…32, at most the image's width and height",
+       "M: interleaved sampling in M×M pixel blocks; each pixel evaluates every M²-th term, "
+       "then a separable M×M block sum (1: the plain march)"},
+      {"light_transmittance", "string", "mean", "mean, traced",
+       "the light's transmittance: e^(−σt·D̄·d), D̄ the medium's mean density (Tóth & "
+       "Umenhoffer's homogeneous model), or the real density traced with step delta1"},
+      {"shadow_map_resolution", "int", "512", "16…8192",
+       "texels per side of each light's shadow map (per cube face); scenes with objects"},
+  };
+  return keys;
+}
+
+const std::vector<KeyDoc>& radialBlurKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"samples", "int", "64", "1…4096", "n: samples per pixel along the screen ray to the light"},
+      {"density", "number", "1", "(0, 1]",
+       "fraction of the pixel→light segment the n samples span (Mitchell's density)"},
+      {"weight", "number", "1", ">= 0", "scale of every sample"},
+      {"decay", "number", "1", "[0, 1]", "sample i is scaled by decay^i"},
+      {"exposure", "number", "1", ">= 0", "scale of the sum"},
+      {"downsample", "int", "1", "1, 2, 4", "the pre-pass has 1/downsample of the pixels per side"},
+      {"guard_band", "number", "0.5", "[0, 10]",
+       "the light's screen position is clamped to this many image sizes beyond each edge"},
+  };
+  return keys;
+}
+
 namespace {
 
 /// render.shadow_map (shadowMapKeys()).
@@ -86,16 +118,50 @@ ShadowMapSettings parseShadowMap(Params& p) {
   return s;
 }
 
+LightSpaceMarchSettings parseLightSpaceMarch(Params& p) {
+  LightSpaceMarchSettings s;
+  s.steps = int(p.integer("steps", s.steps, Interval::closed(1, 65536)));
+  s.interleave = int(p.integer("interleave", s.interleave, Interval::closed(1, 32)));
+  if (s.interleave * s.interleave > s.steps)
+    p.fail("interleave", "interleave² = " + std::to_string(s.interleave * s.interleave) +
+                             " is more than steps = " + std::to_string(s.steps) +
+                             ": some pixels of every block would evaluate no term; raise "
+                             "render.steps or lower render.interleave");
+  s.light = p.choice("light_transmittance", {"mean", "traced"}, "mean") == "mean"
+                ? LightTransmittance::Mean
+                : LightTransmittance::Traced;
+  s.shadowMapResolution =
+      int(p.integer("shadow_map_resolution", s.shadowMapResolution, Interval::closed(16, 8192)));
+  return s;
+}
+
+RadialBlurSettings parseRadialBlur(Params& p) {
+  RadialBlurSettings s;
+  s.samples = int(p.integer("samples", s.samples, Interval::closed(1, 4096)));
+  s.density = p.real("density", s.density, Interval{0.0, 1.0, true, false});
+  s.weight = p.real("weight", s.weight, Interval::atLeast(0));
+  s.decay = p.real("decay", s.decay, Interval::closed(0, 1));
+  s.exposure = p.real("exposure", s.exposure, Interval::atLeast(0));
+  s.downsample = int(p.integer("downsample", s.downsample, Interval::closed(1, 4)));
+  if (s.downsample == 3) p.fail("downsample", "is 3; allowed: 1, 2, 4");
+  s.guardBand = p.real("guard_band", s.guardBand, Interval::closed(0, 10));
+  return s;
+}
+
 }  // namespace
 
 PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const MethodDesc& d) {
   PipelineSettings s;
   const float voxel = scene.medium.voxelSize();
   const Interval steps = stepRange(glm::length(scene.medium.bounds.extent()));
-  s.march.step = p.real("march_step", voxel, steps);
-  s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
+  if (d.viewMarch) {
+    s.march.step = p.real("march_step", voxel, steps);
+    s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
+  }
   s.delta1 = p.real("delta1", voxel, steps);
   s.shadowMap = parseShadowMap(p);
+  if (d.integrator == "light-space-march") s.lightSpaceMarch = parseLightSpaceMarch(p);
+  if (d.integrator == "radial-blur") s.radialBlur = parseRadialBlur(p);
   if (d.sampler) {
     s.delta2 = p.real("delta2", voxel, steps);
     s.paper = p.boolean("paper", false);
@@ -128,7 +194,12 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 }
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
-  std::vector<std::string> k = {"march_step", "min_transmittance", "delta1", "shadow_map"};
+  std::vector<std::string> k = {"delta1", "shadow_map"};
+  if (d.viewMarch) k.insert(k.end(), {"march_step", "min_transmittance"});
+  if (d.integrator == "light-space-march")
+    for (const KeyDoc& key : lightSpaceMarchKeys()) k.emplace_back(key.name);
+  if (d.integrator == "radial-blur")
+    for (const KeyDoc& key : radialBlurKeys()) k.emplace_back(key.name);
   if (d.sampler)
     k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
                        "bounded_taylor", "sampler", "evaluator"});

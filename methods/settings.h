@@ -29,6 +29,9 @@ struct MethodDesc {
   /// The render.sampler a user who sets none gets when the extensions are on (empty: the
   /// paper's default, which also applies with render.paper).
   std::string extendedSampler;
+  /// Whether the method reads march_step and min_transmittance (false: light-space-march, whose
+  /// view rays take `steps` steps each).
+  bool viewMarch = true;
 
   /// Whether the method builds a source-radiance volume (and reads its keys).
   bool radianceVolume() const { return !reconstruction.empty(); }
@@ -39,6 +42,11 @@ struct MethodDesc {
 const std::vector<KeyDoc>& pipelineKeys();
 /// Key table of render.shadow_map (ShadowMapSettings).
 const std::vector<KeyDoc>& shadowMapKeys();
+
+/// Key tables of the real-time methods (core/realtime.h), read for the methods whose integrator
+/// is "light-space-march" or "radial-blur" (docs/light-space-march.md, docs/radial-blur.md).
+const std::vector<KeyDoc>& lightSpaceMarchKeys();
+const std::vector<KeyDoc>& radialBlurKeys();
 
 /// Reads the keys `desc`'s stages use from the render object: march_step, min_transmittance,
 /// delta1 always; delta2 with samples; radiance_resolution and slicing with a radiance volume.

@@ -2,6 +2,8 @@
 
 #include "core/stages.h"
 #include "core/transport.h"
+#include "render/light_space_march.h"
+#include "render/radial_blur.h"
 #include "render/ray_marcher.h"
 
 namespace scatterlab {
@@ -68,6 +70,8 @@ void registerIntegrators() {
   integrators().addVariant("exact", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new ExactIntegrator(s));
   });
+  registerLightSpaceMarch();
+  registerRadialBlur();
 }
 
 }  // namespace scatterlab

@@ -4,11 +4,13 @@
 ///                   integrator of every radiance-volume method; its GPU variant is the slice
 ///                   marcher in gpu/);
 ///   "exact"       — S traced at each step towards every light with step delta1 (no radiance
-///                   volume): the reference.
+///                   volume): the reference;
+///   "light-space-march", "radial-blur" — the whole methods of the same names
+///                   (render/light_space_march.h, render/radial_blur.h).
 
 namespace scatterlab {
 
-/// Registers the CPU variants of "ray-marcher" and "exact".
+/// Registers the CPU variants of "ray-marcher", "exact", "light-space-march" and "radial-blur".
 void registerIntegrators();
 
 }  // namespace scatterlab

@@ -119,6 +119,18 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 6;
         else if (k == "min_transmittance" || k == "epsilon")
           s.render[k] = 0.5;
+        else if (k == "steps")  // light-space-march
+          s.render[k] = 16;
+        else if (k == "interleave" || k == "downsample")
+          s.render[k] = 2;
+        else if (k == "light_transmittance")
+          s.render[k] = "traced";
+        else if (k == "shadow_map_resolution")
+          s.render[k] = 64;
+        else if (k == "samples")  // radial-blur
+          s.render[k] = 8;
+        else if (k == "density" || k == "decay" || k == "guard_band")
+          s.render[k] = 0.5;
         else if (isBool(k))
           s.render[k] = false;
         else
