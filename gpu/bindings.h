@@ -52,6 +52,8 @@ inline constexpr GLuint kScanIn = 0;
 inline constexpr GLuint kScanOut = 1;
 inline constexpr GLuint kScanBlockSums = 2;
 inline constexpr GLuint kScanScannedSums = 3;
+/// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (core/screen_march.h).
+inline constexpr GLuint kJitterTable = 1;
 
 // ---- texture units
 
@@ -66,6 +68,16 @@ inline constexpr GLuint kRadianceTexture = 1;
 inline constexpr GLuint kSumsImage = 0;
 /// The RGBA32F source-radiance volume a compute pass writes.
 inline constexpr GLuint kRadianceImage = 1;
+/// RGBA32F (L, T) of `jittered-march`'s low-resolution march.
+inline constexpr GLuint kLowResImage = 2;
+/// R32F depth where each low-resolution march ended (+∞: the ray missed the box).
+inline constexpr GLuint kLowResDepthImage = 3;
+/// RGBA32F full-resolution output of a per-pixel pass (rgb radiance, a transmittance).
+inline constexpr GLuint kOutputImage = 4;
+/// RGBA32F froxel volume of `froxel`: (L, T) after each froxel.
+inline constexpr GLuint kFroxelImage = 5;
+/// R32F per-light transmittance maps of `froxel`, stacked along z (light l at z / res = l).
+inline constexpr GLuint kTransmittanceMapImage = 6;
 
 }  // namespace binding
 
@@ -100,6 +112,12 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
     {"BINDING_SUMS_IMAGE", binding::kSumsImage},
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
+    {"BINDING_JITTER_TABLE", binding::kJitterTable},
+    {"BINDING_LOW_RES_IMAGE", binding::kLowResImage},
+    {"BINDING_LOW_RES_DEPTH_IMAGE", binding::kLowResDepthImage},
+    {"BINDING_OUTPUT_IMAGE", binding::kOutputImage},
+    {"BINDING_FROXEL_IMAGE", binding::kFroxelImage},
+    {"BINDING_TRANSMITTANCE_MAP_IMAGE", binding::kTransmittanceMapImage},
 };
 
 }  // namespace scatterlab::gpu

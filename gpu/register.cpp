@@ -6,6 +6,7 @@
 #include "gpu/context.h"
 #include "gpu/dynamic_sampling.h"
 #include "gpu/frame.h"
+#include "gpu/screen_march.h"
 #include "gpu/stages.h"
 #include "sampling/dynamic_sampling.h"
 
@@ -69,6 +70,12 @@ void registerGpuStages() {
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(
         new SliceMarcher(s.march, s.slicing == Slicing::RaySteps, s.factorLights));
+  });
+  integrators().addVariant("jittered-march", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new JitteredMarchGpu(s));
+  });
+  integrators().addVariant("froxel", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new FroxelGpu(s));
   });
   refiners().addVariant(
       "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {

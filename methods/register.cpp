@@ -24,6 +24,15 @@ const std::vector<MethodDesc>& builtinMethods() {
       {"adaptive", "gradient with dynamic sampling (paper Sec. 5: Eq. 5 error, grid splitting)",
        true, "dynamic", "gradient", "ray-marcher", true, /*extended=*/true,
        R"({"type": "grid", "count": 2000})"},
+      // The per-pixel competitors (docs/competitors.md): no samples, no radiance volume.
+      {"jittered-march",
+       "per-pixel march, fixed steps per ray, jittered offsets, optional low-res + bilateral "
+       "upsampling (Bevy/Unity)",
+       false, "", "", "jittered-march", false, false, ""},
+      {"froxel",
+       "frustum-aligned grid: in-scattering per froxel, front-to-back accumulation, one "
+       "lookup per pixel (Wronski 2014, Hillaire 2015)",
+       false, "", "", "froxel", false, false, ""},
   };
   return table;
 }

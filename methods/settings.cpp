@@ -1,5 +1,6 @@
 #include "methods/settings.h"
 
+#include "methods/march_settings.h"
 #include "sampling/dynamic_sampling.h"
 
 namespace scatterlab {
@@ -78,6 +79,9 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
                     ? Slicing::RaySteps
                     : Slicing::ViewPlanes;
   }
+  // The per-pixel competitors' own keys (methods/march_settings.cpp).
+  if (d.integrator == "jittered-march") s.jittered = parseJitteredMarch(p);
+  if (d.integrator == "froxel") s.froxel = parseFroxel(p);
   return s;
 }
 
@@ -90,6 +94,10 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())
     for (const KeyDoc& key : dynamicSamplingKeys()) k.emplace_back(key.name);
+  if (d.integrator == "jittered-march")
+    for (const KeyDoc& key : jitteredMarchKeys()) k.emplace_back(key.name);
+  if (d.integrator == "froxel")
+    for (const KeyDoc& key : froxelKeys()) k.emplace_back(key.name);
   return k;
 }
 
