@@ -108,12 +108,13 @@ FroxelSlicing froxelSlicing(const Scene& scene, const FroxelSettings& s) {
   f.exponential = s.distribution == DepthDistribution::Exponential;
   f.far = s.far > 0.0f ? s.far : zmax;
   if (!(f.far > 0.0f))
-    throw ConfigError("render.far: the medium box is behind the camera; give render.near and "
-                      "render.far");
+    throw ConfigError(
+        "render.far: the medium box is behind the camera; give render.near and "
+        "render.far");
   f.near = s.near > 0.0f ? s.near : std::max(zmin, f.far / 1000.0f);
   if (!(f.far > f.near))
-    throw ConfigError("render.near (" + std::to_string(f.near) +
-                      ") must be below render.far (" + std::to_string(f.far) + ")");
+    throw ConfigError("render.near (" + std::to_string(f.near) + ") must be below render.far (" +
+                      std::to_string(f.far) + ")");
   return f;
 }
 

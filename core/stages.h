@@ -90,7 +90,8 @@ enum class DepthDistribution { Exponential, Linear };
 struct FroxelSettings {
   IVec3 grid{160, 90, 64};  ///< froxels across, down, and depth slices
   DepthDistribution distribution = DepthDistribution::Exponential;
-  float near = 0.0f, far = 0.0f;  ///< view depths of the grid; 0: the medium box's (see froxelRange)
+  float near = 0.0f,
+        far = 0.0f;  ///< view depths of the grid; 0: the medium box's (see froxelRange)
   bool transmittanceMap = false;  ///< light transmittance from a per-light map, else traced
   int mapResolution = 64;         ///< voxels per axis of each light's transmittance map
 };

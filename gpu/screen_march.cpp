@@ -57,7 +57,9 @@ Image JitteredMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
   return integrate(scene, f.density, &f.timer);
 }
 
-void JitteredMarchGpu::describe(RenderStats& stats) const { describeJitteredMarch(stats, s_); }
+void JitteredMarchGpu::describe(RenderStats& stats) const {
+  describeJitteredMarch(stats, s_);
+}
 
 Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
   refuseObjects(scene, "jittered-march");
@@ -67,8 +69,8 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
                           "jittered march");
   });
   const Program& upsample = cachedProgram("jittered upsample", [] {
-    return computeProgram({"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"},
-                          {}, "jittered upsample");
+    return computeProgram({"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"}, {},
+                          "jittered upsample");
   });
   const Camera& cam = scene.camera;
   const int d = s_.downsample;
@@ -85,8 +87,7 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     inputs.apply(march);
     setCamera(march, scene);
     tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
-    glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
-                       GL_RGBA32F);
+    glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_R32F);
     glUniform2i(march.uniform("uLowSize"), lw, lh);
@@ -107,8 +108,7 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_READ_ONLY,
                        GL_R32F);
-    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
-                       GL_RGBA32F);
+    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glUniform2i(upsample.uniform("uLowSize"), lw, lh);
     glUniform1i(upsample.uniform("uDownsample"), d);
     glUniform1f(upsample.uniform("uDepthSigma"), kUpsampleDepthSigma);
@@ -127,7 +127,9 @@ Image FroxelGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
   return integrate(scene, f.density, &f.timer);
 }
 
-void FroxelGpu::describe(RenderStats& stats) const { describeFroxel(stats, s_); }
+void FroxelGpu::describe(RenderStats& stats) const {
+  describeFroxel(stats, s_);
+}
 
 Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
   refuseObjects(scene, "froxel");
@@ -200,8 +202,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     slicingUniforms(lookup);
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
                        GL_RGBA32F);
-    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
-                       GL_RGBA32F);
+    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     setVec3(lookup, "uBackground", scene.background);
     glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
     glMemoryBarrier(GL_ALL_BARRIER_BITS);

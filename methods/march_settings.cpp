@@ -24,8 +24,8 @@ const std::vector<KeyDoc>& froxelKeys() {
       {"depth_distribution", "string", "exponential", "exponential, linear",
        "depth slice k covers view depths near·(far/near)^(k/nz) … (k+1) (exponential) or "
        "equal steps (linear)"},
-      {"near", "number", "the medium box's nearest view depth (at least far/1000)",
-       "> 0, < far", "view depth of the first slice's near face"},
+      {"near", "number", "the medium box's nearest view depth (at least far/1000)", "> 0, < far",
+       "view depth of the first slice's near face"},
       {"far", "number", "the medium box's farthest view depth", "> near",
        "view depth of the last slice's far face; medium beyond it is not seen"},
       {"light_transmittance", "string", "traced", "traced, map",
@@ -54,8 +54,7 @@ FroxelSettings parseFroxel(Params& p) {
     if (!g.is_array() || g.size() != 3)
       p.fail("froxel_grid", "must be [nx, ny, nz] (froxels across, down, and depth slices)");
     for (int a = 0; a < 3; ++a) {
-      if (!g[a].is_number_integer() || g[a].get<long long>() < 1 ||
-          g[a].get<long long>() > 1024)
+      if (!g[a].is_number_integer() || g[a].get<long long>() < 1 || g[a].get<long long>() > 1024)
         p.fail("froxel_grid", "entries must be integers in 1…1024 (got " + g.dump() + ")");
       s.grid[a] = g[a].get<int>();
     }

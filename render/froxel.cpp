@@ -9,8 +9,8 @@
 
 namespace scatterlab {
 
-TransmittanceMaps::TransmittanceMaps(const Scene& scene, const DensityGrid& density,
-                                     int resolution, float delta1)
+TransmittanceMaps::TransmittanceMaps(const Scene& scene, const DensityGrid& density, int resolution,
+                                     float delta1)
     : scene_(scene) {
   const SceneObjects* objects = scene.objects.get();
   const float sigmaT = scene.medium.sigmaT;
@@ -99,8 +99,8 @@ void froxelLookup(const FroxelVolume& v, const Camera::RayGenerator& rays, int x
   const float w = v.slicing.coordinate(z);  // boundary coordinate in [0, nz]
   const float gx = std::clamp((float(x) + 0.5f) / float(rays.width) * float(v.dims.x) - 0.5f, 0.0f,
                               float(v.dims.x - 1));
-  const float gy = std::clamp((float(y) + 0.5f) / float(rays.height) * float(v.dims.y) - 0.5f,
-                              0.0f, float(v.dims.y - 1));
+  const float gy = std::clamp((float(y) + 0.5f) / float(rays.height) * float(v.dims.y) - 0.5f, 0.0f,
+                              float(v.dims.y - 1));
   const int i0 = std::min(int(gx), v.dims.x - 1), j0 = std::min(int(gy), v.dims.y - 1);
   const int i1 = std::min(i0 + 1, v.dims.x - 1), j1 = std::min(j0 + 1, v.dims.y - 1);
   const int b0 = std::min(int(w), v.dims.z - 1);

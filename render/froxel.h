@@ -47,8 +47,7 @@ struct FroxelVolume {
 
 /// Pass 1. `maps`: null to trace the transmittance.
 FroxelVolume froxelAccumulate(const Scene& scene, const DensityGrid& density,
-                              const FroxelSettings& s, float delta1,
-                              const TransmittanceMaps* maps);
+                              const FroxelSettings& s, float delta1, const TransmittanceMaps* maps);
 
 /// Pass 2 for one ray of pixel (x, y) ending at ray distance `tEnd` (+∞: no surface):
 /// trilinear (L, T).

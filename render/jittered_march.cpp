@@ -85,10 +85,10 @@ void upsampleWeights(const LowResMarch& low, int x, int y, float depth, int idx[
     const float di = low.depth[idx[c]];
     // Equal depths (both +∞ included) weigh 1; one finite and one infinite weigh 0.
     const float diff = di == depth ? 0.0f : std::abs(di - depth);
-    const float sim = diff == 0.0f                   ? 1.0f
-                      : std::isinf(diff)             ? 0.0f
-                      : std::isinf(depth)            ? 0.0f
-                                                     : std::exp(-diff / (kUpsampleDepthSigma * depth));
+    const float sim = diff == 0.0f        ? 1.0f
+                      : std::isinf(diff)  ? 0.0f
+                      : std::isinf(depth) ? 0.0f
+                                          : std::exp(-diff / (kUpsampleDepthSigma * depth));
     w[c] = b[c] * sim;
     sum += w[c];
     if (diff < nearestDiff) {
