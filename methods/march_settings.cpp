@@ -49,6 +49,7 @@ JitteredMarchSettings parseJitteredMarch(Params& p) {
 
 FroxelSettings parseFroxel(Params& p) {
   FroxelSettings s;
+  p.allow("froxel_grid");  // read below when given; its default otherwise
   if (p.has("froxel_grid")) {
     const Json& g = p.raw("froxel_grid");
     if (!g.is_array() || g.size() != 3)
@@ -65,6 +66,9 @@ FroxelSettings parseFroxel(Params& p) {
       p.choice("depth_distribution", {"exponential", "linear"}, "exponential") == "exponential"
           ? DepthDistribution::Exponential
           : DepthDistribution::Linear;
+  // 0: the medium box's view depths (froxelSlicing), known only with the camera.
+  p.allow("near");
+  p.allow("far");
   s.near = p.has("near") ? p.real("near", std::nullopt, Interval::above(0)) : 0.0f;
   s.far = p.has("far") ? p.real("far", std::nullopt, Interval::above(0)) : 0.0f;
   if (s.near > 0.0f && s.far > 0.0f && !(s.far > s.near))
