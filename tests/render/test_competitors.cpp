@@ -267,6 +267,15 @@ TEST(Competitors, BadKeysAreRejectedNamingTheKey) {
       {{{"method", fx}, {"transmittance_map_resolution", 1}},
        "render.transmittance_map_resolution"},
   };
+  Scene spp = sceneFromJson(blobsDoc());
+  spp.camera.spp = 4;
+  spp.render["method"] = "froxel";
+  try {
+    createMethod(spp);
+    ADD_FAILURE() << "froxel accepted camera.spp = 4";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("camera.spp"), std::string::npos) << e.what();
+  }
   for (const auto& [render, key] : cases) {
     const std::string e = errorOf(render);
     EXPECT_NE(e.find(key), std::string::npos) << render.dump() << " -> '" << e << "'";
