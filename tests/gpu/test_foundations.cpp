@@ -82,7 +82,8 @@ TEST(GpuShaders, EveryEmbeddedFileIsPresent) {
 /// Every shader of the embedded table, in every variant it tests, compiles (and a compute
 /// shader links), so a new file or #ifdef SL_* is covered without editing this test. A stage
 /// file that does not compile alone is compiled after a library file (what the stages do with
-/// common.glsl); it must compile one way or the other.
+/// common.glsl), or after two (common.glsl, screen_common.glsl); it must compile one way or
+/// another.
 TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
   SCATTERLAB_REQUIRE_GPU();
   std::vector<std::string> libraries;
@@ -96,6 +97,10 @@ TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
     ++stageFiles;
     std::vector<std::vector<std::string>> fileSets = {{s.name}};
     for (const std::string& lib : libraries) fileSets.push_back({lib, s.name});
+    // A library may build on another (screen_common.glsl on common.glsl).
+    for (const std::string& a : libraries)
+      for (const std::string& b : libraries)
+        if (a != b) fileSets.push_back({a, b, s.name});
     std::string log;
     bool ok = false;
     for (const auto& files : fileSets) {
