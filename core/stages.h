@@ -84,6 +84,33 @@ struct ShadowMapSettings {
   /// VSM light-bleeding reduction: Chebyshev's bound p is remapped (p − b)/(1 − b), clamped.
   float bleedReduction = 0.2f;
   bool given = false;  ///< the scene set `shadow_map`
+/// Per-pixel ray offsets of `jittered-march` (render/jittered_march.h).
+enum class Jitter {
+  None,       ///< every sample at the middle of its step
+  Ign,        ///< interleaved gradient noise (Jimenez 2014) of the pixel
+  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (render/blue_noise.h)
+};
+
+/// `jittered-march` (render/jittered_march.h): keys steps, jitter, downsample
+/// (methods/march_settings.cpp holds their table).
+struct JitteredMarchSettings {
+  int steps = 32;  ///< view-ray steps per ray, whatever its length in the medium
+  Jitter jitter = Jitter::Ign;
+  int downsample = 1;  ///< 1, 2 or 4: the march runs at 1/downsample of the resolution
+};
+
+/// How froxel depth slices are spaced between near and far (view depth).
+enum class DepthDistribution { Exponential, Linear };
+
+/// `froxel` (render/froxel.h): keys froxel_grid, depth_distribution, near, far,
+/// light_transmittance, transmittance_map_resolution (methods/march_settings.cpp).
+struct FroxelSettings {
+  IVec3 grid{160, 90, 64};  ///< froxels across, down, and depth slices
+  DepthDistribution distribution = DepthDistribution::Exponential;
+  float near = 0.0f,
+        far = 0.0f;  ///< view depths of the grid; 0: the medium box's (see froxelRange)
+  bool transmittanceMap = false;  ///< light transmittance from a per-light map, else traced
+  int mapResolution = 64;         ///< voxels per axis of each light's transmittance map
 };
 
 /// The settings every stage variant is built from, whichever backend runs it. Parsed once,
@@ -118,6 +145,8 @@ struct PipelineSettings {
   /// only for those methods, defaults otherwise.
   LightSpaceMarchSettings lightSpaceMarch;
   RadialBlurSettings radialBlur;
+  JitteredMarchSettings jittered;  ///< `jittered-march` only
+  FroxelSettings froxel;           ///< `froxel` only
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.

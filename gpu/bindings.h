@@ -58,6 +58,8 @@ inline constexpr GLuint kShadowLights = 12;
 inline constexpr GLuint kShadowMatrices = 13;
 /// GpuObjectVertex[]: the scene objects' triangles (objects.vert.glsl, gpu/objects.h).
 inline constexpr GLuint kObjectVertices = 14;
+/// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (core/screen_march.h).
+inline constexpr GLuint kJitterTable = 1;
 
 // ---- texture units
 
@@ -84,6 +86,16 @@ inline constexpr GLuint kBlurTarget = 3;
 inline constexpr GLuint kScreenInImage = 2;
 inline constexpr GLuint kScreenOutImage = 3;
 inline constexpr GLuint kScreenBaseImage = 4;
+/// RGBA32F (L, T) of `jittered-march`'s low-resolution march.
+inline constexpr GLuint kLowResImage = 2;
+/// R32F depth where each low-resolution march ended (+∞: the ray missed the box).
+inline constexpr GLuint kLowResDepthImage = 3;
+/// RGBA32F full-resolution output of a per-pixel pass (rgb radiance, a transmittance).
+inline constexpr GLuint kOutputImage = 4;
+/// RGBA32F froxel volume of `froxel`: (L, T) after each froxel.
+inline constexpr GLuint kFroxelImage = 5;
+/// R32F per-light transmittance maps of `froxel`, stacked along z (light l at z / res = l).
+inline constexpr GLuint kTransmittanceMapImage = 6;
 
 }  // namespace binding
 
@@ -128,6 +140,12 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_SCREEN_IN_IMAGE", binding::kScreenInImage},
     {"BINDING_SCREEN_OUT_IMAGE", binding::kScreenOutImage},
     {"BINDING_SCREEN_BASE_IMAGE", binding::kScreenBaseImage},
+    {"BINDING_JITTER_TABLE", binding::kJitterTable},
+    {"BINDING_LOW_RES_IMAGE", binding::kLowResImage},
+    {"BINDING_LOW_RES_DEPTH_IMAGE", binding::kLowResDepthImage},
+    {"BINDING_OUTPUT_IMAGE", binding::kOutputImage},
+    {"BINDING_FROXEL_IMAGE", binding::kFroxelImage},
+    {"BINDING_TRANSMITTANCE_MAP_IMAGE", binding::kTransmittanceMapImage},
 };
 
 }  // namespace scatterlab::gpu

@@ -7,6 +7,7 @@
 #include "gpu/dynamic_sampling.h"
 #include "gpu/frame.h"
 #include "gpu/realtime.h"
+#include "gpu/screen_march.h"
 #include "gpu/stages.h"
 #include "sampling/dynamic_sampling.h"
 
@@ -79,6 +80,12 @@ void registerGpuStages() {
   });
   integrators().addVariant("radial-blur", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new RadialBlurGpu(s.radialBlur, s.march));
+  });
+  integrators().addVariant("jittered-march", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new JitteredMarchGpu(s));
+  });
+  integrators().addVariant("froxel", Backend::Gpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new FroxelGpu(s));
   });
   refiners().addVariant(
       "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {

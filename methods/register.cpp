@@ -32,6 +32,15 @@ const std::vector<MethodDesc>& builtinMethods() {
        "occlusion pre-pass and screen-space radial blur towards each light (Mitchell, GPU Gems "
        "3 ch. 13)",
        false, "", "", "radial-blur", false, false, ""},
+      // The per-pixel competitors (docs/competitors.md): no samples, no radiance volume.
+      {"jittered-march",
+       "per-pixel march, fixed steps per ray, jittered offsets, optional low-res + bilateral "
+       "upsampling (Bevy/Unity)",
+       false, "", "", "jittered-march", false, false, ""},
+      {"froxel",
+       "frustum-aligned grid: in-scattering per froxel, front-to-back accumulation, one "
+       "lookup per pixel (Wronski 2014, Hillaire 2015)",
+       false, "", "", "froxel", false, false, ""},
   };
   return table;
 }

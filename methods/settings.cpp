@@ -1,5 +1,7 @@
 #include "methods/settings.h"
 
+#include "core/error.h"
+#include "methods/march_settings.h"
 #include "sampling/dynamic_sampling.h"
 
 namespace scatterlab {
@@ -190,6 +192,14 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
                     ? Slicing::RaySteps
                     : Slicing::ViewPlanes;
   }
+  // The per-pixel competitors' own keys (methods/march_settings.cpp). They march one ray per
+  // (low-resolution) pixel or froxel column: no camera.spp.
+  if (d.integrator == "jittered-march") s.jittered = parseJitteredMarch(p);
+  if (d.integrator == "froxel") s.froxel = parseFroxel(p);
+  if ((d.integrator == "jittered-march" || d.integrator == "froxel") && scene.camera.spp > 1)
+    throw ConfigError("camera.spp: " + d.name +
+                      " renders one ray per pixel; camera.spp must be 1 (got " +
+                      std::to_string(scene.camera.spp) + ")");
   return s;
 }
 
@@ -207,6 +217,10 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())
     for (const KeyDoc& key : dynamicSamplingKeys()) k.emplace_back(key.name);
+  if (d.integrator == "jittered-march")
+    for (const KeyDoc& key : jitteredMarchKeys()) k.emplace_back(key.name);
+  if (d.integrator == "froxel")
+    for (const KeyDoc& key : froxelKeys()) k.emplace_back(key.name);
   return k;
 }
 

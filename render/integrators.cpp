@@ -4,6 +4,8 @@
 #include "core/transport.h"
 #include "render/light_space_march.h"
 #include "render/radial_blur.h"
+#include "render/froxel.h"
+#include "render/jittered_march.h"
 #include "render/ray_marcher.h"
 
 namespace scatterlab {
@@ -61,9 +63,53 @@ class ExactIntegrator : public Integrator {
   float delta1_;
 };
 
+/// `jittered-march` (render/jittered_march.h): no radiance volume, S traced per sample.
+class JitteredMarchIntegrator : public Integrator {
+ public:
+  explicit JitteredMarchIntegrator(const PipelineSettings& s)
+      : s_(s.jittered), march_(s.march), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    return jitteredMarch(scene, frame.hostDensity(), s_, march_, delta1_, progress);
+  }
+  void describe(RenderStats& stats) const override { describeJitteredMarch(stats, s_); }
+
+ private:
+  JitteredMarchSettings s_;
+  MarchSettings march_;
+  float delta1_;
+};
+
+/// `froxel` (render/froxel.h).
+class FroxelIntegrator : public Integrator {
+ public:
+  explicit FroxelIntegrator(const PipelineSettings& s)
+      : s_(s.froxel), minT_(s.march.minTransmittance), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    passes_ = Json::object();
+    return froxelRender(scene, frame.hostDensity(), s_, delta1_, minT_, progress, &passes_);
+  }
+  void describe(RenderStats& stats) const override {
+    describeFroxel(stats, s_);
+    stats.extra["pass_ms"] = passes_;
+  }
+
+ private:
+  FroxelSettings s_;
+  float minT_, delta1_;
+  Json passes_;
+};
+
 }  // namespace
 
 void registerIntegrators() {
+  integrators().addVariant("jittered-march", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new JitteredMarchIntegrator(s));
+  });
+  integrators().addVariant("froxel", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new FroxelIntegrator(s));
+  });
   integrators().addVariant("ray-marcher", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new RayMarcher(s));
   });

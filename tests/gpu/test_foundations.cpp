@@ -82,7 +82,8 @@ TEST(GpuShaders, EveryEmbeddedFileIsPresent) {
 /// Every shader of the embedded table, in every variant it tests, compiles (and a compute
 /// shader links), so a new file or #ifdef SL_* is covered without editing this test. A stage
 /// file that does not compile alone is compiled after a library file (what the stages do with
-/// common.glsl), or after all of them; it must compile one way or the other.
+/// common.glsl), after two of them (screen_common.glsl builds on common.glsl), or after all of
+/// them; it must compile one way or another.
 TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
   SCATTERLAB_REQUIRE_GPU();
   std::vector<std::string> libraries;
@@ -99,6 +100,10 @@ TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
     // Every library together (common.glsl with SL_OBJECTS needs shadow.glsl).
     fileSets.push_back(libraries);
     fileSets.back().push_back(s.name);
+    // A library may build on another (screen_common.glsl on common.glsl).
+    for (const std::string& a : libraries)
+      for (const std::string& b : libraries)
+        if (a != b) fileSets.push_back({a, b, s.name});
     std::string log;
     bool ok = false;
     for (const auto& files : fileSets) {

@@ -117,6 +117,22 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = "ancestor";
         else if (k == "probes")
           s.render[k] = 6;
+        else if (k == "steps" || k == "downsample")
+          s.render[k] = 2;
+        else if (k == "jitter")
+          s.render[k] = "blue-noise";
+        else if (k == "froxel_grid")
+          s.render[k] = {4, 3, 2};
+        else if (k == "depth_distribution")
+          s.render[k] = "linear";
+        else if (k == "near")
+          s.render[k] = 0.01;
+        else if (k == "far")
+          s.render[k] = 100;
+        else if (k == "light_transmittance")
+          s.render[k] = "map";
+        else if (k == "transmittance_map_resolution")
+          s.render[k] = 4;
         else if (k == "min_transmittance" || k == "epsilon")
           s.render[k] = 0.5;
         else if (k == "steps")  // light-space-march

@@ -194,9 +194,12 @@ TEST(MethodLayer, EveryMethodRunsItsStageSequence) {
       {"nearest", {"density", "sampling", "evaluation", "reconstruction", "march"}},
       {"adaptive", {"density", "sampling", "dynamic_sampling", "reconstruction", "march"}},
       {"light-space-march", {"density", "march"}},
-      {"radial-blur", {"density", "march"}}};
+      {"radial-blur", {"density", "march"}},
+      {"jittered-march", {"density", "march"}},
+      {"froxel", {"density", "march"}}};
   // The methods without a source-radiance volume.
-  const std::set<std::string> noVolume = {"exact", "light-space-march", "radial-blur"};
+  const std::set<std::string> noVolume = {"exact", "light-space-march", "radial-blur",
+                                          "jittered-march", "froxel"};
   ASSERT_EQ(methods().names().size(), stages.size());
   for (const auto& [name, expected] : stages) {
     const Scene s = loadScene(kGlow, with({"render.levels=[4]"}));

@@ -1,0 +1,214 @@
+#include "gpu/screen_march.h"
+
+#include <vector>
+
+#include "core/error.h"
+#include "core/screen_march.h"
+#include "gpu/bindings.h"
+#include "gpu/context.h"
+#include "gpu/dispatch.h"
+#include "gpu/frame.h"
+#include "gpu/shaders.h"
+#include "gpu/stages.h"
+
+namespace scatterlab::gpu {
+
+namespace {
+
+/// Objects need shadow maps on the GPU (not there yet); the CPU variants render them.
+void refuseObjects(const Scene& scene, const char* method) {
+  if (scene.objects)
+    throw ConfigError(std::string(method) +
+                      " on the GPU does not render objects yet: use --backend cpu");
+}
+
+/// The camera uniforms of screen_common.glsl.
+void setCamera(const Program& p, const Scene& scene) {
+  const auto gen = scene.camera.rayGenerator();
+  setVec3(p, "uForward", gen.forward);
+  setVec3(p, "uRight", gen.right);
+  setVec3(p, "uUp", gen.up);
+  glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
+  glUniform2f(p.uniform("uSize"), float(scene.camera.width), float(scene.camera.height));
+  glUniform1f(p.uniform("uAlbedo"), scene.medium.albedo);
+}
+
+/// Reads the RGBA32F output image back: rgb radiance, a the transmittance (alpha = 1 − T).
+Image readOutput(const Texture& out, int w, int h) {
+  std::vector<float> rgba(size_t(w) * h * 4);
+  glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                    rgba.data());
+  checkGl("read-back");
+  Image img(w, h);
+  img.alpha().resize(size_t(w) * h);
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    img.pixels()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+    img.alpha()[i] = 1.0f - rgba[4 * i + 3];
+  }
+  return img;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- jittered march
+
+Image JitteredMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
+  GpuFrame& f = static_cast<GpuFrame&>(frame);
+  return integrate(scene, f.density, &f.timer);
+}
+
+void JitteredMarchGpu::describe(RenderStats& stats) const {
+  describeJitteredMarch(stats, s_);
+}
+
+Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
+  refuseObjects(scene, "jittered-march");
+  context();
+  const Program& march = cachedProgram("jittered march", [] {
+    return computeProgram({"common.glsl", "screen_common.glsl", "jittered_march.comp.glsl"}, {},
+                          "jittered march");
+  });
+  const Program& upsample = cachedProgram("jittered upsample", [] {
+    return computeProgram({"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"}, {},
+                          "jittered upsample");
+  });
+  const Camera& cam = scene.camera;
+  const int d = s_.downsample;
+  const int lw = (cam.width + d - 1) / d, lh = (cam.height + d - 1) / d;
+  const Texture low = Texture::make2D(GL_RGBA32F, lw, lh, "jittered march (L, T)");
+  const Texture lowDepth = Texture::make2D(GL_R32F, lw, lh, "jittered march depth");
+  const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "jittered march image");
+  const std::vector<float>& table = blueNoiseTable();
+  const Buffer tableBuf(table.size() * sizeof(float), table.data(), 0, "blue-noise table");
+  const TracingInputs inputs(scene, density, delta1_);
+  {
+    ScopedGpuTimer t(timer, "jittered march");
+    march.use();
+    inputs.apply(march);
+    setCamera(march, scene);
+    tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
+    glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
+                       GL_R32F);
+    glUniform2i(march.uniform("uLowSize"), lw, lh);
+    glUniform1i(march.uniform("uDownsample"), d);
+    glUniform1i(march.uniform("uSteps"), s_.steps);
+    glUniform1i(march.uniform("uJitter"), int(s_.jitter));
+    glUniform1i(march.uniform("uTableSize"), kBlueNoiseSize);
+    glUniform1f(march.uniform("uMinTransmittance"), minT_);
+    glDispatchCompute(groups(lw, 8), groups(lh, 8), 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  }
+  checkGl("jittered march");
+  {
+    ScopedGpuTimer t(timer, "bilateral upsample");
+    upsample.use();
+    inputs.apply(upsample);
+    setCamera(upsample, scene);
+    glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_READ_ONLY,
+                       GL_R32F);
+    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glUniform2i(upsample.uniform("uLowSize"), lw, lh);
+    glUniform1i(upsample.uniform("uDownsample"), d);
+    glUniform1f(upsample.uniform("uDepthSigma"), kUpsampleDepthSigma);
+    setVec3(upsample, "uBackground", scene.background);
+    glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  checkGl("bilateral upsample");
+  return readOutput(out, cam.width, cam.height);
+}
+
+// ---------------------------------------------------------------- froxel
+
+Image FroxelGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
+  GpuFrame& f = static_cast<GpuFrame&>(frame);
+  return integrate(scene, f.density, &f.timer);
+}
+
+void FroxelGpu::describe(RenderStats& stats) const {
+  describeFroxel(stats, s_);
+}
+
+Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
+  refuseObjects(scene, "froxel");
+  context();
+  const bool useMap = s_.transmittanceMap && !scene.lights.empty();
+  const std::string scatterKey = useMap ? "froxel scatter (map)" : "froxel scatter";
+  const Program& scatter = cachedProgram(scatterKey, [&] {
+    return computeProgram(
+        {"common.glsl", "screen_common.glsl", "froxel_scatter.comp.glsl"},
+        useMap ? std::vector<std::string>{"SL_TRANSMITTANCE_MAP"} : std::vector<std::string>{},
+        scatterKey);
+  });
+  const Program& lookup = cachedProgram("froxel lookup", [] {
+    return computeProgram({"common.glsl", "screen_common.glsl", "froxel_lookup.comp.glsl"}, {},
+                          "froxel lookup");
+  });
+  const FroxelSlicing slicing = froxelSlicing(scene, s_);
+  const Camera& cam = scene.camera;
+  const IVec3 g = s_.grid;
+  const int R = s_.mapResolution;
+  const TracingInputs inputs(scene, density, delta1_);
+  Texture map;
+  if (useMap) {
+    const Program& build = cachedProgram("froxel transmittance map", [] {
+      return computeProgram({"common.glsl", "froxel_map.comp.glsl"}, {},
+                            "froxel transmittance map");
+    });
+    const int layers = R * int(scene.lights.size());
+    map = Texture::make3D(GL_R32F, R, R, layers, "froxel transmittance maps");
+    ScopedGpuTimer t(timer, "transmittance map");
+    build.use();
+    inputs.apply(build);
+    glBindImageTexture(binding::kTransmittanceMapImage, map.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_R32F);
+    glUniform1i(build.uniform("uMapRes"), R);
+    glDispatchCompute(groups(R, 4), groups(R, 4), groups(layers, 4));
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  }
+  checkGl("froxel transmittance map");
+  const Texture froxels = Texture::make3D(GL_RGBA32F, g.x, g.y, g.z, "froxel volume");
+  const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "froxel image");
+  const auto slicingUniforms = [&](const Program& p) {
+    setIVec3(p, "uGrid", g);
+    glUniform1f(p.uniform("uNear"), slicing.near);
+    glUniform1f(p.uniform("uFar"), slicing.far);
+    glUniform1i(p.uniform("uExponential"), slicing.exponential ? 1 : 0);
+  };
+  {
+    ScopedGpuTimer t(timer, "froxel accumulate");
+    scatter.use();
+    inputs.apply(scatter);
+    setCamera(scatter, scene);
+    slicingUniforms(scatter);
+    glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    if (useMap) {
+      glBindImageTexture(binding::kTransmittanceMapImage, map.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
+                         GL_R32F);
+      glUniform1i(scatter.uniform("uMapRes"), R);
+    }
+    glDispatchCompute(groups(g.x, 8), groups(g.y, 8), 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  }
+  checkGl("froxel accumulate");
+  {
+    ScopedGpuTimer t(timer, "froxel lookup");
+    lookup.use();
+    inputs.apply(lookup);
+    setCamera(lookup, scene);
+    slicingUniforms(lookup);
+    glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
+                       GL_RGBA32F);
+    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    setVec3(lookup, "uBackground", scene.background);
+    glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  checkGl("froxel lookup");
+  return readOutput(out, cam.width, cam.height);
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,47 @@
+#pragma once
+/// GL variants of the per-pixel competitors (docs/competitors.md), integrators behind the
+/// interface of core/stages.h, registered in gpu/register.cpp beside the CPU ones of
+/// render/integrators.cpp:
+///   "jittered-march" — pass 1 marches every low-res pixel (jittered_march.comp.glsl), pass 2
+///                      upsamples bilaterally and adds the background (jittered_upsample);
+///   "froxel"         — optional per-light transmittance maps (froxel_map), then scatter and
+///                      front-to-back accumulation per froxel column into an RGBA32F 3D image
+///                      (froxel_scatter), then one lookup per pixel (froxel_lookup).
+/// Both refuse scenes with objects (they have no shadow maps yet): the CPU variants render
+/// them. Every member function needs a GL context (created on demand).
+
+#include "core/stages.h"
+#include "gpu/timer.h"
+#include "gpu/volume.h"
+
+namespace scatterlab::gpu {
+
+class JitteredMarchGpu : public Integrator {
+ public:
+  explicit JitteredMarchGpu(const PipelineSettings& s)
+      : s_(s.jittered), minT_(s.march.minTransmittance), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
+  void describe(RenderStats& stats) const override;
+  /// The passes on an uploaded density volume.
+  Image integrate(const Scene& scene, const Volume& density, StageTimer* timer);
+
+ private:
+  JitteredMarchSettings s_;
+  float minT_, delta1_;
+};
+
+class FroxelGpu : public Integrator {
+ public:
+  explicit FroxelGpu(const PipelineSettings& s) : s_(s.froxel), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
+  void describe(RenderStats& stats) const override;
+  Image integrate(const Scene& scene, const Volume& density, StageTimer* timer);
+
+ private:
+  FroxelSettings s_;
+  float delta1_;
+};
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,23 @@
+// froxel, light_transmittance = map (render/froxel.cpp, TransmittanceMaps): voxel centre x of
+// light l's map holds e^(−σt·τ(x → l)), whether or not x is inside a spot's cone. The maps are
+// stacked along z: voxel (i, j, l·R + k).
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+layout(r32f, binding = BINDING_TRANSMITTANCE_MAP_IMAGE) uniform writeonly image3D uMap;
+uniform int uMapRes;
+
+void main() {
+  ivec3 v = ivec3(gl_GlobalInvocationID);
+  if (v.x >= uMapRes || v.y >= uMapRes || v.z >= uMapRes * uLightCount) return;
+  int li = v.z / uMapRes;
+  vec3 cell = (uBoxMax - uBoxMin) / float(uMapRes);
+  vec3 x = uBoxMin + (vec3(v.x, v.y, v.z - li * uMapRes) + 0.5) * cell;
+  GpuLight l = lights[li];
+  vec3 toLight;
+  float dist, dist2, cone;
+  float value = 0.0;
+  if (lightGeometry(l, x, toLight, dist, dist2, cone)) {
+    vec3 segEnd = int(l.positionType.w) == 2 ? boxExit(x, toLight) : x + toLight * dist;
+    value = exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
+  }
+  imageStore(uMap, v, vec4(value));
+}

@@ -1,0 +1,80 @@
+// froxel, pass 1 (render/froxel.cpp, froxelAccumulate): one invocation per froxel column, front
+// to back over the depth slices; at each froxel's centre the in-scattering of its slice is
+// composited, and (L, T) after the froxel is stored.
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = BINDING_FROXEL_IMAGE) uniform writeonly image3D uFroxels;
+#ifdef SL_TRANSMITTANCE_MAP
+layout(r32f, binding = BINDING_TRANSMITTANCE_MAP_IMAGE) uniform readonly image3D uMap;
+uniform int uMapRes;
+#endif
+uniform ivec3 uGrid;
+uniform float uNear;
+uniform float uFar;
+uniform int uExponential;
+
+// FroxelSlicing::depth (core/screen_march.h).
+float sliceDepth(float k) {
+  float s = k / float(uGrid.z);
+  return uExponential != 0 ? uNear * pow(uFar / uNear, s) : uNear + (uFar - uNear) * s;
+}
+
+#ifdef SL_TRANSMITTANCE_MAP
+// Grid3::sample of light li's map at x (inside the box).
+float mapAt(int li, vec3 x) {
+  vec3 u = (x - uBoxMin) / ((uBoxMax - uBoxMin) / float(uMapRes)) - 0.5;
+  u = clamp(u, vec3(0.0), vec3(float(uMapRes - 1)));
+  ivec3 i0 = min(ivec3(u), ivec3(uMapRes - 2));
+  vec3 f = u - vec3(i0);
+  ivec3 o = ivec3(0, 0, li * uMapRes);
+  float c[8];
+  for (int c8 = 0; c8 < 8; ++c8)
+    c[c8] = imageLoad(uMap, o + i0 + ivec3(c8 & 1, (c8 >> 1) & 1, (c8 >> 2) & 1)).r;
+  float c00 = c[0] + (c[1] - c[0]) * f.x;
+  float c10 = c[2] + (c[3] - c[2]) * f.x;
+  float c01 = c[4] + (c[5] - c[4]) * f.x;
+  float c11 = c[6] + (c[7] - c[6]) * f.x;
+  float c0 = c00 + (c10 - c00) * f.y;
+  float c1 = c01 + (c11 - c01) * f.y;
+  return c0 + (c1 - c0) * f.z;
+}
+
+// TransmittanceMaps::source: Σ_l E_l(x)·f(ω_l → ω)·map_l(x).
+vec3 mapSource(vec3 x, vec3 toViewer) {
+  vec3 s = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) {
+    GpuLight l = lights[li];
+    vec3 toLight;
+    float dist, dist2, f;
+    if (!lightGeometry(l, x, toLight, dist, dist2, f) || f <= 0.0) continue;
+    vec3 irradiance = int(l.positionType.w) == 2 ? l.intensityCosOuter.rgb
+                                                 : l.intensityCosOuter.rgb * (f / dist2);
+    s += irradiance * (phaseEvalCos(dot(-toLight, toViewer)) * mapAt(li, x));
+  }
+  return s;
+}
+#endif
+
+void main() {
+  ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(ij, uGrid.xy))) return;
+  vec3 dir = cameraRay((vec2(ij) + 0.5) * uSize / vec2(uGrid.xy));
+  float c = dot(dir, uForward);
+  vec3 L = vec3(0.0);
+  float T = 1.0;
+  for (int k = 0; k < uGrid.z; ++k) {
+    float za = sliceDepth(float(k)), zb = sliceDepth(float(k + 1));
+    vec3 x = uEye + dir * (0.5 * (za + zb) / c);
+    float D = uSigmaT > 0.0 ? densityAt(x) : 0.0;
+    if (D > 0.0) {
+      float a = exp(-uSigmaT * D * (zb - za) / c);
+#ifdef SL_TRANSMITTANCE_MAP
+      vec3 S = mapSource(x, -dir);
+#else
+      vec3 S = sourceRadiance(x, -dir);
+#endif
+      L += (T * uAlbedo * (1.0 - a)) * S;
+      T *= a;
+    }
+    imageStore(uFroxels, ivec3(ij, k), vec4(L, T));
+  }
+}

@@ -1,0 +1,48 @@
+// jittered-march, pass 1 (render/jittered_march.cpp, jitteredMarchLowRes): one invocation per
+// low-resolution pixel, uSteps steps over the ray's piece inside the box at offsets
+// (k + o)·Δt, S traced to every light at each sample.
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = BINDING_LOW_RES_IMAGE) uniform writeonly image2D uLow;
+layout(r32f, binding = BINDING_LOW_RES_DEPTH_IMAGE) uniform writeonly image2D uLowDepth;
+layout(std430, binding = BINDING_JITTER_TABLE) readonly buffer JitterTable { float jitterTable[]; };
+uniform ivec2 uLowSize;
+uniform int uDownsample;
+uniform int uSteps;
+uniform int uJitter;  // 0 none, 1 ign, 2 blue noise (Jitter order)
+uniform int uTableSize;
+uniform float uMinTransmittance;
+
+float jitterOffset(ivec2 p) {
+  if (uJitter == 0) return 0.5;
+  if (uJitter == 1) return interleavedGradientNoise(p);
+  ivec2 q = ((p % uTableSize) + uTableSize) % uTableSize;
+  return jitterTable[q.y * uTableSize + q.x];
+}
+
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(p, uLowSize))) return;
+  vec3 dir = cameraRay((vec2(p) + 0.5) * float(uDownsample));
+  vec3 L = vec3(0.0);
+  float T = 1.0;
+  float depth = kInf;
+  float t0, t1;
+  if (intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
+    depth = t1;
+    if (uSigmaT > 0.0) {
+      float dt = (t1 - t0) / float(uSteps);
+      float o = jitterOffset(p);
+      vec3 u0 = (uEye + dir * (t0 + o * dt)) * uDensityScale + uDensityOffset;
+      vec3 du = dir * dt * uDensityScale;
+      for (int k = 0; k < uSteps && T > uMinTransmittance; ++k) {
+        float D = densityAtIndex(u0 + float(k) * du);
+        if (!(D > 0.0)) continue;
+        float a = exp(-uSigmaT * D * dt);
+        L += (T * uAlbedo * (1.0 - a)) * sourceRadiance(uEye + dir * (t0 + (float(k) + o) * dt), -dir);
+        T *= a;
+      }
+    }
+  }
+  imageStore(uLow, p, vec4(L, T));
+  imageStore(uLowDepth, p, vec4(depth));
+}

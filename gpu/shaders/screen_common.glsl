@@ -1,0 +1,28 @@
+// Shared by the per-pixel competitors' passes (jittered-march, froxel): the camera's rays
+// (Camera::RayGenerator::at, core/camera.h), the density with the box test of Grid3::sample,
+// and interleaved gradient noise (core/screen_march.h). After common.glsl.
+uniform vec3 uForward;
+uniform vec3 uRight;
+uniform vec3 uUp;
+uniform vec2 uTanHalf;  // (tan(fov/2)·aspect, tan(fov/2))
+uniform vec2 uSize;     // image width, height
+uniform float uAlbedo;
+
+// The ray through continuous image coordinates f (x right, y down).
+vec3 cameraRay(vec2 f) {
+  float u = (f.x / uSize.x * 2.0 - 1.0) * uTanHalf.x;
+  float v = (1.0 - f.y / uSize.y * 2.0) * uTanHalf.y;
+  return normalize(uForward + u * uRight + v * uUp);
+}
+
+// Grid3::sample: zero outside the box (inclusive faces), trilinear inside.
+float densityAt(vec3 x) {
+  if (any(lessThan(x, uBoxMin)) || any(greaterThan(x, uBoxMax))) return 0.0;
+  return densityAtIndex(x * uDensityScale + uDensityOffset);
+}
+
+float interleavedGradientNoise(ivec2 p) {
+  float f = 0.06711056 * float(p.x) + 0.00583715 * float(p.y);
+  float g = 52.9829189 * (f - floor(f));
+  return g - floor(g);
+}
