@@ -25,6 +25,9 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "view-ray step (world units)"},
       {"min_transmittance", "number", "1e-6", "[0, 1]",
        "a view ray stops when its transmittance falls below this"},
+      {"fast_march", "bool", "true", "true, false",
+       "CPU march: skip blocks of zero density, march in tiles, one fused density + radiance "
+       "lookup per step (same images within 1e-6); false: the plain march (reference)"},
       {"delta1", "number", "one voxel edge", "(diag·1e-6, diag]",
        "volume-tracing step towards the lights (the paper's Δ1)"},
       {"delta2", "number", "one voxel edge", "(diag·1e-6, diag]",
@@ -49,6 +52,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   const Interval steps = stepRange(glm::length(scene.medium.bounds.extent()));
   s.march.step = p.real("march_step", voxel, steps);
   s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
+  s.march.fast = p.boolean("fast_march", true);
   s.delta1 = p.real("delta1", voxel, steps);
   if (d.sampler) {
     s.delta2 = p.real("delta2", voxel, steps);
@@ -82,7 +86,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 }
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
-  std::vector<std::string> k = {"march_step", "min_transmittance", "delta1"};
+  std::vector<std::string> k = {"march_step", "min_transmittance", "fast_march", "delta1"};
   if (d.sampler)
     k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
                        "bounded_taylor", "sampler", "evaluator"});
