@@ -33,25 +33,39 @@ class MaxDensityGrid {
     int end;
     bool empty;
   };
-  /// The block of step i of the march u0 + i·du (index coordinates of the grid), n steps.
-  Span span(const Vec3& u0, const Vec3& du, int i, int n) const {
-    const Vec3 u = u0 + float(i) * du;
-    IVec3 b;
-    float tExit = float(n);
-    for (int a = 0; a < 3; ++a) {
-      // `u > 0 ? u : 0` also maps NaN to block 0.
-      const float c = u[a] > 0.0f ? u[a] * kInvBlock : 0.0f;
-      b[a] = int(std::min(c, float(blocks_[a] - 1)));
-      // Leaving towards the outside of the grid only happens at the box face, where the
-      // march ends anyway (lookups clamp to the outermost voxels, which the edge block holds).
-      if (du[a] > 0.0f && b[a] + 1 < blocks_[a])
-        tExit = std::min(tExit, (float((b[a] + 1) * kBlock) - u0[a]) / du[a]);
-      else if (du[a] < 0.0f && b[a] > 0)
-        tExit = std::min(tExit, (float(b[a] * kBlock) - u0[a]) / du[a]);
+  /// The blocks along one march u_i = u0 + i·du, i in [0, n) (index coordinates of the grid).
+  class Walk {
+   public:
+    Walk(const MaxDensityGrid& g, const Vec3& u0, const Vec3& du, int n)
+        : g_(g), u0_(u0), du_(du), n_(n) {
+      for (int a = 0; a < 3; ++a) inv_[a] = du[a] != 0.0f ? 1.0f / du[a] : 0.0f;
     }
-    const int end = std::min(n, std::max(i + 1, int(std::ceil(tExit))));
-    return {end, !(max(b) > 0.0f)};
-  }
+    /// The block of step i.
+    Span span(int i) const {
+      const Vec3 u = u0_ + float(i) * du_;
+      IVec3 b;
+      float tExit = float(n_);
+      for (int a = 0; a < 3; ++a) {
+        // `u > 0 ? u : 0` also maps NaN to block 0.
+        const float c = u[a] > 0.0f ? u[a] * kInvBlock : 0.0f;
+        b[a] = int(std::min(c, float(g_.blocks_[a] - 1)));
+        // Leaving towards the outside of the grid only happens at the box face, where the
+        // march ends anyway (lookups clamp to the outermost voxels, which the edge block
+        // holds).
+        if (du_[a] > 0.0f && b[a] + 1 < g_.blocks_[a])
+          tExit = std::min(tExit, (float((b[a] + 1) * kBlock) - u0_[a]) * inv_[a]);
+        else if (du_[a] < 0.0f && b[a] > 0)
+          tExit = std::min(tExit, (float(b[a] * kBlock) - u0_[a]) * inv_[a]);
+      }
+      const int end = std::min(n_, std::max(i + 1, int(std::ceil(tExit))));
+      return {end, !(g_.max(b) > 0.0f)};
+    }
+
+   private:
+    const MaxDensityGrid& g_;
+    Vec3 u0_, du_, inv_;
+    int n_;
+  };
 
  private:
   static constexpr float kInvBlock = 1.0f / float(kBlock);

@@ -49,10 +49,16 @@ inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, fl
   return sum * dt;
 }
 
+/// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
+/// gets through, below what the float sums of a pixel resolve.
+inline constexpr float kShadowDepthCutoff = 25.0f;
+
 /// opticalDepth(g, a, b, step) skipping the steps in blocks of `skip` (built from g) whose
-/// maximum is zero: the same steps are summed in the same order, so the result is the same.
+/// maximum is zero: the same steps are summed in the same order, so the result is the same,
+/// unless the sum passes `maxDepth`, checked after each block: then it stops there (a depth
+/// beyond maxDepth, smaller than the whole segment's).
 inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, const Vec3& a,
-                          const Vec3& b, float step) {
+                          const Vec3& b, float step, float maxDepth = kInfinity) {
   const Vec3 d = b - a;
   const float len = glm::length(d);
   if (len <= 0.0f) return 0.0f;
@@ -64,14 +70,14 @@ inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, cons
   const Vec3 s = g.indexScale();
   const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
   const Vec3 du = r.dir * dt * s;
+  const MaxDensityGrid::Walk walk(skip, u0, du, n);
+  const float sumMax = maxDepth / dt;
   float sum = 0.0f;
-  for (int i = 0; i < n;) {
-    const MaxDensityGrid::Span sp = skip.span(u0, du, i, n);
-    if (sp.empty) {
-      i = sp.end;
-      continue;
-    }
-    for (; i < sp.end; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+  for (int i = 0; i < n && sum <= sumMax;) {
+    const MaxDensityGrid::Span sp = walk.span(i);
+    if (!sp.empty)
+      for (; i < sp.end; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+    i = sp.end;
   }
   return sum * dt;
 }
@@ -91,7 +97,8 @@ inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Bo
 class SourceRadiance {
  public:
   /// `delta1`: volume tracing step (world units). `skip` (optional, built from `density`):
-  /// the shadow rays skip its empty blocks (same result). References must outlive this object.
+  /// the shadow rays skip its empty blocks (same sums) and stop at an optical depth of
+  /// kShadowDepthCutoff / σt (transmittance below 1.4e-11). References must outlive this object.
   SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
                  const MaxDensityGrid* skip = nullptr)
       : lights_(scene.lights),
@@ -100,7 +107,8 @@ class SourceRadiance {
         density_(density),
         delta1_(delta1),
         objects_(scene.objects.get()),
-        skip_(skip) {}
+        skip_(skip),
+        depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -110,7 +118,7 @@ class SourceRadiance {
       if (!l.incident(x, inc)) continue;
       if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
       const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
-      const float tau = skip_ ? opticalDepth(density_, *skip_, x, end, delta1_)
+      const float tau = skip_ ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
                               : opticalDepth(density_, x, end, delta1_);
       s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
     }
@@ -125,6 +133,7 @@ class SourceRadiance {
   float delta1_;
   const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
   const MaxDensityGrid* skip_;   ///< empty-space skipping of the shadow rays, or null
+  float depthCutoff_;            ///< with skip_: τ at which a shadow ray stops
 };
 
 /// The radiance leaving a Lambertian surface point towards any direction (DESIGN.md §2):

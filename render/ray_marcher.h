@@ -89,18 +89,15 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
           L += (T * ratio * (1.0f - a)) * S;
           T *= a;
         };
-        if (!skip) {
-          for (int i = 0; i < n && T > minT; ++i) step(i);
-        } else {
-          // 3D DDA over the blocks: jump the empty ones, march the others step by step.
-          for (int i = 0; i < n && T > minT;) {
-            const MaxDensityGrid::Span sp = skip->span(u0, du, i, n);
-            if (sp.empty) {
-              i = sp.end;
-              continue;
-            }
+        // 3D DDA over the blocks: jump the empty ones, march the others step by step (the
+        // plain march: one span of every step).
+        std::optional<MaxDensityGrid::Walk> walk;
+        if (skip) walk.emplace(*skip, u0, du, n);
+        for (int i = 0; i < n && T > minT;) {
+          const MaxDensityGrid::Span sp = walk ? walk->span(i) : MaxDensityGrid::Span{n, false};
+          if (!sp.empty)
             for (; i < sp.end && T > minT; ++i) step(i);
-          }
+          i = sp.end;
         }
       }
     }

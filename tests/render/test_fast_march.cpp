@@ -15,6 +15,7 @@ namespace {
 
 /// The glow's Gaussian smoke (mostly empty space) at `res`³, a small image.
 Scene glowScene(int res, const std::string& method) {
+  initialize();
   Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json");
   s.medium.resolution = IVec3(res);
   s.camera.width = 96;
@@ -69,7 +70,8 @@ TEST(MaxDensityGrid, SkippingLeavesOpticalDepthUnchanged) {
 }
 
 TEST(FastMarch, ExactImageIsThePlainMarchs) {
-  // Same steps summed in the same order: identical pixels.
+  // Same steps summed in the same order. Shadow rays stop at σt·τ = 25 (a transmittance of
+  // 1.4e-11), which changes no pixel here (measured: identical).
   const Scene s = glowScene(45, "exact");
   const Image fast = render(s, true), plain = render(s, false);
   EXPECT_EQ(fast.pixels(), plain.pixels());
@@ -79,7 +81,8 @@ TEST(FastMarch, ExactImageIsThePlainMarchs) {
 
 TEST(FastMarch, VolumeLookupMatchesThePlainMarch) {
   // per-voxel and gradient (factored lights) through the fused density + radiance lookup: the
-  // same steps, the trilinear weights in another order (measured rel. L2 MEASURED).
+  // same steps; S is looked up at u0 + i·du instead of (r.at(t)·scale + offset), the same
+  // point up to rounding (measured rel. L2 6.4e-7 per-voxel, 2.1e-7 gradient).
   for (const std::string method : {"per-voxel", "gradient"}) {
     const Scene s = glowScene(40, method);
     const Image fast = render(s, true), plain = render(s, false);
