@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "core/math.h"
 
 namespace scatterlab {
 
@@ -33,37 +34,51 @@ class MaxDensityGrid {
     int end;
     bool empty;
   };
-  /// The blocks along one march u_i = u0 + i·du, i in [0, n) (index coordinates of the grid).
+  /// The blocks along one march u_i = u0 + i·du, i in [0, n) (index coordinates of the grid):
+  /// an incremental 3D DDA (Amanatides & Woo) over the blocks the ray crosses, in step units.
   class Walk {
    public:
-    Walk(const MaxDensityGrid& g, const Vec3& u0, const Vec3& du, int n)
-        : g_(g), u0_(u0), du_(du), n_(n) {
-      for (int a = 0; a < 3; ++a) inv_[a] = du[a] != 0.0f ? 1.0f / du[a] : 0.0f;
-    }
-    /// The block of step i.
-    Span span(int i) const {
-      const Vec3 u = u0_ + float(i) * du_;
-      IVec3 b;
-      float tExit = float(n_);
+    Walk(const MaxDensityGrid& g, const Vec3& u0, const Vec3& du, int n) : g_(g), u0_(u0), n_(n) {
       for (int a = 0; a < 3; ++a) {
         // `u > 0 ? u : 0` also maps NaN to block 0.
-        const float c = u[a] > 0.0f ? u[a] * kInvBlock : 0.0f;
-        b[a] = int(std::min(c, float(g_.blocks_[a] - 1)));
-        // Leaving towards the outside of the grid only happens at the box face, where the
-        // march ends anyway (lookups clamp to the outermost voxels, which the edge block
-        // holds).
-        if (du_[a] > 0.0f && b[a] + 1 < g_.blocks_[a])
-          tExit = std::min(tExit, (float((b[a] + 1) * kBlock) - u0_[a]) * inv_[a]);
-        else if (du_[a] < 0.0f && b[a] > 0)
-          tExit = std::min(tExit, (float(b[a] * kBlock) - u0_[a]) * inv_[a]);
+        const float c = u0[a] > 0.0f ? u0[a] * kInvBlock : 0.0f;
+        b_[a] = int(std::min(c, float(g.blocks_[a] - 1)));
+        dir_[a] = du[a] > 0.0f ? 1 : du[a] < 0.0f ? -1 : 0;
+        inv_[a] = dir_[a] != 0 ? 1.0f / du[a] : 0.0f;
+        next_[a] = exit(a);
       }
-      const int end = std::min(n_, std::max(i + 1, int(std::ceil(tExit))));
-      return {end, !(g_.max(b) > 0.0f)};
+    }
+    /// The block of step i (i at or after the previous call's i).
+    Span span(int i) {
+      // Advance to the first block whose exit lies beyond step i (a block crossed between
+      // two steps, at a corner or with steps longer than a block, holds no step).
+      for (;;) {
+        const int a =
+            next_.x <= next_.y ? (next_.x <= next_.z ? 0 : 2) : (next_.y <= next_.z ? 1 : 2);
+        if (next_[a] > float(i)) break;
+        b_[a] += dir_[a];
+        next_[a] = exit(a);
+      }
+      const float t = std::min(std::min(next_.x, next_.y), std::min(next_.z, float(n_)));
+      int end = int(t);  // ceil(t) by conversion (t in [i, n]): std::ceil is a libm call
+      end += float(end) < t;
+      return {std::min(n_, std::max(i + 1, end)), !(g_.max(b_) > 0.0f)};
     }
 
    private:
+    /// Where the march leaves the current block along axis a (step units): infinity when it
+    /// moves away from that face's neighbour or the neighbour is outside the grid (the march
+    /// ends at the box face there; lookups clamp to the outermost voxels, which the edge
+    /// block holds).
+    float exit(int a) const {
+      const int nb = b_[a] + dir_[a];
+      if (dir_[a] == 0 || nb < 0 || nb >= g_.blocks_[a]) return kInfinity;
+      return (float((dir_[a] > 0 ? nb : b_[a]) * kBlock) - u0_[a]) * inv_[a];
+    }
+
     const MaxDensityGrid& g_;
-    Vec3 u0_, du_, inv_;
+    Vec3 u0_, inv_{0.0f}, next_{0.0f};
+    IVec3 b_{0}, dir_{0};
     int n_;
   };
 

@@ -70,7 +70,7 @@ inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, cons
   const Vec3 s = g.indexScale();
   const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
   const Vec3 du = r.dir * dt * s;
-  const MaxDensityGrid::Walk walk(skip, u0, du, n);
+  MaxDensityGrid::Walk walk(skip, u0, du, n);
   const float sumMax = maxDepth / dt;
   float sum = 0.0f;
   for (int i = 0; i < n && sum <= sumMax;) {

@@ -10,14 +10,16 @@
 /// surface is opaque). camera.spp > 1
 /// averages k x k rays (radiance and alpha) through the stratum centres of each pixel.
 /// With MarchSettings::fast (render.fast_march, the default) the steps inside blocks of zero
-/// density are skipped (MaxDensityGrid: they add exactly nothing) and the image is marched in
-/// tiles of kMarchTile² pixels (neighbouring rays share cached voxels); the steps taken and
-/// their sums are the plain march's, so images are bit for bit the same.
+/// density are skipped (MaxDensityGrid: they add exactly nothing), the exp of four steps is
+/// taken at once (xsimd; within an ulp of std::exp) and the image is marched in tiles of
+/// kMarchTile² pixels (neighbouring rays share cached voxels); the steps taken and the order
+/// of their sums are the plain march's.
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
 #include <optional>
+#include <xsimd/xsimd.hpp>
 
 #include "core/image.h"
 #include "core/max_density_grid.h"
@@ -89,15 +91,31 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
           L += (T * ratio * (1.0f - a)) * S;
           T *= a;
         };
-        // 3D DDA over the blocks: jump the empty ones, march the others step by step (the
-        // plain march: one span of every step).
-        std::optional<MaxDensityGrid::Walk> walk;
-        if (skip) walk.emplace(*skip, u0, du, n);
-        for (int i = 0; i < n && T > minT;) {
-          const MaxDensityGrid::Span sp = walk ? walk->span(i) : MaxDensityGrid::Span{n, false};
-          if (!sp.empty)
-            for (; i < sp.end && T > minT; ++i) step(i);
-          i = sp.end;
+        if (!skip) {
+          for (int i = 0; i < n && T > minT; ++i) step(i);
+        } else {
+          // 3D DDA over the blocks: jump the empty ones, march the others in groups of four
+          // steps: four lookups, one 4-wide exp (xsimd), then the four sums in order.
+          using Batch = xsimd::make_sized_batch_t<float, 4>;
+          MaxDensityGrid::Walk walk(*skip, u0, du, n);
+          for (int i = 0; i < n && T > minT;) {
+            const MaxDensityGrid::Span sp = walk.span(i);
+            for (; !sp.empty && i < sp.end && T > minT; i += 4) {
+              const int q1 = std::min(4, sp.end - i);
+              alignas(16) float D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
+              Vec3 S[4];
+              for (int q = 0; q < q1; ++q)
+                if (!lookup(u0 + float(i + q) * du, r, t0 + (float(i + q) + 0.5f) * dt, D[q], S[q]))
+                  D[q] = 0.0f;
+              xsimd::exp(Batch(-sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
+              for (int q = 0; q < q1 && T > minT; ++q) {
+                if (!(D[q] > 0.0f)) continue;
+                L += (T * ratio * (1.0f - a[q])) * S[q];
+                T *= a[q];
+              }
+            }
+            i = sp.end;
+          }
         }
       }
     }
