@@ -49,6 +49,28 @@ inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, fl
   return sum * dt;
 }
 
+/// opticalDepth(g, a, b, step) that stops once the sum passes `maxDepth` (checked every
+/// eight steps): the same sum until then, so the same result where the depth stays below it.
+inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
+                          float maxDepth) {
+  const Vec3 d = b - a;
+  const float len = glm::length(d);
+  if (len <= 0.0f) return 0.0f;
+  const Ray r{a, d / len};
+  float t0, t1;
+  if (!g.bounds().intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
+  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  const float dt = (t1 - t0) / float(n);
+  const Vec3 s = g.indexScale();
+  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
+  const Vec3 du = r.dir * dt * s;
+  const float sumMax = maxDepth / dt;
+  float sum = 0.0f;
+  for (int i = 0; i < n && sum <= sumMax;)
+    for (const int e = std::min(n, i + 8); i < e; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+  return sum * dt;
+}
+
 /// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
 /// gets through, below what the float sums of a pixel resolve.
 inline constexpr float kShadowDepthCutoff = 25.0f;
@@ -97,10 +119,11 @@ inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Bo
 class SourceRadiance {
  public:
   /// `delta1`: volume tracing step (world units). `skip` (optional, built from `density`):
-  /// the shadow rays skip its empty blocks (same sums) and stop at an optical depth of
-  /// kShadowDepthCutoff / σt (transmittance below 1.4e-11). References must outlive this object.
+  /// the shadow rays skip its empty blocks (same sums). With `skip` or `cutoff` they stop at
+  /// an optical depth of kShadowDepthCutoff / σt (transmittance below 1.4e-11). References
+  /// must outlive this object.
   SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
-                 const MaxDensityGrid* skip = nullptr)
+                 const MaxDensityGrid* skip = nullptr, bool cutoff = false)
       : lights_(scene.lights),
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
@@ -108,6 +131,7 @@ class SourceRadiance {
         delta1_(delta1),
         objects_(scene.objects.get()),
         skip_(skip),
+        cutoff_(cutoff || skip),
         depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
@@ -118,8 +142,9 @@ class SourceRadiance {
       if (!l.incident(x, inc)) continue;
       if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
       const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
-      const float tau = skip_ ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
-                              : opticalDepth(density_, x, end, delta1_);
+      const float tau = skip_     ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
+                        : cutoff_ ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
+                                  : opticalDepth(density_, x, end, delta1_);
       s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
     }
     return s;
@@ -133,7 +158,8 @@ class SourceRadiance {
   float delta1_;
   const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
   const MaxDensityGrid* skip_;   ///< empty-space skipping of the shadow rays, or null
-  float depthCutoff_;            ///< with skip_: τ at which a shadow ray stops
+  bool cutoff_;                  ///< shadow rays stop at depthCutoff_ (always with skip_)
+  float depthCutoff_;            ///< τ at which a shadow ray stops
 };
 
 /// The radiance leaving a Lambertian surface point towards any direction (DESIGN.md §2):

@@ -132,10 +132,10 @@ class ExactIntegrator : public Integrator {
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     const DensityGrid& density = frame.hostDensity();
     if (progress) progress->restart("exact", scene.camera.height);
-    // The shadow rays skip empty blocks too (same sums, MaxDensityGrid).
-    std::optional<MaxDensityGrid> skip;
-    if (march_.fast) skip.emplace(density);
-    const SourceRadiance source(scene, density, delta1_, skip ? &*skip : nullptr);
+    // The shadow rays stop at an optical depth where no light gets through. (Skipping empty
+    // blocks along them too, SourceRadiance's `skip`, was measured slower on smoke1: their
+    // steps of three voxels cross a block in about three lookups, and few blocks are empty.)
+    const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast);
     return marchImage(scene, density, source, march_, progress, delta1_);
   }
 
