@@ -101,63 +101,9 @@ bool usable(const RadianceSample& s) {
 void voxelRange(float p, float r, float lo, float h, int n, int& first, int& last) {
   const float a = std::clamp((p - r - lo) / h - 0.5f, -2.0f, float(n) + 1.0f);
   const float b = std::clamp((p + r - lo) / h - 0.5f, -2.0f, float(n) + 1.0f);
-  // floor and ceil by conversion (a and b are clamped, finite): std::floor is a libm call
-  // on baseline x86-64, and this runs per sample, slice and row.
-  int fa = int(a), cb = int(b);
-  fa -= float(fa) > a;
-  cb += float(cb) < b;
-  first = std::max(0, fa - 1);
-  last = std::min(n - 1, cb + 1);
+  first = std::max(0, int(std::floor(a)) - 1);
+  last = std::min(n - 1, int(std::ceil(b)) + 1);
 }
-
-/// Occupancy (VoxelOccupancy) of the voxels of one Z slice of `out`, computed when the slice
-/// has a voxel that no sample covers (only those need it). On the density's layout it is the
-/// 3x3x3 dilation of (D > 0), as occupancyMask, done for the slice alone.
-class SliceOccupancy {
- public:
-  SliceOccupancy(const DensityGrid& density, const RadianceGrid& out, int k)
-      : density_(density), out_(out), k_(k) {}
-  bool operator()(int i, int j) {
-    const IVec3 n = out_.dims();
-    if (!sameLayout()) return VoxelOccupancy(density_, out_)(i, j, k_);
-    if (mask_.empty()) build();
-    return mask_[std::size_t(j) * n.x + i] != 0;
-  }
-
- private:
-  bool sameLayout() const {
-    return out_.dims() == density_.dims() && out_.bounds().min == density_.bounds().min &&
-           out_.bounds().max == density_.bounds().max;
-  }
-  void build() {
-    const IVec3 n = out_.dims();
-    const std::size_t nxy = std::size_t(n.x) * n.y;
-    std::vector<char> z(nxy, 0), y(nxy, 0);
-    const float* d = density_.data().data();
-    for (int kk = std::max(0, k_ - 1); kk <= std::min(n.z - 1, k_ + 1); ++kk) {
-      const float* s = d + std::size_t(kk) * nxy;
-      for (std::size_t a = 0; a < nxy; ++a) z[a] |= s[a] > 0.0f;
-    }
-    for (int j = 0; j < n.y; ++j)
-      for (int jj = std::max(0, j - 1); jj <= std::min(n.y - 1, j + 1); ++jj) {
-        const char* s = z.data() + std::size_t(jj) * n.x;
-        char* o = y.data() + std::size_t(j) * n.x;
-        for (int i = 0; i < n.x; ++i) o[i] |= s[i];
-      }
-    mask_.assign(nxy, 0);
-    for (int j = 0; j < n.y; ++j) {
-      const char* s = y.data() + std::size_t(j) * n.x;
-      char* o = mask_.data() + std::size_t(j) * n.x;
-      for (int i = 0; i < n.x; ++i)
-        o[i] = s[i] | (i > 0 ? s[i - 1] : 0) | (i + 1 < n.x ? s[i + 1] : 0);
-    }
-  }
-
-  const DensityGrid& density_;
-  const RadianceGrid& out_;
-  int k_;
-  std::vector<char> mask_;
-};
 
 Vec3 clampNonNegative(Vec3 v) {
   return glm::max(v, Vec3(0.0f));
@@ -184,6 +130,7 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
   }
 
   const NearestIndex nearestIndex(samples);
+  const std::vector<char> occupied = occupancyMask(density, out);
   std::atomic<long long> uncovered{0};
   const std::size_t nxy = std::size_t(n.x) * n.y;
 
@@ -279,42 +226,29 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
       }
     }
     long long unc = 0;
-    SliceOccupancy occupied(density, out, k);
-    // The weighted sums over the weights (Eq. 4), branch-free so it vectorises; voxels no
-    // sample covers are 0 here and get the nearest sample's S below if they are occupied.
-    const bool linearSums = kind != Interpolation::Nearest && space == ValueSpace::Linear;
-    for (int j = 0; j < n.y && linearSums; ++j) {
-      const std::size_t row = std::size_t(j) * n.x;
-      Vec3* o = &out.at(0, j, k);
-      for (int i = 0; i < n.x; ++i) {
-        const float d = den[row + i];
-        const bool covered = d > 0.0f;
-        const float q = covered ? d : 1.0f;
-        o[i] = Vec3(covered ? std::max(ar[row + i] / q, 0.0f) : 0.0f,
-                    covered ? std::max(ag[row + i] / q, 0.0f) : 0.0f,
-                    covered ? std::max(ab[row + i] / q, 0.0f) : 0.0f);
-      }
-    }
     for (int j = 0; j < n.y; ++j)
       for (int i = 0; i < n.x; ++i) {
         const std::size_t a = std::size_t(j) * n.x + i;
         const bool covered = kind == Interpolation::Nearest ? den[a] < kInfinity : den[a] > 0.0f;
-        if (weightSum)
-          weightSum->at(i, j, k) =
-              covered ? (kind == Interpolation::Nearest ? 1.0f : den[a]) : 0.0f;
-        if (linearSums && covered) continue;
         Vec3 v(0.0f);
-        const bool occ = !covered && occupied(i, j);
+        float wsum = 0.0f;
         if (covered) {
-          v = kind == Interpolation::Nearest ? Vec3(ar[a], ag[a], ab[a])
-                                             : Vec3(ar[a], ag[a], ab[a]) / den[a];
-        } else if (occ) {
+          if (kind == Interpolation::Nearest) {
+            v = Vec3(ar[a], ag[a], ab[a]);
+            wsum = 1.0f;
+          } else {
+            v = Vec3(ar[a], ag[a], ab[a]) / den[a];
+            wsum = den[a];
+          }
+        } else if (occupied[out.index(i, j, k)]) {
           ++unc;
           const int m = nearestIndex.nearest(out.cellCenter(i, j, k));
           if (m >= 0) v = samples[std::size_t(m)].S;
         }
-        out.at(i, j, k) = space == ValueSpace::Log ? (covered || occ ? glm::exp(v) : Vec3(0.0f))
-                                                   : clampNonNegative(v);
+        out.at(i, j, k) = space == ValueSpace::Log
+                              ? (covered || occupied[out.index(i, j, k)] ? glm::exp(v) : Vec3(0.0f))
+                              : clampNonNegative(v);
+        if (weightSum) weightSum->at(i, j, k) = wsum;
       }
     uncovered += unc;
   });
