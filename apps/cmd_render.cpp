@@ -1,3 +1,4 @@
+#include <sys/resource.h>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -185,6 +186,11 @@ Action addRender(CLI::App& app) {
       if (f >= 0) renderer.setTime(timeOf(f));
       RenderResult r = renderer.render(sequence ? nullptr : &progress);
       if (f >= 0) r.stats.extra["frame"] = f;
+      // Peak resident memory of the process so far (MiB): scene, volumes and the method's
+      // buffers, the tool running one method.
+      rusage ru{};
+      if (getrusage(RUSAGE_SELF, &ru) == 0)
+        r.stats.extra["peak_host_mib"] = double(ru.ru_maxrss) / 1024.0;
       if (!sequence) progress.restart("write", 1);
       const Scene& frameScene = renderer.scene();
       out.stage(framePath(o->out, f), [&](const std::string& tmp) {

@@ -59,6 +59,9 @@ struct MarchSettings {
   float step = 0.0f;  ///< view-ray step in world units
   /// March stops when transmittance falls below this (its share of the result is below it).
   float minTransmittance = 1e-6f;
+  /// render.fast_march: empty-space skipping (MaxDensityGrid), tiles and, for volume lookups,
+  /// one fused density + radiance lookup per step; false runs the plain march (the reference).
+  bool fast = true;
 };
 
 /// How the GPU marcher lays its slices (render key slicing; the CPU marcher steps along each

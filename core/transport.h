@@ -8,6 +8,7 @@
 
 #include "core/grid.h"
 #include "core/light.h"
+#include "core/max_density_grid.h"
 #include "core/phase.h"
 #include "core/scene.h"
 
@@ -48,6 +49,61 @@ inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, fl
   return sum * dt;
 }
 
+/// opticalDepth(g, a, b, step) that stops once the sum passes `maxDepth` (checked every
+/// eight steps): the same sum until then, so the same result where the depth stays below it.
+inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
+                          float maxDepth) {
+  const Vec3 d = b - a;
+  const float len = glm::length(d);
+  if (len <= 0.0f) return 0.0f;
+  const Ray r{a, d / len};
+  float t0, t1;
+  if (!g.bounds().intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
+  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  const float dt = (t1 - t0) / float(n);
+  const Vec3 s = g.indexScale();
+  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
+  const Vec3 du = r.dir * dt * s;
+  const float sumMax = maxDepth / dt;
+  float sum = 0.0f;
+  for (int i = 0; i < n && sum <= sumMax;)
+    for (const int e = std::min(n, i + 8); i < e; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+  return sum * dt;
+}
+
+/// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
+/// gets through, below what the float sums of a pixel resolve.
+inline constexpr float kShadowDepthCutoff = 25.0f;
+
+/// opticalDepth(g, a, b, step) skipping the steps in blocks of `skip` (built from g) whose
+/// maximum is zero: the same steps are summed in the same order, so the result is the same,
+/// unless the sum passes `maxDepth`, checked after each block: then it stops there (a depth
+/// beyond maxDepth, smaller than the whole segment's).
+inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, const Vec3& a,
+                          const Vec3& b, float step, float maxDepth = kInfinity) {
+  const Vec3 d = b - a;
+  const float len = glm::length(d);
+  if (len <= 0.0f) return 0.0f;
+  const Ray r{a, d / len};
+  float t0, t1;
+  if (!g.bounds().intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
+  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  const float dt = (t1 - t0) / float(n);
+  const Vec3 s = g.indexScale();
+  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
+  const Vec3 du = r.dir * dt * s;
+  MaxDensityGrid::Walk walk(skip, u0, du, n);
+  const float sumMax = maxDepth / dt;
+  float sum = 0.0f;
+  for (int i = 0; i < n && sum <= sumMax;) {
+    const MaxDensityGrid::Span sp = walk.span(i);
+    if (!sp.empty)
+      for (; i < sp.end; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+    i = sp.end;
+  }
+  return sum * dt;
+}
+
 /// The far end of the segment from x towards a light: the light itself, or for directional
 /// lights the point where the ray leaves the box (or x when it is outside).
 inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Box& box,
@@ -62,14 +118,21 @@ inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Bo
 /// S excludes σs and D: the in-scattered radiance per unit length is σs·D(x)·S(x, ω).
 class SourceRadiance {
  public:
-  /// `delta1`: volume tracing step (world units). References must outlive this object.
-  SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
+  /// `delta1`: volume tracing step (world units). `skip` (optional, built from `density`):
+  /// the shadow rays skip its empty blocks (same sums). With `skip` or `cutoff` they stop at
+  /// an optical depth of kShadowDepthCutoff / σt (transmittance below 1.4e-11). References
+  /// must outlive this object.
+  SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
+                 const MaxDensityGrid* skip = nullptr, bool cutoff = false)
       : lights_(scene.lights),
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
         density_(density),
         delta1_(delta1),
-        objects_(scene.objects.get()) {}
+        objects_(scene.objects.get()),
+        skip_(skip),
+        cutoff_(cutoff || skip),
+        depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -78,8 +141,10 @@ class SourceRadiance {
       Light::Incident inc;
       if (!l.incident(x, inc)) continue;
       if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
-      const float tau =
-          opticalDepth(density_, x, lightSegmentEnd(l, inc, density_.bounds(), x), delta1_);
+      const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
+      const float tau = skip_     ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
+                        : cutoff_ ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
+                                  : opticalDepth(density_, x, end, delta1_);
       s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
     }
     return s;
@@ -92,6 +157,9 @@ class SourceRadiance {
   const DensityGrid& density_;
   float delta1_;
   const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
+  const MaxDensityGrid* skip_;   ///< empty-space skipping of the shadow rays, or null
+  bool cutoff_;                  ///< shadow rays stop at depthCutoff_ (always with skip_)
+  float depthCutoff_;            ///< τ at which a shadow ray stops
 };
 
 /// The radiance leaving a Lambertian surface point towards any direction (DESIGN.md §2):

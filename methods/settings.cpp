@@ -27,6 +27,9 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "view-ray step (world units)"},
       {"min_transmittance", "number", "1e-6", "[0, 1]",
        "a view ray stops when its transmittance falls below this"},
+      {"fast_march", "bool", "true", "true, false",
+       "CPU march: skip blocks of zero density, march in tiles, one fused density + radiance "
+       "lookup per step (same images within 1e-6); false: the plain march (reference)"},
       {"delta1", "number", "one voxel edge", "(diag·1e-6, diag]",
        "volume-tracing step towards the lights (the paper's Δ1)"},
       {"delta2", "number", "one voxel edge", "(diag·1e-6, diag]",
@@ -159,6 +162,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   if (d.viewMarch) {
     s.march.step = p.real("march_step", voxel, steps);
     s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
+    s.march.fast = p.boolean("fast_march", true);
   }
   s.delta1 = p.real("delta1", voxel, steps);
   s.shadowMap = parseShadowMap(p);
@@ -205,7 +209,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"delta1", "shadow_map"};
-  if (d.viewMarch) k.insert(k.end(), {"march_step", "min_transmittance"});
+  if (d.viewMarch) k.insert(k.end(), {"march_step", "min_transmittance", "fast_march"});
   if (d.integrator == "light-space-march")
     for (const KeyDoc& key : lightSpaceMarchKeys()) k.emplace_back(key.name);
   if (d.integrator == "radial-blur")

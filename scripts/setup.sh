@@ -9,7 +9,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libglm-dev libeigen3-dev libtbb-dev nlohmann-json3-dev libcli11-dev
   libopenexr-dev libpng-dev libopenvdb-dev libboost-iostreams-dev
-  libembree-dev libtinyobjloader-dev
+  libembree-dev libtinyobjloader-dev libxsimd-dev
   libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-distributed python3-dev python3-numpy pybind11-dev

@@ -72,6 +72,10 @@ TEST_F(Cli, RenderWritesImageStatsAndHonoursSet) {
   EXPECT_TRUE(stats["timings_ms"].contains("total"));
   EXPECT_TRUE(stats["timings_ms"].contains("march"));
   EXPECT_DOUBLE_EQ(stats["march_step"].get<double>(), 0.01f);
+  // The process's peak resident memory: the tool's own pages at least (the glow's 128³ frame
+  // measured 50 MiB, fig3 gradient at 256³ 615 MiB).
+  EXPECT_GT(stats["peak_host_mib"].get<double>(), 1.0);
+  EXPECT_LT(stats["peak_host_mib"].get<double>(), 2048.0);
   const scatterlab::Image img = scatterlab::readExr(out("a.exr"));
   EXPECT_EQ(img.width(), 20);
   EXPECT_GT(img.at(10, 6).x, 0.0f);
