@@ -84,6 +84,8 @@ struct ShadowMapSettings {
   /// VSM light-bleeding reduction: Chebyshev's bound p is remapped (p − b)/(1 − b), clamped.
   float bleedReduction = 0.2f;
   bool given = false;  ///< the scene set `shadow_map`
+};
+
 /// Per-pixel ray offsets of `jittered-march` (render/jittered_march.h).
 enum class Jitter {
   None,       ///< every sample at the middle of its step
