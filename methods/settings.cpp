@@ -77,8 +77,6 @@ const std::vector<KeyDoc>& lightSpaceMarchKeys() {
       {"light_transmittance", "string", "mean", "mean, traced",
        "the light's transmittance: e^(−σt·D̄·d), D̄ the medium's mean density (Tóth & "
        "Umenhoffer's homogeneous model), or the real density traced with step delta1"},
-      {"shadow_map_resolution", "int", "512", "16…8192",
-       "texels per side of each light's shadow map (per cube face); scenes with objects"},
   };
   return keys;
 }
@@ -132,8 +130,6 @@ LightSpaceMarchSettings parseLightSpaceMarch(Params& p) {
   s.light = p.choice("light_transmittance", {"mean", "traced"}, "mean") == "mean"
                 ? LightTransmittance::Mean
                 : LightTransmittance::Traced;
-  s.shadowMapResolution =
-      int(p.integer("shadow_map_resolution", s.shadowMapResolution, Interval::closed(16, 8192)));
   return s;
 }
 

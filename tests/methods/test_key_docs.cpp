@@ -141,8 +141,6 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 2;
         else if (k == "light_transmittance")
           s.render[k] = "traced";
-        else if (k == "shadow_map_resolution")
-          s.render[k] = 64;
         else if (k == "samples")  // radial-blur
           s.render[k] = 8;
         else if (k == "density" || k == "decay" || k == "guard_band")
