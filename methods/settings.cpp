@@ -42,7 +42,8 @@ const std::vector<KeyDoc>& pipelineKeys() {
       {"integrator", "string", "ray-marcher", "a registered integrator",
        "how the image is marched from the volumes; methods with a radiance volume"},
       {"shadow_map", "object", "see shadowMapKeys()", "",
-       "the GPU backend's shadow maps of scene objects; accepted and unused on the CPU"},
+       "the shadow maps of scene objects: every GPU method's, and light-space-march's on the CPU "
+       "(depth compare); accepted and unused by the other CPU methods, which trace shadow rays"},
   };
   return keys;
 }
