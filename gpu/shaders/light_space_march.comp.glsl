@@ -34,11 +34,6 @@ uniform vec3 uBackground;
 // where none) and its L_p. v_l(x) is shadow.glsl's lightVisibility (render.shadow_map).
 layout(binding = BINDING_SURFACE_TEXTURE) uniform sampler2D uSurfaceDistance;
 layout(binding = BINDING_SURFACE_RADIANCE_TEXTURE) uniform sampler2D uSurfaceRadiance;
-#else
-// v_l(x) = 1 without objects.
-float lightVisibility(int li, vec3 x) {
-  return 1.0;
-}
 #endif
 
 // LightSpaceMarcher::source: Σ_l E_l·f·v_l·T_l at x towards the viewer.
@@ -51,8 +46,12 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     if (!lightGeometry(l, x, toLight, dist, dist2, cone) || cone <= 0.0) continue;
     bool directional = int(l.positionType.w) == 2;
     vec3 irradiance = directional ? l.intensityCosOuter.rgb : l.intensityCosOuter.rgb * (cone / dist2);
+#ifdef SL_OBJECTS
     float vis = lightVisibility(li, x);
     if (vis <= 0.0) continue;
+#else
+    const float vis = 1.0;  // v_l = 1 without objects
+#endif
 #ifdef SL_TRACED
     vec3 segEnd = directional ? boxExit(x, toLight) : x + toLight * dist;
     float tau = opticalDepth(x, segEnd, uDelta1);

@@ -117,6 +117,10 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = "ancestor";
         else if (k == "probes")
           s.render[k] = 6;
+        else if (k == "steps" && m == "light-space-march")  // at least interleave²
+          s.render[k] = 16;
+        else if (k == "light_transmittance" && m == "light-space-march")
+          s.render[k] = "traced";
         else if (k == "steps" || k == "downsample")
           s.render[k] = 2;
         else if (k == "jitter")
@@ -135,12 +139,8 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 4;
         else if (k == "min_transmittance" || k == "epsilon")
           s.render[k] = 0.5;
-        else if (k == "steps")  // light-space-march
-          s.render[k] = 16;
-        else if (k == "interleave" || k == "downsample")
+        else if (k == "interleave")
           s.render[k] = 2;
-        else if (k == "light_transmittance")
-          s.render[k] = "traced";
         else if (k == "samples")  // radial-blur
           s.render[k] = 8;
         else if (k == "density" || k == "decay" || k == "guard_band")
