@@ -28,7 +28,6 @@ struct LightSpaceMarchSettings {
   int steps = 128;     ///< N: terms of each view ray's sum, from the visible surface to the eye
   int interleave = 4;  ///< M: M×M pixel blocks, each pixel evaluates every M²-th term
   LightTransmittance light = LightTransmittance::Mean;
-  int shadowMapResolution = 1024;  ///< texels per side of each 2D map / cube face (objects)
 };
 
 /// `radial-blur` keys (methods/settings.cpp, radialBlurKeys()).

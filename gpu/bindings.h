@@ -71,6 +71,8 @@ inline constexpr GLuint kRadianceTexture = 1;
 inline constexpr GLuint kShadowTexture = 2;
 /// The slice marcher's surface distances: R32F view-ray distance of the first surface.
 inline constexpr GLuint kSurfaceTexture = 3;
+/// The surface pass's RGBA32F image of the per-pixel methods: L_p of the first surface (rgb).
+inline constexpr GLuint kSurfaceRadianceTexture = 4;
 
 // ---- image units
 
@@ -133,6 +135,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
     {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
     {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
+    {"BINDING_SURFACE_RADIANCE_TEXTURE", binding::kSurfaceRadianceTexture},
     {"BINDING_SUMS_IMAGE", binding::kSumsImage},
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
     {"BINDING_BLUR_SOURCE", binding::kBlurSource},

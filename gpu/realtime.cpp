@@ -14,13 +14,6 @@ namespace scatterlab::gpu {
 
 namespace {
 
-/// The refusal of scenes with objects (until gpu/shadow_maps gives the shaders visibility).
-void refuseObjects(const Scene& scene, const char* method) {
-  if (scene.objects)
-    throw ConfigError(std::string(method) +
-                      " on the GPU does not render objects yet: use --backend cpu");
-}
-
 /// The camera's ray frame as the shaders' uniforms (Camera::RayGenerator).
 void setCamera(const Program& p, const Scene& scene) {
   const auto gen = scene.camera.rayGenerator();
@@ -55,7 +48,6 @@ Image readImage(const Texture& t, int w, int h, const char* pass) {
 // ---------------------------------------------------------------- light-space march
 
 Image LightSpaceMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
-  refuseObjects(scene, "light-space-march");
   checkLightSpaceMarchScene(scene, s_);
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   // D̄ from the density read back once (the volume may have been splatted on the GPU).
@@ -71,16 +63,18 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const DensityGrid& densi
 
 Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, float mean,
                                     StageTimer* timer) {
-  refuseObjects(scene, "light-space-march");
   checkLightSpaceMarchScene(scene, s_);
   context();
+  SceneShadows objects;
+  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
+  shadowMaps_ = shadows ? int(scene.lights.size()) : 0;
   const bool traced = s_.light == LightTransmittance::Traced;
-  const std::string key = traced ? "light-space march (traced)" : "light-space march (mean)";
-  const Program& march = cachedProgram(key, [&] {
-    std::vector<std::string> defines = {"SL_MARCH"};
-    if (traced) defines.push_back("SL_TRACED");
-    return computeProgram({"common.glsl", "light_space_march.comp.glsl"}, defines, key);
-  });
+  std::string key = traced ? "light-space march (traced)" : "light-space march (mean)";
+  std::vector<std::string> defines = {"SL_MARCH"},
+                           files = {"common.glsl", "light_space_march.comp.glsl"};
+  if (traced) defines.push_back("SL_TRACED");
+  addShadowVariant(shadows, key, files, defines);
+  const Program& march = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
   const Program& sum = cachedProgram("light-space march block sum", [] {
     return computeProgram({"common.glsl", "light_space_march.comp.glsl"}, {"SL_BLOCK_SUM"},
                           "light-space march block sum");
@@ -90,12 +84,15 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
   const Texture base = Texture::make2D(GL_RGBA32F, w, h, "light-space march base");
   const Texture rows = Texture::make2D(GL_RGBA32F, w, h, "light-space march row sums");
   const Texture out = Texture::make2D(GL_RGBA32F, w, h, "light-space march image");
-  const TracingInputs inputs(scene, density, delta1_);
+  const TracingInputs inputs(scene, density, delta1_, shadows);
+  ScreenSurfaces surfaces;
+  surfaces.build(scene, objects, inputs, timer);
   const Medium& m = scene.medium;
   {
     ScopedGpuTimer t(timer, "light-space march");
     march.use();
     inputs.apply(march);
+    surfaces.bind();
     setCamera(march, scene);
     glUniform1i(march.uniform("uInterleave"), M);
     glUniform1i(march.uniform("uSteps"), s_.steps);
@@ -137,7 +134,7 @@ void LightSpaceMarchGpu::describe(RenderStats& st) const {
       (s_.steps + s_.interleave * s_.interleave - 1) / (s_.interleave * s_.interleave);
   st.extra["light_transmittance"] = s_.light == LightTransmittance::Mean ? "mean" : "traced";
   if (s_.light == LightTransmittance::Mean) st.extra["mean_density"] = mean_;
-  st.extra["shadow_maps"] = 0;
+  st.extra["shadow_maps"] = shadowMaps_;
 }
 
 // ---------------------------------------------------------------- radial blur
@@ -154,13 +151,14 @@ Image RadialBlurGpu::integrate(const Scene& scene, const DensityGrid& density) {
 }
 
 Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
-  refuseObjects(scene, "radial-blur");
   checkRadialBlurScene(scene, s_);
   context();
-  const auto program = [](const char* define, const std::string& key) -> const Program& {
-    return cachedProgram(key, [&] {
-      return computeProgram({"common.glsl", "radial_blur.comp.glsl"}, {define}, key);
-    });
+  SceneShadows objects;
+  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
+  const auto program = [&](const char* define, std::string key) -> const Program& {
+    std::vector<std::string> defines = {define}, files = {"common.glsl", "radial_blur.comp.glsl"};
+    addShadowVariant(shadows, key, files, defines);
+    return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
   };
   const Program& basePass = program("SL_BASE", "radial blur base");
   const Program& prePass = program("SL_PREPASS", "radial blur pre-pass");
@@ -169,10 +167,14 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
   const int pw = (w + ds - 1) / ds, ph = (h + ds - 1) / ds;
   const Texture image = Texture::make2D(GL_RGBA32F, w, h, "radial blur image");
   const Texture pre = Texture::make2D(GL_RGBA32F, pw, ph, "radial blur pre-pass");
-  const TracingInputs inputs(scene, density, 0.0f);
+  // delta1 is the step of the surfaces' T(p, l) (the passes trace no light otherwise).
+  const TracingInputs inputs(scene, density, delta1_ > 0.0f ? delta1_ : march_.step, shadows);
+  ScreenSurfaces surfaces;
+  surfaces.build(scene, objects, inputs, timer);
   const Medium& m = scene.medium;
   const auto marchUniforms = [&](const Program& p) {
     inputs.apply(p);
+    surfaces.bind();
     setCamera(p, scene);
     glUniform1f(p.uniform("uStep"), march_.step);
     glUniform1f(p.uniform("uMinTransmittance"), march_.minTransmittance);

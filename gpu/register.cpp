@@ -76,10 +76,12 @@ void registerGpuStages() {
                                                         s.factorLights, s.delta1, s.shadowMap));
   });
   integrators().addVariant("light-space-march", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(new LightSpaceMarchGpu(s.lightSpaceMarch, s.delta1));
+    return std::unique_ptr<Integrator>(
+        new LightSpaceMarchGpu(s.lightSpaceMarch, s.delta1, s.shadowMap));
   });
   integrators().addVariant("radial-blur", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(new RadialBlurGpu(s.radialBlur, s.march));
+    return std::unique_ptr<Integrator>(
+        new RadialBlurGpu(s.radialBlur, s.march, s.delta1, s.shadowMap));
   });
   integrators().addVariant("jittered-march", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new JitteredMarchGpu(s));

@@ -15,11 +15,11 @@ namespace scatterlab::gpu {
 
 namespace {
 
-/// Objects need shadow maps on the GPU (not there yet); the CPU variants render them.
-void refuseObjects(const Scene& scene, const char* method) {
-  if (scene.objects)
-    throw ConfigError(std::string(method) +
-                      " on the GPU does not render objects yet: use --backend cpu");
+/// A program of `files` and `defines`, with the shadow-map variant when `shadows` is set.
+const Program& screenProgram(std::string key, std::vector<std::string> files,
+                             std::vector<std::string> defines, const ShadowMaps* shadows) {
+  addShadowVariant(shadows, key, files, defines);
+  return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
 }
 
 /// The camera uniforms of screen_common.glsl.
@@ -62,16 +62,15 @@ void JitteredMarchGpu::describe(RenderStats& stats) const {
 }
 
 Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
-  refuseObjects(scene, "jittered-march");
   context();
-  const Program& march = cachedProgram("jittered march", [] {
-    return computeProgram({"common.glsl", "screen_common.glsl", "jittered_march.comp.glsl"}, {},
-                          "jittered march");
-  });
-  const Program& upsample = cachedProgram("jittered upsample", [] {
-    return computeProgram({"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"}, {},
-                          "jittered upsample");
-  });
+  SceneShadows objects;
+  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
+  const Program& march =
+      screenProgram("jittered march",
+                    {"common.glsl", "screen_common.glsl", "jittered_march.comp.glsl"}, {}, shadows);
+  const Program& upsample = screenProgram(
+      "jittered upsample", {"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"}, {},
+      shadows);
   const Camera& cam = scene.camera;
   const int d = s_.downsample;
   const int lw = (cam.width + d - 1) / d, lh = (cam.height + d - 1) / d;
@@ -80,11 +79,14 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
   const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "jittered march image");
   const std::vector<float>& table = blueNoiseTable();
   const Buffer tableBuf(table.size() * sizeof(float), table.data(), 0, "blue-noise table");
-  const TracingInputs inputs(scene, density, delta1_);
+  const TracingInputs inputs(scene, density, delta1_, shadows);
+  ScreenSurfaces surfaces;
+  surfaces.build(scene, objects, inputs, timer);
   {
     ScopedGpuTimer t(timer, "jittered march");
     march.use();
     inputs.apply(march);
+    surfaces.bind();
     setCamera(march, scene);
     tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
     glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
@@ -104,6 +106,8 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     ScopedGpuTimer t(timer, "bilateral upsample");
     upsample.use();
     inputs.apply(upsample);
+    surfaces.bind();
+    glUniform1f(upsample.uniform("uMinTransmittance"), minT_);
     setCamera(upsample, scene);
     glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_READ_ONLY,
@@ -132,31 +136,29 @@ void FroxelGpu::describe(RenderStats& stats) const {
 }
 
 Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
-  refuseObjects(scene, "froxel");
   context();
+  SceneShadows objects;
+  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
   const bool useMap = s_.transmittanceMap && !scene.lights.empty();
-  const std::string scatterKey = useMap ? "froxel scatter (map)" : "froxel scatter";
-  const Program& scatter = cachedProgram(scatterKey, [&] {
-    return computeProgram(
-        {"common.glsl", "screen_common.glsl", "froxel_scatter.comp.glsl"},
-        useMap ? std::vector<std::string>{"SL_TRANSMITTANCE_MAP"} : std::vector<std::string>{},
-        scatterKey);
-  });
-  const Program& lookup = cachedProgram("froxel lookup", [] {
-    return computeProgram({"common.glsl", "screen_common.glsl", "froxel_lookup.comp.glsl"}, {},
-                          "froxel lookup");
-  });
+  const Program& scatter = screenProgram(
+      useMap ? "froxel scatter (map)" : "froxel scatter",
+      {"common.glsl", "screen_common.glsl", "froxel_scatter.comp.glsl"},
+      useMap ? std::vector<std::string>{"SL_TRANSMITTANCE_MAP"} : std::vector<std::string>{},
+      shadows);
+  const Program& lookup =
+      screenProgram("froxel lookup",
+                    {"common.glsl", "screen_common.glsl", "froxel_lookup.comp.glsl"}, {}, shadows);
   const FroxelSlicing slicing = froxelSlicing(scene, s_);
   const Camera& cam = scene.camera;
   const IVec3 g = s_.grid;
   const int R = s_.mapResolution;
-  const TracingInputs inputs(scene, density, delta1_);
+  const TracingInputs inputs(scene, density, delta1_, shadows);
+  ScreenSurfaces surfaces;
+  surfaces.build(scene, objects, inputs, timer);
   Texture map;
   if (useMap) {
-    const Program& build = cachedProgram("froxel transmittance map", [] {
-      return computeProgram({"common.glsl", "froxel_map.comp.glsl"}, {},
-                            "froxel transmittance map");
-    });
+    const Program& build = screenProgram("froxel transmittance map",
+                                         {"common.glsl", "froxel_map.comp.glsl"}, {}, shadows);
     const int layers = R * int(scene.lights.size());
     map = Texture::make3D(GL_R32F, R, R, layers, "froxel transmittance maps");
     ScopedGpuTimer t(timer, "transmittance map");
@@ -198,6 +200,8 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     ScopedGpuTimer t(timer, "froxel lookup");
     lookup.use();
     inputs.apply(lookup);
+    surfaces.bind();
+    glUniform1f(lookup.uniform("uMinTransmittance"), minT_);
     setCamera(lookup, scene);
     slicingUniforms(lookup);
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_READ_ONLY,

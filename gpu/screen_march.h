@@ -7,8 +7,10 @@
 ///   "froxel"         — optional per-light transmittance maps (froxel_map), then scatter and
 ///                      front-to-back accumulation per froxel column into an RGBA32F 3D image
 ///                      (froxel_scatter), then one lookup per pixel (froxel_lookup).
-/// Both refuse scenes with objects (they have no shadow maps yet): the CPU variants render
-/// them. Every member function needs a GL context (created on demand).
+/// Scene objects: each pixel's ray ends at the surface pass's first surface (gpu/stages.h
+/// ScreenSurfaces) and adds T·L_p there; the light's visibility at every sample is the shadow
+/// maps' (gpu/shadow_maps.h, render.shadow_map), where the CPU variants trace Embree shadow
+/// rays. Every member function needs a GL context (created on demand).
 
 #include "core/stages.h"
 #include "gpu/timer.h"
@@ -19,7 +21,10 @@ namespace scatterlab::gpu {
 class JitteredMarchGpu : public Integrator {
  public:
   explicit JitteredMarchGpu(const PipelineSettings& s)
-      : s_(s.jittered), minT_(s.march.minTransmittance), delta1_(s.delta1) {}
+      : s_(s.jittered),
+        minT_(s.march.minTransmittance),
+        delta1_(s.delta1),
+        shadowMap_(s.shadowMap) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
   void describe(RenderStats& stats) const override;
@@ -29,11 +34,13 @@ class JitteredMarchGpu : public Integrator {
  private:
   JitteredMarchSettings s_;
   float minT_, delta1_;
+  ShadowMapSettings shadowMap_;
 };
 
 class FroxelGpu : public Integrator {
  public:
-  explicit FroxelGpu(const PipelineSettings& s) : s_(s.froxel), delta1_(s.delta1) {}
+  explicit FroxelGpu(const PipelineSettings& s)
+      : s_(s.froxel), minT_(s.march.minTransmittance), delta1_(s.delta1), shadowMap_(s.shadowMap) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
   void describe(RenderStats& stats) const override;
@@ -41,7 +48,8 @@ class FroxelGpu : public Integrator {
 
  private:
   FroxelSettings s_;
-  float delta1_;
+  float minT_, delta1_;
+  ShadowMapSettings shadowMap_;
 };
 
 }  // namespace scatterlab::gpu

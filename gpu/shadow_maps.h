@@ -8,7 +8,8 @@
 /// in GLSL: 1 lit, 0 shadowed, in between in a filtered penumbra. `light` indexes the scene's
 /// lights (the order of common.glsl's lights[]).
 ///
-/// Per light, every map stores the distance metric d of the nearest surface per texel:
+/// Per light, every map stores the distance metric d of the nearest surface per texel (the
+/// projections of core/shadow_projection.h, which the CPU maps of render/shadow_map.h share):
 ///   spot        one perspective map along the spot axis, field of view 2·outer half-angle
 ///               (a cube like a point light's when that exceeds 120°); d = |x − s|
 ///   point       a cube: six 90° perspective faces (+x, −x, +y, −y, +z, −z); d = |x − s|

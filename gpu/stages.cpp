@@ -270,6 +270,84 @@ float ndcDepth(float z, float nearD, float farD) {
 
 }  // namespace
 
+SurfacePass renderSurfaces(const Scene& scene, const SceneShadows& objects,
+                           const TracingInputs& inputs, const Texture& color, StageTimer* timer) {
+  const Camera& cam = scene.camera;
+  const auto gen = cam.rayGenerator();
+  const int w = cam.width, h = cam.height;
+  const ShadowMaps* shadows = objects.maps.get();
+  SurfacePass out;
+  // The depth range: from the eye to the farthest corner of the medium box and the objects.
+  out.farD = 0.0f;
+  Box all = scene.medium.bounds;
+  all.min = glm::min(all.min, scene.objects->bounds().min);
+  all.max = glm::max(all.max, scene.objects->bounds().max);
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 p((c & 1) ? all.max.x : all.min.x, (c & 2) ? all.max.y : all.min.y,
+                 (c & 4) ? all.max.z : all.min.z);
+    out.farD = std::max(out.farD, glm::dot(p - gen.origin, gen.forward));
+  }
+  out.farD = std::max(out.farD, 1e-6f) * 1.01f;
+  out.nearD = out.farD * 1e-5f;
+  out.depth = Texture::make2D(GL_DEPTH_COMPONENT32F, w, h, "surface depth");
+  out.distance = Texture::make2D(GL_R32F, w, h, "surface distance");
+  const Framebuffer surfaceFbo("surface pass");
+  glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT0, color.id(), 0);
+  glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT1, out.distance.id(), 0);
+  glNamedFramebufferTexture(surfaceFbo.id(), GL_DEPTH_ATTACHMENT, out.depth.id(), 0);
+  const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glNamedFramebufferDrawBuffers(surfaceFbo.id(), 2, both);
+  if (glCheckNamedFramebufferStatus(surfaceFbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GpuError("surface pass: the framebuffer is not complete");
+  std::vector<std::string> surfDefines, surfFiles = {"common.glsl", "surface.frag.glsl"};
+  std::string k = "object surfaces";
+  addShadowVariant(shadows, k, surfFiles, surfDefines);
+  const Program& surf = cachedProgram(
+      k, [&] { return graphicsProgram({"objects.vert.glsl"}, surfFiles, surfDefines, k); });
+  ScopedGpuTimer t(timer, "surfaces");
+  glBindFramebuffer(GL_FRAMEBUFFER, surfaceFbo.id());
+  glViewport(0, 0, w, h);
+  const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
+  glClearBufferfv(GL_COLOR, 0, clear);
+  const float none[4] = {3.0e38f, 0.0f, 0.0f, 0.0f};
+  glClearBufferfv(GL_COLOR, 1, none);
+  const float one = 1.0f;
+  glClearBufferfv(GL_DEPTH, 0, &one);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_SCISSOR_TEST);
+  surf.use();
+  inputs.apply(surf);
+  glUniformMatrix4fv(surf.uniform("uViewProj"), 1, GL_FALSE,
+                     glm::value_ptr(cameraViewProj(gen, out.nearD, out.farD)));
+  glUniform1f(surf.uniform("uSurfaceOffset"), scene.objects->epsilon());
+  objects.geometry->draw();
+  glDisable(GL_DEPTH_TEST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  checkGl("object surfaces");
+  return out;
+}
+
+void ScreenSurfaces::build(const Scene& scene, const SceneShadows& objects,
+                           const TracingInputs& inputs, StageTimer* timer) {
+  if (!objects.geometry || !objects.maps) return;
+  radiance =
+      Texture::make2D(GL_RGBA32F, scene.camera.width, scene.camera.height, "surface radiance");
+  pass = renderSurfaces(scene, objects, inputs, radiance, timer);
+  // The compute passes that read them come next.
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  built = true;
+}
+
+void ScreenSurfaces::bind() const {
+  if (!built) return;
+  glBindTextureUnit(binding::kSurfaceTexture, pass.distance.id());
+  glBindTextureUnit(binding::kSurfaceRadianceTexture, radiance.id());
+}
+
 Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
                               StageTimer* timer, int* sliceCount, const SceneShadows* objects) {
   context();
@@ -317,60 +395,13 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
 
   // Scene objects: the surface pass fills the image with L_p (alpha 0: opaque), the depth
   // buffer and the view-ray distance of the first surface.
-  Texture depth, distance;
-  float nearD = 1.0f, farD = 2.0f;
+  SurfacePass surfacePass;
   if (surfaces) {
-    farD = 0.0f;
-    Box all = b;
-    all.min = glm::min(all.min, scene.objects->bounds().min);
-    all.max = glm::max(all.max, scene.objects->bounds().max);
-    for (int c = 0; c < 8; ++c) {
-      const Vec3 p((c & 1) ? all.max.x : all.min.x, (c & 2) ? all.max.y : all.min.y,
-                   (c & 4) ? all.max.z : all.min.z);
-      farD = std::max(farD, glm::dot(p - gen.origin, gen.forward));
-    }
-    farD = std::max(farD, 1e-6f) * 1.01f;
-    nearD = farD * 1e-5f;
-    depth = Texture::make2D(GL_DEPTH_COMPONENT32F, w, h, "slice marcher depth");
-    distance = Texture::make2D(GL_R32F, w, h, "slice marcher surface distance");
-    const Framebuffer surfaceFbo("slice marcher surfaces");
-    glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0);
-    glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT1, distance.id(), 0);
-    glNamedFramebufferTexture(surfaceFbo.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
-    const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glNamedFramebufferDrawBuffers(surfaceFbo.id(), 2, both);
-    if (glCheckNamedFramebufferStatus(surfaceFbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-      throw GpuError("slice marcher: the surface pass's framebuffer is not complete");
-    const std::string surfKey = "object surfaces";
-    std::vector<std::string> surfDefines, surfFiles = {"common.glsl", "surface.frag.glsl"};
-    std::string k = surfKey;
-    addShadowVariant(shadows, k, surfFiles, surfDefines);
-    const Program& surf = cachedProgram(
-        k, [&] { return graphicsProgram({"objects.vert.glsl"}, surfFiles, surfDefines, k); });
-    ScopedGpuTimer t(timer, "surfaces");
-    glBindFramebuffer(GL_FRAMEBUFFER, surfaceFbo.id());
-    glViewport(0, 0, w, h);
-    glClearBufferfv(GL_COLOR, 0, clear);
-    const float none[4] = {3.0e38f, 0.0f, 0.0f, 0.0f};
-    glClearBufferfv(GL_COLOR, 1, none);
-    const float one = 1.0f;
-    glClearBufferfv(GL_DEPTH, 0, &one);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
-    glDisable(GL_BLEND);
-    glDisable(GL_CULL_FACE);
-    glDisable(GL_SCISSOR_TEST);
-    surf.use();
-    inputs.apply(surf);
-    glUniformMatrix4fv(surf.uniform("uViewProj"), 1, GL_FALSE,
-                       glm::value_ptr(cameraViewProj(gen, nearD, farD)));
-    glUniform1f(surf.uniform("uSurfaceOffset"), scene.objects->epsilon());
-    objects->geometry->draw();
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    checkGl("object surfaces");
-    glNamedFramebufferTexture(fbo.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
+    surfacePass = renderSurfaces(scene, *objects, inputs, target, timer);
+    glNamedFramebufferTexture(fbo.id(), GL_DEPTH_ATTACHMENT, surfacePass.depth.id(), 0);
   }
+  const Texture& distance = surfacePass.distance;
+  const float nearD = surfacePass.nearD, farD = surfacePass.farD;
   if (glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw GpuError("slice marcher: RGBA32F image is not a complete framebuffer");
   {

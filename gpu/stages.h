@@ -48,6 +48,39 @@ struct SceneShadows {
   const ShadowMaps* build(const Scene& scene, const ShadowMapSettings& settings, StageTimer* timer);
 };
 
+/// The surface pass (docs/objects.md "GPU"): the scene's objects rasterised from the camera
+/// with a depth buffer (surface.frag.glsl). Per pixel, the first surface's
+/// L_p = albedo/π·Σ_l E_l·max(0, n·ω_l)·V_l·T(p, l) (V_l from the shadow maps, T marched with
+/// the step of `inputs`) goes into the rgb of `color` (RGBA32F, the camera's size) with alpha 0,
+/// after `color` was cleared to (background, 1); its view-ray distance goes into `distance`
+/// (R32F, 3e38 where no surface), and its depth into `depth` (the depth range nearD..farD of
+/// the camera's projection). The slice marcher composites over `color` with `depth` as its
+/// depth buffer; the per-pixel methods (gpu/realtime.h, gpu/screen_march.h) read `distance`
+/// and `color` (ScreenSurfaces). Needs the context, `objects` built and `inputs` made with its
+/// maps.
+struct SurfacePass {
+  Texture distance;
+  Texture depth;
+  float nearD = 1.0f, farD = 2.0f;
+};
+SurfacePass renderSurfaces(const Scene& scene, const SceneShadows& objects,
+                           const TracingInputs& inputs, const Texture& color, StageTimer* timer);
+
+/// The surface pass as the per-pixel methods read it (built only when the scene has objects):
+/// its L_p image and distances, bound at binding::kSurfaceRadianceTexture and
+/// binding::kSurfaceTexture (the samplers uSurfaceRadiance and uSurfaceDistance of shaders
+/// compiled with SL_OBJECTS: light_space_march, radial_blur, screen_common).
+struct ScreenSurfaces {
+  Texture radiance;
+  SurfacePass pass;
+  bool built = false;
+  /// Runs the surface pass when `objects` has maps (the scene has objects), else does nothing.
+  void build(const Scene& scene, const SceneShadows& objects, const TracingInputs& inputs,
+             StageTimer* timer);
+  /// Binds the two textures (when built).
+  void bind() const;
+};
+
 /// S and ∇S at every sample in one compute dispatch (GPU twin of the CPU volume tracer):
 /// S(x) = SourceRadiance(x, towards the camera position), ∇S by central differences with step
 /// delta2 along each world axis, each offset point with its own view direction.

@@ -45,7 +45,8 @@ const std::vector<KeyDoc>& pipelineKeys() {
       {"integrator", "string", "ray-marcher", "a registered integrator",
        "how the image is marched from the volumes; methods with a radiance volume"},
       {"shadow_map", "object", "see shadowMapKeys()", "",
-       "the GPU backend's shadow maps of scene objects; accepted and unused on the CPU"},
+       "the shadow maps of scene objects: every GPU method's, and light-space-march's on the CPU "
+       "(depth compare); accepted and unused by the other CPU methods, which trace shadow rays"},
   };
   return keys;
 }
@@ -80,8 +81,6 @@ const std::vector<KeyDoc>& lightSpaceMarchKeys() {
       {"light_transmittance", "string", "mean", "mean, traced",
        "the light's transmittance: e^(−σt·D̄·d), D̄ the medium's mean density (Tóth & "
        "Umenhoffer's homogeneous model), or the real density traced with step delta1"},
-      {"shadow_map_resolution", "int", "512", "16…8192",
-       "texels per side of each light's shadow map (per cube face); scenes with objects"},
   };
   return keys;
 }
@@ -135,8 +134,6 @@ LightSpaceMarchSettings parseLightSpaceMarch(Params& p) {
   s.light = p.choice("light_transmittance", {"mean", "traced"}, "mean") == "mean"
                 ? LightTransmittance::Mean
                 : LightTransmittance::Traced;
-  s.shadowMapResolution =
-      int(p.integer("shadow_map_resolution", s.shadowMapResolution, Interval::closed(16, 8192)));
   return s;
 }
 

@@ -9,13 +9,11 @@
 namespace scatterlab {
 
 LightSpaceMarcher::LightSpaceMarcher(const Scene& scene, const DensityGrid& density,
-                                     const LightSpaceMarchSettings& settings, float delta1)
+                                     const LightSpaceMarchSettings& settings, float delta1,
+                                     const ShadowMapSettings& shadowMap)
     : scene_(scene), density_(density), s_(settings), delta1_(delta1) {
   if (s_.light == LightTransmittance::Mean) mean_ = scatterlab::meanDensity(density);
-  if (scene.objects)
-    for (const Light& l : scene.lights)
-      shadows_.push_back(std::make_unique<ShadowMap>(l, *scene.objects, scene.medium.bounds,
-                                                     s_.shadowMapResolution));
+  if (scene.objects) shadows_ = std::make_unique<ShadowMap>(scene, shadowMap);
 }
 
 Vec3 LightSpaceMarcher::source(const Vec3& x, const Vec3& toViewer) const {
@@ -25,12 +23,13 @@ Vec3 LightSpaceMarcher::source(const Vec3& x, const Vec3& toViewer) const {
     const Light& l = scene_.lights[i];
     Light::Incident inc;
     if (!l.incident(x, inc)) continue;
-    if (!shadows_.empty() && shadows_[i]->visibility(x) <= 0.0f) continue;
+    const float vis = shadows_ ? shadows_->visibility(int(i), x) : 1.0f;
+    if (vis <= 0.0f) continue;
     const float tau =
         s_.light == LightTransmittance::Mean
             ? mean_ * lengthInBox(l, inc, m.bounds, x)
             : opticalDepth(density_, x, lightSegmentEnd(l, inc, m.bounds, x), delta1_);
-    s += inc.irradiance * (m.phase.eval(-inc.toLight, toViewer) * std::exp(-m.sigmaT * tau));
+    s += inc.irradiance * (vis * m.phase.eval(-inc.toLight, toViewer) * std::exp(-m.sigmaT * tau));
   }
   return s;
 }
@@ -128,11 +127,11 @@ namespace {
 class LightSpaceMarchIntegrator : public Integrator {
  public:
   explicit LightSpaceMarchIntegrator(const PipelineSettings& s)
-      : s_(s.lightSpaceMarch), delta1_(s.delta1) {}
+      : s_(s.lightSpaceMarch), delta1_(s.delta1), shadowMap_(s.shadowMap) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     checkLightSpaceMarchScene(scene, s_);
-    const LightSpaceMarcher marcher(scene, frame.hostDensity(), s_, delta1_);
+    const LightSpaceMarcher marcher(scene, frame.hostDensity(), s_, delta1_, shadowMap_);
     mean_ = marcher.meanDensity();
     shadowMaps_ = scene.objects ? int(scene.lights.size()) : 0;
     return marcher.render(progress);
@@ -145,11 +144,14 @@ class LightSpaceMarchIntegrator : public Integrator {
     st.extra["light_transmittance"] = s_.light == LightTransmittance::Mean ? "mean" : "traced";
     if (s_.light == LightTransmittance::Mean) st.extra["mean_density"] = mean_;
     st.extra["shadow_maps"] = shadowMaps_;
+    // The CPU maps compare depths whatever render.shadow_map.type (VSM is GPU only).
+    if (shadowMaps_ > 0) st.extra["shadow_map_lookup"] = "depth";
   }
 
  private:
   LightSpaceMarchSettings s_;
   float delta1_;
+  ShadowMapSettings shadowMap_;
   float mean_ = 0.0f;
   int shadowMaps_ = 0;
 };

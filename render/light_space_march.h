@@ -4,7 +4,8 @@
 /// into N equal steps; term n is
 ///   T_n · Ω · (1 − e^(−σt·D_n·Δ)) · Σ_l E_l(x_n)·f(ω_l → ω)·v_l(x_n)·T_l(x_n),
 /// T_n the view transmittance up to step n (all N densities are looked up), v_l the shadow-map
-/// visibility (render/shadow_map.h; 1 without objects), T_l the light's transmittance,
+/// visibility (render/shadow_map.h: the maps of render.shadow_map with a depth compare; 1
+/// without objects), T_l the light's transmittance,
 /// e^(−σt·D̄·d) (D̄ the mean density, d the segment to the light inside the box) or traced.
 /// Interleaved sampling (their Sec. 4.1): the image is covered by M×M blocks and pixel (x, y)
 /// evaluates only the terms n ≡ (x mod M) + M·(y mod M) (mod M²); the image of these partial
@@ -19,15 +20,18 @@
 #include "core/progress.h"
 #include "core/realtime.h"
 #include "core/scene.h"
+#include "core/stages.h"
 #include "render/shadow_map.h"
 
 namespace scatterlab {
 
 class LightSpaceMarcher {
  public:
-  /// References must outlive this object. Builds the shadow maps when the scene has objects.
+  /// References must outlive this object. Builds the shadow maps (`shadowMap`'s resolution,
+  /// bias and filter) when the scene has objects.
   LightSpaceMarcher(const Scene& scene, const DensityGrid& density,
-                    const LightSpaceMarchSettings& settings, float delta1);
+                    const LightSpaceMarchSettings& settings, float delta1,
+                    const ShadowMapSettings& shadowMap = {});
 
   /// One pixel's ray: the sum of its terms n = first, first + stride, ... (< N), and its
   /// boundary term and alpha (1 − T_N, or 1 on a surface).
@@ -53,7 +57,7 @@ class LightSpaceMarcher {
   LightSpaceMarchSettings s_;
   float delta1_;
   float mean_ = 0.0f;
-  std::vector<std::unique_ptr<ShadowMap>> shadows_;  ///< per light; empty without objects
+  std::unique_ptr<ShadowMap> shadows_;  ///< every light's; null without objects
 };
 
 /// The separable sliding-window sum of interleaved sampling: out(x, y) = Σ of `terms` over the

@@ -1,46 +1,38 @@
 #pragma once
-/// CPU shadow maps of the scene objects (Tóth & Umenhoffer 2009, Sec. 4): a depth map per light,
-/// built by casting one Embree ray through the centre of every texel — a 2D perspective map for
-/// a spot light whose outer half-angle is at most 80°, a cube map (six 90° faces) for point
-/// lights and wider spots, an orthographic map over the medium box for directional lights.
-/// visibility(x) is the shadow-map test: 1 when nothing is nearer the light in x's texel (with a
-/// bias of two texels' width at x's distance), else 0. Used by light-space-march for the
-/// visibility v(x) of its sample points (docs/light-space-march.md).
+/// CPU shadow maps of the scene objects (Tóth & Umenhoffer 2009, Sec. 4), the CPU twin of
+/// gpu/shadow_maps.h: per light the maps of core/shadow_projection.h (2D perspective for a
+/// spot, a cube for a point light or a spot wider than 120°, orthographic for a directional
+/// light), render.shadow_map.resolution texels a side, each texel holding the distance metric
+/// d of the nearest surface along one Embree ray through the texel's centre (where the GPU
+/// rasterises the same texel centres). visibility() is the depth compare of shadow.glsl's
+/// `depth` type: V = [d(x) − bias·texel ≤ d_map], averaged over filter × filter texels (PCF).
+/// Variance shadow maps (type `vsm`, the GPU default) are GPU only: the CPU compares depths
+/// whatever the type (docs/light-space-march.md). Used by light-space-march for the
+/// visibility v_l(x) of its sample points.
 
 #include <vector>
 
-#include "core/light.h"
-#include "core/objects.h"
+#include "core/shadow_projection.h"
+#include "core/stages.h"
 
 namespace scatterlab {
 
 class ShadowMap {
  public:
-  /// The map of `light` over `objects`, `resolution` texels per side (per face), covering the
-  /// medium box `medium` (what the directional map spans).
-  ShadowMap(const Light& light, const SceneObjects& objects, const Box& medium, int resolution);
+  /// The maps of every light of `scene` (which must have objects), with `settings`'
+  /// resolution, bias and filter.
+  ShadowMap(const Scene& scene, const ShadowMapSettings& settings);
 
-  /// 1 when x is lit by the light as far as the map sees, 0 when an object is nearer the light.
-  float visibility(const Vec3& x) const;
+  /// V of light `light` at x: 1 lit, 0 shadowed, in between on a PCF penumbra; 1 where x falls
+  /// outside the light's maps.
+  float visibility(int light, const Vec3& x) const;
 
-  int faces() const { return int(faces_.size()); }
+  int layers() const { return int(proj_.layers.size()); }
 
  private:
-  /// One perspective face (origin at the light) or the orthographic map.
-  struct Face {
-    Vec3 forward, right, up;
-    float tanHalf = 1.0f;  ///< perspective: tan of the half field of view
-  };
-  /// The texel of x on face f and x's depth there (distance from the light, or along the
-  /// directional light's direction); false when x is outside the face.
-  bool lookup(int f, const Vec3& x, int& i, int& j, float& depth, float& texel) const;
-
-  bool ortho_ = false;
-  Vec3 origin_{0.0f};  ///< the light's position (perspective faces)
-  float uMin_ = 0, vMin_ = 0, cellU_ = 1, cellV_ = 1, start_ = 0;  ///< orthographic map
-  int res_ = 1;
-  std::vector<Face> faces_;
-  std::vector<float> depth_;  ///< faces × res × res, infinity where no object is hit
+  ShadowMapSettings s_;
+  ShadowProjections proj_;
+  std::vector<float> depth_;  ///< layers × res × res, row j at map v = (j + ½)/res
 };
 
 }  // namespace scatterlab

@@ -1,6 +1,6 @@
-// froxel, pass 2 (render/froxel.cpp, froxelLookup): one trilinear lookup per pixel at the far
-// depth (no objects on the GPU yet: with a surface, the lookup would be at its depth, and
-// T·surface radiance from a shadow-map lookup would slot in here), then T·background.
+// froxel, pass 2 (render/froxel.cpp, froxelLookup and froxelRender): one trilinear lookup per
+// pixel at the far depth, then T·background; where the pixel's ray hits a surface (the surface
+// pass), the lookup is at the surface's view depth, then T·L_p (above min_transmittance).
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = BINDING_FROXEL_IMAGE) uniform readonly image3D uFroxels;
 layout(rgba32f, binding = BINDING_OUTPUT_IMAGE) uniform writeonly image2D uOut;
@@ -9,6 +9,7 @@ uniform float uNear;
 uniform float uFar;
 uniform int uExponential;
 uniform vec3 uBackground;
+uniform float uMinTransmittance;
 
 // FroxelSlicing::coordinate (core/screen_march.h).
 float sliceCoordinate(float z) {
@@ -25,7 +26,8 @@ vec4 boundary(int i, int j, int b) {
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, ivec2(uSize)))) return;
-  float w = sliceCoordinate(uFar);
+  float hitT = surfaceDistance(p);
+  float w = sliceCoordinate(isinf(hitT) ? uFar : hitT * dot(cameraRay(vec2(p) + 0.5), uForward));
   vec2 g = clamp((vec2(p) + 0.5) / uSize * vec2(uGrid.xy) - 0.5, vec2(0.0), vec2(uGrid.xy - 1));
   int i0 = min(int(g.x), uGrid.x - 1), j0 = min(int(g.y), uGrid.y - 1);
   int i1 = min(i0 + 1, uGrid.x - 1), j1 = min(j0 + 1, uGrid.y - 1);
@@ -38,5 +40,12 @@ void main() {
                    ((c & 4) != 0 ? fz : 1.0 - fz);
     if (weight != 0.0) acc += weight * boundary(i, j, b);
   }
+#ifdef SL_OBJECTS
+  if (!isinf(hitT)) {
+    vec3 lp = texelFetch(uSurfaceRadiance, p, 0).rgb;
+    imageStore(uOut, p, vec4(acc.a > uMinTransmittance ? acc.rgb + acc.a * lp : acc.rgb, 0.0));
+    return;
+  }
+#endif
   imageStore(uOut, p, vec4(acc.rgb + acc.a * uBackground, acc.a));
 }

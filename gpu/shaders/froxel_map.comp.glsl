@@ -18,6 +18,9 @@ void main() {
   if (lightGeometry(l, x, toLight, dist, dist2, cone)) {
     vec3 segEnd = int(l.positionType.w) == 2 ? boxExit(x, toLight) : x + toLight * dist;
     value = exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
+#ifdef SL_OBJECTS
+    value *= lightVisibility(li, x);  // the shadow maps (the CPU: 0 where an object blocks)
+#endif
   }
   imageStore(uMap, v, vec4(value));
 }

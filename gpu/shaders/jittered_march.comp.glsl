@@ -1,6 +1,7 @@
 // jittered-march, pass 1 (render/jittered_march.cpp, jitteredMarchLowRes): one invocation per
 // low-resolution pixel, uSteps steps over the ray's piece inside the box at offsets
-// (k + o)·Δt, S traced to every light at each sample.
+// (k + o)·Δt, S traced to every light at each sample. SL_OBJECTS: the ray ends at the surface
+// pass's first surface, and S's visibility comes from the shadow maps (common.glsl).
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = BINDING_LOW_RES_IMAGE) uniform writeonly image2D uLow;
 layout(r32f, binding = BINDING_LOW_RES_DEPTH_IMAGE) uniform writeonly image2D uLowDepth;
@@ -25,22 +26,23 @@ void main() {
   vec3 dir = cameraRay((vec2(p) + 0.5) * float(uDownsample));
   vec3 L = vec3(0.0);
   float T = 1.0;
-  float depth = kInf;
+  // The first surface (the surface pass's nearest full-resolution pixel when downsampled).
+  float hitT = surfaceDistance(ivec2((vec2(p) + 0.5) * float(uDownsample)));
   float t0, t1;
-  if (intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
-    depth = t1;
-    if (uSigmaT > 0.0) {
-      float dt = (t1 - t0) / float(uSteps);
-      float o = jitterOffset(p);
-      vec3 u0 = (uEye + dir * (t0 + o * dt)) * uDensityScale + uDensityOffset;
-      vec3 du = dir * dt * uDensityScale;
-      for (int k = 0; k < uSteps && T > uMinTransmittance; ++k) {
-        float D = densityAtIndex(u0 + float(k) * du);
-        if (!(D > 0.0)) continue;
-        float a = exp(-uSigmaT * D * dt);
-        L += (T * uAlbedo * (1.0 - a)) * sourceRadiance(uEye + dir * (t0 + (float(k) + o) * dt), -dir);
-        T *= a;
-      }
+  bool inBox = intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0;
+  float depth = !isinf(hitT) ? hitT : inBox ? t1 : kInf;
+  if (inBox && uSigmaT > 0.0 && min(t1, hitT) > t0) {
+    t1 = min(t1, hitT);
+    float dt = (t1 - t0) / float(uSteps);
+    float o = jitterOffset(p);
+    vec3 u0 = (uEye + dir * (t0 + o * dt)) * uDensityScale + uDensityOffset;
+    vec3 du = dir * dt * uDensityScale;
+    for (int k = 0; k < uSteps && T > uMinTransmittance; ++k) {
+      float D = densityAtIndex(u0 + float(k) * du);
+      if (!(D > 0.0)) continue;
+      float a = exp(-uSigmaT * D * dt);
+      L += (T * uAlbedo * (1.0 - a)) * sourceRadiance(uEye + dir * (t0 + (float(k) + o) * dt), -dir);
+      T *= a;
     }
   }
   imageStore(uLow, p, vec4(L, T));

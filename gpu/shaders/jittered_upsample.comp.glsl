@@ -1,7 +1,7 @@
 // jittered-march, pass 2 (render/jittered_march.cpp, upsampleWeights and jitteredMarch): each
 // full-resolution pixel takes the bilateral average of its four low-resolution neighbours
-// (bilinear × e^(−|Δdepth| / (σ·depth))), then adds T·background. No objects on the GPU yet:
-// a shadow-map lookup for surfaces would slot in here (T·surface radiance where a ray hits).
+// (bilinear × e^(−|Δdepth| / (σ·depth))), then adds T·background, or T·L_p of the surface
+// pass's first surface (above min_transmittance; alpha 1) where the pixel's ray hits one.
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = BINDING_LOW_RES_IMAGE) uniform readonly image2D uLow;
 layout(r32f, binding = BINDING_LOW_RES_DEPTH_IMAGE) uniform readonly image2D uLowDepth;
@@ -10,13 +10,17 @@ uniform ivec2 uLowSize;
 uniform int uDownsample;
 uniform float uDepthSigma;
 uniform vec3 uBackground;
+uniform float uMinTransmittance;
 
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, ivec2(uSize)))) return;
   vec3 dir = cameraRay(vec2(p) + 0.5);
   float t0, t1;
-  float depth = intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0 ? t1 : kInf;
+  float hitT = surfaceDistance(p);
+  float depth = !isinf(hitT)                                          ? hitT
+                : intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0 ? t1
+                                                                        : kInf;
   float d = float(uDownsample);
   vec2 l = (vec2(p) + 0.5) / d - 0.5;
   int i0 = clamp(int(floor(l.x)), 0, uLowSize.x - 1), j0 = clamp(int(floor(l.y)), 0, uLowSize.y - 1);
@@ -47,5 +51,12 @@ void main() {
     L += wc * v.rgb;
     T += wc * v.a;
   }
+#ifdef SL_OBJECTS
+  if (!isinf(hitT)) {
+    vec3 lp = texelFetch(uSurfaceRadiance, p, 0).rgb;
+    imageStore(uOut, p, vec4(T > uMinTransmittance ? L + T * lp : L, 0.0));
+    return;
+  }
+#endif
   imageStore(uOut, p, vec4(L + T * uBackground, T));
 }

@@ -3,6 +3,8 @@
 //   SL_MARCH:     one invocation per pixel: the pixel's interleaving class k = (x mod M) +
 //                 M·(y mod M); the terms n ≡ k (mod M²) of its N-step view ray go to the "out"
 //                 image (rgb), its boundary term T_N·background and alpha 1 − T_N to "base".
+//                 SL_OBJECTS: the ray ends at the surface of the surface pass, whose boundary
+//                 term is T_N·L_p (alpha 1), and v_l comes from the shadow maps (shadow.glsl).
 //   SL_BLOCK_SUM: one direction of the separable M-wide sliding-window sum (blockWindowStart of
 //                 core/realtime.h) from "in" to "out"; the vertical pass adds "base" and writes
 //                 base's alpha.
@@ -27,11 +29,12 @@ uniform float uAlbedo;
 uniform float uMeanDensity;  // D̄ (light_transmittance "mean")
 uniform vec3 uBackground;
 
-// v_l(x): the shadow-map visibility of light li at x. Scenes with objects are refused on the GPU
-// for now (LightSpaceMarchGpu); the shadow-map lookup of gpu/shadow_maps slots in here.
-float lightVisibility(int li, vec3 x) {
-  return 1.0;
-}
+#ifdef SL_OBJECTS
+// The surface pass (gpu/stages.h ScreenSurfaces): the first surface's view-ray distance (3e38
+// where none) and its L_p. v_l(x) is shadow.glsl's lightVisibility (render.shadow_map).
+layout(binding = BINDING_SURFACE_TEXTURE) uniform sampler2D uSurfaceDistance;
+layout(binding = BINDING_SURFACE_RADIANCE_TEXTURE) uniform sampler2D uSurfaceRadiance;
+#endif
 
 // LightSpaceMarcher::source: Σ_l E_l·f·v_l·T_l at x towards the viewer.
 vec3 lsmSource(vec3 x, vec3 toViewer) {
@@ -43,7 +46,12 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     if (!lightGeometry(l, x, toLight, dist, dist2, cone) || cone <= 0.0) continue;
     bool directional = int(l.positionType.w) == 2;
     vec3 irradiance = directional ? l.intensityCosOuter.rgb : l.intensityCosOuter.rgb * (cone / dist2);
-    if (lightVisibility(li, x) <= 0.0) continue;
+#ifdef SL_OBJECTS
+    float vis = lightVisibility(li, x);
+    if (vis <= 0.0) continue;
+#else
+    const float vis = 1.0;  // v_l = 1 without objects
+#endif
 #ifdef SL_TRACED
     vec3 segEnd = directional ? boxExit(x, toLight) : x + toLight * dist;
     float tau = opticalDepth(x, segEnd, uDelta1);
@@ -53,7 +61,7 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     if (intersectBox(x, toLight, 0.0, directional ? kInf : dist, t0, t1) && t1 > t0)
       tau = uMeanDensity * (t1 - t0);
 #endif
-    s += irradiance * (phaseEvalCos(dot(-toLight, toViewer)) * exp(-uSigmaT * tau));
+    s += irradiance * (vis * phaseEvalCos(dot(-toLight, toViewer)) * exp(-uSigmaT * tau));
   }
   return s;
 }
@@ -69,7 +77,17 @@ void main() {
   vec3 L = vec3(0.0);
   float T = 1.0;
   float t0, t1;
-  if (uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
+#ifdef SL_OBJECTS
+  float hitT = texelFetch(uSurfaceDistance, px, 0).r;
+  bool hasHit = hitT < 1.0e38;
+#else
+  const float hitT = kInf;
+  const bool hasHit = false;
+#endif
+  if (uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0 &&
+      min(t1, hitT) > t0) {
+    // From the box entry to the surface or the box exit (LightSpaceMarcher::march).
+    t1 = min(t1, hitT);
     int n = uSteps;
     float dt = (t1 - t0) / float(n);
     vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
@@ -86,6 +104,12 @@ void main() {
     }
   }
   imageStore(uOut, px, vec4(L, 0.0));
+#ifdef SL_OBJECTS
+  if (hasHit) {
+    imageStore(uBase, px, vec4(T * texelFetch(uSurfaceRadiance, px, 0).rgb, 1.0));
+    return;
+  }
+#endif
   imageStore(uBase, px, vec4(T * uBackground, 1.0 - T));
 }
 #endif

@@ -3,6 +3,8 @@
 //               min_transmittance) into "out" (rgb) with alpha 1 − T (marchImage with S = 0);
 //   SL_PREPASS: per pre-pass pixel, light uLight's unshadowed in-scattering along the view ray
 //               through image point ((i + 1/2)·ds, (j + 1/2)·ds) (radialBlurPrePass) into "out";
+//   SL_OBJECTS: the view rays end at the surface pass's first surface; the base pass adds T·L_p
+//               there, and the pre-pass leaves pixels whose surface hides the light black.
 //   SL_BLUR:    per pixel, "out" += exposure·Σ_{i<n} decay^i·weight·P(φ_i)/n (radialBlur), P
 //               the pre-pass ("in") read bilinearly with its edge texels repeated.
 #if !defined(SL_PREPASS) && !defined(SL_BLUR)
@@ -26,6 +28,12 @@ uniform vec3 uBackground;
 uniform int uLight;       // SL_PREPASS: the light
 uniform int uDownsample;  // SL_PREPASS: ds
 uniform ivec2 uPassSize;  // the size of the image this pass writes
+#ifdef SL_OBJECTS
+// The surface pass (gpu/stages.h ScreenSurfaces): the first surface's view-ray distance (3e38
+// where none) and its L_p, at full resolution.
+layout(binding = BINDING_SURFACE_TEXTURE) uniform sampler2D uSurfaceDistance;
+layout(binding = BINDING_SURFACE_RADIANCE_TEXTURE) uniform sampler2D uSurfaceRadiance;
+#endif
 
 void main() {
   ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -41,7 +49,25 @@ void main() {
   vec3 L = vec3(0.0);
   float T = 1.0;
   float t0, t1;
-  if (uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
+#ifdef SL_OBJECTS
+  // The full-resolution pixel of the ray's image point (the pre-pass's own pixel when ds = 1).
+  ivec2 q = min(ivec2(f), uImageSize - 1);
+  float hitT = texelFetch(uSurfaceDistance, q, 0).r;
+  bool hasHit = hitT < 1.0e38;
+#else
+  const float hitT = kInf;
+  const bool hasHit = false;
+#endif
+  bool inBox = uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0;
+#ifdef SL_PREPASS
+  // An occluder (a surface nearer than the light; any surface for a directional light) is
+  // black in the pre-pass (radialBlurPrePass).
+  GpuLight occl = lights[uLight];
+  if (hasHit && (int(occl.positionType.w) == 2 || hitT < length(occl.positionType.xyz - uEye)))
+    inBox = false;
+#endif
+  if (inBox && min(t1, hitT) > t0) {
+    t1 = min(t1, hitT);
     int n = max(1, int(ceil((t1 - t0) / uStep)));
     float dt = (t1 - t0) / float(n);
     vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
@@ -67,6 +93,14 @@ void main() {
 #ifdef SL_PREPASS
   imageStore(uOut, px, vec4(L, 0.0));
 #else
+#ifdef SL_OBJECTS
+  if (hasHit) {
+    // marchImage: T·L_p above min_transmittance, alpha 1 (the surface is opaque).
+    vec3 lp = texelFetch(uSurfaceRadiance, px, 0).rgb;
+    imageStore(uOut, px, vec4(T > uMinTransmittance ? T * lp : vec3(0.0), 1.0));
+    return;
+  }
+#endif
   imageStore(uOut, px, vec4(T * uBackground, 1.0 - T));
 #endif
 }

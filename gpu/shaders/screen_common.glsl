@@ -8,6 +8,24 @@ uniform vec2 uTanHalf;  // (tan(fov/2)·aspect, tan(fov/2))
 uniform vec2 uSize;     // image width, height
 uniform float uAlbedo;
 
+#ifdef SL_OBJECTS
+// The surface pass (gpu/stages.h ScreenSurfaces), at full resolution: the first surface's
+// view-ray distance (3e38 where none) and its L_p.
+layout(binding = BINDING_SURFACE_TEXTURE) uniform sampler2D uSurfaceDistance;
+layout(binding = BINDING_SURFACE_RADIANCE_TEXTURE) uniform sampler2D uSurfaceRadiance;
+#endif
+
+// The view-ray distance of the first surface at full-resolution pixel p; kInf where none (and
+// always without objects).
+float surfaceDistance(ivec2 p) {
+#ifdef SL_OBJECTS
+  float t = texelFetch(uSurfaceDistance, min(p, ivec2(uSize) - 1), 0).r;
+  return t < 1.0e38 ? t : kInf;
+#else
+  return kInf;
+#endif
+}
+
 // The ray through continuous image coordinates f (x right, y down).
 vec3 cameraRay(vec2 f) {
   float u = (f.x / uSize.x * 2.0 - 1.0) * uTanHalf.x;

@@ -1,7 +1,7 @@
 /// The GPU variants of `jittered-march` and `froxel` (gpu/screen_march.cpp) against their CPU
 /// variants (render/), end to end through createMethod: every jitter pattern and downsample,
-/// both depth distributions and both light-transmittance sources. And the GPU variants refuse
-/// scenes with objects.
+/// both depth distributions and both light-transmittance sources. Scenes with objects:
+/// tests/gpu/test_competitor_objects.cpp.
 
 #include <gtest/gtest.h>
 
@@ -52,31 +52,6 @@ TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
              {"light_transmittance", "map"},
              {"transmittance_map_resolution", 16}}})
     EXPECT_LT(gpuVsCpu(r), 1.5e-6) << r.dump();
-}
-
-TEST(GpuCompetitors, RefuseObjectsNamingTheMethod) {
-  SCATTERLAB_REQUIRE_GPU();
-  Json doc = blobSceneDoc(8, 8, 6);
-  doc["objects"] =
-      Json::array({{{"type", "sphere"}, {"center", {0.5, 0.5, 0.5}}, {"radius", 0.1}}});
-  const Scene scene = sceneFromJson(doc);
-  gpu::GpuFrame frame;
-  frame.buildDensity(scene);
-  PipelineSettings s;
-  s.delta1 = 0.05f;
-  s.march.step = 0.05f;
-  for (const auto& [name, integrator] :
-       std::vector<std::pair<std::string, std::shared_ptr<Integrator>>>{
-           {"jittered-march", std::make_shared<gpu::JitteredMarchGpu>(s)},
-           {"froxel", std::make_shared<gpu::FroxelGpu>(s)}}) {
-    try {
-      integrator->integrate(frame, scene, nullptr);
-      ADD_FAILURE() << name << " rendered a scene with objects on the GPU";
-    } catch (const ConfigError& e) {
-      EXPECT_EQ(std::string(e.what()),
-                name + " on the GPU does not render objects yet: use --backend cpu");
-    }
-  }
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 /// The GPU variants of the real-time methods (gpu/realtime.h) against their CPU twins
 /// (render/light_space_march.h, render/radial_blur.h), end to end through createMethod, on
-/// llvmpipe in CI; and what the GPU variants refuse.
+/// llvmpipe in CI; and what the GPU variants refuse (a light behind the camera).
 
 #include "core/method.h"
 #include "gpu/context.h"
@@ -79,28 +79,7 @@ TEST(GpuRealtimeMethods, RefuseWhatTheyCannotRender) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("behind the camera"), std::string::npos) << e.what();
   }
-  // Objects: the GPU integrators of these two methods do not read the shadow maps yet, so they
-  // refuse a scene with objects (createMethod no longer refuses objects on the GPU).
-  Json withObjects = blobSceneDoc(12, 16, 12);
-  withObjects["objects"] = Json::array(
-      {{{"type", "sphere"}, {"center", {0.5, 1.2, 0.5}}, {"radius", 0.1}, {"albedo", 0.5}}});
-  Scene o = sceneFromJson(withObjects);
-  for (const char* method : {"light-space-march", "radial-blur"}) {
-    o.render = {{"method", method}};
-    Scene plain = sceneFromJson(blobSceneDoc(12, 16, 12));
-    plain.render = {{"method", method}};
-    auto gm = createMethod(plain, "", "gpu");
-    try {
-      gm->render(o, nullptr);  // a GPU method handed a scene with objects
-      ADD_FAILURE() << method << " rendered objects on the GPU";
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find(std::string(method) +
-                                           " on the GPU does not render objects yet: use "
-                                           "--backend cpu"),
-                std::string::npos)
-          << e.what();
-    }
-  }
+  // Objects render on the GPU (tests/gpu/test_competitor_objects.cpp): nothing refused.
 }
 
 }  // namespace

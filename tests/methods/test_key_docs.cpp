@@ -117,9 +117,11 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = "ancestor";
         else if (k == "probes")
           s.render[k] = 6;
-        else if (k == "steps")  // jittered-march and light-space-march (>= interleave²)
+        else if (k == "steps" && m == "light-space-march")  // at least interleave²
           s.render[k] = 16;
-        else if (k == "downsample")  // jittered-march and radial-blur
+        else if (k == "light_transmittance" && m == "light-space-march")
+          s.render[k] = "traced";
+        else if (k == "steps" || k == "downsample")
           s.render[k] = 2;
         else if (k == "jitter")
           s.render[k] = "blue-noise";
@@ -131,17 +133,14 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 0.01;
         else if (k == "far")
           s.render[k] = 100;
-        else if (k ==
-                 "light_transmittance")  // froxel (traced, map), light-space-march (mean, traced)
-          s.render[k] = "traced";
+        else if (k == "light_transmittance")
+          s.render[k] = "map";
         else if (k == "transmittance_map_resolution")
           s.render[k] = 4;
         else if (k == "min_transmittance" || k == "epsilon")
           s.render[k] = 0.5;
         else if (k == "interleave")
           s.render[k] = 2;
-        else if (k == "shadow_map_resolution")
-          s.render[k] = 64;
         else if (k == "samples")  // radial-blur
           s.render[k] = 8;
         else if (k == "density" || k == "decay" || k == "guard_band")
