@@ -87,10 +87,12 @@ class VdbLayoutCheck {
       const std::uint64_t gridPos = u64("grid offset"), blockPos = u64("data offset"),
                           endPos = u64("grid end offset");
       if (endPos == 0) return;  // a stream without offsets: grids follow in order, unknown size
-      if (!(gridPos <= blockPos && blockPos <= endPos && endPos <= size_ && gridPos >= pos_))
+      if (endPos > size_)
+        fail("truncated: grid '" + name.substr(0, 64) + "' ends at byte " + std::to_string(endPos) +
+             ", the file has " + std::to_string(size_) + " bytes");
+      if (!(gridPos <= blockPos && blockPos <= endPos && gridPos >= pos_))
         fail("grid '" + name.substr(0, 64) + "': offsets " + std::to_string(gridPos) + ", " +
-             std::to_string(blockPos) + ", " + std::to_string(endPos) + " outside the file's " +
-             std::to_string(size_) + " bytes or out of order");
+             std::to_string(blockPos) + ", " + std::to_string(endPos) + " out of order");
       seek(endPos);
     }
   }
