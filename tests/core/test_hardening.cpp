@@ -15,6 +15,7 @@
 
 #include "core/atomic_file.h"
 #include "core/grid.h"
+#include "core/image.h"
 #include "core/limits.h"
 #include "core/params.h"
 #include "support/scenes.h"
@@ -251,4 +252,15 @@ TEST(SignalCleanup, InterruptDuringAWriteLeavesNoTemporary) {
       ::testing::KilledBySignal(SIGINT), "");
   EXPECT_TRUE(std::filesystem::is_empty(dir));
   std::filesystem::remove_all(dir);
+}
+
+// fuzz_exr's finding: a data window of 4325382x769 pixels in a 0.4 KB file made readExr
+// allocate 40 GB (ASan: out of memory; without ASan the allocation's luck decided). Now the
+// window is checked in 64 bits and its memory against the limit, before allocating.
+TEST(BinaryInputs, ExrWithAHugeDataWindowIsRefusedBeforeAllocating) {
+  const std::string p = SCATTERLAB_SOURCE_DIR "/fuzz/regressions/fuzz_exr_huge_data_window.exr";
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string m = messageOf<LimitError>([&] { readExr(p); });
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
+  EXPECT_TRUE(has(m, "'" + p + "': an image of 4325382x769 pixels needs about 50 GiB")) << m;
 }
