@@ -13,7 +13,7 @@ TARGETS=("$@")
 OUT=build-fuzz
 # libFuzzer reports allocations above its -rss_limit_mb (2 GiB): the library's own memory limit
 # is set below it, so a size the limit refuses is an error, not a finding.
-export SCATTERLAB_MEMORY_LIMIT=${SCATTERLAB_MEMORY_LIMIT:-1G}
+export SCATTERLAB_MEMORY_LIMIT=${SCATTERLAB_MEMORY_LIMIT:-64M}
 CLI=${BUILD:-build}/bin/scatterlab
 mkdir -p "$OUT"
 CXX=${CXX_FUZZ:-clang++-14}
