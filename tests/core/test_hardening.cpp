@@ -261,6 +261,7 @@ TEST(BinaryInputs, ExrWithAHugeDataWindowIsRefusedBeforeAllocating) {
   const std::string p = SCATTERLAB_SOURCE_DIR "/fuzz/regressions/fuzz_exr_huge_data_window.exr";
   const auto t0 = std::chrono::steady_clock::now();
   const std::string m = messageOf<LimitError>([&] { readExr(p); });
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
+  // 0.01 s in Release; 1.3 s under ASan (OpenEXR's own header and line-buffer setup).
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
   EXPECT_TRUE(has(m, "'" + p + "': an image of 4325382x769 pixels needs about 50 GiB")) << m;
 }
