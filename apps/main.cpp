@@ -1,10 +1,16 @@
 /// `scatterlab`: render scenes, compare images, inspect files. See README.md.
 
+#include <tbb/global_control.h>
+
 #include <cstdio>
+#include <memory>
 #include <vector>
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/limits.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -12,6 +18,24 @@ int main(int argc, char** argv) {
       "and comparisons"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(scatterlab::version()));
+  // Global options, accepted before or after the subcommand (docs/reliability.md).
+  app.fallthrough();
+  int threads = 0;
+  app.add_option("--threads", threads,
+                 "worker threads at most (TBB's global limit; default: one per core)")
+      ->check(CLI::Range(1, 4096));
+  std::string memoryLimit;
+  app.add_option("--memory-limit", memoryLimit,
+                 "refuse requests whose estimated memory is above this (bytes, K/M/G/T or % "
+                 "of physical memory; default 75%, or SCATTERLAB_MEMORY_LIMIT)")
+      ->check([](const std::string& v) -> std::string {
+        try {
+          scatterlab::parseMemorySize(v, "");
+        } catch (const scatterlab::Error& e) {
+          return e.what();
+        }
+        return {};
+      });
   std::vector<std::pair<CLI::App*, scatterlab::cli::Action>> cmds;
   const auto add = [&](scatterlab::cli::Action (*f)(CLI::App&)) {
     const size_t before = app.get_subcommands({}).size();
@@ -34,8 +58,15 @@ int main(int argc, char** argv) {
                  e.what());
     return 2;
   }
+  std::unique_ptr<tbb::global_control> threadLimit;
+  if (threads > 0)
+    threadLimit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   try {
+    if (!memoryLimit.empty())
+      scatterlab::setMemoryLimit(scatterlab::parseMemorySize(memoryLimit, "--memory-limit"));
     scatterlab::initialize();
+    scatterlab::removeTemporariesOnSignal();  // Ctrl-C leaves no temporary behind
     for (auto& [sub, action] : cmds)
       if (sub->parsed()) return action();
   } catch (const scatterlab::cli::UsageError& e) {

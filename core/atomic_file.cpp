@@ -1,6 +1,7 @@
 #include "core/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -16,6 +17,42 @@ namespace fs = std::filesystem;
 
 namespace scatterlab {
 namespace {
+
+/// Temporaries being written, for the signal handler: fixed slots (no allocation, no lock in
+/// the handler). A slot is 0 free, 1 being filled, 2 holding a path to unlink on a signal.
+constexpr int kTempSlots = 64;
+struct TempSlot {
+  std::atomic<int> state{0};
+  char path[4096];
+};
+TempSlot g_temps[kTempSlots];
+
+/// Registers `tmp` for removal on SIGINT/SIGTERM/SIGHUP; -1 when every slot is taken or the
+/// path is too long (then only a later cleanup of stale temporaries removes it).
+int registerTemp(const std::string& tmp) {
+  if (tmp.size() >= sizeof(TempSlot::path)) return -1;
+  for (int i = 0; i < kTempSlots; ++i) {
+    int expected = 0;
+    if (g_temps[i].state.compare_exchange_strong(expected, 1)) {
+      std::memcpy(g_temps[i].path, tmp.c_str(), tmp.size() + 1);
+      g_temps[i].state.store(2);
+      return i;
+    }
+  }
+  return -1;
+}
+
+void unregisterTemp(int& slot) {
+  if (slot >= 0) g_temps[slot].state.store(0);
+  slot = -1;
+}
+
+extern "C" void removeTempsAndReraise(int sig) {
+  for (TempSlot& t : g_temps)
+    if (t.state.load() == 2) ::unlink(t.path);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
 
 std::string tempPathFor(const std::string& path) {
   static std::atomic<unsigned> counter{0};
@@ -131,6 +168,14 @@ void writeBytesAtomically(const std::string& path, std::string_view bytes) {
       path, [&](std::ostream& os) { os.write(bytes.data(), std::streamsize(bytes.size())); });
 }
 
+void removeTemporariesOnSignal() {
+  struct sigaction sa {};
+  sa.sa_handler = removeTempsAndReraise;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+}
+
 void checkWritablePath(const std::string& path) {
   if (path.empty()) throw IoError("output path is empty");
   const fs::path p(path);
@@ -159,16 +204,19 @@ void writeAtomically(const std::string& path,
 void PendingOutputs::stage(const std::string& path,
                            const std::function<void(const std::string&)>& write) {
   checkWritablePath(path);
-  Item item{tempPathFor(path), path};
+  Item item{tempPathFor(path), path, -1};
+  item.slot = registerTemp(item.tmp);
   try {
     write(item.tmp);
   } catch (const IoError&) {
     std::error_code ec;
     fs::remove(item.tmp, ec);
+    unregisterTemp(item.slot);
     rethrowNaming(item.tmp, path);
   } catch (...) {
     std::error_code ec;
     fs::remove(item.tmp, ec);
+    unregisterTemp(item.slot);
     throw;
   }
   items_.push_back(item);
@@ -188,14 +236,16 @@ void PendingOutputs::commit() {
       for (std::size_t j = 0; j < i; ++j) fs::remove(items_[j].path, ec);
       throw IoError("cannot write '" + items_[i].path + "': " + ec.message());
     }
+    unregisterTemp(items_[i].slot);
   }
   items_.clear();
 }
 
 PendingOutputs::~PendingOutputs() {
-  for (const Item& item : items_) {
+  for (Item& item : items_) {
     std::error_code ec;
     fs::remove(item.tmp, ec);
+    unregisterTemp(item.slot);
   }
 }
 

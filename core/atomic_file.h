@@ -43,9 +43,16 @@ class PendingOutputs {
  private:
   struct Item {
     std::string tmp, path;
+    int slot;  ///< registration for removal on a signal (-1: none)
   };
   std::vector<Item> items_;
 };
+
+/// Installs handlers for SIGINT, SIGTERM and SIGHUP that unlink every temporary an atomic
+/// writer or PendingOutputs holds at that moment (up to 64 at once), then re-raise the signal
+/// with its default action (the process still dies by the signal). For programs (the CLI);
+/// a library user decides about its own signal handlers.
+void removeTemporariesOnSignal();
 
 /// Checks that `path` can be created: its directory exists and `path` is not a directory.
 /// Throws IoError naming the path.

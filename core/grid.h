@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/math.h"
 
 namespace scatterlab {
@@ -30,6 +31,9 @@ class Grid3 {
       throw LimitError("grid of " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
                        std::to_string(dims.z) + " voxels exceeds the limit of " +
                        std::to_string(kMaxGridVoxels) + " voxels (512^3)");
+    checkMemory("grid " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
+                    std::to_string(dims.z),
+                "a volume of " + std::to_string(sizeof(T)) + "-byte voxels", double(n) * sizeof(T));
     bounds_ = bounds;
     dims_ = dims;
     cell_ = bounds.extent() / Vec3(dims);

@@ -11,12 +11,15 @@
 #include <png.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace scatterlab {
 
@@ -85,10 +88,18 @@ Image readExr(const std::string& path) {
   try {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
-    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    // In 64 bits: a corrupt data window overflows int (fuzz_exr found a 40 GB allocation).
+    const std::int64_t w64 = std::int64_t(dw.max.x) - dw.min.x + 1,
+                       h64 = std::int64_t(dw.max.y) - dw.min.y + 1;
+    if (w64 < 1 || h64 < 1 || w64 > INT_MAX || h64 > INT_MAX)
+      throw IoError("invalid data window of " + std::to_string(w64) + "x" + std::to_string(h64) +
+                    " pixels");
     const Imf::ChannelList& ch = file.header().channels();
     if (!ch.findChannel("R") && !ch.findChannel("G") && !ch.findChannel("B"))
       throw IoError("no R, G or B channel");
+    checkMemory(path, "an image of " + std::to_string(w64) + "x" + std::to_string(h64) + " pixels",
+                double(w64) * double(h64) * double(sizeof(Vec3) + sizeof(float)));
+    const int w = int(w64), h = int(h64);
     Image img(w, h);
     Imf::FrameBuffer fb;
     char* base = reinterpret_cast<char*>(img.pixels().data());
@@ -108,6 +119,10 @@ Image readExr(const std::string& path) {
     return img;
   } catch (const IoError& e) {
     throw IoError("cannot read EXR '" + path + "': " + e.what());
+  } catch (const LimitError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw IoError("cannot read EXR '" + path + "': corrupt sizes (allocation failed)");
   } catch (const std::exception& e) {
     throw IoError("cannot read EXR '" + path + "': " + e.what());
   }

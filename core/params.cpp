@@ -306,7 +306,8 @@ Vec3 Params::rgb(const std::string& key, std::optional<Vec3> def, const Interval
   return vec3(key, def, range);
 }
 
-IVec3 Params::resolution(const std::string& key, std::optional<IVec3> def) {
+IVec3 Params::resolution(const std::string& key, std::optional<IVec3> def,
+                         std::size_t bytesPerVoxel, const std::string& what) {
   const Interval range = Interval::closed(1, 4096);
   IVec3 r;
   if (has(key) && (*j_)[key].is_array()) {
@@ -325,6 +326,10 @@ IVec3 Params::resolution(const std::string& key, std::optional<IVec3> def) {
     fail(key, std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) + " = " +
                   std::to_string(n) + " voxels is above the memory bound of " +
                   std::to_string(kMaxGridVoxels) + " voxels (512^3)");
+  checkMemory(keyPath(key),
+              what + " of " + std::to_string(r.x) + "x" + std::to_string(r.y) + "x" +
+                  std::to_string(r.z) + " voxels",
+              double(n) * double(bytesPerVoxel));
   return r;
 }
 

@@ -76,8 +76,11 @@ class Params {
   std::string choice(const std::string& key, const std::vector<std::string>& allowed,
                      std::optional<std::string> def = std::nullopt);
   /// A voxel resolution: an integer n (meaning n³) or [nx, ny, nz] of integers, each in
-  /// [1, 4096], at most 512³ voxels in all (the one rule for every resolution key).
-  IVec3 resolution(const std::string& key, std::optional<IVec3> def = std::nullopt);
+  /// [1, 4096], at most 512³ voxels in all (the one rule for every resolution key). A volume
+  /// of `bytesPerVoxel` per voxel (`what`) must also fit the memory limit (core/limits.h):
+  /// LimitError naming the key otherwise.
+  IVec3 resolution(const std::string& key, std::optional<IVec3> def = std::nullopt,
+                   std::size_t bytesPerVoxel = 4, const std::string& what = "the volume");
   /// Array of 3 numbers, each within `range` and within float range.
   Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt,
             const Interval& range = {});

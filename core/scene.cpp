@@ -8,6 +8,7 @@
 #include "core/animation.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace scatterlab {
 
@@ -96,6 +97,11 @@ Camera parseCamera(Params p, const Box& box) {
   c.width = int(p.integer("width", 320, Interval::closed(1, 16384)));
   c.height = int(p.integer("height", 240, Interval::closed(1, 16384)));
   c.spp = int(p.integer("spp", 1, Interval::closed(1, 1024)));
+  // The image (RGB float + alpha) and what an output encodes from it (EXR/PNG buffers).
+  checkMemory(p.keyPath("width") + "', '" + p.keyPath("height"),
+              "an image of " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                  " pixels (32 bytes each with alpha and output buffers)",
+              double(c.width) * double(c.height) * 32.0);
   const int k = int(std::lround(std::sqrt(double(c.spp))));
   if (k * k != c.spp)
     p.fail("spp", "value " + std::to_string(c.spp) +
@@ -171,7 +177,7 @@ Medium parseMedium(Params p, LoadContext ctx) {
       p.fail("bounds", "required for density type '" + m.density->type() +
                            "' (expected {\"min\": [x,y,z], \"max\": [x,y,z]})");
   }
-  m.resolution = p.resolution("resolution", IVec3(128));
+  m.resolution = p.resolution("resolution", IVec3(128), sizeof(float), "the density volume");
   m.sigmaT = p.real("sigma_t", 1.0, Interval::atLeast(0));
   m.albedo = p.real("albedo", 1.0, Interval::closed(0, 1));
   if (p.has("phase"))

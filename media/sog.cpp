@@ -10,6 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace scatterlab {
 
@@ -222,19 +223,23 @@ void writeSog(const std::string& path, const SogModel& m) {
 
 SogModel readSog(const std::string& path) {
   checkReadableFile(path, ".sog model");
-  std::string s;
-  {
-    std::ifstream in(path, std::ios::binary);
-    s.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (in.bad()) throw IoError("cannot read '" + path + "'");
-  }
   const auto bad = [&](const std::string& why) -> IoError {
     return IoError("'" + path + "' is not a valid .sog model: " + why);
   };
+  // Header first, then its sizes against the file's size: nothing is allocated from a number
+  // the file states before the file is known to hold that many bytes.
+  std::error_code ec;
+  const std::uintmax_t fileSize = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError("cannot read '" + path + "': " + ec.message());
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot read '" + path + "'");
+  std::string s(std::size_t(std::min<std::uintmax_t>(fileSize, kHeaderBytes)), '\0');
+  in.read(s.data(), std::streamsize(s.size()));
+  if (in.gcount() != std::streamsize(s.size())) throw IoError("cannot read '" + path + "'");
   if (s.size() < 8 || std::memcmp(s.data(), kMagic, 8) != 0)
     throw bad("no .sog signature at its start (a foreign file?)");
-  if (s.size() < kHeaderBytes + 8)
-    throw bad("truncated (" + std::to_string(s.size()) + " bytes, the header alone needs " +
+  if (fileSize < kHeaderBytes + 8)
+    throw bad("truncated (" + std::to_string(fileSize) + " bytes, the header alone needs " +
               std::to_string(kHeaderBytes + 8) + ")");
   std::size_t off = 8;
   const auto version = get<std::uint32_t>(s, off);
@@ -263,19 +268,34 @@ SogModel readSog(const std::string& path) {
   const auto step = get<float>(s, off);
   const auto threshold = get<float>(s, off);
   if (bits != 8 && bits != 16) throw bad("quantisation of " + std::to_string(bits) + " bits");
-  if (!(std::isfinite(step) && step >= 0)) throw bad("invalid residual step");
+  // The largest code times the step must stay finite in single precision.
+  if (!(std::isfinite(step) && step >= 0 && double(step) * 32767.0 <= 3.4e38))
+    throw bad("invalid residual step");
+  if (std::int64_t(nE) > cells)
+    throw bad(std::to_string(nE) + " residual entries on a lattice of " + std::to_string(cells) +
+              " cells");
   const std::uint64_t expected =
       kHeaderBytes + std::uint64_t(nG) * kGaussianBytes + std::uint64_t(nE) * (4 + bits / 8) + 8;
-  if (s.size() != expected)
-    throw bad((s.size() < expected ? "truncated: " : "trailing bytes: ") +
-              std::to_string(s.size()) + " bytes, the header announces " +
+  if (fileSize != expected)
+    throw bad((fileSize < expected ? "truncated: " : "trailing bytes: ") +
+              std::to_string(fileSize) + " bytes, the header announces " +
               std::to_string(expected));
+  // The model in memory: Gaussians, and the hash at load factor <= 1/2 (capacity up to 4x).
+  checkMemory(path,
+              "the .sog model (" + std::to_string(nG) + " Gaussians, " + std::to_string(nE) +
+                  " residual entries)",
+              double(nG) * sizeof(GaussianBlob) + double(nE) * 4 * 6 + double(fileSize));
+  s.resize(std::size_t(fileSize));
+  in.read(s.data() + kHeaderBytes, std::streamsize(fileSize - kHeaderBytes));
+  if (in.gcount() != std::streamsize(fileSize - kHeaderBytes))
+    throw bad("truncated while reading (the file changed?)");
   std::uint64_t stored;
   std::memcpy(&stored, s.data() + s.size() - 8, 8);
   if (stored != fnv1a(s.data(), s.size() - 8)) throw bad("checksum mismatch (corrupt file)");
   SogModel m;
   m.threshold = threshold;
   m.gaussians.resize(nG);
+  const double diag = glm::length(glm::dvec3(b.max) - glm::dvec3(b.min));
   for (auto& g : m.gaussians) {
     g.center.x = get<float>(s, off);
     g.center.y = get<float>(s, off);
@@ -285,6 +305,14 @@ SogModel readSog(const std::string& path) {
     if (!std::isfinite(g.center.x + g.center.y + g.center.z + g.weight) ||
         !(g.radius > 0 && std::isfinite(g.radius)))
       throw bad("invalid Gaussian (non-finite value or radius <= 0)");
+    // As scene Gaussians (core/scene.cpp): within 1e6 box diagonals, and a sum of all weights
+    // that stays finite in single precision.
+    const glm::dvec3 c(g.center), mid = (glm::dvec3(b.min) + glm::dvec3(b.max)) * 0.5;
+    if (!(glm::length(c - mid) <= 1e6 * diag && double(g.radius) <= 1e6 * diag))
+      throw bad("a Gaussian's centre or radius is more than 1e6 box diagonals from the box");
+    if (!(std::abs(double(g.weight)) * double(nG) <= 3.4e38))
+      throw bad("a Gaussian weight of " + std::to_string(g.weight) +
+                " (the sum of the weights would overflow single precision)");
   }
   m.residual = ResidualHash(b, dims, int(bits), step);
   const std::size_t keyOff = off, codeOff = off + std::size_t(nE) * 4;

@@ -2,13 +2,20 @@
 
 #include <tbb/parallel_for.h>
 
+#include <fcntl.h>
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Count.h>
 #include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Interpolation.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -16,6 +23,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace scatterlab {
 
@@ -39,17 +47,109 @@ bool startsWithVdbMagic(const std::string& path) {
   return b[0] == 0x20 && b[1] == 0x42 && b[2] == 0x44 && b[3] == 0x56;
 }
 
-/// Opens and fully reads every grid (no delayed loading, so a truncated file fails here and
+/// Reads what can be checked of a VDB file's layout before OpenVDB parses it
+/// (openvdb/io/Archive.cc, GridDescriptor.cc): the header, the file metadata, the grid count
+/// and each grid descriptor (names, type, offsets). Every length and offset must lie inside
+/// the file; a bit flip in them used to make OpenVDB allocate gigabytes or read past buffers.
+/// The grids' own data (topology, compressed buffers) is not checked here: see readInChild.
+class VdbLayoutCheck {
+ public:
+  VdbLayoutCheck(const std::string& path, std::uint64_t size) : path_(path), size_(size) {
+    in_.open(path, std::ios::binary);
+    if (!in_) throw IoError("cannot read VDB file '" + path + "'");
+  }
+
+  void run() {
+    skip(8, "magic number");
+    const auto version = u32("file format version");
+    if (version < openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP ||
+        version > openvdb::OPENVDB_FILE_VERSION)
+      fail("file format version " + std::to_string(version) + " (this build reads " +
+           std::to_string(openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP) + " to " +
+           std::to_string(openvdb::OPENVDB_FILE_VERSION) + ")");
+    skip(8, "library version");
+    skip(1, "grid offsets flag");
+    skip(version >= openvdb::OPENVDB_FILE_VERSION_BOOST_UUID ? 36 : 16, "file UUID");
+    const auto metaCount = u32("file metadata count");
+    for (std::uint32_t m = 0; m < metaCount; ++m) {
+      str("metadata name");
+      str("metadata type");
+      skip(u32("metadata value size"), "metadata value");
+    }
+    const auto grids = u32("grid count");
+    // A grid takes far more than 16 bytes (descriptor, transform, topology).
+    if (std::uint64_t(grids) * 16 > size_ - pos_)
+      fail(std::to_string(grids) + " grids announced in " + std::to_string(size_) + " bytes");
+    for (std::uint32_t g = 0; g < grids; ++g) {
+      const std::string name = str("grid name");
+      str("grid type");
+      if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) str("instance parent name");
+      const std::uint64_t gridPos = u64("grid offset"), blockPos = u64("data offset"),
+                          endPos = u64("grid end offset");
+      if (endPos == 0) return;  // a stream without offsets: grids follow in order, unknown size
+      if (endPos > size_)
+        fail("truncated: grid '" + name.substr(0, 64) + "' ends at byte " + std::to_string(endPos) +
+             ", the file has " + std::to_string(size_) + " bytes");
+      if (!(gridPos <= blockPos && blockPos <= endPos && gridPos >= pos_))
+        fail("grid '" + name.substr(0, 64) + "': offsets " + std::to_string(gridPos) + ", " +
+             std::to_string(blockPos) + ", " + std::to_string(endPos) + " out of order");
+      seek(endPos);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) {
+    throw IoError("'" + path_ + "' is not a valid VDB file: " + why);
+  }
+  void need(std::uint64_t n, const char* what) {
+    if (n > size_ - pos_)
+      fail(std::string("truncated or corrupt ") + what + " at byte " + std::to_string(pos_) + " (" +
+           std::to_string(n) + " bytes announced, " + std::to_string(size_ - pos_) + " left)");
+  }
+  void read(char* p, std::uint64_t n, const char* what) {
+    need(n, what);
+    in_.read(p, std::streamsize(n));
+    if (!in_) fail(std::string("cannot read ") + what);
+    pos_ += n;
+  }
+  void skip(std::uint64_t n, const char* what) {
+    need(n, what);
+    seek(pos_ + n);
+  }
+  void seek(std::uint64_t at) {
+    in_.seekg(std::streamoff(at));
+    pos_ = at;
+  }
+  std::uint32_t u32(const char* what) {
+    std::uint32_t v;
+    read(reinterpret_cast<char*>(&v), 4, what);
+    return v;
+  }
+  std::uint64_t u64(const char* what) {
+    std::uint64_t v;
+    read(reinterpret_cast<char*>(&v), 8, what);
+    return v;
+  }
+  std::string str(const char* what) {
+    const std::uint32_t n = u32(what);
+    if (n > (1u << 20)) fail(std::string(what) + " of " + std::to_string(n) + " bytes");
+    std::string s(n, '\0');
+    read(s.data(), n, what);
+    return s;
+  }
+
+  std::string path_;
+  std::uint64_t size_;
+  std::uint64_t pos_ = 0;
+  std::ifstream in_;
+};
+
+/// Reads every grid in this process (no delayed loading, so a truncated file fails here and
 /// not later inside a sampler).
-openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
-  ensureOpenVdbInitialized();
-  checkReadableFile(path, "VDB file");
-  if (!startsWithVdbMagic(path))
-    throw IoError("'" + path + "' is not an OpenVDB file (no VDB magic number at its start)");
+openvdb::GridPtrVecPtr readGridsHere(const std::string& path, std::istream& in) {
   try {
-    // io::Stream over an ifstream that throws on a short read: OpenVDB itself does not check
+    // io::Stream over an istream that throws on a short read: OpenVDB itself does not check
     // every read, and a truncated file would otherwise load as silently incomplete grids.
-    std::ifstream in(path, std::ios::binary);
     in.exceptions(std::ios::failbit | std::ios::badbit);
     openvdb::io::Stream stream(in, /*delayLoad=*/false);
     openvdb::GridPtrVecPtr grids = stream.getGrids();
@@ -62,6 +162,120 @@ openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
   } catch (const std::bad_alloc&) {
     throw IoError("cannot read VDB file '" + path + "': corrupt sizes (allocation failed)");
   }
+}
+
+bool writeAll(int fd, const char* p, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w;
+    n -= std::size_t(w);
+  }
+  return true;
+}
+
+/// Address-space bytes in use now (/proc/self/statm), 0 when unknown.
+std::uint64_t addressSpaceInUse() {
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t pages = 0;
+  statm >> pages;
+  return pages * std::uint64_t(::sysconf(_SC_PAGE_SIZE));
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
+/// OpenVDB's reader trusts the file: a bit flip in a compressed block made it overflow a heap
+/// buffer (blosc), others make it allocate gigabytes. So a forked child parses the file,
+/// under an address-space limit of the memory limit (core/limits.h; not under ASan, whose
+/// shadow memory needs the address space), and sends the grids back re-serialised by OpenVDB's
+/// writer through a pipe; the parent parses only that. A crash, abort or allocation failure
+/// in the child is an IoError naming the file; the process goes on.
+openvdb::GridPtrVecPtr readInChild(const std::string& path) {
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0)
+    throw IoError("cannot read VDB file '" + path + "': pipe: " + std::strerror(errno));
+  const std::uint64_t limit = memoryLimit() + addressSpaceInUse();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int e = errno;
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw IoError("cannot read VDB file '" + path + "': fork: " + std::strerror(e));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    if (!kAddressSanitizer) {
+      const rlimit rl{rlim_t(limit), rlim_t(limit)};
+      ::setrlimit(RLIMIT_AS, &rl);
+    }
+    std::string out;
+    try {
+      std::ifstream in(path, std::ios::binary);
+      const openvdb::GridPtrVecPtr grids = readGridsHere(path, in);
+      std::ostringstream os(std::ios::binary);
+      openvdb::io::Stream stream(os);
+      stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
+      stream.write(*grids);
+      out = "G" + std::move(os).str();
+    } catch (const std::bad_alloc&) {
+      out = "Ecannot read VDB file '" + path + "': corrupt sizes (more memory than the limit of " +
+            formatBytes(double(memoryLimit())) + ")";
+    } catch (const IoError& e) {
+      out = std::string("E") + e.what();
+    } catch (const std::exception& e) {
+      out = "Ecannot read VDB file '" + path + "' (corrupt?): " + e.what();
+    }
+    _exit(writeAll(fds[1], out.data(), out.size()) ? 0 : 3);
+  }
+  ::close(fds[1]);
+  std::string data;
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t r = ::read(fds[0], buf, sizeof buf);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) break;
+    data.append(buf, std::size_t(r));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status))
+    throw IoError("cannot read VDB file '" + path + "': OpenVDB's reader crashed on it (signal " +
+                  std::to_string(WTERMSIG(status)) + ", " + strsignal(WTERMSIG(status)) +
+                  "): the file is corrupt (it was read in a separate process)");
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || data.empty())
+    throw IoError("cannot read VDB file '" + path + "': OpenVDB's reader failed on it (exit " +
+                  std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                  "): the file is corrupt (it was read in a separate process)");
+  if (data[0] == 'E') throw IoError(data.substr(1));
+  std::istringstream in(data.substr(1), std::ios::binary);
+  return readGridsHere(path, in);
+}
+
+/// Opens and fully reads every grid: layout checked here, data parsed in a child process.
+openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
+  ensureOpenVdbInitialized();
+  checkReadableFile(path, "VDB file");
+  if (!startsWithVdbMagic(path))
+    throw IoError("'" + path + "' is not an OpenVDB file (no VDB magic number at its start)");
+  std::error_code ec;
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw IoError("cannot read VDB file '" + path + "': " + ec.message());
+  VdbLayoutCheck(path, size).run();
+  return readInChild(path);
 }
 
 std::string className(openvdb::GridClass c) {

@@ -36,7 +36,13 @@ struct VdbGridInfo {
 };
 
 /// Reads every grid of a .vdb file (fully, no delayed loading). Throws IoError naming the file
-/// when it is missing, not a VDB, or truncated.
+/// when it is missing, not a VDB, truncated or corrupt.
+///
+/// Untrusted files: the layout (header, metadata, grid descriptors, offsets) is checked in
+/// this process, then OpenVDB parses the file in a forked child process (under an address-space
+/// limit of the memory limit, core/limits.h) that sends the grids back through a pipe, so a
+/// crash or huge allocation inside OpenVDB's reader is an IoError, not the end of the caller
+/// (docs/reliability.md). The child runs only OpenVDB's stream reader and writer (no TBB).
 std::vector<VdbGridInfo> inspectVdb(const std::string& path);
 
 /// Density from a float (or double, converted) grid of a .vdb file. Sampling goes through

@@ -1,5 +1,8 @@
 #include "methods/settings.h"
 
+#include <cmath>
+#include <cstdio>
+
 #include "core/error.h"
 #include "methods/march_settings.h"
 #include "sampling/dynamic_sampling.h"
@@ -150,6 +153,53 @@ RadialBlurSettings parseRadialBlur(Params& p) {
   return s;
 }
 
+/// Bounds on marching work, checked before a render starts (docs/reliability.md): view-ray
+/// steps (pixels × spp × diagonal / march_step), and light-march steps taken per view step
+/// (exact) or per voxel (per-voxel). 1e10 view steps take minutes on a few cores.
+constexpr double kMaxViewSteps = 1e10;
+constexpr double kMaxLightSteps = 1e12;
+
+std::string sci(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", v);
+  return b;
+}
+
+void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s) {
+  const double diag = glm::length(glm::dvec3(scene.medium.bounds.extent()));
+  const Camera& c = scene.camera;
+  const double rays = double(c.width) * c.height * c.spp;
+  // Methods that do not step by march_step (light-space-march: `steps` per ray, at most 65536)
+  // have no view bound here.
+  const double perRay = d.viewMarch ? std::ceil(diag / s.march.step) : 0.0;
+  const double view = rays * perRay;
+  const std::string size = std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels x " +
+                           std::to_string(c.spp) + " spp";
+  if (view > kMaxViewSteps)
+    throw LimitError("'" + p.keyPath("march_step") + "': a step of " + sci(s.march.step) +
+                     " gives " + sci(perRay) + " steps per view ray (box diagonal " + sci(diag) +
+                     "), " + sci(view) + " steps for " + size + ", above the bound of " +
+                     sci(kMaxViewSteps) + "; use a longer step or a smaller image");
+  const double perLight =
+      std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
+  double light = 0;
+  std::string what;
+  if (d.integrator == "exact") {
+    light = view * perLight;
+    what = "at every one of " + sci(view) + " view steps";
+  } else if (d.reconstruction == "per-voxel") {
+    const IVec3 r = s.radianceResolution;
+    const double voxels = double(r.x) * r.y * r.z;
+    light = voxels * perLight;
+    what = "at every one of " + sci(voxels) + " voxels";
+  }
+  if (light > kMaxLightSteps)
+    throw LimitError("'" + p.keyPath("delta1") + "': a step of " + sci(s.delta1) + " gives " +
+                     sci(perLight) + " light-march steps " + what + ", " + sci(light) +
+                     " in all, above the bound of " + sci(kMaxLightSteps) +
+                     "; use a longer step, a smaller image or volume");
+}
+
 }  // namespace
 
 PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const MethodDesc& d) {
@@ -187,7 +237,8 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
       p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
   }
   if (d.radianceVolume()) {
-    s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution);
+    s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution,
+                                        sizeof(Vec3), "the source-radiance volume (RGB float)");
     s.slicingGiven = p.has("slicing");
     s.slicing = p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps"
                     ? Slicing::RaySteps
@@ -201,6 +252,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     throw ConfigError("camera.spp: " + d.name +
                       " renders one ray per pixel; camera.spp must be 1 (got " +
                       std::to_string(scene.camera.spp) + ")");
+  checkWork(p, scene, d, s);
   return s;
 }
 

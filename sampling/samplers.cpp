@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace scatterlab {
 
@@ -130,6 +131,12 @@ class CellSampler : public Sampler {
 
 const Interval kCount = Interval::closed(1, 1e8);
 
+/// `count` samples (and the cells they come from) must fit the memory limit.
+void checkSampleMemory(Params& p, long long count) {
+  checkMemory(p.keyPath("count"), std::to_string(count) + " radiance samples",
+              double(count) * double(sizeof(RadianceSample) + 2 * sizeof(std::int64_t)));
+}
+
 }  // namespace
 
 SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty) {
@@ -164,9 +171,10 @@ SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool 
 void registerSamplers() {
   samplers().add("gaussian-centres", [](Params& p, const Scene& scene) {
     std::optional<long long> count;
-    if (p.has("count"))
+    if (p.has("count")) {
       count = p.integer("count", std::nullopt, kCount);
-    else
+      checkSampleMemory(p, *count);
+    } else
       p.allow("count");
     const float scale = p.real("radius_scale", 3.0, Interval::above(0));
     if (!scene.medium.density || !scene.medium.density->gaussians())
@@ -179,6 +187,7 @@ void registerSamplers() {
   const auto cell = [](bool jitter) {
     return [jitter](Params& p, const Scene&) {
       const long long count = p.integer("count", 512, kCount);
+      checkSampleMemory(p, count);
       const float scale = p.real("radius_scale", jitter ? 1.75 : 1.0, Interval::above(0));
       const std::uint64_t seed =
           jitter ? std::uint64_t(p.integer("seed", 0, Interval::atLeast(0))) : 0;

@@ -386,6 +386,53 @@ TEST_F(Cli, ExtremeValuesFailWithTheKeyNotASegfault) {
                     {"dup.json", "duplicate key \"camera\""});
 }
 
+TEST_F(Cli, WorkBoundsNameTheStepBeforeRendering) {
+  // march_step = 2e-6 of a unit box: 866 026 steps per ray, 6.65e10 for 320x240; it ran
+  // practically forever. The same for light marches of `exact` (delta1).
+  const std::string scene = writeScene(tinyScene());
+  const std::string big = "--set camera.width=320 --set camera.height=240 ";
+  expectRenderFails(scene,
+                    {"'render.march_step': a step of 2e-06 gives 8.66e+05 steps per view ray",
+                     "6.65e+10 steps for 320x240 pixels x 1 spp, above the bound of 1e+10"},
+                    big + "--set render.march_step=2e-6");
+  expectRenderFails(scene, {"'render.delta1': a step of 2e-06", "above the bound of 1e+12"},
+                    big + "--set render.delta1=2e-6");
+}
+
+TEST_F(Cli, MemoryLimitFlagAndEnvironment) {
+  const std::string scene = writeScene(tinyScene());
+  expectRenderFails(scene,
+                    {"'medium.resolution': the density volume of 512x512x512 voxels needs about "
+                     "512 MiB, above the memory limit of 64 MiB"},
+                    "--memory-limit 64M --set medium.resolution=512");
+  setenv("SCATTERLAB_MEMORY_LIMIT", "32M", 1);
+  expectRenderFails(scene, {"the memory limit of 32 MiB"}, "--set medium.resolution=256");
+  setenv("SCATTERLAB_MEMORY_LIMIT", "lots", 1);
+  expectRenderFails(scene, {"SCATTERLAB_MEMORY_LIMIT: 'lots' is not a size"});
+  unsetenv("SCATTERLAB_MEMORY_LIMIT");
+  for (const char* bad : {"12Q", "0", "200%"}) {
+    const RunResult r = run("render " + scene + " -o " + out("o.exr") + " --memory-limit " + bad);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_EQ(r.output.rfind("scatterlab: error: --memory-limit", 0), 0u) << r.output;
+  }
+}
+
+TEST_F(Cli, ThreadsBoundsTheWorkerPool) {
+  const std::string scene = writeScene(tinyScene());
+  RunResult r = run("--threads 1 render " + scene + " -o " + out("a.exr"));
+  EXPECT_EQ(r.code, 0) << r.output;
+  r = run("render " + scene + " -o " + out("b.exr") + " --threads 2");
+  EXPECT_EQ(r.code, 0) << r.output;
+  r = run("compare " + out("a.exr") + " " + out("b.exr"));
+  EXPECT_EQ(r.code, 0) << r.output;  // same image whatever the thread count
+  EXPECT_NE(r.output.find("max abs error:     0\n"), std::string::npos) << r.output;
+  for (const char* bad : {"0", "-3", "many"}) {
+    r = run("render " + scene + " -o " + out("c.exr") + " --threads " + bad);
+    EXPECT_EQ(r.code, 2) << bad << r.output;
+    EXPECT_EQ(r.output.rfind("scatterlab: error: --threads", 0), 0u) << r.output;
+  }
+}
+
 TEST_F(Cli, FullDiskDuringVdbExportExits1AndLeavesNothing) {
   // bash's `ulimit -f 64` (KiB) fails write(2) with EFBIG like a full disk fails it with ENOSPC;
   // SIGXFSZ is ignored so the write fails instead of killing the process. The density volume

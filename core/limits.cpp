@@ -1,0 +1,116 @@
+#include "core/limits.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "core/error.h"
+
+namespace scatterlab {
+
+namespace {
+
+constexpr const char* kEnv = "SCATTERLAB_MEMORY_LIMIT";
+
+std::atomic<std::uint64_t> g_limit{0};  // 0: not set yet
+
+std::uint64_t physicalMemory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return std::uint64_t(8) << 30;  // unknown: assume 8 GiB
+  return std::uint64_t(pages) * std::uint64_t(page);
+}
+
+std::uint64_t initialLimit() {
+  if (const char* e = std::getenv(kEnv); e && *e) return parseMemorySize(e, kEnv);
+  return defaultMemoryLimit();
+}
+
+}  // namespace
+
+std::uint64_t defaultMemoryLimit() {
+  return physicalMemory() / 4 * 3;
+}
+
+std::uint64_t memoryLimit() {
+  std::uint64_t l = g_limit.load(std::memory_order_relaxed);
+  if (l == 0) {
+    l = initialLimit();
+    g_limit.store(l, std::memory_order_relaxed);
+  }
+  return l;
+}
+
+void setMemoryLimit(std::uint64_t bytes) {
+  g_limit.store(bytes == 0 ? initialLimit() : bytes, std::memory_order_relaxed);
+}
+
+std::uint64_t parseMemorySize(const std::string& text, const std::string& what) {
+  const auto bad = [&](const std::string& why) {
+    return ConfigError((what.empty() ? "" : what + ": ") + "'" + text.substr(0, 40) + "' " + why +
+                       "; expected bytes with an optional unit (K, M, G, T) or a percentage "
+                       "of physical memory, e.g. 4G, 512M, 50%");
+  };
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    throw bad("is not a size");
+  }
+  std::string unit = text.substr(used);
+  unit.erase(0, unit.find_first_not_of(' '));
+  for (char& c : unit) c = char(std::tolower(static_cast<unsigned char>(c)));
+  double bytes = 0;
+  if (unit == "%") {
+    if (!(v > 0 && v <= 100)) throw bad("is not a percentage in (0, 100]");
+    bytes = double(physicalMemory()) * v / 100.0;
+  } else {
+    static const char* kUnits = "bkmgt";
+    double scale = 1;
+    if (!unit.empty()) {
+      const char* u = std::strchr(kUnits, unit[0]);
+      const std::string rest = unit.substr(1);
+      if (!u || !(rest.empty() || rest == "b" || rest == "ib" || (unit == "b")))
+        throw bad("has an unknown unit '" + unit.substr(0, 8) + "'");
+      scale = std::pow(1024.0, double(u - kUnits));
+    }
+    if (!(std::isfinite(v) && v > 0)) throw bad("is not a positive size");
+    bytes = v * scale;
+  }
+  if (!(bytes >= double(1 << 20))) throw bad("is below 1 MiB");
+  if (!(bytes < 1.8e19)) throw bad("is too large");
+  return std::uint64_t(bytes);
+}
+
+std::string formatBytes(double bytes) {
+  static const char* kNames[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  int u = 0;
+  while (bytes >= 1024.0 && u < 6) {
+    bytes /= 1024.0;
+    ++u;
+  }
+  char buf[48];
+  if (u == 0)
+    std::snprintf(buf, sizeof buf, "%.0f bytes", bytes);
+  else
+    std::snprintf(buf, sizeof buf, "%.*f %s", bytes < 10 ? 1 : 0, bytes, kNames[u]);
+  return buf;
+}
+
+void checkMemory(const std::string& key, const std::string& what, double bytes) {
+  const std::uint64_t limit = memoryLimit();
+  if (!(bytes > double(limit))) return;
+  throw LimitError(
+      "'" + key + "': " + what + " needs about " + formatBytes(bytes) +
+      ", above the memory limit of " + formatBytes(double(limit)) +
+      " (the default is 75 % of physical memory; change the limit with --memory-limit or " + kEnv +
+      ")");
+}
+
+}  // namespace scatterlab

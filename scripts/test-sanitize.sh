@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The test suite under AddressSanitizer + UndefinedBehaviorSanitizer (issue 17): a separate
+# build tree (build-asan/, RelWithDebInfo at -O1), every C++ test including the GPU tests on
+# llvmpipe. Not here: the Python module and the installed-package consumer test (a Python
+# interpreter that is not ASan-built would need libasan in LD_PRELOAD and reports CPython's
+# own leaks; the same code runs in the C++ tests) and the benchmarks.
+# Usage: scripts/test-sanitize.sh [BUILD_DIR]   (SCATTERLAB_JOBS: parallel jobs, default 2)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${1:-build-asan}
+JOBS=${SCATTERLAB_JOBS:-2}
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" -DSCATTERLAB_SANITIZE=ON \
+  -DSCATTERLAB_BUILD_BENCH=OFF -DSCATTERLAB_PYTHON=OFF -DSCATTERLAB_INSTALL=OFF \
+  -DPython3_EXECUTABLE=/usr/bin/python3 "${launcher[@]}" >/dev/null
+cmake --build "$BUILD" -j "$JOBS"
+cd "$BUILD"
+# Any report fails the test that caused it: UBSan aborts instead of printing and going on.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0:strict_string_checks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
+ctest --output-on-failure -j "$JOBS" --timeout 1800
