@@ -81,7 +81,7 @@ Action addRender(CLI::App& app) {
     std::string frames, tonemap = "linear";
     double fps = 24.0;
     float exposure = 0.0f;
-    bool quiet = false;
+    bool quiet = false, depth = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* c = app.add_subcommand("render", "Render a scene file to OpenEXR (and PNG)");
@@ -137,8 +137,16 @@ Action addRender(CLI::App& app) {
   c->add_option("--radiance-vdb", o->radianceVdb,
                 "Also write the source-radiance volume S as an OpenVDB file (Vec3SGrid "
                 "'radiance'); CPU methods that build one (not exact)");
+  c->add_flag("--depth", o->depth,
+              "Also write a Z channel in the EXR: the camera-space depth of the view ray's "
+              "expected first interaction (opacity-weighted; +inf where the ray meets nothing); "
+              "CPU methods that march the view ray (exact, per-voxel, gradient, rbf, nearest, "
+              "adaptive)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
+    if (o->depth && imageFormat(o->out) != "exr")
+      throw UsageError("--depth writes a Z channel, which needs an .exr output (-o " + o->out +
+                       ")");
     checkDistinctPaths({{"scene", o->scene},
                         {"--output", o->out},
                         {"--png", o->png},
@@ -191,6 +199,11 @@ Action addRender(CLI::App& app) {
       rusage ru{};
       if (getrusage(RUSAGE_SELF, &ru) == 0)
         r.stats.extra["peak_host_mib"] = double(ru.ru_maxrss) / 1024.0;
+      if (o->depth && r.image.depth().size() != r.image.pixels().size())
+        throw ConfigError("--depth: method '" + r.stats.method + "' (" + r.stats.backend +
+                          ") records no depth; use --backend cpu with exact, per-voxel, "
+                          "gradient, rbf, nearest or adaptive");
+      if (!o->depth) r.image.depth().clear();
       if (!sequence) progress.restart("write", 1);
       const Scene& frameScene = renderer.scene();
       out.stage(framePath(o->out, f), [&](const std::string& tmp) {

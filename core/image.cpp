@@ -46,16 +46,20 @@ class ExrOStream : public Imf::OStream {
 
 void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
-  const bool hasAlpha = !img.alpha().empty();
-  if (hasAlpha && img.alpha().size() != img.pixels().size())
-    throw IoError("cannot write EXR '" + path + "': alpha has " +
-                  std::to_string(img.alpha().size()) + " values for " +
-                  std::to_string(img.pixels().size()) + " pixels");
+  const bool hasAlpha = !img.alpha().empty(), hasDepth = !img.depth().empty();
+  for (const auto& [name, values] :
+       {std::pair<const char*, const std::vector<float>*>{"alpha", &img.alpha()},
+        {"depth", &img.depth()}})
+    if (!values->empty() && values->size() != img.pixels().size())
+      throw IoError("cannot write EXR '" + path + "': " + name + " has " +
+                    std::to_string(values->size()) + " values for " +
+                    std::to_string(img.pixels().size()) + " pixels");
   writeFileAtomically(path, [&](std::ostream& os) {
     try {
       Imf::Header header(img.width(), img.height());
       for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
       if (hasAlpha) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
+      if (hasDepth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
       for (const auto& [name, value] : attributes.strings)
         header.insert(name, Imf::StringAttribute(value));
       for (const auto& [name, m] : attributes.matrices)
@@ -70,11 +74,12 @@ void writeExr(const Image& img, const std::string& path, const ExrAttributes& at
       fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
       fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
       fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
-      if (hasAlpha)
-        fb.insert("A",
-                  Imf::Slice(Imf::FLOAT,
-                             const_cast<char*>(reinterpret_cast<const char*>(img.alpha().data())),
-                             sizeof(float), sizeof(float) * img.width()));
+      const auto scalar = [&](const std::vector<float>& v) {
+        return Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(v.data())),
+                          sizeof(float), sizeof(float) * img.width());
+      };
+      if (hasAlpha) fb.insert("A", scalar(img.alpha()));
+      if (hasDepth) fb.insert("Z", scalar(img.depth()));
       file.setFrameBuffer(fb);
       file.writePixels(img.height());
     } catch (const std::exception& e) {
@@ -108,11 +113,13 @@ Image readExr(const std::string& path) {
     fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
     fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
     fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
-    if (ch.findChannel("A")) {
-      img.alpha().assign(size_t(w) * h, 0.0f);
-      char* abase = reinterpret_cast<char*>(img.alpha().data()) -
+    for (const auto& [name, values] :
+         {std::pair<const char*, std::vector<float>*>{"A", &img.alpha()}, {"Z", &img.depth()}}) {
+      if (!ch.findChannel(name)) continue;
+      values->assign(size_t(w) * h, 0.0f);
+      char* vbase = reinterpret_cast<char*>(values->data()) -
                     (dw.min.x * sizeof(float) + dw.min.y * sizeof(float) * w);
-      fb.insert("A", Imf::Slice(Imf::FLOAT, abase, sizeof(float), sizeof(float) * w, 1, 1, 0.0));
+      fb.insert(name, Imf::Slice(Imf::FLOAT, vbase, sizeof(float), sizeof(float) * w, 1, 1, 0.0));
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);

@@ -28,11 +28,20 @@ class Image {
   /// the integrator does not record it (the GPU slice marcher); written as the EXR's A channel.
   std::vector<float>& alpha() { return alpha_; }
   const std::vector<float>& alpha() const { return alpha_; }
+  /// Depth for compositing, row-major like pixels(): the camera-space depth (distance along
+  /// the view axis, world units) of the view ray's expected first interaction — the medium's
+  /// steps weighted by their opacity T·(1 − e^(−σt·D·Δt)) and an opaque surface by the T that
+  /// reaches it — i.e. Σ w·z / A with A = alpha(); +∞ where nothing interacts (A = 0). Empty
+  /// when the integrator does not record it (the CPU ray marcher and `exact` do); written as
+  /// the EXR's Z channel.
+  std::vector<float>& depth() { return depth_; }
+  const std::vector<float>& depth() const { return depth_; }
 
  private:
   int width_ = 0, height_ = 0;
   std::vector<Vec3> pixels_;
   std::vector<float> alpha_;
+  std::vector<float> depth_;
 };
 
 /// Header attributes of an EXR (render's provenance and camera, for compositing).
@@ -44,13 +53,14 @@ struct ExrAttributes {
   std::vector<std::pair<std::string, std::array<float, 16>>> matrices;
 };
 
-/// Writes a 32-bit float RGB OpenEXR file atomically (temporary file, then rename); on any
+/// Writes a 32-bit float RGB OpenEXR file (A and Z channels where alpha() and depth() are
+/// non-empty) atomically (temporary file, then rename); on any
 /// failure no file is left at `path`. Throws IoError.
 void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes = {});
 
-/// Reads the R, G, B channels (and A into alpha(), when the file has it) of an OpenEXR file
-/// (missing channels read as 0; a file with none of them is an error). Throws IoError naming the
-/// file.
+/// Reads the R, G, B channels (and A into alpha(), Z into depth(), when the file has them) of an
+/// OpenEXR file (missing channels read as 0; a file with none of them is an error). Throws IoError
+/// naming the file.
 Image readExr(const std::string& path);
 
 /// Display transform used for PNG output and PSNR: multiply by 2^exposure, clamp to [0, 1],

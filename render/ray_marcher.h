@@ -9,6 +9,9 @@
 /// traced per pixel with step `surfaceDelta1`) instead of T·background, and alpha is 1 (the
 /// surface is opaque). camera.spp > 1
 /// averages k x k rays (radiance and alpha) through the stratum centres of each pixel.
+/// Image::depth records the camera-space depth of the expected first interaction: Σ w·z / A,
+/// w = T·(1 − a) per step (z at the step's middle) and T for a surface hit; +∞ where A = 0.
+/// With k x k rays the pixel's depth is their alpha-weighted mean.
 /// With MarchSettings::fast (render.fast_march, the default) the steps inside blocks of zero
 /// density are skipped (MaxDensityGrid: they add exactly nothing), the exp of four steps is
 /// taken at once (xsimd; within an ulp of std::exp) and the image is marched in tiles of
@@ -65,13 +68,15 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
   // One camera ray: in-scattering up to the first surface (or the box exit), then T·L_p of
   // the surface or T·background.
   // Radiance and alpha: 1 − T of the medium, 1 where an (opaque) surface is hit.
+  // Radiance, alpha and Σ w·t (the opacity-weighted ray distance of the interactions).
   struct Shaded {
     Vec3 L;
     float alpha;
+    float wt;
   };
   const auto radiance = [&](const Ray& r) -> Shaded {
     Vec3 L(0.0f);
-    float T = 1.0f;
+    float T = 1.0f, wt = 0.0f;
     SurfaceHit hit;
     const bool hasHit = objects && objects->intersect(r, 0.0f, kInfinity, hit);
     float t0, t1;
@@ -89,6 +94,7 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
           if (!lookup(u0 + float(i) * du, r, t0 + (float(i) + 0.5f) * dt, D, S)) return;
           const float a = std::exp(-sigmaT * D * dt);
           L += (T * ratio * (1.0f - a)) * S;
+          wt += T * (1.0f - a) * (t0 + (float(i) + 0.5f) * dt);
           T *= a;
         };
         if (!skip) {
@@ -111,6 +117,7 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
               for (int q = 0; q < q1 && T > minT; ++q) {
                 if (!(D[q] > 0.0f)) continue;
                 L += (T * ratio * (1.0f - a[q])) * S[q];
+                wt += T * (1.0f - a[q]) * (t0 + (float(i + q) + 0.5f) * dt);
                 T *= a[q];
               }
             }
@@ -119,33 +126,46 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
         }
       }
     }
-    if (!hasHit) return {L + T * scene.background, 1.0f - T};
+    if (!hasHit) return {L + T * scene.background, 1.0f - T, wt};
     // Below min_transmittance the surface's share is below it too (as for the medium).
-    return {T > minT ? L + T * surface(hit) : L, 1.0f};
+    return {T > minT ? L + T * surface(hit) : L, 1.0f, wt + T * hit.t};
+  };
+  Vec3 forward, right, up;
+  cam.frame(forward, right, up);
+  // Camera-space depth of the pixel from its rays' alpha and Σ w·t (t along each unit ray).
+  const auto depthOf = [](float alpha, float wz) {
+    return alpha > 0.0f ? wz / alpha : std::numeric_limits<float>::infinity();
   };
   const int k = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
   const float inv = 1.0f / float(k * k);
   Image img(cam.width, cam.height);
   img.alpha().assign(img.pixels().size(), 0.0f);
+  img.depth().assign(img.pixels().size(), 0.0f);
   const auto pixel = [&](int x, int y) {
+    const size_t at = size_t(y) * cam.width + x;
     if (k == 1) {
-      const Shaded sh = radiance(rays(x, y));
+      const Ray r = rays(x, y);
+      const Shaded sh = radiance(r);
       img.at(x, y) = sh.L;
-      img.alpha()[size_t(y) * cam.width + x] = sh.alpha;
+      img.alpha()[at] = sh.alpha;
+      img.depth()[at] = depthOf(sh.alpha, sh.wt * glm::dot(r.dir, forward));
       return;
     }
     // k x k stratum centres, box filter.
     Vec3 sum(0.0f);
-    float alpha = 0.0f;
+    float alpha = 0.0f, wz = 0.0f;
     for (int j = 0; j < k; ++j)
       for (int i = 0; i < k; ++i) {
-        const Shaded sh = radiance(rays.at(float(x) + (float(i) + 0.5f) / float(k),
-                                           float(y) + (float(j) + 0.5f) / float(k)));
+        const Ray r = rays.at(float(x) + (float(i) + 0.5f) / float(k),
+                              float(y) + (float(j) + 0.5f) / float(k));
+        const Shaded sh = radiance(r);
         sum += sh.L;
         alpha += sh.alpha;
+        wz += sh.wt * glm::dot(r.dir, forward);
       }
     img.at(x, y) = sum * inv;
-    img.alpha()[size_t(y) * cam.width + x] = alpha * inv;
+    img.alpha()[at] = alpha * inv;
+    img.depth()[at] = depthOf(alpha, wz);
   };
   // Rows (the plain march) or tiles; progress counts rows, a tile adds its share of one.
   const int tile = ms.fast ? kMarchTile : cam.width;

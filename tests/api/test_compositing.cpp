@@ -53,6 +53,33 @@ TEST(Compositing, AlphaIsOneMinusTransmittanceOfExact) {
   EXPECT_EQ(img.alpha()[0], 0.0f);
 }
 
+/// Z: the camera-space depth of the expected first interaction. Along the centre ray the box
+/// is entered at depth 2 and is 1 deep, κ = σt·D = 1.6, so E[t | interaction] = 2 + 1/κ −
+/// e^(−κ)/(1 − e^(−κ)) = 2.372036 (the density of the first interaction is κ·e^(−κs) on [0, 1]).
+TEST(Compositing, DepthIsTheExpectedFirstInteraction) {
+  const double kappa = 2.0 * 0.8;
+  const double expected = 2.0 + 1.0 / kappa - std::exp(-kappa) / (1.0 - std::exp(-kappa));
+  for (const char* method : {"exact", "gradient"}) {
+    SCOPED_TRACE(method);
+    const Image img = render(boxDoc(Vec3(0.0f)), method, "cpu");
+    ASSERT_EQ(img.depth().size(), img.pixels().size());
+    const float z = img.depth()[size_t(12) * 33 + 16];
+    // Measured 5.21e-4 for both (2.3725502: the midpoint sum over 16 steps of 1/16).
+    EXPECT_NEAR(z, expected, 7.8e-4);
+    // A corner ray meets nothing: no depth.
+    EXPECT_TRUE(std::isinf(img.depth()[0]));
+  }
+  // The EXR's Z channel carries it unchanged.
+  const Image img = render(boxDoc(Vec3(0.0f)), "exact", "cpu");
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "scatterlab_test_depth.exr").string();
+  writeExr(img, path);
+  const Image back = readExr(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(back.depth().size(), img.depth().size());
+  for (size_t i = 0; i < img.depth().size(); ++i) EXPECT_EQ(back.depth()[i], img.depth()[i]) << i;
+}
+
 TEST(Compositing, FogOverAPlateCpu) {
   const Vec3 plate(0.3f, 0.5f, 0.7f);
   for (const char* method : {"exact", "per-voxel", "gradient"}) {
