@@ -31,24 +31,6 @@ float opticalDepth(const Field& field, const Box& box, const Vec3& a, const Vec3
   return sum * dt;
 }
 
-/// Fast path of opticalDepth for a DensityGrid covering `box`: marches in index space.
-inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step) {
-  const Vec3 d = b - a;
-  const float len = glm::length(d);
-  if (len <= 0.0f) return 0.0f;
-  const Ray r{a, d / len};
-  float t0, t1;
-  if (!g.bounds().intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
-  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
-  const float dt = (t1 - t0) / float(n);
-  const Vec3 s = g.indexScale();
-  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
-  const Vec3 du = r.dir * dt * s;
-  float sum = 0.0f;
-  for (int i = 0; i < n; ++i) sum += g.sampleIndex(u0 + float(i) * du);
-  return sum * dt;
-}
-
 /// opticalDepth(g, a, b, step) that stops once the sum passes `maxDepth` (checked every
 /// eight steps): the same sum until then, so the same result where the depth stays below it.
 inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
@@ -69,6 +51,12 @@ inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, fl
   for (int i = 0; i < n && sum <= sumMax;)
     for (const int e = std::min(n, i + 8); i < e; ++i) sum += g.sampleIndex(u0 + float(i) * du);
   return sum * dt;
+}
+
+/// Fast path of opticalDepth for a DensityGrid covering `box`: marches in index space (the
+/// stopping overload never stops: the same sum in the same order).
+inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step) {
+  return opticalDepth(g, a, b, step, std::numeric_limits<float>::infinity());
 }
 
 /// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
