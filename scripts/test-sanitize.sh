@@ -20,4 +20,6 @@ cd "$BUILD"
 # Any report fails the test that caused it: UBSan aborts instead of printing and going on.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0:strict_string_checks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
+# Leaks inside Mesa's llvmpipe driver are not ours (scripts/lsan.supp says which).
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$(cd .. && pwd)/scripts/lsan.supp:print_suppressions=0}
 ctest --output-on-failure -j "$JOBS" --timeout 1800
