@@ -201,7 +201,6 @@ struct MemoryLimit {
 
 TEST(ResourceLimits, VolumesImagesAndSamplesAreRefusedBeforeAllocating) {
   const MemoryLimit limit(std::uint64_t(64) << 20);
-  const auto t0 = std::chrono::steady_clock::now();
   const std::string vol = limitMessage({"medium.resolution=512"});
   EXPECT_NE(vol.find("'medium.resolution': the density volume of 512x512x512 voxels needs about "
                      "512 MiB, above the memory limit of 64 MiB"),
@@ -214,7 +213,6 @@ TEST(ResourceLimits, VolumesImagesAndSamplesAreRefusedBeforeAllocating) {
   EXPECT_NE(img.find("needs about 1.0 GiB"), std::string::npos) << img;
   // The grid itself checks too (a volume built from code, not from a key).
   EXPECT_THROW(DensityGrid(Box{Vec3(0), Vec3(1)}, IVec3(512, 512, 128)), LimitError);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
   // Under the limit nothing changes.
   EXPECT_EQ(limitMessage({"medium.resolution=64"}), "");
 }
@@ -259,9 +257,6 @@ TEST(SignalCleanup, InterruptDuringAWriteLeavesNoTemporary) {
 // window is checked in 64 bits and its memory against the limit, before allocating.
 TEST(BinaryInputs, ExrWithAHugeDataWindowIsRefusedBeforeAllocating) {
   const std::string p = SCATTERLAB_SOURCE_DIR "/fuzz/regressions/fuzz_exr_huge_data_window.exr";
-  const auto t0 = std::chrono::steady_clock::now();
   const std::string m = messageOf<LimitError>([&] { readExr(p); });
-  // 0.01 s in Release; 1.3 s under ASan (OpenEXR's own header and line-buffer setup).
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
   EXPECT_TRUE(has(m, "'" + p + "': an image of 4325382x769 pixels needs about 50 GiB")) << m;
 }

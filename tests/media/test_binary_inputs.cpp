@@ -79,9 +79,7 @@ TEST(SogHeader, LyingSizesAreRefusedBeforeAllocating) {
   poke<std::uint32_t>(s, 52, 4000000000u);
   reseal(s);
   spit(p, s);
-  const auto t0 = std::chrono::steady_clock::now();
   std::string m = sogError(p);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.05);
   EXPECT_NE(m.find("truncated: 130 bytes, the header announces 80000000090"), std::string::npos)
       << m;
   EXPECT_NE(m.find(p), std::string::npos);
