@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "core/transport.h"
+#include "render/screen_compose.h"
 
 namespace scatterlab {
 
@@ -143,30 +144,13 @@ Image froxelRender(const Scene& scene, const DensityGrid& density, const FroxelS
   const FroxelVolume v = froxelAccumulate(scene, density, s, delta1, maps.get());
   if (passMs) (*passMs)["froxel_accumulate"] = ms(t);
   t = Clock::now();
-  const Camera& cam = scene.camera;
-  const auto rays = cam.rayGenerator();
-  const SurfaceRadiance surface(scene, density, delta1);
-  Image img(cam.width, cam.height);
-  img.alpha().assign(img.pixels().size(), 0.0f);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height), [&](const tbb::blocked_range<int>& r) {
-    for (int y = r.begin(); y < r.end(); ++y)
-      for (int x = 0; x < cam.width; ++x) {
-        const Ray ray = rays(x, y);
-        SurfaceHit hit;
-        const bool hasHit = scene.objects && scene.objects->intersect(ray, 0.0f, kInfinity, hit);
-        Vec3 L;
-        float T;
-        froxelLookup(v, rays, x, y, ray, hasHit ? hit.t : kInfinity, L, T);
-        const size_t p = size_t(y) * cam.width + x;
-        if (!hasHit) {
-          img.pixels()[p] = L + T * scene.background;
-          img.alpha()[p] = 1.0f - T;
-        } else {
-          img.pixels()[p] = T > minTransmittance ? L + T * surface(hit) : L;
-          img.alpha()[p] = 1.0f;
-        }
-      }
-  });
+  const auto rays = scene.camera.rayGenerator();
+  Image img = composeScreen(scene, density, delta1, minTransmittance,
+                            [&](int x, int y, const Ray& ray, const SurfaceHit* hit) {
+                              PixelMedium m;
+                              froxelLookup(v, rays, x, y, ray, hit ? hit->t : kInfinity, m.L, m.T);
+                              return m;
+                            });
   if (passMs) (*passMs)["froxel_lookup"] = ms(t);
   if (progress) progress->advance(1);
   return img;

@@ -5,6 +5,7 @@
 
 #include "core/screen_march.h"
 #include "core/transport.h"
+#include "render/screen_compose.h"
 
 namespace scatterlab {
 
@@ -106,41 +107,24 @@ void upsampleWeights(const LowResMarch& low, int x, int y, float depth, int idx[
 Image jitteredMarch(const Scene& scene, const DensityGrid& density, const JitteredMarchSettings& s,
                     const MarchSettings& ms, float delta1, Progress* progress) {
   const LowResMarch low = jitteredMarchLowRes(scene, density, s, ms, delta1, progress);
-  const Camera& cam = scene.camera;
-  const auto rays = cam.rayGenerator();
-  const SurfaceRadiance surface(scene, density, delta1);
-  Image img(cam.width, cam.height);
-  img.alpha().assign(img.pixels().size(), 0.0f);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height), [&](const tbb::blocked_range<int>& r) {
-    for (int y = r.begin(); y < r.end(); ++y)
-      for (int x = 0; x < cam.width; ++x) {
-        const Ray ray = rays(x, y);
-        SurfaceHit hit;
-        const bool hasHit = scene.objects && scene.objects->intersect(ray, 0.0f, kInfinity, hit);
-        float t0, t1;
-        const float depth = hasHit                                                  ? hit.t
-                            : scene.medium.bounds.intersect(ray, t0, t1) && t1 > t0 ? t1
-                                                                                    : kInfinity;
-        int idx[4];
-        float w[4];
-        upsampleWeights(low, x, y, depth, idx, w);
-        Vec3 L(0.0f);
-        float T = 0.0f;
-        for (int c = 0; c < 4; ++c) {
-          L += w[c] * low.L[idx[c]];
-          T += w[c] * low.T[idx[c]];
-        }
-        const size_t p = size_t(y) * cam.width + x;
-        if (!hasHit) {
-          img.pixels()[p] = L + T * scene.background;
-          img.alpha()[p] = 1.0f - T;
-        } else {
-          img.pixels()[p] = T > ms.minTransmittance ? L + T * surface(hit) : L;
-          img.alpha()[p] = 1.0f;
-        }
-      }
-  });
-  return img;
+  return composeScreen(scene, density, delta1, ms.minTransmittance,
+                       [&](int x, int y, const Ray& ray, const SurfaceHit* hit) {
+                         float t0, t1;
+                         const float depth = hit ? hit->t
+                                             : scene.medium.bounds.intersect(ray, t0, t1) && t1 > t0
+                                                 ? t1
+                                                 : kInfinity;
+                         int idx[4];
+                         float w[4];
+                         upsampleWeights(low, x, y, depth, idx, w);
+                         PixelMedium m;
+                         m.T = 0.0f;
+                         for (int c = 0; c < 4; ++c) {
+                           m.L += w[c] * low.L[idx[c]];
+                           m.T += w[c] * low.T[idx[c]];
+                         }
+                         return m;
+                       });
 }
 
 }  // namespace scatterlab
