@@ -211,6 +211,44 @@ int iters(int n) {
   return e && std::atoi(e) > 0 ? std::atoi(e) : n;
 }
 
+/// Wall-clock time of GPU dynamic sampling alone (shaft scene, 541 grid samples, ε 1e-4,
+/// levels 16, 32, 64 up to half the resolution), the result read back: what the host waits for,
+/// read-backs and buffer creation included (issue 14: no per-level read-back).
+void BM_GpuDynamicSamplingWall(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
+  const int res = int(state.range(0));
+  s.medium.resolution = IVec3(res);
+  const gpu::Volume d = gpu::buildDensity(s);
+  const DensityGrid hd = gpu::readDensity(d);
+  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
+  Params sp(samplerCfg, "sampler");
+  auto sampler = samplers().get("grid", "sampler")(sp, s);
+  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
+  const float vox = s.medium.voxelSize();
+  DynamicSamplingSettings ds;
+  ds.epsilon = 1e-4;
+  ds.levels.clear();
+  for (int l : {16, 32, 64})
+    if (l <= res / 2) ds.levels.push_back(l);
+  ds.delta1 = vox;
+  std::size_t count = 0;
+  for (auto _ : state) {
+    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds);
+    glFinish();
+    count = r.samples.size();
+  }
+  state.counters["samples"] = double(count);
+  state.SetLabel(gpu::context().info().renderer);
+}
+BENCHMARK(BM_GpuDynamicSamplingWall)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseRealTime()
+    ->Iterations(iters(3))
+    ->Unit(benchmark::kMillisecond);
+
 BENCHMARK(BM_GpuDensitySplat)
     ->Arg(64)
     ->Arg(128)
