@@ -16,6 +16,9 @@
 #include "gpu/timer.h"
 #include "gpu/volume.h"
 #include "media/procedural.h"
+#include "media/sog.h"
+#include "media/sog_fit.h"
+#include "media/vdb.h"
 
 namespace scatterlab {
 namespace {
@@ -247,6 +250,96 @@ BENCHMARK(BM_GpuDynamicSamplingWall)
     ->Arg(128)
     ->UseRealTime()
     ->Iterations(iters(3))
+    ->Unit(benchmark::kMillisecond);
+
+/// GPU dynamic sampling as the GPU refiner runs it from the second frame on: with its buffers
+/// kept in a workspace (no buffer created). Same scene and settings as BM_GpuDynamicSamplingWall.
+void BM_GpuDynamicSamplingWallKept(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
+  const int res = int(state.range(0));
+  s.medium.resolution = IVec3(res);
+  const gpu::Volume d = gpu::buildDensity(s);
+  const DensityGrid hd = gpu::readDensity(d);
+  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
+  Params sp(samplerCfg, "sampler");
+  auto sampler = samplers().get("grid", "sampler")(sp, s);
+  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
+  const float vox = s.medium.voxelSize();
+  DynamicSamplingSettings ds;
+  ds.epsilon = 1e-4;
+  ds.levels.clear();
+  for (int l : {16, 32, 64})
+    if (l <= res / 2) ds.levels.push_back(l);
+  ds.delta1 = vox;
+  gpu::DynamicSamplingWorkspace workspace;
+  std::size_t count = 0;
+  for (auto _ : state) {
+    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds, nullptr,
+                                                            nullptr, nullptr, &workspace);
+    glFinish();
+    count = r.samples.size();
+  }
+  state.counters["samples"] = double(count);
+  state.SetLabel(gpu::context().info().renderer);
+}
+BENCHMARK(BM_GpuDynamicSamplingWallKept)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseRealTime()
+    ->Iterations(iters(3))
+    ->Unit(benchmark::kMillisecond);
+
+/// smoke1.vdb fitted with 512 Gaussians (the .sog model of docs/benchmarks.md "Media").
+const SogDensity& smokeSog(const char* source) {
+  static const SogModel model = [] {
+    const DensityGrid g = loadVdbAsDense(SCATTERLAB_SHARED_DATA "/vdb/smoke1.vdb", "density");
+    SogFitOptions o;
+    o.gaussians = 512;
+    return fitSog(g, o);
+  }();
+  static const SogDensity a(model, "smoke1 (a)"), b(model, "smoke1 (b)");
+  return source[0] == 'a' ? a : b;
+}
+
+/// The density volume (128³ over the model's lattice box) of a .sog medium on the GPU backend,
+/// wall time until the texture is ready. Arg 0: CPU splat (SogModel::splat) + upload, what
+/// gpu::buildDensity did before issue 14; 1: Gaussians splatted on the GPU, residual uploaded
+/// sparsely (its entries) and scattered, then added (a model not seen before: two models with
+/// the same data alternate); 2: the same with the residual lattice kept (the same model again,
+/// e.g. a new transform or resolution).
+void BM_GpuSogDensity128(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const int mode = int(state.range(0));
+  const SogDensity& sog = smokeSog("a");
+  const Box bounds = sog.model().residual.bounds();
+  const IVec3 dims(128);
+  gpu::splatSog(smokeSog("b"), bounds, dims);  // programs compiled outside the loop
+  int i = 0;
+  for (auto _ : state) {
+    if (mode == 0) {
+      DensityGrid g(bounds, dims);
+      sog.build(g);
+      gpu::Volume v = gpu::uploadDensity(g);
+      glFinish();
+      benchmark::DoNotOptimize(v.texture.id());
+    } else {
+      const SogDensity& m = mode == 1 ? smokeSog(i++ % 2 ? "b" : "a") : sog;
+      gpu::Volume v = gpu::splatSog(m, bounds, dims);
+      glFinish();
+      benchmark::DoNotOptimize(v.texture.id());
+    }
+  }
+  const char* labels[] = {"cpu splat + upload", "gpu splat, residual uploaded",
+                          "gpu splat, residual kept"};
+  state.SetLabel(labels[mode]);
+  state.counters["hash_entries"] = double(sog.model().residual.size());
+}
+BENCHMARK(BM_GpuSogDensity128)
+    ->DenseRange(0, 2)
+    ->UseRealTime()
+    ->Iterations(iters(4))
     ->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_GpuDensitySplat)
