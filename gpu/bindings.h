@@ -78,6 +78,8 @@ inline constexpr GLuint kShadowTexture = 2;
 inline constexpr GLuint kSurfaceTexture = 3;
 /// The surface pass's RGBA32F image of the per-pixel methods: L_p of the first surface (rgb).
 inline constexpr GLuint kSurfaceRadianceTexture = 4;
+/// The R32F lattice of a .sog residual F, read by texelFetch (sog_residual.comp.glsl).
+inline constexpr GLuint kResidualTexture = 5;
 
 // ---- image units
 
@@ -103,7 +105,8 @@ inline constexpr GLuint kOutputImage = 4;
 inline constexpr GLuint kFroxelImage = 5;
 /// R32F per-light transmittance maps of `froxel`, stacked along z (light l at z / res = l).
 inline constexpr GLuint kTransmittanceMapImage = 6;
-/// R32F lattice of a .sog residual F, and the R32F density volume it is added to.
+/// R32F lattice of a .sog residual F (written by the scatter), and the R32F density volume it
+/// is added to.
 inline constexpr GLuint kResidualImage = 0;
 inline constexpr GLuint kDensityImage = 1;
 
@@ -146,6 +149,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
     {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
     {"BINDING_SURFACE_RADIANCE_TEXTURE", binding::kSurfaceRadianceTexture},
+    {"BINDING_RESIDUAL_TEXTURE", binding::kResidualTexture},
     {"BINDING_SUMS_IMAGE", binding::kSumsImage},
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
     {"BINDING_BLUR_SOURCE", binding::kBlurSource},

@@ -1,5 +1,6 @@
 #include "gpu/volume.h"
 
+#include <memory>
 #include <vector>
 
 #include "core/error.h"
@@ -129,13 +130,13 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
 
 namespace {
 
-/// The residual lattice of the last .sog model put on the GPU, and what identifies the model
-/// (its description: the file, the Gaussian count and the lattice; the entry count and the
-/// quantisation step). Kept for the process (never deleted, like the cached programs: no GL call
-/// during static destruction), so that re-building the density of the same model (a new
-/// transform, resolution or frame of a Renderer) uploads no residual again.
+/// The residual lattice of the last .sog model put on the GPU, and that model (held weakly: the
+/// lattice is reused only while the very same model object lives, so a file rewritten and read
+/// again is never confused with the old one). Kept for the process (never deleted, like the
+/// cached programs: no GL call during static destruction).
 struct ResidualLattice {
-  std::string key;
+  std::weak_ptr<const SogDensity> model;
+  const SogDensity* address = nullptr;
   Texture texture;
 };
 
@@ -144,21 +145,16 @@ ResidualLattice& residualCache() {
   return *cache;
 }
 
-std::string residualKey(const SogDensity& sog) {
-  const ResidualHash& r = sog.model().residual;
-  return sog.describe() + "|" + std::to_string(r.size()) + "|" + std::to_string(r.step()) + "|" +
-         std::to_string(sog.model().gaussians.size());
-}
-
-/// F of `model` as an R32F texture on its lattice: the hash's entries uploaded as a list and
+/// F of `sog` as an R32F texture on its lattice: the hash's entries uploaded as a list and
 /// scattered by a compute pass (sog_residual.comp.glsl, SL_SCATTER); reused while the model is
-/// the same. GPU time: "residual upload" (only when uploaded).
-const Texture& residualLattice(const SogDensity& sog, StageTimer* timer, bool* uploaded) {
+/// the same object. GPU time: "residual upload" (only when uploaded).
+const Texture& residualLattice(const std::shared_ptr<const SogDensity>& sog, StageTimer* timer,
+                               bool* uploaded) {
   ResidualLattice& cache = residualCache();
-  const std::string key = residualKey(sog);
   *uploaded = false;
-  if (cache.texture && cache.key == key) return cache.texture;
-  const ResidualHash& r = sog.model().residual;
+  if (cache.texture && cache.address == sog.get() && cache.model.lock() == sog)
+    return cache.texture;
+  const ResidualHash& r = sog->model().residual;
   const IVec3 n = r.dims();
   const std::vector<std::pair<std::uint32_t, std::int16_t>> entries = r.entries();
   std::vector<GLint> packed(2 * entries.size());
@@ -166,7 +162,8 @@ const Texture& residualLattice(const SogDensity& sog, StageTimer* timer, bool* u
     packed[2 * e] = GLint(entries[e].first);
     packed[2 * e + 1] = GLint(entries[e].second);
   }
-  cache.key.clear();
+  cache.model.reset();
+  cache.address = nullptr;
   cache.texture = Texture::make3D(GL_R32F, n.x, n.y, n.z, "sog residual lattice");
   const Buffer list(packed.size() * sizeof(GLint), packed.data(), 0, "sog residual entries");
   const Program& scatter = cachedProgram("sog residual scatter", [] {
@@ -187,16 +184,17 @@ const Texture& residualLattice(const SogDensity& sog, StageTimer* timer, bool* u
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   }
   checkGl("sog residual upload");
-  cache.key = key;
+  cache.model = sog;
+  cache.address = sog.get();
   *uploaded = true;
   return cache.texture;
 }
 
 }  // namespace
 
-Volume splatSog(const SogDensity& sog, const Box& bounds, IVec3 dims, StageTimer* timer,
-                bool* residualUploaded) {
-  const SogModel& model = sog.model();
+Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds, IVec3 dims,
+                StageTimer* timer, bool* residualUploaded) {
+  const SogModel& model = sog->model();
   Volume v = splatGaussians(model.gaussians, bounds, dims, timer);
   bool uploaded = false;
   const bool useF = model.residual.size() > 0;
@@ -217,9 +215,7 @@ Volume splatSog(const SogDensity& sog, const Box& bounds, IVec3 dims, StageTimer
   setIVec3(add, "uLatticeDims", r.dims());
   glUniform1i(add.uniform("uHasResidual"), useF ? 1 : 0);
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
-  if (lattice)
-    glBindImageTexture(binding::kResidualImage, lattice->id(), 0, GL_TRUE, 0, GL_READ_ONLY,
-                       GL_R32F);
+  if (lattice) glBindTextureUnit(binding::kResidualTexture, lattice->id());
   glBindImageTexture(binding::kDensityImage, v.texture.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_R32F);
   glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
@@ -234,9 +230,9 @@ Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted) {
     if (splatted) *splatted = true;
     return splatGaussians(*m.density->gaussians(), m.bounds, m.resolution, timer);
   }
-  if (const auto* sog = dynamic_cast<const SogDensity*>(m.density.get())) {
+  if (const auto sog = std::dynamic_pointer_cast<const SogDensity>(m.density)) {
     if (splatted) *splatted = true;
-    return splatSog(*sog, m.bounds, m.resolution, timer);
+    return splatSog(sog, m.bounds, m.resolution, timer);
   }
   if (splatted) *splatted = false;
   DensityGrid grid(m.bounds, m.resolution);

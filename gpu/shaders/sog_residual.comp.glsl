@@ -25,7 +25,7 @@ void main() {
 }
 #else
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
-layout(r32f, binding = BINDING_RESIDUAL_IMAGE) readonly uniform image3D uResidual;
+layout(binding = BINDING_RESIDUAL_TEXTURE) uniform sampler3D uResidualLattice;
 layout(r32f, binding = BINDING_DENSITY_IMAGE) uniform image3D uDensityOut;
 uniform vec3 uGridMin;
 uniform vec3 uGridCell;
@@ -36,7 +36,7 @@ uniform vec3 uLatticeCell;  // lattice extent / dims, as latticeIndex divides
 uniform ivec3 uLatticeDims;
 uniform int uHasResidual;   // 0: the hash is empty (F = 0)
 
-float F(int i, int j, int k) { return imageLoad(uResidual, ivec3(i, j, k)).r; }
+float F(int i, int j, int k) { return texelFetch(uResidualLattice, ivec3(i, j, k), 0).r; }
 
 void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
