@@ -81,8 +81,20 @@ std::uint32_t scanTotal(const Buffer& flags, const Buffer& offsets, GLuint n) {
   return last + (flag != 0 ? 1u : 0u);
 }
 
+/// The geometry of G_{k+1} as GridInfoBuffer computes it (bounds, dims, interval, radius), without
+/// its host arrays (the membership and ancestors live on the GPU).
+struct GridGeometry {
+  Box bounds;
+  IVec3 dims;
+  Vec3 interval;
+  GridGeometry(const Box& b, int resolution)
+      : bounds(b), dims(resolution), interval(b.extent() / float(resolution)) {}
+  std::size_t vertices() const { return std::size_t(dims.x) * dims.y * dims.z; }
+  float radius() const { return std::max(interval.x, std::max(interval.y, interval.z)); }
+};
+
 /// The grid of G_{k+1} as split and compact read it (GridInfoBuffer::vertex's convention).
-void setGridUniforms(const Program& p, const GridInfoBuffer& grid) {
+void setGridUniforms(const Program& p, const GridGeometry& grid) {
   setVec3(p, "uGridMin", grid.bounds.min);
   setVec3(p, "uGridInterval", grid.interval);
   setIVec3(p, "uGridDims", grid.dims);
@@ -236,12 +248,12 @@ void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings
 
 /// Split level k into the grid information buffer of G_{k+1} (cleared first). GPU time:
 /// "ds split".
-void splitLevel(DynamicSamplingWorkspace& w, const GridInfoBuffer& grid, std::size_t k,
-                std::size_t L, StageTimer* timer) {
+void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k, std::size_t L,
+                StageTimer* timer) {
   const Program& program = cachedProgram("dynamic sampling split", [] {
     return computeProgram({"dynamic_split.comp.glsl"}, {}, "dynamic sampling split");
   });
-  const std::size_t nv = std::size_t(grid.dims.x) * grid.dims.y * grid.dims.z;
+  const std::size_t nv = grid.vertices();
   const GLuint zero = 0;
   const GLint none = INT_MAX;
   ScopedGpuTimer t(timer, "ds split");
@@ -273,7 +285,7 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridInfoBuffer& grid, std::si
 
 /// Compact G_{k+1} into level k + 1: scan, count (and the next dispatch size), scatter. GPU
 /// times: "ds scan" (scan and count), "ds compact".
-void compactLevel(DynamicSamplingWorkspace& w, const GridInfoBuffer& grid, std::size_t next,
+void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t next,
                   std::size_t L, StageTimer* timer) {
   const Program& count = cachedProgram("dynamic sampling count", [] {
     return computeProgram({"dynamic_level.comp.glsl"}, {}, "dynamic sampling count");
@@ -281,7 +293,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridInfoBuffer& grid, std::
   const Program& program = cachedProgram("dynamic sampling compact", [] {
     return computeProgram({"compact.comp.glsl"}, {}, "dynamic sampling compact");
   });
-  const std::size_t nv = std::size_t(grid.dims.x) * grid.dims.y * grid.dims.z;
+  const std::size_t nv = grid.vertices();
   const DynamicSamplingWorkspace::Level& l = w.levels[next];
   {
     ScopedGpuTimer t(timer, "ds scan");
@@ -341,7 +353,7 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
       evaluateLevel(w, inputs, density, k, final, steps, settings, timer);
       if (!final) {
         if (k == 0) computeThreshold(w, settings, timer);
-        const GridInfoBuffer grid(scene.medium.bounds, settings.levels[k]);
+        const GridGeometry grid(scene.medium.bounds, settings.levels[k]);
         splitLevel(w, grid, k, L, timer);
         compactLevel(w, grid, k + 1, L, timer);
       }
