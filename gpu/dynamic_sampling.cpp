@@ -145,7 +145,7 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
     std::size_t cap = n0;
     if (k > 0) {
       const std::size_t r = std::size_t(settings.levels[k - 1]);
-      cap = std::min(r * r * r, kMaxLevelSamples);
+      cap = std::min(r * r * r, w.maxLevelSamples);
     }
     DynamicSamplingWorkspace::Level& l = w.levels[k];
     l.capacity = cap;

@@ -58,6 +58,8 @@ struct DynamicSamplingWorkspace {
   Buffer inSet, vertexAncestors, offsets;  ///< grid information buffer of G_{k+1}, its scan
   std::vector<Buffer> scanSums;            ///< block sums per recursion depth of the scan
   std::size_t vertices = 0;                ///< capacity of inSet / vertexAncestors / offsets
+  /// Most samples a level above 0 may hold (tests lower it to reach the overflow report).
+  std::size_t maxLevelSamples = kMaxLevelSamples;
 };
 
 /// Runs recursive splitting from `initial` (positions and radii) entirely with GL compute
