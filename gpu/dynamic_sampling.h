@@ -36,7 +36,7 @@ struct DynamicSamplingGpuSteps {
 };
 
 /// Most samples one level above level 0 may hold (its list's capacity is the smaller of this and
-/// its grid's vertex count): 2^21 samples, 176 MB of buffers per level.
+/// its grid's vertex count): 2^21 samples, 176 MiB of buffers per level (88 bytes a sample).
 inline constexpr std::size_t kMaxLevelSamples = std::size_t(1) << 21;
 
 /// The GPU buffers of dynamicSamplingGpu: per level the sample list (positions, ancestors),
@@ -69,10 +69,11 @@ struct DynamicSamplingWorkspace {
 /// the split decisions agree unless some E_j is within rounding of the threshold (compared in
 /// double, as on the CPU). `errors`, when given, receives E of every evaluated sample per split
 /// level (in evaluation order) of the pass returned. GPU times per pass go to `timer` (stages
-/// "ds evaluate+error", "ds threshold", "ds split", "ds scan", "ds compact"); LevelStats::ms is
-/// the host time to enqueue a level (the levels no longer wait for each other). `shadows`: the
-/// scene objects' shadow maps (null without objects), so that S at samples and probes carries
-/// V_l as on the CPU. `workspace`: buffers kept from an earlier call (null: made for this call).
+/// "ds evaluate+error", "ds threshold", "ds split", "ds scan", "ds compact", "ds read-back");
+/// LevelStats::ms is the host time to enqueue a level (the levels no longer wait for each
+/// other). `shadows`: the scene objects' shadow maps (null without objects), so that S at
+/// samples and probes carries V_l as on the CPU. `workspace`: buffers kept from an earlier call
+/// (null: made for this call).
 DynamicSamplingResult dynamicSamplingGpu(
     const Scene& scene, const Volume& density, std::vector<RadianceSample> initial,
     DynamicSamplingGpuSteps steps, const DynamicSamplingSettings& settings,
