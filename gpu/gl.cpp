@@ -39,6 +39,7 @@ void label(GLenum identifier, GLuint id, std::string_view name) {
 /// The recycler's state. GL is single-threaded here (gpu/context.h), so no locking.
 struct Recycler {
   int scopes = 0;
+  std::size_t freeBytes = 0;
   std::deque<std::pair<detail::ObjectKey, GLuint>> free;  ///< oldest first
   GlObjectCounts counts;
 };
@@ -48,8 +49,19 @@ Recycler& recycler() {
   return r;
 }
 
-/// Most objects the free list keeps; the oldest is deleted beyond it.
+/// Most objects and bytes the free list keeps; the oldest are deleted beyond either.
 constexpr std::size_t kMaxFree = 256;
+constexpr std::size_t kMaxFreeBytes = std::size_t(1) << 30;
+
+/// The storage an object of `key` holds (textures: 16 bytes a texel at most; estimated).
+std::size_t storageBytes(const detail::ObjectKey& key) {
+  if (key.kind == 1) return key.bytes;
+  if (key.kind != 2) return 0;
+  std::size_t texel = 16;
+  if (key.format == GL_R32F || key.format == GL_DEPTH_COMPONENT32F) texel = 4;
+  if (key.format == GL_RG32F) texel = 8;
+  return std::size_t(key.w) * std::size_t(key.h) * std::size_t(key.d) * texel;
+}
 
 void deleteObject(const detail::ObjectKey& key, GLuint id) {
   switch (key.kind) {
@@ -92,6 +104,7 @@ RecyclingScope::~RecyclingScope() {
   if (--r.scopes > 0) return;
   for (const auto& [key, id] : r.free) deleteObject(key, id);
   r.free.clear();
+  r.freeBytes = 0;
 }
 
 namespace detail {
@@ -102,6 +115,7 @@ GLuint takeRecycled(const ObjectKey& key) {
   for (auto it = r.free.begin(); it != r.free.end(); ++it)
     if (it->first == key) {
       const GLuint id = it->second;
+      r.freeBytes -= storageBytes(it->first);
       r.free.erase(it);
       ++r.counts.reused;
       ++r.counts.live;
@@ -114,8 +128,10 @@ bool recycle(const ObjectKey& key, GLuint id) {
   Recycler& r = recycler();
   if (r.scopes == 0) return false;
   r.free.emplace_back(key, id);
+  r.freeBytes += storageBytes(key);
   --r.counts.live;
-  if (r.free.size() > kMaxFree) {
+  while (r.free.size() > kMaxFree || (r.freeBytes > kMaxFreeBytes && r.free.size() > 1)) {
+    r.freeBytes -= storageBytes(r.free.front().first);
     deleteObject(r.free.front().first, r.free.front().second);
     r.free.pop_front();
   }
