@@ -2,6 +2,7 @@
 /// Gaussians and a sparsely uploaded residual, and GL objects reused across the frames of one
 /// Renderer. On llvmpipe in CI, with tiny scenes.
 
+#include <algorithm>
 #include <cstdio>
 
 #include "api/scatterlab.h"
@@ -101,6 +102,47 @@ TEST_F(GpuSogMethod, PerVoxelImageMatchesCpu) {
   std::printf("sog per-voxel, gpu vs cpu: relative L2 %.3g\n", err);
   // Measured on llvmpipe: 1.29e-6 (the per-voxel stage's own CPU/GPU difference, docs/gpu.md).
   EXPECT_LE(err, 1.9e-6);
+}
+
+TEST(GpuRecycling, SameDescriptionTakesTheNameOverOnlyInsideAScope) {
+  SCATTERLAB_REQUIRE_GPU();
+  gpu::context();
+  GLuint name = 0;
+  {
+    const gpu::Buffer b(64, nullptr, 0, "outside");
+    name = b.id();
+  }
+  {
+    gpu::RecyclingScope scope;
+    const long long reused0 = gpu::glObjectCounts().reused;
+    GLuint texName = 0;
+    {
+      const float ones[4] = {1, 1, 1, 1};
+      const gpu::Buffer b(16, ones, 0, "first");
+      name = b.id();
+      gpu::Texture t = gpu::Texture::make3D(GL_R32F, 4, 4, 4, "first texture");
+      glClearTexImage(t.id(), 0, GL_RED, GL_FLOAT, ones);
+      texName = t.id();
+    }
+    EXPECT_EQ(gpu::glObjectCounts().free, 2);
+    const float data[4] = {1, 2, 3, 4};
+    const gpu::Buffer same(16, data, 0, "second");
+    EXPECT_EQ(same.id(), name);  // taken over, with the new data
+    float back[4] = {};
+    same.read(back, sizeof back);
+    EXPECT_EQ(back[3], 4.0f);
+    const gpu::Buffer other(32, nullptr, 0, "other size");
+    EXPECT_NE(other.id(), name);
+    const gpu::Texture t = gpu::Texture::make3D(GL_R32F, 4, 4, 4, "second texture");
+    EXPECT_EQ(t.id(), texName);  // taken over, cleared to zero as a new texture reads
+    std::vector<float> texels(64, -1.0f);
+    glGetTextureImage(t.id(), 0, GL_RED, GL_FLOAT, GLsizei(texels.size() * sizeof(float)),
+                      texels.data());
+    EXPECT_EQ(*std::max_element(texels.begin(), texels.end()), 0.0f);
+    EXPECT_EQ(gpu::glObjectCounts().reused - reused0, 2);
+  }
+  EXPECT_EQ(gpu::glObjectCounts().free, 0);  // the scope's end deleted the free list
+  gpu::checkGl("recycling");
 }
 
 /// The blob scene with its spot light moved per frame.
