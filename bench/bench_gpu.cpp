@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <map>
 #include <random>
 
 #include "api/scatterlab.h"
@@ -16,6 +17,9 @@
 #include "gpu/timer.h"
 #include "gpu/volume.h"
 #include "media/procedural.h"
+#include "media/sog.h"
+#include "media/sog_fit.h"
+#include "media/vdb.h"
 
 namespace scatterlab {
 namespace {
@@ -210,6 +214,141 @@ int iters(int n) {
   const char* e = std::getenv("SCATTERLAB_GPU_BENCH_ITERS");
   return e && std::atoi(e) > 0 ? std::atoi(e) : n;
 }
+
+/// Wall-clock time of GPU dynamic sampling alone (shaft scene, 541 grid samples, ε 1e-4,
+/// levels 16, 32, 64 up to half the resolution), the result read back: what the host waits for,
+/// read-backs and buffer creation included (issue 14: no per-level read-back).
+void BM_GpuDynamicSamplingWall(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
+  const int res = int(state.range(0));
+  s.medium.resolution = IVec3(res);
+  const gpu::Volume d = gpu::buildDensity(s);
+  const DensityGrid hd = gpu::readDensity(d);
+  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
+  Params sp(samplerCfg, "sampler");
+  auto sampler = samplers().get("grid", "sampler")(sp, s);
+  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
+  const float vox = s.medium.voxelSize();
+  DynamicSamplingSettings ds;
+  ds.epsilon = 1e-4;
+  ds.levels.clear();
+  for (int l : {16, 32, 64})
+    if (l <= res / 2) ds.levels.push_back(l);
+  ds.delta1 = vox;
+  std::size_t count = 0;
+  for (auto _ : state) {
+    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds);
+    glFinish();
+    count = r.samples.size();
+  }
+  state.counters["samples"] = double(count);
+  state.SetLabel(gpu::context().info().renderer);
+}
+BENCHMARK(BM_GpuDynamicSamplingWall)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseRealTime()
+    ->Iterations(iters(3))
+    ->Unit(benchmark::kMillisecond);
+
+/// GPU dynamic sampling as the GPU refiner runs it from the second frame on: with its buffers
+/// kept in a workspace (no buffer created). Same scene and settings as BM_GpuDynamicSamplingWall.
+void BM_GpuDynamicSamplingWallKept(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
+  const int res = int(state.range(0));
+  s.medium.resolution = IVec3(res);
+  const gpu::Volume d = gpu::buildDensity(s);
+  const DensityGrid hd = gpu::readDensity(d);
+  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
+  Params sp(samplerCfg, "sampler");
+  auto sampler = samplers().get("grid", "sampler")(sp, s);
+  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
+  const float vox = s.medium.voxelSize();
+  DynamicSamplingSettings ds;
+  ds.epsilon = 1e-4;
+  ds.levels.clear();
+  for (int l : {16, 32, 64})
+    if (l <= res / 2) ds.levels.push_back(l);
+  ds.delta1 = vox;
+  gpu::DynamicSamplingWorkspace workspace;
+  std::size_t count = 0;
+  for (auto _ : state) {
+    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds, nullptr,
+                                                            nullptr, nullptr, &workspace);
+    glFinish();
+    count = r.samples.size();
+  }
+  state.counters["samples"] = double(count);
+  state.SetLabel(gpu::context().info().renderer);
+}
+BENCHMARK(BM_GpuDynamicSamplingWallKept)
+    ->Arg(64)
+    ->Arg(128)
+    ->UseRealTime()
+    ->Iterations(iters(3))
+    ->Unit(benchmark::kMillisecond);
+
+/// smoke1.vdb fitted with 512 Gaussians (the .sog model of docs/benchmarks.md "Media").
+const std::shared_ptr<const SogDensity>& smokeSog(const char* source) {
+  static const SogModel model = [] {
+    const DensityGrid g = loadVdbAsDense(SCATTERLAB_SHARED_DATA "/vdb/smoke1.vdb", "density");
+    SogFitOptions o;
+    o.gaussians = 512;
+    return fitSog(g, o);
+  }();
+  static const auto a = std::make_shared<const SogDensity>(model, "smoke1 (a)");
+  static const auto b = std::make_shared<const SogDensity>(model, "smoke1 (b)");
+  return source[0] == 'a' ? a : b;
+}
+
+/// The density volume (128³ over the model's lattice box) of a .sog medium on the GPU backend,
+/// wall time until the texture is ready. Arg 0: CPU splat (SogModel::splat) + upload, what
+/// gpu::buildDensity did before issue 14; 1: Gaussians splatted on the GPU, residual uploaded
+/// sparsely (its entries) and scattered, then added (a model not seen before: two models with
+/// the same data alternate); 2: the same with the residual lattice kept (the same model again,
+/// e.g. a new transform or resolution).
+void BM_GpuSogDensity128(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const int mode = int(state.range(0));
+  const auto& sog = smokeSog("a");
+  const Box bounds = sog->model().residual.bounds();
+  const IVec3 dims(128);
+  // Programs compiled outside the loop; with the residual kept, the model's lattice too.
+  gpu::splatSog(mode == 2 ? sog : smokeSog("b"), bounds, dims);
+  int i = 0, n = 0;
+  std::map<std::string, double> stageMs;  // GPU ms per pass (llvmpipe: CPU time)
+  for (auto _ : state) {
+    if (mode == 0) {
+      DensityGrid g(bounds, dims);
+      sog->build(g);
+      gpu::Volume v = gpu::uploadDensity(g);
+      glFinish();
+      benchmark::DoNotOptimize(v.texture.id());
+    } else {
+      const auto& m = mode == 1 ? smokeSog(i++ % 2 ? "b" : "a") : sog;
+      gpu::StageTimer timer;
+      gpu::Volume v = gpu::splatSog(m, bounds, dims, &timer);
+      glFinish();
+      benchmark::DoNotOptimize(v.texture.id());
+      for (const auto& [stage, ms] : timer.results()) stageMs[stage] += ms;
+      ++n;
+    }
+  }
+  for (const auto& [stage, ms] : stageMs) state.counters[stage + " ms"] = ms / std::max(n, 1);
+  const char* labels[] = {"cpu splat + upload", "gpu splat, residual uploaded",
+                          "gpu splat, residual kept"};
+  state.SetLabel(labels[mode]);
+  state.counters["hash_entries"] = double(sog->model().residual.size());
+}
+BENCHMARK(BM_GpuSogDensity128)
+    ->DenseRange(0, 2)
+    ->UseRealTime()
+    ->Iterations(iters(4))
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_GpuDensitySplat)
     ->Arg(64)

@@ -35,8 +35,9 @@ inline constexpr GLuint kCounters = 3;
 inline constexpr GLuint kRadiance = 4;
 /// float E_j per sample (dynamic sampling).
 inline constexpr GLuint kErrors = 5;
-/// uint split flag per sample (dynamic sampling).
-inline constexpr GLuint kSplitFlags = 6;
+/// uint per level of dynamic sampling: the levels' sample counts, the overflow record and the
+/// levels' indirect dispatch sizes (DynamicSamplingWorkspace, written on the GPU).
+inline constexpr GLuint kLevelCounts = 6;
 /// Grid information buffer of G_{k+1}: uint membership per vertex.
 inline constexpr GLuint kInSet = 7;
 /// Grid information buffer of G_{k+1}: int32 ancestor per vertex (INT_MAX = none).
@@ -58,6 +59,10 @@ inline constexpr GLuint kShadowLights = 12;
 inline constexpr GLuint kShadowMatrices = 13;
 /// GpuObjectVertex[]: the scene objects' triangles (objects.vert.glsl, gpu/objects.h).
 inline constexpr GLuint kObjectVertices = 14;
+/// int32 (key, code) pairs of a .sog residual hash (sog_residual.comp.glsl).
+inline constexpr GLuint kResidualEntries = 0;
+/// double error scale and absolute threshold of dynamic sampling (dynamic_level.comp.glsl).
+inline constexpr GLuint kThreshold = 15;
 /// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (core/screen_march.h).
 inline constexpr GLuint kJitterTable = 1;
 
@@ -73,6 +78,8 @@ inline constexpr GLuint kShadowTexture = 2;
 inline constexpr GLuint kSurfaceTexture = 3;
 /// The surface pass's RGBA32F image of the per-pixel methods: L_p of the first surface (rgb).
 inline constexpr GLuint kSurfaceRadianceTexture = 4;
+/// The R32F lattice of a .sog residual F, read by texelFetch (sog_residual.comp.glsl).
+inline constexpr GLuint kResidualTexture = 5;
 
 // ---- image units
 
@@ -98,6 +105,10 @@ inline constexpr GLuint kOutputImage = 4;
 inline constexpr GLuint kFroxelImage = 5;
 /// R32F per-light transmittance maps of `froxel`, stacked along z (light l at z / res = l).
 inline constexpr GLuint kTransmittanceMapImage = 6;
+/// R32F lattice of a .sog residual F (written by the scatter), and the R32F density volume it
+/// is added to.
+inline constexpr GLuint kResidualImage = 0;
+inline constexpr GLuint kDensityImage = 1;
 
 }  // namespace binding
 
@@ -118,7 +129,9 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_COUNTERS", binding::kCounters},
     {"BINDING_RADIANCE", binding::kRadiance},
     {"BINDING_ERRORS", binding::kErrors},
-    {"BINDING_SPLIT_FLAGS", binding::kSplitFlags},
+    {"BINDING_LEVEL_COUNTS", binding::kLevelCounts},
+    {"BINDING_THRESHOLD", binding::kThreshold},
+    {"BINDING_RESIDUAL_ENTRIES", binding::kResidualEntries},
     {"BINDING_IN_SET", binding::kInSet},
     {"BINDING_VERTEX_ANCESTORS", binding::kVertexAncestors},
     {"BINDING_OFFSETS", binding::kOffsets},
@@ -136,6 +149,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
     {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
     {"BINDING_SURFACE_RADIANCE_TEXTURE", binding::kSurfaceRadianceTexture},
+    {"BINDING_RESIDUAL_TEXTURE", binding::kResidualTexture},
     {"BINDING_SUMS_IMAGE", binding::kSumsImage},
     {"BINDING_RADIANCE_IMAGE", binding::kRadianceImage},
     {"BINDING_BLUR_SOURCE", binding::kBlurSource},
@@ -149,6 +163,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_OUTPUT_IMAGE", binding::kOutputImage},
     {"BINDING_FROXEL_IMAGE", binding::kFroxelImage},
     {"BINDING_TRANSMITTANCE_MAP_IMAGE", binding::kTransmittanceMapImage},
+    {"BINDING_RESIDUAL_IMAGE", binding::kResidualImage},
+    {"BINDING_DENSITY_IMAGE", binding::kDensityImage},
 };
 
 }  // namespace scatterlab::gpu

@@ -27,29 +27,46 @@ const Program& scanAddProgram() {
   });
 }
 
+/// `buffer` with at least `bytes` of storage (re-created only when smaller). Dynamic storage,
+/// so that the host may update it (glNamedBufferSubData).
+void ensure(Buffer& buffer, std::size_t bytes, const std::string& label) {
+  bytes = std::max<std::size_t>(bytes, 4);
+  if (buffer && buffer.size() >= bytes) return;
+  buffer = Buffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, label);
+}
+
 /// Exclusive scan of n uints of `in` into `out` (flags: count non-zero as one): block scans,
-/// then the block sums scanned recursively and added back.
-void scanBuffer(const Buffer& in, const Buffer& out, GLuint n, bool flags) {
+/// then the block sums scanned recursively and added back. The block sums of recursion depth d
+/// live in sums[2d] (and their scan in sums[2d + 1]), grown as needed and kept (the vector is
+/// sized before the recursion, which holds references into it).
+void scanBuffer(const Buffer& in, const Buffer& out, GLuint n, bool flags,
+                std::vector<Buffer>& sums, std::size_t depth = 0) {
   if (n == 0) return;
   const GLuint blocks = groups(n, kScanBlock);
-  const Buffer sums(blocks * sizeof(GLuint), nullptr, 0, "scan block sums");
+  if (depth == 0) {
+    std::size_t depths = 1;
+    for (GLuint m = blocks; m > 1; m = groups(m, kScanBlock)) ++depths;
+    if (sums.size() < 2 * depths) sums.resize(2 * depths);
+  }
+  Buffer& blockSums = sums[2 * depth];
+  ensure(blockSums, blocks * sizeof(GLuint), "scan block sums");
   const Program& scan = scanProgram();
   scan.use();
   glUniform1ui(scan.uniform("uCount"), n);
   glUniform1i(scan.uniform("uFlags"), flags ? 1 : 0);
   in.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanIn);
   out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
-  sums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanBlockSums);
+  blockSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanBlockSums);
   glDispatchCompute(blocks, 1, 1);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   if (blocks > 1) {
-    const Buffer scanned(blocks * sizeof(GLuint), nullptr, 0, "scanned block sums");
-    scanBuffer(sums, scanned, blocks, false);
+    ensure(sums[2 * depth + 1], blocks * sizeof(GLuint), "scanned block sums");
+    scanBuffer(sums[2 * depth], sums[2 * depth + 1], blocks, false, sums, depth + 1);
     const Program& add = scanAddProgram();
     add.use();
     glUniform1ui(add.uniform("uCount"), n);
     out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
-    scanned.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanScannedSums);
+    sums[2 * depth + 1].bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanScannedSums);
     glDispatchCompute(blocks, 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
@@ -64,8 +81,20 @@ std::uint32_t scanTotal(const Buffer& flags, const Buffer& offsets, GLuint n) {
   return last + (flag != 0 ? 1u : 0u);
 }
 
+/// The geometry of G_{k+1} as GridInfoBuffer computes it (bounds, dims, interval, radius), without
+/// its host arrays (the membership and ancestors live on the GPU).
+struct GridGeometry {
+  Box bounds;
+  IVec3 dims;
+  Vec3 interval;
+  GridGeometry(const Box& b, int resolution)
+      : bounds(b), dims(resolution), interval(b.extent() / float(resolution)) {}
+  std::size_t vertices() const { return std::size_t(dims.x) * dims.y * dims.z; }
+  float radius() const { return std::max(interval.x, std::max(interval.y, interval.z)); }
+};
+
 /// The grid of G_{k+1} as split and compact read it (GridInfoBuffer::vertex's convention).
-void setGridUniforms(const Program& p, const GridInfoBuffer& grid) {
+void setGridUniforms(const Program& p, const GridGeometry& grid) {
   setVec3(p, "uGridMin", grid.bounds.min);
   setVec3(p, "uGridInterval", grid.interval);
   setIVec3(p, "uGridDims", grid.dims);
@@ -75,61 +104,18 @@ std::string levelLabel(const char* what, std::size_t level) {
   return std::string("dynamic sampling ") + what + " (level " + std::to_string(level) + ")";
 }
 
-/// Level 0 on the GPU: the initial positions and radii, each sample its own ancestor.
-DynamicLevelGpu uploadInitialLevel(const std::vector<RadianceSample>& initial) {
-  DynamicLevelGpu l;
-  l.count = initial.size();
-  std::vector<GpuSamplePoint> points;
-  points.reserve(l.count);
-  std::vector<std::int32_t> anc(l.count);
-  for (std::size_t i = 0; i < l.count; ++i) {
-    points.push_back({initial[i].position, initial[i].radius});
-    anc[i] = std::int32_t(i);
-  }
-  l.samples =
-      Buffer(points.size() * sizeof(GpuSamplePoint), points.data(), 0, levelLabel("samples", 0));
-  l.ancestors =
-      Buffer(anc.size() * sizeof(std::int32_t), anc.data(), 0, levelLabel("ancestors", 0));
-  return l;
+/// Layout of DynamicSamplingWorkspace::counts for L split levels: [0, L] the levels' sample
+/// counts, [L + 1] the largest count a level asked for beyond its capacity, [L + 2] that level,
+/// then from dispatchSlot(L) three uints (x, 1, 1) per level: its evaluate/split dispatch.
+std::size_t overflowSlot(std::size_t L) {
+  return L + 1;
+}
+std::size_t dispatchSlot(std::size_t L) {
+  return L + 3;
 }
 
-/// Appends the samples of `eval` that stay (all of them on the final level) to `out`, in
-/// evaluation order: the CPU's order.
-void appendKept(const LevelEvaluationGpu& eval, std::size_t level, bool final,
-                std::vector<RadianceSample>& out) {
-  for (std::size_t j = 0; j < eval.samples.size(); ++j) {
-    if (!final && eval.splitFlags[j]) continue;
-    RadianceSample s;
-    s.position = eval.samples[j].position;
-    s.radius = eval.samples[j].radius;
-    s.level = int(level);
-    unpackRadiance(eval.radiance[j], s);
-    out.push_back(s);
-  }
-}
-
-}  // namespace
-
-std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
-                               std::span<std::uint32_t> offsets) {
-  context();
-  if (flags.size() != offsets.size()) throw GpuError("exclusiveScanGpu: size mismatch");
-  const GLuint n = GLuint(flags.size());
-  if (n == 0) return 0;
-  const std::vector<GLuint> wide(flags.begin(), flags.end());
-  const Buffer in(n * sizeof(GLuint), wide.data(), 0, "scan flags");
-  const Buffer out(n * sizeof(GLuint), nullptr, 0, "scan offsets");
-  scanBuffer(in, out, n, true);
-  checkGl("scan");
-  out.read(offsets.data(), n * sizeof(GLuint));
-  return scanTotal(in, out, n);
-}
-
-LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
-                                    const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
-                                    const DynamicSamplingGpuSteps& steps,
-                                    const DynamicSamplingSettings& settings, StageTimer* timer) {
-  context();
+const Program& errorProgram(const TracingInputs& inputs, const DynamicSamplingGpuSteps& steps,
+                            const DynamicSamplingSettings& settings) {
   std::string key = "dynamic sampling error";
   std::vector<std::string> defines;
   if (steps.factorLights) {
@@ -146,183 +132,296 @@ LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& d
   }
   std::vector<std::string> files = {"common.glsl", "dynamic_error.comp.glsl"};
   addShadowVariant(inputs.shadows(), key, files, defines);
-  const Program& program = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
-  const std::size_t count = level.count;
-  LevelEvaluationGpu e;
-  e.samples.resize(count);
-  e.radiance.resize(count);
-  e.errors.resize(count);
-  e.splitFlags.resize(count);
-  if (count == 0) return e;
-  const bool root = level.level == 0;
+  return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
+}
+
+/// Sizes the workspace for `n0` initial samples and `levels`, and uploads level 0 (positions,
+/// radii, each sample its own ancestor) and the counts (n0, zeros).
+void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSample>& initial,
+                      const DynamicSamplingSettings& settings) {
+  const std::size_t L = settings.levels.size(), n0 = initial.size();
+  if (w.levels.size() < L + 1) w.levels.resize(L + 1);
+  for (std::size_t k = 0; k <= L; ++k) {
+    std::size_t cap = n0;
+    if (k > 0) {
+      const std::size_t r = std::size_t(settings.levels[k - 1]);
+      cap = std::min(r * r * r, w.maxLevelSamples);
+    }
+    DynamicSamplingWorkspace::Level& l = w.levels[k];
+    l.capacity = cap;
+    ensure(l.samples, cap * sizeof(GpuSamplePoint), levelLabel("samples", k));
+    ensure(l.ancestors, cap * sizeof(std::int32_t), levelLabel("ancestors", k));
+    ensure(l.radiance, cap * sizeof(GpuRadianceRecord), levelLabel("S", k));
+    ensure(l.errors, (k == 0 ? 2 : 1) * cap * sizeof(float), levelLabel("E", k));
+  }
+  std::size_t vertices = 0;
+  for (std::size_t k = 0; k < L; ++k) {
+    const std::size_t r = std::size_t(settings.levels[k]);
+    vertices = std::max(vertices, r * r * r);
+  }
+  if (vertices > w.vertices) {
+    ensure(w.inSet, vertices * sizeof(GLuint), "grid info: in set");
+    ensure(w.vertexAncestors, vertices * sizeof(std::int32_t), "grid info: ancestor");
+    ensure(w.offsets, vertices * sizeof(GLuint), "grid info: offsets");
+    w.vertices = vertices;
+  }
+  ensure(w.threshold, 2 * sizeof(double), "dynamic sampling threshold");
+  ensure(w.rootTau, n0 * sizeof(float), "dynamic sampling root tau");
+  const std::size_t words = dispatchSlot(L) + 3 * (L + 1);
+  ensure(w.counts, words * sizeof(GLuint), "dynamic sampling counts");
+  std::vector<GLuint> counts(words, 0u);
+  counts[0] = GLuint(n0);
+  glNamedBufferSubData(w.counts.id(), 0, GLsizeiptr(words * sizeof(GLuint)), counts.data());
+  std::vector<GpuSamplePoint> points;
+  points.reserve(n0);
+  std::vector<std::int32_t> anc(n0);
+  for (std::size_t i = 0; i < n0; ++i) {
+    points.push_back({initial[i].position, initial[i].radius});
+    anc[i] = std::int32_t(i);
+  }
+  if (n0) {
+    glNamedBufferSubData(w.levels[0].samples.id(), 0, GLsizeiptr(n0 * sizeof(GpuSamplePoint)),
+                         points.data());
+    glNamedBufferSubData(w.levels[0].ancestors.id(), 0, GLsizeiptr(n0 * sizeof(std::int32_t)),
+                         anc.data());
+  }
+  checkGl("dynamic sampling: upload level 0");
+}
+
+/// Evaluate level k (indirect dispatch after level 0): S, ∇S, E_j and on level 0 (not final)
+/// the contributions. GPU time: "ds evaluate+error".
+void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
+                   std::size_t k, bool final, const DynamicSamplingGpuSteps& steps,
+                   const DynamicSamplingSettings& settings, StageTimer* timer) {
+  const Program& program = errorProgram(inputs, steps, settings);
   const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
-  const Buffer results(count * sizeof(GpuRadianceRecord), nullptr, 0, "dynamic sampling S");
-  // E per sample, then (level 0) the contributions R³·mean|S|·D·τ.
-  const Buffer errors((root ? 2 : 1) * count * sizeof(float), nullptr, 0, "dynamic sampling E");
-  {
-    ScopedGpuTimer t(timer, "ds evaluate+error");
-    program.use();
-    inputs.apply(program);
-    glUniform1ui(program.uniform("uCount"), GLuint(count));
-    glUniform1f(program.uniform("uDelta2"), steps.delta2);
-    glUniform1i(program.uniform("uProbes"), settings.probes);
-    glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
-    glUniform1i(program.uniform("uTauMode"),
-                level.level == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
-    glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
-    glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
-    if (settings.space.bounds)
-      glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
-                  settings.space.bounds->hi);
-    setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
-    level.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-    level.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
-    rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRootTau);
-    results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
-    errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
-    glDispatchCompute(groups(count, 64), 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  const DynamicSamplingWorkspace::Level& l = w.levels[k];
+  const std::size_t L = settings.levels.size();
+  ScopedGpuTimer t(timer, "ds evaluate+error");
+  program.use();
+  inputs.apply(program);
+  glUniform1ui(program.uniform("uLevel"), GLuint(k));
+  glUniform1f(program.uniform("uDelta2"), steps.delta2);
+  glUniform1i(program.uniform("uProbes"), settings.probes);
+  glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
+  glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
+  glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
+  glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
+  if (settings.space.bounds)
+    glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
+                settings.space.bounds->hi);
+  setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
+  l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
+  w.rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRootTau);
+  l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+  l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  if (k == 0) {
+    glDispatchCompute(groups(l.capacity, 64), 1, 1);
+  } else {
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
+    glDispatchComputeIndirect(GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   }
-  checkGl("dynamic sampling: evaluate and error");
-  level.samples.read(e.samples.data(), count * sizeof(GpuSamplePoint));
-  results.read(e.radiance.data(), count * sizeof(GpuRadianceRecord));
-  errors.read(e.errors.data(), count * sizeof(float));
-  if (root && !final) {
-    e.contributions.resize(count);
-    errors.read(e.contributions.data(), count * sizeof(float), count * sizeof(float));
-  }
-  return e;
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-void setSplitFlags(LevelEvaluationGpu& eval, double threshold) {
-  context();
-  const std::size_t n = eval.errors.size();
-  eval.splitFlags.assign(n, 0u);
-  // In double against the double threshold, as the CPU variant compares.
-  for (std::size_t j = 0; j < n; ++j) eval.splitFlags[j] = double(eval.errors[j]) > threshold;
-  eval.flags = Buffer(std::max<std::size_t>(n, 1) * sizeof(GLuint),
-                      n ? eval.splitFlags.data() : nullptr, 0, "split flags");
+/// Level 0: the error scale (mean contribution, in double) and the absolute threshold, left in
+/// w.threshold. GPU time: "ds threshold".
+void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings& settings,
+                      StageTimer* timer) {
+  const Program& program = cachedProgram("dynamic sampling threshold", [] {
+    return computeProgram({"dynamic_level.comp.glsl"}, {"SL_THRESHOLD"},
+                          "dynamic sampling threshold");
+  });
+  ScopedGpuTimer t(timer, "ds threshold");
+  program.use();
+  glUniform1d(program.uniform("uEpsilon"), settings.epsilon);
+  glUniform1i(program.uniform("uRelative"), settings.relative ? 1 : 0);
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  w.levels[0].errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+  w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
+  glDispatchCompute(1, 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-GridInfoGpu splitLevelGpu(const DynamicLevelGpu& level, const LevelEvaluationGpu& eval,
-                          const Box& bounds, int resolution, LevelStats& stats, StageTimer* timer) {
-  context();
+/// Split level k into the grid information buffer of G_{k+1} (cleared first). GPU time:
+/// "ds split".
+void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k, std::size_t L,
+                StageTimer* timer) {
   const Program& program = cachedProgram("dynamic sampling split", [] {
     return computeProgram({"dynamic_split.comp.glsl"}, {}, "dynamic sampling split");
   });
-  for (std::uint32_t f : eval.splitFlags) stats.split += f != 0 ? 1 : 0;
-  if (!eval.errors.empty()) {
-    stats.maxError = *std::max_element(eval.errors.begin(), eval.errors.end());
-    stats.p90Error = quantile(eval.errors, 0.9);
+  const std::size_t nv = grid.vertices();
+  const GLuint zero = 0;
+  const GLint none = INT_MAX;
+  ScopedGpuTimer t(timer, "ds split");
+  glClearNamedBufferSubData(w.inSet.id(), GL_R32UI, 0, GLsizeiptr(nv * sizeof(GLuint)),
+                            GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glClearNamedBufferSubData(w.vertexAncestors.id(), GL_R32I, 0, GLsizeiptr(nv * sizeof(GLint)),
+                            GL_RED_INTEGER, GL_INT, &none);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  const DynamicSamplingWorkspace::Level& l = w.levels[k];
+  program.use();
+  glUniform1ui(program.uniform("uLevel"), GLuint(k));
+  setGridUniforms(program, grid);
+  l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
+  l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
+  w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+  w.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
+  if (k == 0) {
+    glDispatchCompute(groups(l.capacity, 64), 1, 1);
+  } else {
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
+    glDispatchComputeIndirect(GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   }
-  GridInfoGpu g{GridInfoBuffer(bounds, resolution), Buffer(), Buffer()};
-  const std::size_t nv = g.grid.inSet.size();
-  const std::vector<GLuint> zeros(nv, 0u);
-  const std::vector<std::int32_t> none(nv, INT_MAX);
-  g.inSet = Buffer(nv * sizeof(GLuint), zeros.data(), 0, "grid info: in set");
-  g.vertexAncestors = Buffer(nv * sizeof(std::int32_t), none.data(), 0, "grid info: ancestor");
-  if (level.count == 0) return g;
-  {
-    ScopedGpuTimer t(timer, "ds split");
-    program.use();
-    glUniform1ui(program.uniform("uCount"), GLuint(level.count));
-    setGridUniforms(program, g.grid);
-    level.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-    level.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
-    eval.flags.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplitFlags);
-    g.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
-    g.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
-    glDispatchCompute(groups(level.count, 64), 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  }
-  checkGl("dynamic sampling: split");
-  return g;
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-DynamicLevelGpu compactLevelGpu(const GridInfoGpu& grid, std::size_t level, StageTimer* timer) {
-  context();
+/// Compact G_{k+1} into level k + 1: scan, count (and the next dispatch size), scatter. GPU
+/// times: "ds scan" (scan and count), "ds compact".
+void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t next,
+                  std::size_t L, StageTimer* timer) {
+  const Program& count = cachedProgram("dynamic sampling count", [] {
+    return computeProgram({"dynamic_level.comp.glsl"}, {}, "dynamic sampling count");
+  });
   const Program& program = cachedProgram("dynamic sampling compact", [] {
     return computeProgram({"compact.comp.glsl"}, {}, "dynamic sampling compact");
   });
-  const std::size_t nv = grid.grid.inSet.size();
-  const Buffer offsets(nv * sizeof(GLuint), nullptr, 0, "grid info: offsets");
+  const std::size_t nv = grid.vertices();
+  const DynamicSamplingWorkspace::Level& l = w.levels[next];
   {
     ScopedGpuTimer t(timer, "ds scan");
-    scanBuffer(grid.inSet, offsets, GLuint(nv), true);
+    scanBuffer(w.inSet, w.offsets, GLuint(nv), true, w.scanSums);
+    count.use();
+    glUniform1ui(count.uniform("uVertexCount"), GLuint(nv));
+    glUniform1ui(count.uniform("uLevel"), GLuint(next));
+    glUniform1ui(count.uniform("uCapacity"), GLuint(l.capacity));
+    glUniform1ui(count.uniform("uOverflowSlot"), GLuint(overflowSlot(L)));
+    glUniform1ui(count.uniform("uDispatchSlot"), GLuint(dispatchSlot(L)));
+    w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   }
-  checkGl("dynamic sampling: scan");
-  DynamicLevelGpu next;
-  next.level = level;
-  next.count = scanTotal(grid.inSet, offsets, GLuint(nv));
-  next.samples =
-      Buffer(next.count * sizeof(GpuSamplePoint), nullptr, 0, levelLabel("samples", level));
-  next.ancestors =
-      Buffer(next.count * sizeof(std::int32_t), nullptr, 0, levelLabel("ancestors", level));
-  {
-    ScopedGpuTimer t(timer, "ds compact");
-    program.use();
-    glUniform1ui(program.uniform("uVertexCount"), GLuint(nv));
-    setGridUniforms(program, grid.grid);
-    glUniform1f(program.uniform("uRadius"), grid.grid.radius());
-    grid.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
-    grid.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
-    offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
-    next.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
-    next.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextAncestors);
-    glDispatchCompute(groups(nv, 256), 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  }
-  checkGl("dynamic sampling: compact");
-  return next;
+  ScopedGpuTimer t(timer, "ds compact");
+  program.use();
+  glUniform1ui(program.uniform("uVertexCount"), GLuint(nv));
+  glUniform1ui(program.uniform("uCapacity"), GLuint(l.capacity));
+  setGridUniforms(program, grid);
+  glUniform1f(program.uniform("uRadius"), grid.radius());
+  w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+  w.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
+  w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+  l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
+  l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextAncestors);
+  glDispatchCompute(groups(nv, 256), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-namespace {
+/// What one level's evaluation left on the GPU, read back once the pass is done.
+struct LevelReadBack {
+  std::vector<GpuSamplePoint> samples;
+  std::vector<GpuRadianceRecord> radiance;
+  std::vector<float> errors;
+};
 
-/// One splitting pass on the GPU (no budget): dynamicSamplingGpu() without max_samples.
+/// One splitting pass on the GPU (no budget): dynamicSamplingGpu() without max_samples. Every
+/// level is enqueued without a read-back; the result is read once at the end.
 DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
                                    const TracingInputs& inputs,
                                    const std::vector<RadianceSample>& initial,
                                    DynamicSamplingGpuSteps steps,
                                    const DynamicSamplingSettings& settings, StageTimer* timer,
-                                   std::vector<std::vector<float>>* errorsOut) {
+                                   std::vector<std::vector<float>>* errorsOut,
+                                   DynamicSamplingWorkspace& w) {
   using Clock = std::chrono::steady_clock;
+  const std::size_t L = settings.levels.size();
   DynamicSamplingResult result;
-  DynamicLevelGpu current = uploadInitialLevel(initial);
-  const Buffer rootTau(std::max<std::size_t>(current.count, 1) * sizeof(float), nullptr, 0,
-                       "dynamic sampling root tau");
-  double threshold = settings.epsilon, errorScale = 0.0;  // set on level 0
-
-  const std::size_t nLevels = settings.levels.size();
-  for (std::size_t level = 0; level <= nLevels; ++level) {
-    const auto t0 = Clock::now();
-    LevelStats ls;
-    ls.resolution = level == 0 ? 0 : settings.levels[level - 1];
-    ls.samples = (long long)current.count;
-    const bool final = level == nLevels || current.count == 0;
-    if (current.count > 0) {
-      LevelEvaluationGpu eval =
-          evaluateLevelGpu(inputs, density, current, rootTau, final, steps, settings, timer);
+  std::vector<double> enqueueMs(L + 1, 0.0);
+  if (!initial.empty()) {
+    prepareWorkspace(w, initial, settings);
+    for (std::size_t k = 0; k <= L; ++k) {
+      const auto t0 = Clock::now();
+      const bool final = k == L;
+      evaluateLevel(w, inputs, density, k, final, steps, settings, timer);
       if (!final) {
-        if (level == 0) {
-          errorScale = settings.relative ? relativeErrorScale(eval.contributions) : 0.0;
-          threshold = settings.relative ? settings.epsilon * errorScale : settings.epsilon;
-        }
+        if (k == 0) computeThreshold(w, settings, timer);
+        const GridGeometry grid(scene.medium.bounds, settings.levels[k]);
+        splitLevel(w, grid, k, L, timer);
+        compactLevel(w, grid, k + 1, L, timer);
+      }
+      checkGl("dynamic sampling: level " + std::to_string(k));
+      enqueueMs[k] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    }
+  }
+  // The one read-back of the pass: the counts (this waits for the GPU), then the levels.
+  ScopedGpuTimer readTime(timer, "ds read-back");
+  std::vector<GLuint> counts(dispatchSlot(L), 0u);
+  double thr[2] = {0.0, 0.0};
+  if (!initial.empty()) {
+    w.counts.read(counts.data(), counts.size() * sizeof(GLuint));
+    if (counts[overflowSlot(L)] > 0) {
+      const std::size_t k = counts[overflowSlot(L) + 1];
+      throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
+                     std::to_string(settings.levels[k - 1]) + "^3) has " +
+                     std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
+                     std::to_string(w.levels[k].capacity) +
+                     " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
+                     "larger epsilon");
+    }
+    if (L > 0) w.threshold.read(thr, sizeof thr);
+  }
+  const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
+  for (std::size_t k = 0; k <= L; ++k) {
+    LevelStats ls;
+    ls.resolution = k == 0 ? 0 : settings.levels[k - 1];
+    const std::size_t n = counts[k];
+    ls.samples = (long long)n;
+    ls.ms = enqueueMs[k];
+    const bool final = k == L || n == 0;
+    if (n > 0) {
+      const DynamicSamplingWorkspace::Level& l = w.levels[k];
+      LevelReadBack rb;
+      rb.samples.resize(n);
+      rb.radiance.resize(n);
+      l.samples.read(rb.samples.data(), n * sizeof(GpuSamplePoint));
+      l.radiance.read(rb.radiance.data(), n * sizeof(GpuRadianceRecord));
+      std::vector<std::uint8_t> split(n, 0);
+      if (!final) {
+        rb.errors.resize(n);
+        l.errors.read(rb.errors.data(), n * sizeof(float));
         ls.threshold = threshold;
         ls.errorScale = errorScale;
-        setSplitFlags(eval, threshold);
+        // In double against the double threshold, as the CPU variant and the split pass compare.
+        for (std::size_t j = 0; j < n; ++j) {
+          split[j] = double(rb.errors[j]) > threshold;
+          ls.split += split[j];
+        }
+        ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
+        ls.p90Error = quantile(rb.errors, 0.9);
       }
-      appendKept(eval, level, final, result.samples);
-      if (!final) {
-        if (errorsOut) errorsOut->push_back(eval.errors);
-        const GridInfoGpu grid =
-            splitLevelGpu(current, eval, scene.medium.bounds, settings.levels[level], ls, timer);
-        current = compactLevelGpu(grid, level + 1, timer);
+      // The samples that stay (all of them on the final level), in evaluation order: the CPU's.
+      for (std::size_t j = 0; j < n; ++j) {
+        if (split[j]) continue;
+        RadianceSample s;
+        s.position = rb.samples[j].position;
+        s.radius = rb.samples[j].radius;
+        s.level = int(k);
+        unpackRadiance(rb.radiance[j], s);
+        result.samples.push_back(s);
       }
+      if (!final && errorsOut) errorsOut->push_back(std::move(rb.errors));
     }
-    ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     result.levels.push_back(ls);
-    if (ls.samples == 0) {
-      for (std::size_t l = level + 1; l <= nLevels; ++l)
+    if (n == 0) {
+      for (std::size_t l = k + 1; l <= L; ++l)
         result.levels.push_back(LevelStats{settings.levels[l - 1]});
       break;
     }
@@ -332,17 +431,36 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
 
 }  // namespace
 
+std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
+                               std::span<std::uint32_t> offsets) {
+  context();
+  if (flags.size() != offsets.size()) throw GpuError("exclusiveScanGpu: size mismatch");
+  const GLuint n = GLuint(flags.size());
+  if (n == 0) return 0;
+  const std::vector<GLuint> wide(flags.begin(), flags.end());
+  const Buffer in(n * sizeof(GLuint), wide.data(), 0, "scan flags");
+  const Buffer out(n * sizeof(GLuint), nullptr, 0, "scan offsets");
+  std::vector<Buffer> sums;
+  scanBuffer(in, out, n, true, sums);
+  checkGl("scan");
+  out.read(offsets.data(), n * sizeof(GLuint));
+  return scanTotal(in, out, n);
+}
+
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
                                          std::vector<RadianceSample> initial,
                                          DynamicSamplingGpuSteps steps,
                                          const DynamicSamplingSettings& settings, StageTimer* timer,
                                          std::vector<std::vector<float>>* errorsOut,
-                                         const ShadowMaps* shadows) {
+                                         const ShadowMaps* shadows,
+                                         DynamicSamplingWorkspace* workspace) {
   context();
   const TracingInputs inputs(scene, density, steps.delta1, shadows);
+  DynamicSamplingWorkspace local;
+  DynamicSamplingWorkspace& w = workspace ? *workspace : local;
   return withSampleBudget(settings, [&](const DynamicSamplingSettings& s) {
     if (errorsOut) errorsOut->clear();  // the errors of the pass returned
-    return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut);
+    return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut, w);
   });
 }
 

@@ -1,14 +1,19 @@
 #pragma once
 /// Dynamic sampling on the GPU (paper Sec. 5): the GPU twin of scatterlab::dynamicSampling
-/// (sampling/dynamic_sampling.h), with the same semantics sample for sample. Per level, three
-/// steps: evaluate (one compute dispatch: S, ∇S, the probes' S and density, τ to the viewer,
-/// E_j (Eq. 5) and the split flag), split (error statistics, and a dispatch that marks the
-/// vertices of G_{k+1} inside the split spheres in the grid information buffer: inSet, ancestor
-/// by atomicMin) and compact (a work-efficient Blelloch scan, gpu/shaders/scan.comp.glsl, and a
-/// scatter into the next level's sample list, in ascending vertex order, which stays on the
-/// GPU). Each level's samples, S/∇S, errors and flags are read back to assemble the result
-/// (kept samples in the CPU's order) and the stats. Everything here needs a GL context
-/// (gpu::context(), created on demand).
+/// (sampling/dynamic_sampling.h), with the same semantics sample for sample. Resident: the host
+/// uploads the initial samples and reads the result back once, after the last level; in
+/// between every level runs without waiting for the host. Per level: evaluate (one compute
+/// dispatch, indirect after level 0: S, ∇S, the probes' S and density, τ to the viewer, E_j
+/// (Eq. 5)); on level 0 a one-invocation pass turns the contributions into the threshold (the
+/// mean in double, as relativeErrorScale); split (a dispatch that marks the vertices of G_{k+1}
+/// inside the spheres of the samples whose E_j exceeds the threshold, compared in double:
+/// inSet, ancestor by atomicMin) and compact (a Blelloch scan, gpu/shaders/scan.comp.glsl, a
+/// one-invocation pass writing |Q^{k+1}| and the next level's dispatch size into a buffer, and
+/// a scatter into the next level's sample list, in ascending vertex order). Each level's list
+/// has a capacity fixed up front (min(vertices of its grid, kMaxLevelSamples)); a level that
+/// asks for more is cut on the GPU and reported (GpuError) when the pass is read back. The
+/// buffers live in a DynamicSamplingWorkspace, kept across frames by the GPU refiner. Everything
+/// here needs a GL context (gpu::context(), created on demand).
 
 #include <cstdint>
 #include <span>
@@ -30,80 +35,50 @@ struct DynamicSamplingGpuSteps {
   bool logSpace = false;      ///< ... or ln V (with factorLights)
 };
 
+/// Most samples one level above level 0 may hold (its list's capacity is the smaller of this and
+/// its grid's vertex count): 2^21 samples, 176 MiB of buffers per level (88 bytes a sample).
+inline constexpr std::size_t kMaxLevelSamples = std::size_t(1) << 21;
+
+/// The GPU buffers of dynamicSamplingGpu: per level the sample list (positions, ancestors),
+/// S/∇S and E; the grid information buffer and scan scratch of the largest grid; the counts.
+/// Grown when a pass needs more, never shrunk; reused by every later pass and frame (one per
+/// GPU refiner, gpu/register.cpp). Holds GL objects: destroy it while the context exists.
+struct DynamicSamplingWorkspace {
+  struct Level {
+    std::size_t capacity = 0;
+    Buffer samples;    ///< GpuSamplePoint per sample: position, valid radius
+    Buffer ancestors;  ///< int32 per sample: index of its level-0 ancestor
+    Buffer radiance;   ///< GpuRadianceRecord per sample
+    Buffer errors;     ///< float E_j per sample (level 0: then the contributions)
+  };
+  std::vector<Level> levels;
+  Buffer counts;     ///< uint: counts per level, overflow record, indirect dispatch sizes
+  Buffer threshold;  ///< double error scale, double threshold
+  Buffer rootTau;    ///< float τ per level-0 sample
+  Buffer inSet, vertexAncestors, offsets;  ///< grid information buffer of G_{k+1}, its scan
+  std::vector<Buffer> scanSums;            ///< block sums per recursion depth of the scan
+  std::size_t vertices = 0;                ///< capacity of inSet / vertexAncestors / offsets
+  /// Most samples a level above 0 may hold (tests lower it to reach the overflow report).
+  std::size_t maxLevelSamples = kMaxLevelSamples;
+};
+
 /// Runs recursive splitting from `initial` (positions and radii) entirely with GL compute
-/// passes: per level evaluateLevelGpu, setSplitFlags (on the host: the threshold of a relative
-/// ε needs level 0's contributions), then (but on the finest level) splitLevelGpu and
-/// compactLevelGpu; with settings.maxSamples, the passes are repeated by withSampleBudget()
-/// exactly as on the CPU. Same result as dynamicSampling() with the CPU volume tracer up to
-/// floating-point differences of S (1e-3); the split decisions agree unless some E_j is within
-/// rounding of the threshold (compared in double, as on the CPU). `errors`, when given,
-/// receives E of every evaluated sample per split level (in evaluation order) of the pass
-/// returned. GPU times per pass go to `timer` (stages "ds evaluate+error", "ds split", "ds
-/// scan", "ds compact"). `shadows`: the scene objects' shadow maps (null without objects), so
-/// that S at samples and probes carries V_l as on the CPU.
-DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
-                                         std::vector<RadianceSample> initial,
-                                         DynamicSamplingGpuSteps steps,
-                                         const DynamicSamplingSettings& settings,
-                                         StageTimer* timer = nullptr,
-                                         std::vector<std::vector<float>>* errors = nullptr,
-                                         const ShadowMaps* shadows = nullptr);
-
-/// The sample list Q^k of one level, on the GPU.
-struct DynamicLevelGpu {
-  std::size_t level = 0;  ///< k (0: the initial set)
-  std::size_t count = 0;  ///< |Q^k|
-  Buffer samples;         ///< GpuSamplePoint per sample: position, valid radius
-  Buffer ancestors;       ///< int32 per sample: index of its level-0 ancestor
-};
-
-/// What the evaluation of a level computed: read back for the result, and the split flags
-/// also kept on the GPU for splitLevelGpu.
-struct LevelEvaluationGpu {
-  std::vector<GpuSamplePoint> samples;      ///< the level's positions and radii
-  std::vector<GpuRadianceRecord> radiance;  ///< S and ∇S per sample
-  std::vector<float> errors;                ///< E_j (0 on the final level)
-  std::vector<float> contributions;  ///< level 0, not final: R³·mean|S|·D·τ (sampleContribution)
-  std::vector<std::uint32_t> splitFlags;  ///< 1 where E_j > threshold (set by setSplitFlags)
-  Buffer flags;                           ///< splitFlags on the GPU
-};
-
-/// The grid information buffer of G_{k+1} on the GPU, as splitting leaves it.
-struct GridInfoGpu {
-  GridInfoBuffer grid;     ///< the grid's geometry (its host arrays are not used)
-  Buffer inSet;            ///< uint per vertex: 1 when the vertex is in Q^{k+1}
-  Buffer vertexAncestors;  ///< int32 per vertex: least ancestor marking it, INT_MAX = none
-};
-
-/// Evaluate: one dispatch computes, for every sample of `level`, S and ∇S (central
-/// differences, step steps.delta2; V or ln V instead of S as steps says) and, unless `final`, the
-/// probes' S and density, τ to the viewer (traced on level 0 and stored in `rootTau`, one float per
-/// level-0 sample; later levels read their ancestor's unless settings.perSampleTau), E_j and, on
-/// level 0, the contributions. The split flags are left to setSplitFlags. `inputs` must be those of
-/// `density`. GPU time: "ds evaluate+error".
-LevelEvaluationGpu evaluateLevelGpu(const TracingInputs& inputs, const Volume& density,
-                                    const DynamicLevelGpu& level, const Buffer& rootTau, bool final,
-                                    const DynamicSamplingGpuSteps& steps,
-                                    const DynamicSamplingSettings& settings,
-                                    StageTimer* timer = nullptr);
-
-/// The split flags E_j > threshold of an evaluated level (host, in double: the CPU's
-/// comparison), uploaded to eval.flags for splitLevelGpu.
-void setSplitFlags(LevelEvaluationGpu& eval, double threshold);
-
-/// Split: adds the level's split count, largest and 90th-percentile E_j to `stats`, and marks,
-/// in a new grid information buffer of G_{k+1} (`resolution`³ vertices over `bounds`), every
-/// vertex strictly inside the valid sphere of a split sample, with the least ancestor of the
-/// spheres that cover it (GridInfoBuffer::markSphere). GPU time: "ds split".
-GridInfoGpu splitLevelGpu(const DynamicLevelGpu& level, const LevelEvaluationGpu& eval,
-                          const Box& bounds, int resolution, LevelStats& stats,
-                          StageTimer* timer = nullptr);
-
-/// Compact: an exclusive scan of the marked vertices and a scatter of them, in ascending
-/// vertex order, into the sample list of level `level` (positions at the vertices, radius
-/// GridInfoBuffer::radius(), the vertices' ancestors). GPU times: "ds scan", "ds compact".
-DynamicLevelGpu compactLevelGpu(const GridInfoGpu& grid, std::size_t level,
-                                StageTimer* timer = nullptr);
+/// passes, reading back once at the end of the pass; with settings.maxSamples, the passes are
+/// repeated by withSampleBudget() exactly as on the CPU (one read-back per pass). Same result as
+/// dynamicSampling() with the CPU volume tracer up to floating-point differences of S (1e-3);
+/// the split decisions agree unless some E_j is within rounding of the threshold (compared in
+/// double, as on the CPU). `errors`, when given, receives E of every evaluated sample per split
+/// level (in evaluation order) of the pass returned. GPU times per pass go to `timer` (stages
+/// "ds evaluate+error", "ds threshold", "ds split", "ds scan", "ds compact", "ds read-back");
+/// LevelStats::ms is the host time to enqueue a level (the levels no longer wait for each
+/// other). `shadows`: the scene objects' shadow maps (null without objects), so that S at
+/// samples and probes carries V_l as on the CPU. `workspace`: buffers kept from an earlier call
+/// (null: made for this call).
+DynamicSamplingResult dynamicSamplingGpu(
+    const Scene& scene, const Volume& density, std::vector<RadianceSample> initial,
+    DynamicSamplingGpuSteps steps, const DynamicSamplingSettings& settings,
+    StageTimer* timer = nullptr, std::vector<std::vector<float>>* errors = nullptr,
+    const ShadowMaps* shadows = nullptr, DynamicSamplingWorkspace* workspace = nullptr);
 
 /// Exclusive scan of 0/1 flags by compute shader (the scan used by dynamicSamplingGpu, on host
 /// data: upload, scan, read back), for comparison with scatterlab::exclusiveScan. Returns the

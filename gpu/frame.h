@@ -2,8 +2,12 @@
 /// The GPU backend's frame: the density and source-radiance volumes as 3D textures, the timer
 /// queries of every pass, and the density read back once when a host stage (a sampler) asks
 /// for it. The GL context is created when the density is first built, not by the constructor.
+/// A frame keeps GL object recycling on (gpu/gl.h RecyclingScope) for its lifetime: a frame
+/// kept by a Renderer (Method::retainDensity) makes every later render take its textures,
+/// buffers, framebuffers and queries from the objects the previous render released.
 
 #include <optional>
+#include <vector>
 
 #include "core/stages.h"
 #include "gpu/stages.h"
@@ -13,6 +17,8 @@
 namespace scatterlab::gpu {
 
 class GpuFrame : public Frame {
+  RecyclingScope recycling_;  ///< first: outlives every GL object of the frame
+
  public:
   GpuFrame() = default;
   /// A frame over an uploaded copy of `density` (tests; needs the context).
@@ -26,8 +32,10 @@ class GpuFrame : public Frame {
   void sync() override;
   /// Drops the pass timings and the scene objects of the previous render (the volumes stay).
   void newRender() override;
-  /// backend "gpu", device = GL_RENDERER, gpu_ms per pass, density_construction, gl_version,
-  /// egl_platform.
+  /// backend "gpu", device = GL_RENDERER, gpu_ms per pass, gpu_ms_by_stage (the passes' GPU ms
+  /// summed per pipeline stage of timings_ms: the passes between two sync() calls belong to the
+  /// stage that ended with the second), gpu_ms_total, density_construction, gl_version,
+  /// egl_platform. (On llvmpipe "GPU ms" are CPU time of the software rasteriser.)
   void report(RenderStats& stats) override;
 
   /// The scene objects' triangles and shadow maps, built by the first stage that needs them
@@ -42,6 +50,7 @@ class GpuFrame : public Frame {
 
  private:
   bool splatted_ = false;
+  std::vector<std::size_t> marks_;  ///< timer.count() at each sync() of this render
   std::optional<DensityGrid> host_;
 };
 

@@ -1,6 +1,7 @@
 #include "gpu/gl.h"
 
 #include <cstring>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -35,7 +36,118 @@ void label(GLenum identifier, GLuint id, std::string_view name) {
   if (!name.empty()) glObjectLabel(identifier, id, GLsizei(name.size()), name.data());
 }
 
+/// The recycler's state. GL is single-threaded here (gpu/context.h), so no locking.
+struct Recycler {
+  int scopes = 0;
+  std::size_t freeBytes = 0;
+  std::deque<std::pair<detail::ObjectKey, GLuint>> free;  ///< oldest first
+  GlObjectCounts counts;
+};
+
+Recycler& recycler() {
+  static Recycler r;
+  return r;
+}
+
+/// Most objects and bytes the free list keeps; the oldest are deleted beyond either.
+constexpr std::size_t kMaxFree = 256;
+constexpr std::size_t kMaxFreeBytes = std::size_t(1) << 30;
+
+/// The storage an object of `key` holds (textures: 16 bytes a texel at most; estimated).
+std::size_t storageBytes(const detail::ObjectKey& key) {
+  if (key.kind == 1) return key.bytes;
+  if (key.kind != 2) return 0;
+  std::size_t texel = 16;
+  if (key.format == GL_R32F || key.format == GL_DEPTH_COMPONENT32F) texel = 4;
+  if (key.format == GL_RG32F) texel = 8;
+  return std::size_t(key.w) * std::size_t(key.h) * std::size_t(key.d) * texel;
+}
+
+void deleteObject(const detail::ObjectKey& key, GLuint id) {
+  switch (key.kind) {
+    case 1:
+      glDeleteBuffers(1, &id);
+      break;
+    case 2:
+      glDeleteTextures(1, &id);
+      break;
+    case 3:
+      glDeleteFramebuffers(1, &id);
+      break;
+    case 4:
+      glDeleteQueries(1, &id);
+      break;
+    default:
+      glDeleteVertexArrays(1, &id);
+  }
+}
+
+bool isDepthFormat(GLenum format) {
+  return format == GL_DEPTH_COMPONENT32F || format == GL_DEPTH_COMPONENT24 ||
+         format == GL_DEPTH_COMPONENT16 || format == GL_DEPTH_COMPONENT32;
+}
+
 }  // namespace
+
+GlObjectCounts glObjectCounts() {
+  GlObjectCounts c = recycler().counts;
+  c.free = (long long)recycler().free.size();
+  return c;
+}
+
+RecyclingScope::RecyclingScope() {
+  ++recycler().scopes;
+}
+
+RecyclingScope::~RecyclingScope() {
+  Recycler& r = recycler();
+  if (--r.scopes > 0) return;
+  for (const auto& [key, id] : r.free) deleteObject(key, id);
+  r.free.clear();
+  r.freeBytes = 0;
+}
+
+namespace detail {
+
+GLuint takeRecycled(const ObjectKey& key) {
+  Recycler& r = recycler();
+  if (r.scopes == 0) return 0;
+  for (auto it = r.free.begin(); it != r.free.end(); ++it)
+    if (it->first == key) {
+      const GLuint id = it->second;
+      r.freeBytes -= storageBytes(it->first);
+      r.free.erase(it);
+      ++r.counts.reused;
+      ++r.counts.live;
+      return id;
+    }
+  return 0;
+}
+
+bool recycle(const ObjectKey& key, GLuint id) {
+  Recycler& r = recycler();
+  if (r.scopes == 0) return false;
+  r.free.emplace_back(key, id);
+  r.freeBytes += storageBytes(key);
+  --r.counts.live;
+  while (r.free.size() > kMaxFree || (r.freeBytes > kMaxFreeBytes && r.free.size() > 1)) {
+    r.freeBytes -= storageBytes(r.free.front().first);
+    deleteObject(r.free.front().first, r.free.front().second);
+    r.free.pop_front();
+  }
+  return true;
+}
+
+void countCreated() {
+  ++recycler().counts.created;
+  ++recycler().counts.live;
+}
+
+void countDeleted() {
+  --recycler().counts.live;
+}
+
+}  // namespace detail
 
 void checkGl(std::string_view pass) {
   std::string errors;
@@ -48,10 +160,20 @@ void checkGl(std::string_view pass) {
 }
 
 Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view name)
-    : size_(bytes) {
-  glCreateBuffers(1, &id_);
+    : size_(bytes), flags_(flags | GL_DYNAMIC_STORAGE_BIT) {
   // Zero-sized storage is an error in GL; keep one word so empty sets still bind.
-  glNamedBufferStorage(id_, GLsizeiptr(bytes ? bytes : 4), bytes ? data : nullptr, flags);
+  const GLsizeiptr stored = GLsizeiptr(bytes ? bytes : 4);
+  id_ = detail::takeRecycled(key());
+  if (id_) {
+    if (bytes && data)
+      glNamedBufferSubData(id_, 0, stored, data);
+    else
+      glClearNamedBufferData(id_, GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
+  } else {
+    glCreateBuffers(1, &id_);
+    detail::countCreated();
+    glNamedBufferStorage(id_, stored, bytes ? data : nullptr, flags_);
+  }
   label(GL_BUFFER, id_, name);
 }
 
@@ -59,22 +181,32 @@ void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   if (n) glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
-Texture::Texture(GLenum target, std::string_view name) : target_(target) {
-  glCreateTextures(target, 1, &id_);
+Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view name)
+    : target_(target), key_{2, target, format, w, h, d} {
+  id_ = detail::takeRecycled(key_);
+  if (id_) {
+    // A new texture's contents are undefined in GL (zeros in practice): a recycled one is zeroed.
+    glClearTexImage(id_, 0, isDepthFormat(format) ? GL_DEPTH_COMPONENT : GL_RED, GL_FLOAT, nullptr);
+  } else {
+    glCreateTextures(target, 1, &id_);
+    detail::countCreated();
+    if (target == GL_TEXTURE_2D)
+      glTextureStorage2D(id_, 1, format, w, h);
+    else
+      glTextureStorage3D(id_, 1, format, w, h, d);
+  }
   label(GL_TEXTURE, id_, name);
 }
 
 Texture Texture::make2D(GLenum format, int w, int h, std::string_view name) {
-  Texture t(GL_TEXTURE_2D, name);
-  glTextureStorage2D(t.id_, 1, format, w, h);
+  Texture t(GL_TEXTURE_2D, format, w, h, 1, name);
   glTextureParameteri(t.id_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(t.id_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   return t;
 }
 
 Texture Texture::make3D(GLenum format, int w, int h, int d, std::string_view name) {
-  Texture t(GL_TEXTURE_3D, name);
-  glTextureStorage3D(t.id_, 1, format, w, h, d);
+  Texture t(GL_TEXTURE_3D, format, w, h, d, name);
   glTextureParameteri(t.id_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTextureParameteri(t.id_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
@@ -83,8 +215,7 @@ Texture Texture::make3D(GLenum format, int w, int h, int d, std::string_view nam
 }
 
 Texture Texture::make2DArray(GLenum format, int w, int h, int layers, std::string_view name) {
-  Texture t(GL_TEXTURE_2D_ARRAY, name);
-  glTextureStorage3D(t.id_, 1, format, w, h, layers);
+  Texture t(GL_TEXTURE_2D_ARRAY, format, w, h, layers, name);
   glTextureParameteri(t.id_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTextureParameteri(t.id_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T})
@@ -93,12 +224,27 @@ Texture Texture::make2DArray(GLenum format, int w, int h, int layers, std::strin
 }
 
 Framebuffer::Framebuffer(std::string_view name) {
-  glCreateFramebuffers(1, &id_);
+  id_ = detail::takeRecycled({3});
+  if (id_) {
+    // As new: no attachments, draw buffer 0.
+    GLint colors = 8;
+    glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &colors);
+    for (GLint c = 0; c < colors; ++c)
+      glNamedFramebufferTexture(id_, GLenum(GL_COLOR_ATTACHMENT0 + c), 0, 0);
+    glNamedFramebufferTexture(id_, GL_DEPTH_ATTACHMENT, 0, 0);
+    glNamedFramebufferTexture(id_, GL_STENCIL_ATTACHMENT, 0, 0);
+    glNamedFramebufferDrawBuffer(id_, GL_COLOR_ATTACHMENT0);
+    glNamedFramebufferReadBuffer(id_, GL_COLOR_ATTACHMENT0);
+  } else {
+    glCreateFramebuffers(1, &id_);
+    detail::countCreated();
+  }
   label(GL_FRAMEBUFFER, id_, name);
 }
 
 Shader::Shader(GLenum stage, std::string_view source, std::string_view file) {
   id_ = glCreateShader(stage);
+  detail::countCreated();
   const char* src = source.data();
   const GLint len = GLint(source.size());
   glShaderSource(id_, 1, &src, &len);
@@ -118,6 +264,7 @@ Shader::Shader(GLenum stage, std::string_view source, std::string_view file) {
 
 Program::Program(std::initializer_list<const Shader*> shaders, std::string_view name) {
   id_ = glCreateProgram();
+  detail::countCreated();
   for (const Shader* s : shaders) glAttachShader(id_, s->id());
   glLinkProgram(id_);
   for (const Shader* s : shaders) glDetachShader(id_, s->id());
@@ -134,13 +281,21 @@ Program::Program(std::initializer_list<const Shader*> shaders, std::string_view 
   label(GL_PROGRAM, id_, name);
 }
 
-Query::Query(GLenum target, std::string_view name) {
-  glCreateQueries(target, 1, &id_);
+Query::Query(GLenum target, std::string_view name) : target_(target) {
+  id_ = detail::takeRecycled({4, target});
+  if (!id_) {
+    glCreateQueries(target, 1, &id_);
+    detail::countCreated();
+  }
   label(GL_QUERY, id_, name);
 }
 
 VertexArray::VertexArray(std::string_view name) {
-  glCreateVertexArrays(1, &id_);
+  id_ = detail::takeRecycled({5});
+  if (!id_) {
+    glCreateVertexArrays(1, &id_);
+    detail::countCreated();
+  }
   label(GL_VERTEX_ARRAY, id_, name);
 }
 

@@ -4,6 +4,15 @@
 /// gpu::context() current on the calling thread; destructors and moves of empty objects do not.
 /// Move-assignment swaps, so the moved-from object releases the old name when it dies.
 /// Raw GLuint names stay inside gpu/: the accessors below are for gpu/ code only.
+///
+/// Recycling (issue 14, GL objects reused across frames): while a RecyclingScope lives (a
+/// GpuFrame holds one, so a Renderer's kept frame keeps recycling on from one render to the
+/// next), a Buffer, Texture, Framebuffer, Query or VertexArray that dies is not deleted but kept
+/// in a free list, and the next one made with the same description (buffer: bytes and flags;
+/// texture: target, format and size; query: target) takes its name over instead of creating a
+/// new object. A taken object reads as a new one: buffers get their data (or zeros), textures
+/// are cleared to zero, framebuffers lose their attachments. When the last scope ends, the
+/// free list is deleted. glObjectCounts() counts creations and reuses (for the reuse tests).
 
 #include <epoxy/gl.h>
 
@@ -16,6 +25,45 @@ namespace scatterlab::gpu {
 /// Throws GpuError naming `pass` when glGetError reports anything (draining the queue).
 void checkGl(std::string_view pass);
 
+/// What the wrappers did since the process started (no context needed).
+struct GlObjectCounts {
+  long long created = 0;  ///< objects created (glCreate*): buffers, textures, framebuffers,
+                          ///< queries, vertex arrays, shaders, programs
+  long long reused = 0;   ///< objects taken from the free list instead of created
+  long long live = 0;     ///< objects owned by a wrapper now
+  long long free = 0;     ///< objects in the free list now
+};
+GlObjectCounts glObjectCounts();
+
+/// Turns recycling on for its lifetime (scopes nest; the free list is deleted, in the current
+/// context, when the last one ends). Constructing one needs no context.
+class RecyclingScope {
+ public:
+  RecyclingScope();
+  ~RecyclingScope();
+  RecyclingScope(const RecyclingScope&) = delete;
+  RecyclingScope& operator=(const RecyclingScope&) = delete;
+};
+
+namespace detail {
+/// What a recycled object must match to be taken over.
+struct ObjectKey {
+  int kind = 0;  ///< 1 buffer, 2 texture, 3 framebuffer, 4 query, 5 vertex array
+  GLenum target = 0, format = 0;
+  int w = 0, h = 0, d = 0;
+  std::size_t bytes = 0;
+  GLbitfield flags = 0;
+  bool operator==(const ObjectKey&) const = default;
+};
+/// A name from the free list matching `key` (0: none, or recycling is off).
+GLuint takeRecycled(const ObjectKey& key);
+/// Keeps `id` in the free list under `key` when recycling is on (returns true), else false.
+bool recycle(const ObjectKey& key, GLuint id);
+/// Counts an object created / deleted by a wrapper.
+void countCreated();
+void countDeleted();
+}  // namespace detail
+
 /// Base of the wrappers: owns one GL name, deleted through Deleter.
 template <class Deleter>
 class GlObject {
@@ -23,7 +71,10 @@ class GlObject {
   GlObject() = default;
   explicit GlObject(GLuint id) : id_(id) {}
   ~GlObject() {
-    if (id_) Deleter{}(id_);
+    if (id_) {
+      Deleter{}(id_);
+      detail::countDeleted();
+    }
   }
   GlObject(const GlObject&) = delete;
   GlObject& operator=(const GlObject&) = delete;
@@ -36,6 +87,11 @@ class GlObject {
   explicit operator bool() const { return id_ != 0; }
 
  protected:
+  /// Gives the name to the free list (a derived destructor's first step); the base destructor
+  /// then deletes nothing.
+  void release(const detail::ObjectKey& key) {
+    if (id_ && detail::recycle(key, id_)) id_ = 0;
+  }
   GLuint id_ = 0;
 };
 
@@ -66,14 +122,26 @@ class Buffer : public GlObject<BufferDeleter> {
  public:
   Buffer() = default;
   /// Creates `bytes` of storage initialised from `data` (may be null); `label` for debuggers.
+  /// GL_DYNAMIC_STORAGE_BIT is always added to `flags` (so that a recycled buffer can take new
+  /// data).
   Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view label);
+  ~Buffer() { release(key()); }
+  Buffer(Buffer&& o) noexcept : GlObject(std::move(o)), size_(o.size_), flags_(o.flags_) {}
+  Buffer& operator=(Buffer&& o) noexcept {
+    GlObject::operator=(std::move(o));
+    std::swap(size_, o.size_);
+    std::swap(flags_, o.flags_);
+    return *this;
+  }
   std::size_t size() const { return size_; }
   /// Copies bytes [offset, offset + n) back to host memory.
   void read(void* dst, std::size_t n, std::size_t offset = 0) const;
   void bindBase(GLenum target, GLuint index) const { glBindBufferBase(target, index, id_); }
 
  private:
+  detail::ObjectKey key() const { return {1, 0, 0, 0, 0, 0, size_, flags_}; }
   std::size_t size_ = 0;
+  GLbitfield flags_ = 0;
 };
 
 /// Texture object (glCreateTextures) with immutable storage.
@@ -88,10 +156,21 @@ class Texture : public GlObject<TextureDeleter> {
   /// A 2D array texture of `layers` layers, GL_LINEAR filtering, CLAMP_TO_EDGE.
   static Texture make2DArray(GLenum format, int w, int h, int layers, std::string_view label);
   GLenum target() const { return target_; }
+  ~Texture() { release(key_); }
+  Texture(Texture&& o) noexcept : GlObject(std::move(o)), target_(o.target_), key_(o.key_) {}
+  Texture& operator=(Texture&& o) noexcept {
+    GlObject::operator=(std::move(o));
+    std::swap(target_, o.target_);
+    std::swap(key_, o.key_);
+    return *this;
+  }
 
  private:
-  Texture(GLenum target, std::string_view label);
+  /// A texture of `target`, `format` and size (w, h, d): recycled (cleared to zero) or created
+  /// with its storage.
+  Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view label);
   GLenum target_ = 0;
+  detail::ObjectKey key_;
 };
 
 /// Framebuffer object.
@@ -99,6 +178,9 @@ class Framebuffer : public GlObject<FramebufferDeleter> {
  public:
   Framebuffer() = default;
   explicit Framebuffer(std::string_view label);
+  ~Framebuffer() { release({3}); }
+  Framebuffer(Framebuffer&&) noexcept = default;
+  Framebuffer& operator=(Framebuffer&&) noexcept = default;
 };
 
 /// A compiled shader stage; compile errors throw GpuError with `file` and the info log.
@@ -124,6 +206,16 @@ class Query : public GlObject<QueryDeleter> {
  public:
   Query() = default;
   Query(GLenum target, std::string_view label);
+  ~Query() { release({4, target_}); }
+  Query(Query&& o) noexcept : GlObject(std::move(o)), target_(o.target_) {}
+  Query& operator=(Query&& o) noexcept {
+    GlObject::operator=(std::move(o));
+    std::swap(target_, o.target_);
+    return *this;
+  }
+
+ private:
+  GLenum target_ = 0;
 };
 
 /// Vertex array object; the stages draw attribute-less geometry generated from gl_VertexID and
@@ -132,6 +224,9 @@ class VertexArray : public GlObject<VertexArrayDeleter> {
  public:
   VertexArray() = default;
   explicit VertexArray(std::string_view label);
+  ~VertexArray() { release({5}); }
+  VertexArray(VertexArray&&) noexcept = default;
+  VertexArray& operator=(VertexArray&&) noexcept = default;
 };
 
 }  // namespace scatterlab::gpu

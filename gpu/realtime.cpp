@@ -7,6 +7,7 @@
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
 #include "gpu/frame.h"
+#include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
 #include "gpu/stages.h"
 
@@ -14,33 +15,8 @@ namespace scatterlab::gpu {
 
 namespace {
 
-/// The camera's ray frame as the shaders' uniforms (Camera::RayGenerator).
-void setCamera(const Program& p, const Scene& scene) {
-  const auto gen = scene.camera.rayGenerator();
-  setVec3(p, "uForward", gen.forward);
-  setVec3(p, "uRight", gen.right);
-  setVec3(p, "uUp", gen.up);
-  glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
-  glUniform2i(p.uniform("uImageSize"), scene.camera.width, scene.camera.height);
-}
-
 void bindImage(GLuint unit, const Texture& t, GLenum access) {
   glBindImageTexture(unit, t.id(), 0, GL_FALSE, 0, access, GL_RGBA32F);
-}
-
-/// Reads an RGBA32F image back: rgb into the image, a into its alpha.
-Image readImage(const Texture& t, int w, int h, const char* pass) {
-  std::vector<float> rgba(std::size_t(w) * h * 4);
-  glGetTextureImage(t.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                    rgba.data());
-  checkGl(pass);
-  Image img(w, h);
-  img.alpha().resize(std::size_t(w) * h);
-  for (std::size_t i = 0; i < std::size_t(w) * h; ++i) {
-    img.pixels()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
-    img.alpha()[i] = rgba[4 * i + 3];
-  }
-  return img;
 }
 
 }  // namespace
@@ -64,17 +40,14 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const DensityGrid& densi
 Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, float mean,
                                     StageTimer* timer) {
   checkLightSpaceMarchScene(scene, s_);
-  context();
-  SceneShadows objects;
-  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
-  shadowMaps_ = shadows ? int(scene.lights.size()) : 0;
+  const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
+  shadowMaps_ = pass.shadows() ? int(scene.lights.size()) : 0;
   const bool traced = s_.light == LightTransmittance::Traced;
-  std::string key = traced ? "light-space march (traced)" : "light-space march (mean)";
-  std::vector<std::string> defines = {"SL_MARCH"},
-                           files = {"common.glsl", "light_space_march.comp.glsl"};
-  if (traced) defines.push_back("SL_TRACED");
-  addShadowVariant(shadows, key, files, defines);
-  const Program& march = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
+  const Program& march =
+      pass.program(traced ? "light-space march (traced)" : "light-space march (mean)",
+                   {"common.glsl", "light_space_march.comp.glsl"},
+                   traced ? std::vector<std::string>{"SL_MARCH", "SL_TRACED"}
+                          : std::vector<std::string>{"SL_MARCH"});
   const Program& sum = cachedProgram("light-space march block sum", [] {
     return computeProgram({"common.glsl", "light_space_march.comp.glsl"}, {"SL_BLOCK_SUM"},
                           "light-space march block sum");
@@ -84,19 +57,12 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
   const Texture base = Texture::make2D(GL_RGBA32F, w, h, "light-space march base");
   const Texture rows = Texture::make2D(GL_RGBA32F, w, h, "light-space march row sums");
   const Texture out = Texture::make2D(GL_RGBA32F, w, h, "light-space march image");
-  const TracingInputs inputs(scene, density, delta1_, shadows);
-  ScreenSurfaces surfaces;
-  surfaces.build(scene, objects, inputs, timer);
-  const Medium& m = scene.medium;
   {
     ScopedGpuTimer t(timer, "light-space march");
     march.use();
-    inputs.apply(march);
-    surfaces.bind();
-    setCamera(march, scene);
+    pass.bind(march);
     glUniform1i(march.uniform("uInterleave"), M);
     glUniform1i(march.uniform("uSteps"), s_.steps);
-    glUniform1f(march.uniform("uAlbedo"), m.albedo);
     glUniform1f(march.uniform("uMeanDensity"), mean);
     setVec3(march, "uBackground", scene.background);
     bindImage(binding::kScreenOutImage, terms, GL_WRITE_ONLY);
@@ -124,7 +90,7 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   checkGl("block sum");
-  return readImage(out, w, h, "light-space march read-back");
+  return readScreenImage(out, w, h, OutputAlpha::Alpha, "light-space march read-back", timer);
 }
 
 void LightSpaceMarchGpu::describe(RenderStats& st) const {
@@ -152,13 +118,10 @@ Image RadialBlurGpu::integrate(const Scene& scene, const DensityGrid& density) {
 
 Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
   checkRadialBlurScene(scene, s_);
-  context();
-  SceneShadows objects;
-  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
-  const auto program = [&](const char* define, std::string key) -> const Program& {
-    std::vector<std::string> defines = {define}, files = {"common.glsl", "radial_blur.comp.glsl"};
-    addShadowVariant(shadows, key, files, defines);
-    return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
+  // delta1 is the step of the surfaces' T(p, l) (the passes trace no light otherwise).
+  const ScreenPass pass(scene, density, delta1_ > 0.0f ? delta1_ : march_.step, shadowMap_, timer);
+  const auto program = [&](const char* define, const char* key) -> const Program& {
+    return pass.program(key, {"common.glsl", "radial_blur.comp.glsl"}, {define});
   };
   const Program& basePass = program("SL_BASE", "radial blur base");
   const Program& prePass = program("SL_PREPASS", "radial blur pre-pass");
@@ -167,18 +130,10 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
   const int pw = (w + ds - 1) / ds, ph = (h + ds - 1) / ds;
   const Texture image = Texture::make2D(GL_RGBA32F, w, h, "radial blur image");
   const Texture pre = Texture::make2D(GL_RGBA32F, pw, ph, "radial blur pre-pass");
-  // delta1 is the step of the surfaces' T(p, l) (the passes trace no light otherwise).
-  const TracingInputs inputs(scene, density, delta1_ > 0.0f ? delta1_ : march_.step, shadows);
-  ScreenSurfaces surfaces;
-  surfaces.build(scene, objects, inputs, timer);
-  const Medium& m = scene.medium;
   const auto marchUniforms = [&](const Program& p) {
-    inputs.apply(p);
-    surfaces.bind();
-    setCamera(p, scene);
+    pass.bind(p);
     glUniform1f(p.uniform("uStep"), march_.step);
     glUniform1f(p.uniform("uMinTransmittance"), march_.minTransmittance);
-    glUniform1f(p.uniform("uAlbedo"), m.albedo);
     setVec3(p, "uBackground", scene.background);
   };
   {
@@ -226,7 +181,7 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
     }
     checkGl("radial blur");
   }
-  return readImage(image, w, h, "radial blur read-back");
+  return readScreenImage(image, w, h, OutputAlpha::Alpha, "radial blur read-back", timer);
 }
 
 void RadialBlurGpu::describe(RenderStats& st) const {

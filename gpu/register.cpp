@@ -16,7 +16,8 @@ namespace scatterlab::gpu {
 namespace {
 
 /// "dynamic" on the GPU: dynamicSamplingGpu's passes on the frame's density (the pipeline's
-/// evaluator is not used: the passes trace S, ∇S and the probes themselves).
+/// evaluator is not used: the passes trace S, ∇S and the probes themselves), in buffers kept
+/// from one frame to the next.
 class GpuRefiner : public SampleRefiner {
  public:
   GpuRefiner(DynamicSamplingSettings s, DynamicSamplingGpuSteps steps, ShadowMapSettings shadowMap)
@@ -26,13 +27,14 @@ class GpuRefiner : public SampleRefiner {
     GpuFrame& f = static_cast<GpuFrame&>(frame);
     const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
     return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer, nullptr,
-                              shadows);
+                              shadows, &workspace_);
   }
 
  private:
   DynamicSamplingSettings s_;
   DynamicSamplingGpuSteps steps_;
   ShadowMapSettings shadowMap_;  ///< the objects' visibility at samples and probes
+  DynamicSamplingWorkspace workspace_;
 };
 
 /// Backend "auto" picks the GPU only on real hardware: llvmpipe runs the GL passes on the CPU,

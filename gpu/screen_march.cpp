@@ -8,47 +8,11 @@
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
 #include "gpu/frame.h"
+#include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
 #include "gpu/stages.h"
 
 namespace scatterlab::gpu {
-
-namespace {
-
-/// A program of `files` and `defines`, with the shadow-map variant when `shadows` is set.
-const Program& screenProgram(std::string key, std::vector<std::string> files,
-                             std::vector<std::string> defines, const ShadowMaps* shadows) {
-  addShadowVariant(shadows, key, files, defines);
-  return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
-}
-
-/// The camera uniforms of screen_common.glsl.
-void setCamera(const Program& p, const Scene& scene) {
-  const auto gen = scene.camera.rayGenerator();
-  setVec3(p, "uForward", gen.forward);
-  setVec3(p, "uRight", gen.right);
-  setVec3(p, "uUp", gen.up);
-  glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
-  glUniform2f(p.uniform("uSize"), float(scene.camera.width), float(scene.camera.height));
-  glUniform1f(p.uniform("uAlbedo"), scene.medium.albedo);
-}
-
-/// Reads the RGBA32F output image back: rgb radiance, a the transmittance (alpha = 1 − T).
-Image readOutput(const Texture& out, int w, int h) {
-  std::vector<float> rgba(size_t(w) * h * 4);
-  glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                    rgba.data());
-  checkGl("read-back");
-  Image img(w, h);
-  img.alpha().resize(size_t(w) * h);
-  for (size_t i = 0; i < size_t(w) * h; ++i) {
-    img.pixels()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
-    img.alpha()[i] = 1.0f - rgba[4 * i + 3];
-  }
-  return img;
-}
-
-}  // namespace
 
 // ---------------------------------------------------------------- jittered march
 
@@ -62,15 +26,11 @@ void JitteredMarchGpu::describe(RenderStats& stats) const {
 }
 
 Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
-  context();
-  SceneShadows objects;
-  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
-  const Program& march =
-      screenProgram("jittered march",
-                    {"common.glsl", "screen_common.glsl", "jittered_march.comp.glsl"}, {}, shadows);
-  const Program& upsample = screenProgram(
-      "jittered upsample", {"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"}, {},
-      shadows);
+  const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
+  const Program& march = pass.program(
+      "jittered march", {"common.glsl", "screen_common.glsl", "jittered_march.comp.glsl"});
+  const Program& upsample = pass.program(
+      "jittered upsample", {"common.glsl", "screen_common.glsl", "jittered_upsample.comp.glsl"});
   const Camera& cam = scene.camera;
   const int d = s_.downsample;
   const int lw = (cam.width + d - 1) / d, lh = (cam.height + d - 1) / d;
@@ -79,15 +39,10 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
   const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "jittered march image");
   const std::vector<float>& table = blueNoiseTable();
   const Buffer tableBuf(table.size() * sizeof(float), table.data(), 0, "blue-noise table");
-  const TracingInputs inputs(scene, density, delta1_, shadows);
-  ScreenSurfaces surfaces;
-  surfaces.build(scene, objects, inputs, timer);
   {
     ScopedGpuTimer t(timer, "jittered march");
     march.use();
-    inputs.apply(march);
-    surfaces.bind();
-    setCamera(march, scene);
+    pass.bind(march);
     tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
     glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
@@ -105,10 +60,8 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
   {
     ScopedGpuTimer t(timer, "bilateral upsample");
     upsample.use();
-    inputs.apply(upsample);
-    surfaces.bind();
+    pass.bind(upsample);
     glUniform1f(upsample.uniform("uMinTransmittance"), minT_);
-    setCamera(upsample, scene);
     glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_READ_ONLY,
                        GL_R32F);
@@ -121,7 +74,8 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   checkGl("bilateral upsample");
-  return readOutput(out, cam.width, cam.height);
+  return readScreenImage(out, cam.width, cam.height, OutputAlpha::Transmittance, "read-back",
+                         timer);
 }
 
 // ---------------------------------------------------------------- froxel
@@ -136,34 +90,27 @@ void FroxelGpu::describe(RenderStats& stats) const {
 }
 
 Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer* timer) {
-  context();
-  SceneShadows objects;
-  const ShadowMaps* shadows = objects.build(scene, shadowMap_, timer);
+  const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
   const bool useMap = s_.transmittanceMap && !scene.lights.empty();
-  const Program& scatter = screenProgram(
+  const Program& scatter = pass.program(
       useMap ? "froxel scatter (map)" : "froxel scatter",
       {"common.glsl", "screen_common.glsl", "froxel_scatter.comp.glsl"},
-      useMap ? std::vector<std::string>{"SL_TRANSMITTANCE_MAP"} : std::vector<std::string>{},
-      shadows);
-  const Program& lookup =
-      screenProgram("froxel lookup",
-                    {"common.glsl", "screen_common.glsl", "froxel_lookup.comp.glsl"}, {}, shadows);
+      useMap ? std::vector<std::string>{"SL_TRANSMITTANCE_MAP"} : std::vector<std::string>{});
+  const Program& lookup = pass.program(
+      "froxel lookup", {"common.glsl", "screen_common.glsl", "froxel_lookup.comp.glsl"});
   const FroxelSlicing slicing = froxelSlicing(scene, s_);
   const Camera& cam = scene.camera;
   const IVec3 g = s_.grid;
   const int R = s_.mapResolution;
-  const TracingInputs inputs(scene, density, delta1_, shadows);
-  ScreenSurfaces surfaces;
-  surfaces.build(scene, objects, inputs, timer);
   Texture map;
   if (useMap) {
-    const Program& build = screenProgram("froxel transmittance map",
-                                         {"common.glsl", "froxel_map.comp.glsl"}, {}, shadows);
+    const Program& build =
+        pass.program("froxel transmittance map", {"common.glsl", "froxel_map.comp.glsl"});
     const int layers = R * int(scene.lights.size());
     map = Texture::make3D(GL_R32F, R, R, layers, "froxel transmittance maps");
     ScopedGpuTimer t(timer, "transmittance map");
     build.use();
-    inputs.apply(build);
+    pass.inputs().apply(build);
     glBindImageTexture(binding::kTransmittanceMapImage, map.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
                        GL_R32F);
     glUniform1i(build.uniform("uMapRes"), R);
@@ -182,8 +129,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
   {
     ScopedGpuTimer t(timer, "froxel accumulate");
     scatter.use();
-    inputs.apply(scatter);
-    setCamera(scatter, scene);
+    pass.bind(scatter);
     slicingUniforms(scatter);
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
                        GL_RGBA32F);
@@ -199,10 +145,8 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
   {
     ScopedGpuTimer t(timer, "froxel lookup");
     lookup.use();
-    inputs.apply(lookup);
-    surfaces.bind();
+    pass.bind(lookup);
     glUniform1f(lookup.uniform("uMinTransmittance"), minT_);
-    setCamera(lookup, scene);
     slicingUniforms(lookup);
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
                        GL_RGBA32F);
@@ -212,7 +156,8 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   checkGl("froxel lookup");
-  return readOutput(out, cam.width, cam.height);
+  return readScreenImage(out, cam.width, cam.height, OutputAlpha::Transmittance, "read-back",
+                         timer);
 }
 
 }  // namespace scatterlab::gpu

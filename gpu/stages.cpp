@@ -462,8 +462,11 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
   }
   checkGl("slice march");
   std::vector<float> rgba(size_t(w) * h * 4);
-  glGetTextureImage(target.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                    rgba.data());
+  {
+    ScopedGpuTimer t(timer, "read-back");
+    glGetTextureImage(target.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                      rgba.data());
+  }
   checkGl("slice march read-back");
   Image img(w, h);
   img.alpha().resize(size_t(w) * h);

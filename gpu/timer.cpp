@@ -18,23 +18,31 @@ void StageTimer::end() {
   open_ = false;
 }
 
-std::vector<std::pair<std::string, double>> StageTimer::results() {
+std::vector<std::pair<std::string, double>> StageTimer::spans() {
   end();
   std::vector<std::pair<std::string, double>> out;
+  out.reserve(spans_.size());
   for (Span& s : spans_) {
     GLuint64 t0 = 0, t1 = 0;
     glGetQueryObjectui64v(s.start.id(), GL_QUERY_RESULT, &t0);
     glGetQueryObjectui64v(s.stop.id(), GL_QUERY_RESULT, &t1);
-    const double ms = t1 > t0 ? double(t1 - t0) * 1e-6 : 0.0;
+    out.emplace_back(s.stage, t1 > t0 ? double(t1 - t0) * 1e-6 : 0.0);
+  }
+  spans_.clear();
+  return out;
+}
+
+std::vector<std::pair<std::string, double>> StageTimer::results() {
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& [stage, ms] : spans()) {
     bool merged = false;
     for (auto& [n, v] : out)
-      if (n == s.stage) {
+      if (n == stage) {
         v += ms;
         merged = true;
       }
-    if (!merged) out.emplace_back(s.stage, ms);
+    if (!merged) out.emplace_back(stage, ms);
   }
-  spans_.clear();
   return out;
 }
 

@@ -20,6 +20,11 @@ class StageTimer {
   void end();
   /// GPU milliseconds per stage, in order of begin(); stages timed more than once are summed.
   std::vector<std::pair<std::string, double>> results();
+  /// GPU milliseconds of every span, in order of begin() (not summed). Like results(), waits
+  /// for the GPU and forgets the spans.
+  std::vector<std::pair<std::string, double>> spans();
+  /// Spans begun so far (since the last results() or spans()).
+  std::size_t count() const { return spans_.size(); }
 
  private:
   struct Span {

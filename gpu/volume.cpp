@@ -1,5 +1,6 @@
 #include "gpu/volume.h"
 
+#include <memory>
 #include <vector>
 
 #include "core/error.h"
@@ -8,6 +9,7 @@
 #include "gpu/dispatch.h"
 #include "gpu/records.h"
 #include "gpu/shaders.h"
+#include "media/sog.h"
 
 namespace scatterlab::gpu {
 
@@ -126,11 +128,111 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
   return v;
 }
 
+namespace {
+
+/// The residual lattice of the last .sog model put on the GPU, and that model (held weakly: the
+/// lattice is reused only while the very same model object lives, so a file rewritten and read
+/// again is never confused with the old one). Kept for the process (never deleted, like the
+/// cached programs: no GL call during static destruction).
+struct ResidualLattice {
+  std::weak_ptr<const SogDensity> model;
+  const SogDensity* address = nullptr;
+  Texture texture;
+};
+
+ResidualLattice& residualCache() {
+  static ResidualLattice* cache = new ResidualLattice();
+  return *cache;
+}
+
+/// F of `sog` as an R32F texture on its lattice: the hash's entries uploaded as a list and
+/// scattered by a compute pass (sog_residual.comp.glsl, SL_SCATTER); reused while the model is
+/// the same object. GPU time: "residual upload" (only when uploaded).
+const Texture& residualLattice(const std::shared_ptr<const SogDensity>& sog, StageTimer* timer,
+                               bool* uploaded) {
+  ResidualLattice& cache = residualCache();
+  *uploaded = false;
+  if (cache.texture && cache.address == sog.get() && cache.model.lock() == sog)
+    return cache.texture;
+  const ResidualHash& r = sog->model().residual;
+  const IVec3 n = r.dims();
+  const std::vector<std::pair<std::uint32_t, std::int16_t>> entries = r.entries();
+  std::vector<GLint> packed(2 * entries.size());
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    packed[2 * e] = GLint(entries[e].first);
+    packed[2 * e + 1] = GLint(entries[e].second);
+  }
+  cache.model.reset();
+  cache.address = nullptr;
+  cache.texture = Texture::make3D(GL_R32F, n.x, n.y, n.z, "sog residual lattice");
+  const Buffer list(packed.size() * sizeof(GLint), packed.data(), 0, "sog residual entries");
+  const Program& scatter = cachedProgram("sog residual scatter", [] {
+    return computeProgram({"sog_residual.comp.glsl"}, {"SL_SCATTER"}, "sog residual scatter");
+  });
+  ScopedGpuTimer t(timer, "residual upload");
+  const float zero = 0.0f;
+  glClearTexImage(cache.texture.id(), 0, GL_RED, GL_FLOAT, &zero);
+  if (!entries.empty()) {
+    scatter.use();
+    glUniform1ui(scatter.uniform("uCount"), GLuint(entries.size()));
+    setIVec3(scatter, "uLatticeDims", n);
+    glUniform1f(scatter.uniform("uStep"), r.step());
+    list.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kResidualEntries);
+    glBindImageTexture(binding::kResidualImage, cache.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_R32F);
+    glDispatchCompute(groups(entries.size(), 64), 1, 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  }
+  checkGl("sog residual upload");
+  cache.model = sog;
+  cache.address = sog.get();
+  *uploaded = true;
+  return cache.texture;
+}
+
+}  // namespace
+
+Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds, IVec3 dims,
+                StageTimer* timer, bool* residualUploaded) {
+  const SogModel& model = sog->model();
+  Volume v = splatGaussians(model.gaussians, bounds, dims, timer);
+  bool uploaded = false;
+  const bool useF = model.residual.size() > 0;
+  const Texture* lattice = useF ? &residualLattice(sog, timer, &uploaded) : nullptr;
+  if (residualUploaded) *residualUploaded = uploaded;
+  const Program& add = cachedProgram("sog residual add", [] {
+    return computeProgram({"sog_residual.comp.glsl"}, {}, "sog residual add");
+  });
+  const ResidualHash& r = model.residual;
+  ScopedGpuTimer t(timer, "residual add");
+  add.use();
+  setVec3(add, "uGridMin", bounds.min);
+  setVec3(add, "uGridCell", bounds.extent() / Vec3(dims));
+  setIVec3(add, "uGridDims", dims);
+  setVec3(add, "uLatticeMin", r.bounds().min);
+  setVec3(add, "uLatticeMax", r.bounds().max);
+  setVec3(add, "uLatticeCell", r.bounds().extent() / Vec3(r.dims()));
+  setIVec3(add, "uLatticeDims", r.dims());
+  glUniform1i(add.uniform("uHasResidual"), useF ? 1 : 0);
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  if (lattice) glBindTextureUnit(binding::kResidualTexture, lattice->id());
+  glBindImageTexture(binding::kDensityImage, v.texture.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_R32F);
+  glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                  GL_TEXTURE_UPDATE_BARRIER_BIT);
+  checkGl("sog residual add");
+  return v;
+}
+
 Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted) {
   const Medium& m = scene.medium;
   if (m.density->isSumOfGaussians()) {
     if (splatted) *splatted = true;
     return splatGaussians(*m.density->gaussians(), m.bounds, m.resolution, timer);
+  }
+  if (const auto sog = std::dynamic_pointer_cast<const SogDensity>(m.density)) {
+    if (splatted) *splatted = true;
+    return splatSog(sog, m.bounds, m.resolution, timer);
   }
   if (splatted) *splatted = false;
   DensityGrid grid(m.bounds, m.resolution);

@@ -3,6 +3,7 @@
 /// core/grid.h, their upload and read-back, and density construction by splatting (paper
 /// Sec. 6). Everything here needs a current context (gpu::context()).
 
+#include <memory>
 #include <span>
 
 #include "core/density_model.h"
@@ -10,6 +11,10 @@
 #include "core/scene.h"
 #include "gpu/gl.h"
 #include "gpu/timer.h"
+
+namespace scatterlab {
+class SogDensity;
+}
 
 namespace scatterlab::gpu {
 
@@ -50,8 +55,19 @@ void splatSlices(const Program& program, const Texture& target, const Box& bound
 Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
                       StageTimer* timer = nullptr);
 
+/// The density of a .sog medium on the GPU (SogModel::splat's twin): the Gaussians splatted
+/// (splatGaussians), then F added by a compute pass that samples the residual lattice as the CPU
+/// does, d = max(0, D̃ + F). The lattice is uploaded sparsely (the hash's entries as a list,
+/// scattered by a compute pass) and kept for the process while the same model object lives, so
+/// a rebuild of the density from it (another resolution or box, a Renderer re-building the
+/// density of a kept medium) uploads no residual; `residualUploaded` says whether this call
+/// uploaded it. GPU times: "density splat", "residual upload", "residual add".
+Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds, IVec3 dims,
+                StageTimer* timer = nullptr, bool* residualUploaded = nullptr);
+
 /// The scene's density volume at medium.resolution: splatted on the GPU when the medium is a
-/// sum of Gaussians, else built on the CPU and uploaded. `splatted` reports which.
+/// sum of Gaussians or a .sog model (splatSog), else built on the CPU and uploaded (stage
+/// "density upload"). `splatted` reports which.
 Volume buildDensity(const Scene& scene, StageTimer* timer = nullptr, bool* splatted = nullptr);
 
 }  // namespace scatterlab::gpu

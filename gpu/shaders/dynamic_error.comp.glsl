@@ -1,8 +1,9 @@
 // Dynamic sampling (paper Sec. 5), one invocation per sample of the current level: S and ∇S
 // (as volume_tracer.comp.glsl), the traced S and the density at the probes x_j + R_j·d_i,
 // τ to the viewer, the local shading error E_j of Eq. 5 and, on level 0, the sample's
-// contribution R³·mean|S|·D·τ (the scale of a relative ε). The split flags are set on the host
-// (the threshold of a relative ε is known only once level 0's contributions are read back).
+// contribution R³·mean|S|·D·τ (the scale of a relative ε). The level's sample count is read
+// from the GPU (counts[uLevel], written by the count pass of dynamic_level.comp.glsl; the
+// dispatch is indirect); the threshold and the split decisions are left to the next passes.
 // Mirrors sampling/dynamic_sampling.cpp (localShadingError, sampleContribution,
 // viewTransmittance) operation for operation.
 layout(local_size_x = 64) in;
@@ -11,10 +12,11 @@ layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples
 layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
 layout(std430, binding = BINDING_ROOT_TAU) buffer RootTau { float rootTau[]; };  // τ of every level-0 sample
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
-// E_j at [j]; on level 0 also the contribution at [uCount + j]
+// E_j at [j]; on level 0 also the contribution at [count + j]
 layout(std430, binding = BINDING_ERRORS) writeonly buffer Errors { float errors[]; };
+layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
 
-uniform uint uCount;
+uniform uint uLevel;            // k: the level's sample count is counts[k]
 uniform float uDelta2;
 uniform int uProbes;            // 6, 14, 26 or 40
 uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
@@ -37,7 +39,8 @@ float viewTransmittance(vec3 x) { return exp(-uSigmaT * opticalDepth(x, uEye, uT
 
 void main() {
   uint j = gl_GlobalInvocationID.x;
-  if (j >= uCount) return;
+  uint count = counts[uLevel];
+  if (j >= count) return;
   vec4 pr = samples[j];
   vec3 x = pr.xyz;
   float R = pr.w;
@@ -90,6 +93,6 @@ void main() {
     precise vec3 a = abs(S);
 #endif
     precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAt(x) * tau;
-    errors[uCount + j] = c;
+    errors[count + j] = c;
   }
 }

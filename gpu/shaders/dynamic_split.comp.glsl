@@ -1,5 +1,6 @@
-// Dynamic sampling, splitting: one invocation per sample of level k; a sample with its split
-// flag set marks every vertex of G_{k+1} strictly inside its valid sphere in the grid
+// Dynamic sampling, splitting: one invocation per sample of level k (an indirect dispatch sized
+// by the GPU); a sample whose E_j exceeds the threshold (compared in double, as the CPU
+// compares, against the threshold the SL_THRESHOLD pass left on the GPU) marks every vertex of G_{k+1} strictly inside its valid sphere in the grid
 // information buffer (inSet = 1) and lowers the vertex's ancestor with atomicMin. Mirrors
 // GridInfoBuffer::markSphere; the index box is widened by one vertex on each side so that the
 // sphere test alone (same float operations as the CPU, `precise`) decides membership.
@@ -7,18 +8,20 @@ layout(local_size_x = 64) in;
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
 layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
-layout(std430, binding = BINDING_SPLIT_FLAGS) readonly buffer SplitFlags { uint splitFlags[]; };
+layout(std430, binding = BINDING_ERRORS) readonly buffer Errors { float errors[]; };
+layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
+layout(std430, binding = BINDING_THRESHOLD) readonly buffer Threshold { double errorScale; double threshold; };
 layout(std430, binding = BINDING_IN_SET) buffer InSet { uint inSet[]; };
 layout(std430, binding = BINDING_VERTEX_ANCESTORS) buffer VertexAncestor { int vertexAncestor[]; };  // INT_MAX = none
 
-uniform uint uCount;
+uniform uint uLevel;  // k: the level's sample count is counts[k]
 uniform vec3 uGridMin;
 uniform vec3 uGridInterval;
 uniform ivec3 uGridDims;
 
 void main() {
   uint s = gl_GlobalInvocationID.x;
-  if (s >= uCount || splitFlags[s] == 0u) return;
+  if (s >= counts[uLevel] || !(double(errors[s]) > threshold)) return;
   vec3 c = samples[s].xyz;
   float R = samples[s].w;
   int anc = ancestors[s];

@@ -216,6 +216,44 @@ TEST(GpuDynamicSampling, InfiniteAndZeroEpsilon) {
   expectNoGlError();
 }
 
+/// A level with more samples than its capacity is cut on the GPU and reported once, after the
+/// pass, naming the level, the count it asked for and the capacity.
+TEST(GpuDynamicSampling, LevelOverflowIsReportedAfterThePass) {
+  SCATTERLAB_REQUIRE_GPU();
+  const Scene scene = spotScene();
+  DensityGrid density(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(density);
+  const gpu::Volume d = gpu::uploadDensity(density);
+  DynamicSamplingSettings ds;
+  ds.levels = {8};
+  ds.delta1 = 1.0f / 24;
+  ds.epsilon = 0.0;  // every sample with E > 0 splits
+  gpu::DynamicSamplingWorkspace w;
+  const auto full = gpu::dynamicSamplingGpu(scene, d, latticeSamples(), {ds.delta1, ds.delta1}, ds,
+                                            nullptr, nullptr, nullptr, &w);
+  const long long asked = full.levels[1].samples;
+  ASSERT_GT(asked, 100);
+  w.maxLevelSamples = 100;
+  try {
+    gpu::dynamicSamplingGpu(scene, d, latticeSamples(), {ds.delta1, ds.delta1}, ds, nullptr,
+                            nullptr, nullptr, &w);
+    ADD_FAILURE() << "no overflow reported";
+  } catch (const GpuError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("level 1 (grid 8^3) has " + std::to_string(asked) +
+                        " samples, more than "
+                        "the 100"),
+              std::string::npos)
+        << what;
+  }
+  expectNoGlError();
+  // The workspace works again once the capacity suffices.
+  w.maxLevelSamples = gpu::kMaxLevelSamples;
+  const auto again = gpu::dynamicSamplingGpu(scene, d, latticeSamples(), {ds.delta1, ds.delta1}, ds,
+                                             nullptr, nullptr, nullptr, &w);
+  EXPECT_EQ(again.samples.size(), full.samples.size());
+}
+
 RenderResult renderWith(Scene s, const Json& render, const char* backend) {
   s.render = render;
   return createMethod(s, "", backend)->render(s, nullptr);

@@ -1,0 +1,60 @@
+#include "gpu/screen_pass.h"
+
+#include "gpu/context.h"
+#include "gpu/dispatch.h"
+#include "gpu/shaders.h"
+
+namespace scatterlab::gpu {
+
+ScreenPass::ScreenPass(const Scene& scene, const Volume& density, float delta1,
+                       const ShadowMapSettings& shadowMap, StageTimer* timer)
+    : scene_(scene),
+      shadows_((context(), objects_.build(scene, shadowMap, timer))),
+      inputs_(scene, density, delta1, shadows_) {
+  surfaces_.build(scene, objects_, inputs_, timer);
+}
+
+const Program& ScreenPass::program(std::string key, std::vector<std::string> files,
+                                   std::vector<std::string> defines) const {
+  addShadowVariant(shadows_, key, files, defines);
+  return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
+}
+
+void ScreenPass::bind(const Program& p) const {
+  inputs_.apply(p);
+  surfaces_.bind();
+  setScreenCamera(p, scene_);
+}
+
+void setScreenCamera(const Program& p, const Scene& scene) {
+  const auto gen = scene.camera.rayGenerator();
+  setVec3(p, "uForward", gen.forward);
+  setVec3(p, "uRight", gen.right);
+  setVec3(p, "uUp", gen.up);
+  glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
+  // Unused (absent) uniforms have location −1, which GL ignores.
+  glUniform2i(p.uniform("uImageSize"), scene.camera.width, scene.camera.height);
+  glUniform2f(p.uniform("uSize"), float(scene.camera.width), float(scene.camera.height));
+  glUniform1f(p.uniform("uAlbedo"), scene.medium.albedo);
+}
+
+Image readScreenImage(const Texture& t, int w, int h, OutputAlpha alpha, const char* pass,
+                      StageTimer* timer) {
+  const std::size_t n = std::size_t(w) * std::size_t(h);
+  std::vector<float> rgba(n * 4);
+  {
+    ScopedGpuTimer time(timer, "read-back");
+    glGetTextureImage(t.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                      rgba.data());
+  }
+  checkGl(pass);
+  Image img(w, h);
+  img.alpha().resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    img.pixels()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+    img.alpha()[i] = alpha == OutputAlpha::Alpha ? rgba[4 * i + 3] : 1.0f - rgba[4 * i + 3];
+  }
+  return img;
+}
+
+}  // namespace scatterlab::gpu

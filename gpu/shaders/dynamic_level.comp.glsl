@@ -1,0 +1,53 @@
+// Dynamic sampling, the per-level bookkeeping that stays on the GPU (one invocation):
+// SL_THRESHOLD (after level 0's evaluation): the error scale of a relative ε, the mean of the
+// level-0 contributions summed in index order in double (relativeErrorScale), and the absolute
+// threshold ε·scale (or ε), both as doubles for the split pass and the host's read-back.
+// Without it (after the scan of G_{k+1}'s membership): |Q^{k+1}| = last offset + last flag,
+// clamped to the level's capacity (an overflow records the largest asked count and its level,
+// reported by the host once the frame is done), and the level's indirect dispatch size.
+layout(local_size_x = 1) in;
+
+layout(std430, binding = BINDING_LEVEL_COUNTS) buffer LevelCounts { uint counts[]; };
+
+#ifdef SL_THRESHOLD
+// E_j at [j], the contributions at [count + j] (level 0)
+layout(std430, binding = BINDING_ERRORS) readonly buffer Errors { float errors[]; };
+layout(std430, binding = BINDING_THRESHOLD) writeonly buffer Threshold { double errorScale; double threshold; };
+uniform double uEpsilon;
+uniform int uRelative;
+
+void main() {
+  uint n = counts[0];
+  precise double scale = 0.0;
+  if (uRelative != 0 && n > 0u) {
+    precise double sum = 0.0;
+    for (uint j = 0u; j < n; ++j) sum += double(errors[n + j]);
+    scale = sum / double(n);
+  }
+  errorScale = scale;
+  threshold = uRelative != 0 ? uEpsilon * scale : uEpsilon;
+}
+#else
+layout(std430, binding = BINDING_IN_SET) readonly buffer InSet { uint inSet[]; };
+layout(std430, binding = BINDING_OFFSETS) readonly buffer Offsets { uint offsets[]; };
+uniform uint uVertexCount;  // vertices of G_{k+1}
+uniform uint uLevel;        // k + 1
+uniform uint uCapacity;     // the level's sample capacity
+uniform uint uOverflowSlot; // counts[slot]: largest asked count, counts[slot + 1]: its level
+uniform uint uDispatchSlot; // counts[slot + 3·level ...]: the level's (x, 1, 1) dispatch
+
+void main() {
+  uint n = uVertexCount;
+  uint total = n == 0u ? 0u : offsets[n - 1u] + (inSet[n - 1u] != 0u ? 1u : 0u);
+  uint kept = min(total, uCapacity);
+  counts[uLevel] = kept;
+  if (total > uCapacity) {
+    atomicMax(counts[uOverflowSlot], total);
+    atomicMax(counts[uOverflowSlot + 1u], uLevel);
+  }
+  uint d = uDispatchSlot + 3u * uLevel;
+  counts[d] = (kept + 63u) / 64u;
+  counts[d + 1u] = 1u;
+  counts[d + 2u] = 1u;
+}
+#endif
