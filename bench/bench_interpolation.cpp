@@ -5,6 +5,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include <map>
+
 #include "api/scatterlab.h"
 #include "core/stages.h"
 #include "render/interpolation.h"
@@ -131,6 +133,45 @@ BENCHMARK(BM_InterpGatherOnly128)
     ->Arg(8192)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+/// Issue 14: the reconstruction's cost against the volume and the spheres. 512 grid samples
+/// of the Fig. 3 plume (evaluated once at 128³), each with radius R = range(1) voxels of a
+/// range(0)³ volume (density of the plume built at that size, once): the spheres cover
+/// samples·(4/3)π·R³ voxels, the volume res³. At equal R in voxels the sphere work is the same
+/// at every size, so what grows with the size is the part proportional to the volume.
+void BM_InterpGatherScaling(benchmark::State& state) {
+  Fixture& f = Fixture::get();
+  const int res = int(state.range(0));
+  const float rVoxels = float(state.range(1));
+  static std::map<int, DensityGrid> densities;
+  static std::vector<RadianceSample> base;
+  if (base.empty()) {
+    base = samplesOf(f, "grid", 512);
+    evaluateSamples(f.scene, f.density, {f.scene.medium.voxelSize(), f.scene.medium.voxelSize()},
+                    base, true);
+  }
+  if (!densities.count(res)) {
+    Scene s = f.scene;
+    s.medium.resolution = IVec3(res);
+    densities[res] = buildDensityVolume(s);
+  }
+  std::vector<RadianceSample> s = base;
+  const float voxel = f.scene.medium.bounds.extent().x / float(res);
+  for (RadianceSample& x : s) x.radius = rVoxels * voxel;
+  RadianceGrid out(f.scene.medium.bounds, IVec3(res));
+  for (auto _ : state) {
+    interpolateSamples(Interpolation::Gradient, densities[res], s, out);
+    benchmark::DoNotOptimize(out.data().data());
+  }
+  state.counters["samples"] = double(s.size());
+  state.counters["sphere_voxels"] = double(s.size()) * 4.18879 * rVoxels * rVoxels * rVoxels;
+  state.counters["volume_voxels"] = double(res) * res * res;
+}
+BENCHMARK(BM_InterpGatherScaling)
+    ->ArgsProduct({{64, 128, 256}, {2, 4, 8}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 }  // namespace
 }  // namespace scatterlab
