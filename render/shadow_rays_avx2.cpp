@@ -6,7 +6,8 @@ namespace scatterlab::shadow_detail {
 
 float densitySumAvx2(const DensityLayout& g, const float u0[3], const float du[3], int n,
                      float sumMax) {
-  return densitySum<xsimd::avx2>(g, u0, du, n, sumMax);
+  return g.step[0] == 1 ? densitySum<xsimd::avx2, true>(g, u0, du, n, sumMax)
+                        : densitySum<xsimd::avx2, false>(g, u0, du, n, sumMax);
 }
 
 }  // namespace scatterlab::shadow_detail

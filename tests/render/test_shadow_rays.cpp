@@ -85,7 +85,7 @@ TEST(ShadowRays, FlatAndOddSizedVolumes) {
 
 TEST(ShadowRays, CutoffStopsOnlyBeyondTheDepth) {
   // Where the whole segment's depth stays below the cutoff the result is the full sum; beyond
-  // it, a depth past the cutoff (checked every 8 steps, as the scalar stopping overload).
+  // it, a depth past the cutoff (checked every 32 steps).
   const Scene s = glowScene(45);
   DensityGrid g = buildDensityVolume(s);
   for (float& x : g.data()) x *= 50.0f;
