@@ -38,7 +38,10 @@ void BM_InterpPerVoxel128(benchmark::State& state) {
     benchmark::DoNotOptimize(out.data().data());
   }
 }
-BENCHMARK(BM_InterpPerVoxel128)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_InterpPerVoxel128)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 /// Positions and radii from the named sampler (`count` omitted when 0: all Gaussian centres).
 std::vector<RadianceSample> samplesOf(Fixture& f, const char* type, long long count) {
@@ -78,7 +81,8 @@ BENCHMARK(BM_InterpGradient128)
     ->Arg(2048)
     ->Arg(8192)
     ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 /// The same with grid samples: valid radius h instead of 1.75·h, so ~4 instead of ~22
 /// samples cover each voxel (the gather's cost is proportional to that overlap).
@@ -91,7 +95,8 @@ BENCHMARK(BM_InterpGradientGrid128)
     ->Arg(2048)
     ->Arg(8192)
     ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 /// The same with the Gaussian centres of the scene (800 samples, R = 3r).
 void BM_InterpGradientGaussianCentres128(benchmark::State& state) {
@@ -132,7 +137,8 @@ BENCHMARK(BM_InterpGatherOnly128)
     ->Arg(2048)
     ->Arg(8192)
     ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 /// Issue 14: the reconstruction's cost against the volume and the spheres. 512 grid samples
 /// of the Fig. 3 plume (evaluated once at 128³), each with radius R = range(1) voxels of a

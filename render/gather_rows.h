@@ -32,4 +32,11 @@ void gradientRowBounded(float* __restrict r0, float* __restrict g0, float* __res
                         float c, float R, float eps, Vec3 base, Vec3 gx,
                         const float* __restrict occ, float lo, float hi);
 
+/// Voxels i0..i1 of one row: q = max(0, a / w) per channel where w > 0 (Eq. 4's division
+/// and the clamp to S >= 0), q = max(0, a) elsewhere (the caller ignores those). An exact
+/// division (-ffast-math approximates only 1/sqrt here, not division).
+void normaliseSpan(const float* __restrict r, const float* __restrict g, const float* __restrict b,
+                   const float* __restrict w, int i0, int i1, float* __restrict qr,
+                   float* __restrict qg, float* __restrict qb);
+
 }  // namespace scatterlab

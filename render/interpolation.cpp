@@ -100,11 +100,14 @@ bool usable(const RadianceSample& s) {
 
 /// Voxel index range [first, last] whose centres may lie within `r` of coordinate `p` along
 /// one axis, widened by one voxel (the exact test is done per voxel), clamped to [0, n).
-void voxelRange(float p, float r, float lo, float h, int n, int& first, int& last) {
-  const float a = std::clamp((p - r - lo) / h - 0.5f, -2.0f, float(n) + 1.0f);
-  const float b = std::clamp((p + r - lo) / h - 0.5f, -2.0f, float(n) + 1.0f);
-  first = std::max(0, int(std::floor(a)) - 1);
-  last = std::min(n - 1, int(std::ceil(b)) + 1);
+/// `invH` = 1/h. Floor and ceiling by conversion (the values are clamped to [−2, n + 1]): no
+/// libm call, which made this 14 % of the gather in perf.
+inline void voxelRange(float p, float r, float lo, float invH, int n, int& first, int& last) {
+  const float a = std::clamp((p - r - lo) * invH - 0.5f, -2.0f, float(n) + 1.0f);
+  const float b = std::clamp((p + r - lo) * invH - 0.5f, -2.0f, float(n) + 1.0f);
+  const int ia = int(a), ib = int(b);  // truncation towards zero
+  first = std::max(0, ia - (float(ia) > a) - 1);
+  last = std::min(n - 1, ib + (float(ib) < b) + 1);
 }
 
 Vec3 clampNonNegative(Vec3 v) {
@@ -120,9 +123,13 @@ struct SliceAccumulators {
         b(nxy, 0.0f),
         w(nxy, emptyDen),
         occ(nx, 0.0f),
+        qr(nx, 0.0f),
+        qg(nx, 0.0f),
+        qb(nx, 0.0f),
         spanLo(ny, std::numeric_limits<int>::max()),
         spanHi(ny, -1) {}
   std::vector<float> r, g, b, w, occ;
+  std::vector<float> qr, qg, qb;  ///< one row's normalised values
   std::vector<int> spanLo, spanHi;
 };
 
@@ -202,7 +209,7 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
                                        Grid3<float>* weightSum, ValueSpace space,
                                        float occlusionSigmaT, std::optional<TaylorBounds> bounds) {
   const IVec3 n = out.dims();
-  const Vec3 h = out.cellSize(), lo = out.bounds().min;
+  const Vec3 h = out.cellSize(), lo = out.bounds().min, invH = 1.0f / h;
   if (weightSum) weightSum->reset(out.bounds(), n, 0.0f);
 
   // Samples per Z slice, in sample order (binned once; each slice is one task and owns its
@@ -212,7 +219,7 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
     const RadianceSample& s = samples[j];
     if (!usable(s)) continue;
     int k0, k1;
-    voxelRange(s.position.z, s.radius, lo.z, h.z, n.z, k0, k1);
+    voxelRange(s.position.z, s.radius, lo.z, invH.z, n.z, k0, k1);
     for (int k = k0; k <= k1; ++k) slices[std::size_t(k)].push_back(int(j));
   }
 
@@ -247,14 +254,14 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
       const float remZ = R2 - dz * dz;
       if (!(remZ > 0.0f)) continue;
       int j0, j1;
-      voxelRange(p.y, std::sqrt(remZ), lo.y, h.y, n.y, j0, j1);
+      voxelRange(p.y, std::sqrt(remZ), lo.y, invH.y, n.y, j0, j1);
       for (int j = j0; j <= j1; ++j) {
         const float dy = (lo.y + (float(j) + 0.5f) * h.y) - p.y;
         const float c = dy * dy + dz * dz;
         const float rem = R2 - c;
         if (!(rem > 0.0f)) continue;
         int i0, i1;
-        voxelRange(p.x, std::sqrt(rem), lo.x, h.x, n.x, i0, i1);
+        voxelRange(p.x, std::sqrt(rem), lo.x, invH.x, n.x, i0, i1);
         if (i0 > i1) continue;  // the sphere's row lies outside the volume
         spanLo[j] = std::min(spanLo[j], i0);
         spanHi[j] = std::max(spanHi[j], i1);
@@ -331,6 +338,7 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
     // reached (UncoveredOccupancy: no density read outside the density rows' non-zero spans).
     long long unc = 0;
     const bool log = space == ValueSpace::Log;
+    const bool fastNormalise = !log && kind != Interpolation::Nearest;
     const auto uncoveredValue = [&](int i, int j) {
       ++unc;
       const int m = nearestIndex.nearest(out.cellCenter(i, j, k));
@@ -358,7 +366,28 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
       }
       uncoveredRun(0, s0);
       const std::size_t row = std::size_t(j) * n.x;
-      for (int i = s0; i <= s1; ++i) {
+      if (fastNormalise) {
+        // Gradient and Rbf, linear values: the division and clamp over the span in a loop that
+        // vectorises (the same operations as the general loop below), then the stores.
+        float* __restrict qr = acc.qr.data();
+        float* __restrict qg = acc.qg.data();
+        float* __restrict qb = acc.qb.data();
+        const float* __restrict rr = ar + row;
+        const float* __restrict rg = ag + row;
+        const float* __restrict rb = ab + row;
+        const float* __restrict rw = den + row;
+        normaliseSpan(rr, rg, rb, rw, s0, s1, qr, qg, qb);
+        for (int i = s0; i <= s1; ++i) {
+          const float d = rw[i];
+          if (d > 0.0f) {
+            orow[i] = Vec3(qr[i], qg[i], qb[i]);
+          } else {
+            orow[i] = i >= a && i <= b && occupied(i, j, k) ? uncoveredValue(i, j) : Vec3(0.0f);
+          }
+          if (wrow) wrow[i] = d > 0.0f ? d : 0.0f;
+        }
+      }
+      for (int i = s0; i <= s1 && !fastNormalise; ++i) {
         const float d = den[row + i];
         const bool covered = kind == Interpolation::Nearest ? d < kInfinity : d > 0.0f;
         Vec3 v;
