@@ -28,9 +28,15 @@ bool useAvx2() {
   return false;
 #endif
 }
-const bool kAvx2 = useAvx2();
+bool kAvx2 = useAvx2();
 
 }  // namespace
+
+bool setGatherRowsAvx2(bool on) {
+  const bool was = kAvx2;
+  kAvx2 = on && useAvx2();
+  return was;
+}
 
 void gradientRow(float* __restrict r0, float* __restrict g0, float* __restrict b0,
                  float* __restrict w0, int i0, int i1, float lox, float hx, float px, float c,

@@ -9,6 +9,11 @@
 
 namespace scatterlab {
 
+/// Whether the row functions below run their AVX2 instantiation (8 lanes; the default where
+/// the CPU has AVX2) or the baseline one (4 lanes): turns it on (where available) or off and
+/// returns the previous state. For tests and benchmarks; not thread-safe.
+bool setGatherRowsAvx2(bool on);
+
 /// Adds sample j's Eq. 4 terms to voxels i0..i1 of one row: voxel i at x = lox + (i + 1/2)·hx;
 /// px = x_j; c = dy² + dz² of the row; base = S_j + dy·∂S/∂y + dz·∂S/∂z; gx = ∂S/∂x; R = R_j.
 /// W = R / max(‖x − x_j‖, eps·R) where ‖x − x_j‖ < R, else 0. Accumulates W·Taylor into

@@ -6,8 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <random>
 
+#include "render/gather_rows.h"
 #include "render/interpolation.h"
 #include "render/per_voxel.h"
 #include "support/scenes.h"
@@ -110,6 +113,39 @@ TEST(ReconstructionRules, EveryVoxelAsSpecified) {
         EXPECT_GT(occ, unc);
       }
   }
+}
+
+}  // namespace scatterlab
+
+namespace scatterlab {
+
+TEST(ReconstructionRules, Avx2RowsGiveTheBaselineVolume) {
+  // The AVX2 instantiation of the gather's rows (8 lanes, no FMA) against the baseline one
+  // (4 lanes): the same operations per voxel, except that the voxels left to each loop's
+  // scalar remainder (exact sqrt and division instead of the vectorised reciprocal square
+  // root) are not the same ones. Measured relative L2 6.5e-9 over the Fig. 3 plume's 128³
+  // volume from 300 random samples.
+  initialize();
+  const Scene scene = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
+  const DensityGrid d = buildDensityVolume(scene);
+  std::vector<RadianceSample> s = someSamples(300, 0.15f);
+  for (RadianceSample& x : s)
+    x.position = scene.medium.bounds.min + x.position * scene.medium.bounds.extent();
+  RadianceGrid a(scene.medium.bounds, d.dims()), b(scene.medium.bounds, d.dims());
+  const bool was = setGatherRowsAvx2(true);
+  interpolateSamples(Interpolation::Gradient, d, s, a);
+  setGatherRowsAvx2(false);
+  interpolateSamples(Interpolation::Gradient, d, s, b);
+  setGatherRowsAvx2(was);
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      num += double(a.data()[i][c] - b.data()[i][c]) * (a.data()[i][c] - b.data()[i][c]);
+      den += double(b.data()[i][c]) * b.data()[i][c];
+    }
+  std::printf("AVX2 / baseline rows: relative L2 %.3g\n", std::sqrt(num / den));
+  EXPECT_GT(den, 0.0);
+  EXPECT_LE(std::sqrt(num / den), 1e-8);
 }
 
 }  // namespace scatterlab
