@@ -123,7 +123,7 @@ TEST(ReconstructionRules, Avx2RowsGiveTheBaselineVolume) {
   // The AVX2 instantiation of the gather's rows (8 lanes, no FMA) against the baseline one
   // (4 lanes): the same operations per voxel, except that the voxels left to each loop's
   // scalar remainder (exact sqrt and division instead of the vectorised reciprocal square
-  // root) are not the same ones. Measured relative L2 6.5e-9 over the Fig. 3 plume's 128³
+  // root) are not the same ones. Measured relative L2 3.5e-9 over the Fig. 3 plume's 128³
   // volume from 300 random samples.
   initialize();
   const Scene scene = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
