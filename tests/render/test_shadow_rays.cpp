@@ -57,9 +57,9 @@ DepthComparison compareDepths(const DensityGrid& g, float voxel, ShadowKernel k)
 
 TEST(ShadowRays, SimdOpticalDepthMatchesTheScalarSum) {
   // The same lookups; only the order of the float sum (4 or 8 partial sums) and, with FMA,
-  // the rounding of u0 + i·du differ. Measured max relative difference over the 2502 of 4000 segments that cross density:
-  // 5.1e-7 (sse2) and 5.9e-6 (avx2: FMA rounds u0 + i·du differently, which moves lookups
-  // by an ulp of the index coordinate on short, thin segments).
+  // the rounding of u0 + i·du differ. Measured max relative difference over the 2502 of 4000
+  // segments that cross density: 5.1e-7 (sse2) and 5.9e-6 (avx2: FMA rounds u0 + i·du differently,
+  // which moves lookups by an ulp of the index coordinate on short, thin segments).
   const Scene s = glowScene(45);
   const DensityGrid g = buildDensityVolume(s);
   for (const ShadowKernel k : {ShadowKernel::Sse2, ShadowKernel::Avx2, ShadowKernel::Best}) {
