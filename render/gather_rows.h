@@ -38,8 +38,9 @@ void gradientRowBounded(float* __restrict r0, float* __restrict g0, float* __res
                         const float* __restrict occ, float lo, float hi);
 
 /// Voxels i0..i1 of one row: q = max(0, a / w) per channel where w > 0 (Eq. 4's division
-/// and the clamp to S >= 0), q = max(0, a) elsewhere (the caller ignores those). An exact
-/// division (-ffast-math approximates only 1/sqrt here, not division).
+/// and the clamp to S >= 0), q = max(0, a) elsewhere (the caller ignores those). Compiled with
+/// -ffast-math, so GCC multiplies by 1/w instead of dividing three times (within an ulp of
+/// the division; volumes 6e-8, images 4.7e-8 relative L2 from the division, fig3 rbf).
 void normaliseSpan(const float* __restrict r, const float* __restrict g, const float* __restrict b,
                    const float* __restrict w, int i0, int i1, float* __restrict qr,
                    float* __restrict qg, float* __restrict qb);

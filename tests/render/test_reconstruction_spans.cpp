@@ -82,6 +82,7 @@ TEST(ReconstructionRules, EveryVoxelAsSpecified) {
         Grid3<float> wsum;
         const ReconstructionStats st = interpolateSamples(kind, d, samples, out, &wsum, space);
         long long unc = 0, cov = 0, occ = 0;
+        float worst = 0.0f;
         for (int k = 0; k < out.dims().z; ++k)
           for (int j = 0; j < out.dims().y; ++j)
             for (int i = 0; i < out.dims().x; ++i) {
@@ -101,10 +102,15 @@ TEST(ReconstructionRules, EveryVoxelAsSpecified) {
               }
               occ += occupied(i, j, k);
               for (int a = 0; a < 3; ++a)
+                worst =
+                    std::max(worst, std::abs(got[a] - want[a]) / std::max(1.0f, std::abs(want[a])));
+              for (int a = 0; a < 3; ++a)
                 ASSERT_NEAR(got[a], want[a], 1.1e-6f * std::max(1.0f, std::abs(want[a])))
                     << i << " " << j << " " << k << " kind " << int(kind);
               ASSERT_NEAR(wsum.at(i, j, k), wantW, 1.1e-6f * std::max(1.0f, wantW));
             }
+        std::printf("kind %d, %s: worst relative difference %.3g\n", int(kind),
+                    space == ValueSpace::Log ? "log" : "linear", double(worst));
         EXPECT_EQ(st.uncovered, unc);
         // Each rule is exercised.
         EXPECT_GT(cov, 500);
