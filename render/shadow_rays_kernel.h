@@ -54,10 +54,12 @@ inline __m256 pairOrder(__m256 v) {
 /// of a batch taking step i + l. Stops after the first block of kShadowCheck steps at whose end
 /// the sum exceeds sumMax. kPairs (AVX2 only, and only when x has more than one voxel): the x
 /// neighbours are gathered as pairs (pairLerp) and the lanes are summed in pair order.
+/// kInside: every step's index coordinate lies inside [0.01, maxIndex − 0.01] on every axis, so
+/// the clamps are no-ops and are left out (the lanes past the last step are moved onto it).
 inline constexpr int kShadowCheck = 32;
-template <class Arch, bool kPairs = false>
-float densitySum(const DensityLayout& g, const float u0[3], const float du[3], int n,
-                 float sumMax) {
+template <class Arch, bool kPairs, bool kInside>
+float densitySumImpl(const DensityLayout& g, const float u0[3], const float du[3], int n,
+                     float sumMax) {
   using B = xsimd::batch<float, Arch>;
   using I = xsimd::batch<std::int32_t, Arch>;
   constexpr int W = int(B::size);
@@ -78,22 +80,37 @@ float densitySum(const DensityLayout& g, const float u0[3], const float du[3], i
   const I ox(dx), oy(dy), oyx(dy + dx), oz(dz), ozx(dz + dx), ozy(dz + dy), ozyx(dz + dy + dx);
   const B ux0(u0[0]), uy0(u0[1]), uz0(u0[2]), dux(du[0]), duy(du[1]), duz(du[2]);
   const float* d = g.data;
+  const B last(float(n - 1));
   B acc(0.0f);
   for (int i = 0; i < n;) {
     const int blockEnd = i + kShadowCheck < n ? i + kShadowCheck : n;
     for (; i < blockEnd; i += W) {
       B t = B(float(i)) + iota;
-      // `u > 0 ? u : 0` then `u < max ? u : max`, as sampleIndex (NaN reads voxel 0).
-      B ux = ux0 + t * dux, uy = uy0 + t * duy, uz = uz0 + t * duz;
-      ux = xsimd::select(ux > zero, ux, zero);
-      uy = xsimd::select(uy > zero, uy, zero);
-      uz = xsimd::select(uz > zero, uz, zero);
-      ux = xsimd::select(ux < mx, ux, mx);
-      uy = xsimd::select(uy < my, uy, my);
-      uz = xsimd::select(uz < mz, uz, mz);
-      const I ix = xsimd::min(xsimd::to_int(ux), bx);
-      const I iy = xsimd::min(xsimd::to_int(uy), by);
-      const I iz = xsimd::min(xsimd::to_int(uz), bz);
+      B ux, uy, uz;
+      I ix, iy, iz;
+      if constexpr (kInside) {
+        const B tt = xsimd::min(t, last);
+        ux = ux0 + tt * dux;
+        uy = uy0 + tt * duy;
+        uz = uz0 + tt * duz;
+        ix = xsimd::to_int(ux);
+        iy = xsimd::to_int(uy);
+        iz = xsimd::to_int(uz);
+      } else {
+        // `u > 0 ? u : 0` then `u < max ? u : max`, as sampleIndex (NaN reads voxel 0).
+        ux = ux0 + t * dux;
+        uy = uy0 + t * duy;
+        uz = uz0 + t * duz;
+        ux = xsimd::select(ux > zero, ux, zero);
+        uy = xsimd::select(uy > zero, uy, zero);
+        uz = xsimd::select(uz > zero, uz, zero);
+        ux = xsimd::select(ux < mx, ux, mx);
+        uy = xsimd::select(uy < my, uy, my);
+        uz = xsimd::select(uz < mz, uz, mz);
+        ix = xsimd::min(xsimd::to_int(ux), bx);
+        iy = xsimd::min(xsimd::to_int(uy), by);
+        iz = xsimd::min(xsimd::to_int(uz), bz);
+      }
       B fx = ux - xsimd::to_float(ix), fy = uy - xsimd::to_float(iy), fz = uz - xsimd::to_float(iz);
       const I base = ix + iy * sy + iz * sz;
       B c00, c10, c01, c11;
@@ -128,6 +145,20 @@ float densitySum(const DensityLayout& g, const float u0[3], const float du[3], i
     if (xsimd::hadd(acc) > sumMax) break;
   }
   return xsimd::hadd(acc);
+}
+
+/// densitySumImpl with the clamps left out where the whole segment lies inside the grid.
+template <class Arch, bool kPairs = false>
+float densitySum(const DensityLayout& g, const float u0[3], const float du[3], int n,
+                 float sumMax) {
+  bool inside = n > 0;
+  for (int a = 0; a < 3; ++a) {
+    const float e = u0[a] + float(n - 1) * du[a];
+    const float lo = u0[a] < e ? u0[a] : e, hi = u0[a] < e ? e : u0[a];
+    inside = inside && lo >= 0.01f && hi <= g.maxIndex[a] - 0.01f;  // false for NaN
+  }
+  return inside ? densitySumImpl<Arch, kPairs, true>(g, u0, du, n, sumMax)
+                : densitySumImpl<Arch, kPairs, false>(g, u0, du, n, sumMax);
 }
 
 }  // namespace scatterlab::shadow_detail
