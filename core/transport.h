@@ -102,6 +102,13 @@ inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Bo
   return x + inc.toLight * t1;
 }
 
+/// A replacement for the shadow rays' opticalDepth(density, a, b, step, maxDepth) (the one with a
+/// cutoff): fn(ctx, a, b, step, maxDepth). render/shadow_rays.h provides the SIMD one `exact` uses.
+struct ShadowDepthFn {
+  float (*fn)(const void* ctx, const Vec3& a, const Vec3& b, float step, float maxDepth) = nullptr;
+  const void* ctx = nullptr;
+};
+
 /// Evaluates the source radiance S(x, ω) for the scene's lights through a density volume.
 /// S excludes σs and D: the in-scattered radiance per unit length is σs·D(x)·S(x, ω).
 class SourceRadiance {
@@ -109,9 +116,11 @@ class SourceRadiance {
   /// `delta1`: volume tracing step (world units). `skip` (optional, built from `density`):
   /// the shadow rays skip its empty blocks (same sums). With `skip` or `cutoff` they stop at
   /// an optical depth of kShadowDepthCutoff / σt (transmittance below 1.4e-11). References
-  /// must outlive this object.
+  /// must outlive this object. `shadow` (optional): traces the shadow rays instead, with the
+  /// cutoff (and without `skip`).
   SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
-                 const MaxDensityGrid* skip = nullptr, bool cutoff = false)
+                 const MaxDensityGrid* skip = nullptr, bool cutoff = false,
+                 ShadowDepthFn shadow = {})
       : lights_(scene.lights),
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
@@ -119,7 +128,8 @@ class SourceRadiance {
         delta1_(delta1),
         objects_(scene.objects.get()),
         skip_(skip),
-        cutoff_(cutoff || skip),
+        shadow_(shadow),
+        cutoff_(cutoff || skip || shadow.fn),
         depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
@@ -130,9 +140,10 @@ class SourceRadiance {
       if (!l.incident(x, inc)) continue;
       if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
       const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
-      const float tau = skip_     ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
-                        : cutoff_ ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
-                                  : opticalDepth(density_, x, end, delta1_);
+      const float tau = shadow_.fn ? shadow_.fn(shadow_.ctx, x, end, delta1_, depthCutoff_)
+                        : skip_    ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
+                        : cutoff_  ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
+                                   : opticalDepth(density_, x, end, delta1_);
       s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
     }
     return s;
@@ -146,6 +157,7 @@ class SourceRadiance {
   float delta1_;
   const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
   const MaxDensityGrid* skip_;   ///< empty-space skipping of the shadow rays, or null
+  ShadowDepthFn shadow_;         ///< the shadow rays' tracer, when given
   bool cutoff_;                  ///< shadow rays stop at depthCutoff_ (always with skip_)
   float depthCutoff_;            ///< τ at which a shadow ray stops
 };

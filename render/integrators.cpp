@@ -9,6 +9,7 @@
 #include "render/froxel.h"
 #include "render/jittered_march.h"
 #include "render/ray_marcher.h"
+#include "render/shadow_rays.h"
 
 namespace scatterlab {
 
@@ -139,7 +140,11 @@ class ExactIntegrator : public Integrator {
     // The shadow rays stop at an optical depth where no light gets through. (Skipping empty
     // blocks along them too, SourceRadiance's `skip`, was measured slower on smoke1: their
     // steps of three voxels cross a block in about three lookups, and few blocks are empty.)
-    const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast);
+    // With the fast march the shadow rays are traced with SIMD over their steps
+    // (render/shadow_rays.h); the plain march keeps the scalar opticalDepth.
+    const SimdShadowRays shadows(density);
+    const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast,
+                                march_.fast ? shadows.fn() : ShadowDepthFn{});
     return marchImage(scene, density, source, march_, progress, delta1_);
   }
 

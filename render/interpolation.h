@@ -3,10 +3,15 @@
 /// stage "reconstruction"), registered as "gradient", "rbf", "nearest" and "per-voxel".
 ///
 /// The three interpolating ones share one gather: the paper's slice splatting (Sec. 4) done
-/// on the CPU. Each Z slice of the volume is one TBB task; a slice visits only the samples
-/// whose valid sphere reaches it, and for each of them only the voxel rows and the x-range
-/// inside the sphere, so the cost is proportional to the sphere/voxel overlap, not to
-/// samples × voxels. Sums run in sample order, so results are deterministic.
+/// on the CPU. Each Z slice of the volume is one TBB task (it owns its output slice); a slice
+/// visits only the samples whose valid sphere reaches it (binned once), and for each of them
+/// only the voxel rows and the x-range inside the sphere, into per-thread accumulators that
+/// are cleared only where they were touched. The normalisation is fused per row over the span
+/// the spheres touched; the rest of the row is written as zero unless occupied. So the cost is
+/// the sphere/voxel overlap plus a write of the output and one pass over the density rows
+/// (bench/bench_interpolation.cpp BM_InterpGatherScaling, docs/benchmarks.md), not samples ×
+/// voxels. Sums run in sample order, so results are deterministic; the gradient rows run 4 or
+/// 8 voxels wide (gather_rows.h: AVX2 where the CPU has it, same operations).
 ///
 /// Uncovered voxels: an occupied voxel (VoxelOccupancy: density non-zero in its trilinear
 /// support) that no valid sphere contains is counted in ReconstructionStats::uncovered and
