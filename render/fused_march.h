@@ -36,11 +36,18 @@ struct FusedMarchState {
 using FusedSpanKernel = void (*)(const FusedVolumeView& v, const FusedMarchConstants& c,
                                  const FusedRay& ray, int i, int end, FusedMarchState& s);
 
+/// The lookups alone, for the march that multiplies the lights' factor in: (D, S.r, S.g, S.b)
+/// of steps i, …, i + count − 1 (count <= 8) to out[0 … count − 1].
+using FusedLookupKernel = void (*)(const FusedVolumeView& v, const FusedRay& ray, int i, int count,
+                                   float (*out)[4]);
+
 /// Whether this CPU runs the avx2 kernel (AVX2, FMA and F16C).
 bool cpuHasAvx2Kernel();
 /// The kernel for `simd` (Auto: avx2 where the CPU has it). Throws ConfigError naming
 /// render.march_simd when avx2 is asked for and the CPU lacks it.
 FusedSpanKernel fusedSpanKernel(MarchSimd simd);
+/// The lookup kernel of the same instruction set as fusedSpanKernel(simd).
+FusedLookupKernel fusedLookupKernel(MarchSimd simd);
 /// "sse2" or "avx2": the kernel fusedSpanKernel(simd) returns.
 std::string fusedKernelName(MarchSimd simd);
 
@@ -49,6 +56,8 @@ void fusedSpanSse2(const FusedVolumeView&, const FusedMarchConstants&, const Fus
                    FusedMarchState&);
 void fusedSpanAvx2(const FusedVolumeView&, const FusedMarchConstants&, const FusedRay&, int, int,
                    FusedMarchState&);
+void fusedLookupsSse2(const FusedVolumeView&, const FusedRay&, int, int, float (*)[4]);
+void fusedLookupsAvx2(const FusedVolumeView&, const FusedRay&, int, int, float (*)[4]);
 }  // namespace detail
 
 }  // namespace scatterlab

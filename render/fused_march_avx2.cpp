@@ -58,6 +58,16 @@ void fusedSpanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const
   else
     avx2_kernel::spanLoop<8>(v, c, r, i, end, s, avx2_kernel::Lookup<false>{});
 }
+void fusedLookupsAvx2(const FusedVolumeView& v, const FusedRay& r, int i, int count,
+                      float (*out)[4]) {
+  alignas(16) float tmp[8][4];
+  if (v.f16)
+    avx2_kernel::lookupSteps(v, r, i, count, tmp, avx2_kernel::Lookup<true>{});
+  else
+    avx2_kernel::lookupSteps(v, r, i, count, tmp, avx2_kernel::Lookup<false>{});
+  for (int q = 0; q < count; ++q)
+    for (int c = 0; c < 4; ++c) out[q][c] = tmp[q][c];
+}
 }  // namespace detail
 
 }  // namespace scatterlab

@@ -45,6 +45,17 @@ inline void spanLoop(const scatterlab::FusedVolumeView& v, const scatterlab::Fus
   s.wt = wt;
 }
 
+/// Lookups of steps i … i + count − 1 into out.
+template <class Lookup>
+inline void lookupSteps(const scatterlab::FusedVolumeView& v, const scatterlab::FusedRay& r, int i,
+                        int count, float (*out)[4], const Lookup& lookup) {
+  for (int q = 0; q < count; ++q) {
+    const float k = float(i + q);
+    const float u[3] = {r.u0[0] + k * r.du[0], r.u0[1] + k * r.du[1], r.u0[2] + k * r.du[2]};
+    lookup(v, u, out[q]);
+  }
+}
+
 /// Clamped base corner, fractions and voxel offset of index coordinates u (Grid3::sampleIndex).
 inline std::ptrdiff_t cellOf(const scatterlab::FusedVolumeView& v, const float* u, float f[3]) {
   int b[3];

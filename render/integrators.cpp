@@ -16,12 +16,18 @@ namespace scatterlab {
 
 namespace {
 
-/// The march's lookup (DensitySourceLookup's interface) through a FusedVolume, times the
-/// analytic factor A of the lights when the volume holds V = S / A (portable code, a lookup
-/// per call).
+/// The march's lookups through a FusedVolume by the SIMD kernels (render/fused_march.h), in
+/// runs of steps (MarchesSpans in render/ray_marcher.h). Without a light factor the span
+/// kernel marches a run itself; with one (the volume holds V = S / A) the lookup kernel gives
+/// four steps at a time, S = V·A(x, ω) per step, then exp of the four at once and the sums in
+/// the plain march's order.
 struct FusedLookup {
   const FusedVolume& volume;
   const LightFactor* factor;
+  FusedSpanKernel span;
+  FusedLookupKernel lookups;
+  FusedMarchConstants c;
+  /// One step (DensitySourceLookup's interface; the fast march calls marchSpan instead).
   bool operator()(const Vec3& u, const Ray& r, float t, float& D, Vec3& S) const {
     alignas(16) float v[4];
     volume.sample(u, v);
@@ -31,21 +37,37 @@ struct FusedLookup {
     if (factor) S *= (*factor)(r.at(t), -r.dir);
     return true;
   }
-};
-
-/// FusedLookup without a light factor, whose runs of steps the SIMD kernel marches
-/// (render/fused_march.h; MarchesSpans in render/ray_marcher.h).
-struct FusedSpanLookup : FusedLookup {
-  FusedSpanKernel kernel;
-  FusedMarchConstants constants;
-  void marchSpan(const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end, Vec3& L,
-                 float& T, float& wt) const {
-    const FusedRay r{{u0.x, u0.y, u0.z}, {du.x, du.y, du.z}, t0, dt};
-    FusedMarchState s{{L.x, L.y, L.z}, T, wt};
-    kernel(volume.view(), constants, r, i, end, s);
-    L = Vec3(s.L[0], s.L[1], s.L[2]);
-    T = s.T;
-    wt = s.wt;
+  void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
+                 Vec3& L, float& T, float& wt) const {
+    const FusedRay fr{{u0.x, u0.y, u0.z}, {du.x, du.y, du.z}, t0, dt};
+    if (!factor) {
+      FusedMarchState s{{L.x, L.y, L.z}, T, wt};
+      span(volume.view(), c, fr, i, end, s);
+      L = Vec3(s.L[0], s.L[1], s.L[2]);
+      T = s.T;
+      wt = s.wt;
+      return;
+    }
+    using Batch = xsimd::make_sized_batch_t<float, 4>;
+    for (; i < end && T > c.minT; i += 4) {
+      const int q1 = std::min(4, end - i);
+      alignas(16) float V[4][4], D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
+      Vec3 S[4];
+      lookups(volume.view(), fr, i, q1, V);
+      for (int q = 0; q < q1; ++q) {
+        if (!(V[q][0] > 0.0f)) continue;
+        D[q] = V[q][0];
+        const float t = t0 + (float(i + q) + 0.5f) * dt;
+        S[q] = Vec3(V[q][1], V[q][2], V[q][3]) * (*factor)(r.at(t), -r.dir);
+      }
+      xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
+      for (int q = 0; q < q1 && T > c.minT; ++q) {
+        if (!(D[q] > 0.0f)) continue;
+        L += (T * c.ratio * (1.0f - a[q])) * S[q];
+        wt += T * (1.0f - a[q]) * (t0 + (float(i + q) + 0.5f) * dt);
+        T *= a[q];
+      }
+    }
   }
 };
 
@@ -64,12 +86,11 @@ class RayMarcher : public Integrator {
     const LightFactor A(scene);
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       const FusedVolume volume(*f.density, radiance, march_.halfFloat);
-      if (factored_)
-        return marchWith(scene, *f.density, FusedLookup{volume, &A}, march_, progress, delta1_);
-      const FusedSpanLookup lookup{
-          {volume, nullptr},
-          fusedSpanKernel(march_.simd),
-          {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
+      const FusedLookup lookup{volume,
+                               factored_ ? &A : nullptr,
+                               fusedSpanKernel(march_.simd),
+                               fusedLookupKernel(march_.simd),
+                               {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
       return marchWith(scene, *f.density, lookup, march_, progress, delta1_);
     }
     const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();

@@ -53,8 +53,8 @@ struct DensitySourceLookup {
 };
 
 /// Whether a lookup class also marches whole runs of steps itself:
-///   void marchSpan(const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
-///                  Vec3& L, float& T, float& wt) const
+///   void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i,
+///                  int end, Vec3& L, float& T, float& wt) const
 /// (steps [i, end) of a non-empty block, in the order and with the sums of the loop below; the
 /// fused volume's SIMD kernels, render/fused_march.h). The fast march then calls it per block.
 template <class L, class = void>
@@ -232,7 +232,7 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
           for (int i = 0; i < n && T > minT;) {
             const MaxDensityGrid::Span sp = walk.span(i);
             if constexpr (MarchesSpans<Lookup>::value) {
-              if (!sp.empty) lookup.marchSpan(u0, du, t0, dt, i, sp.end, L, T, wt);
+              if (!sp.empty) lookup.marchSpan(r, u0, du, t0, dt, i, sp.end, L, T, wt);
               i = sp.end;
               continue;
             }

@@ -98,15 +98,18 @@ TEST(FastMarch, ExactImageMatchesThePlainMarch) {
 }
 
 TEST(FastMarch, VolumeLookupMatchesThePlainMarch) {
-  // per-voxel and gradient (factored lights) through the fused density + radiance lookup: the
-  // same steps; S is looked up at u0 + i·du instead of (r.at(t)·scale + offset), the same
-  // point up to rounding, and exp as above (measured rel. L2 6.7e-7 per-voxel, 2.4e-7
-  // gradient; alpha 1.2e-7).
+  // per-voxel and gradient (factored lights) through the fused density + radiance lookup (the
+  // SIMD kernels, render/fused_march.h, whichever this CPU runs): the same steps; S is looked
+  // up at u0 + i·du instead of (r.at(t)·scale + offset), the same point up to rounding, the
+  // lerps in another order (avx2: y, z, x with FMA) and exp as above. Measured with the avx2
+  // kernel: rel. L2 6.9e-7 per-voxel, 2.4e-7 gradient; alpha 2.4e-7 (two float ulps of 1).
   for (const std::string method : {"per-voxel", "gradient"}) {
     const Scene s = glowScene(40, method);
     const Image fast = render(s, true), plain = render(s, false);
+    std::printf("%s fast vs plain rel L2 %.3g alpha %.3g\n", method.c_str(),
+                compareImages(fast, plain).relL2, maxAlphaDifference(fast, plain));
     EXPECT_LT(compareImages(fast, plain).relL2, 1.1e-6) << method;
-    EXPECT_LT(maxAlphaDifference(fast, plain), 2e-7f) << method;
+    EXPECT_LT(maxAlphaDifference(fast, plain), 3.6e-7f) << method;
   }
 }
 
@@ -157,9 +160,9 @@ float stateDifference(const FusedMarchState& a, const FusedMarchState& b) {
 TEST(FusedMarch, KernelsMatchThePlainSums) {
   // Random rays (steps of 0.3-1.7 voxels, inside and partly outside the index box, where the
   // lookups clamp) through a random volume: each kernel against the plain march's Grid3
-  // lookups and std::exp, and the two kernels against each other. Measured (largest over
-  // 3000 rays): sse2 vs plain 1.2e-6, avx2 vs plain 1.3e-6, avx2 vs sse2 4.2e-7 (lerp order
-  // and FMA); half storage (avx2 vs sse2, same halves) 4.8e-7.
+  // lookups and std::exp, and the two kernels against each other; largest relative
+  // difference of L, T, wt over 3000 rays of 40 steps. Measured: vs plain 2.7e-6, avx2 vs
+  // sse2 1.4e-6 (lerp order and FMA); half storage (the same halves) avx2 vs sse2 2.1e-6.
   const RandomFused g(3);
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-2.0f, 24.0f), step(0.3f, 1.7f), dir(-1.0f, 1.0f);
@@ -186,14 +189,14 @@ TEST(FusedMarch, KernelsMatchThePlainSums) {
       }
     }
     std::printf("half %d: vs plain %.3g, avx2 vs sse2 %.3g\n", int(half), dPlain, dKernels);
-    EXPECT_LT(dPlain, 2e-6f) << half;
-    EXPECT_LT(dKernels, 1e-6f) << half;
+    EXPECT_LT(dPlain, 4e-6f) << half;
+    EXPECT_LT(dKernels, 3.2e-6f) << half;
   }
 }
 
 TEST(FusedMarch, HalfFloatVolumeError) {
   // render.half_float_volumes against float storage on the glow (per-voxel, 40³): half keeps
-  // 11 significant bits. Measured rel. L2 X, alpha X.
+  // 11 significant bits. Measured rel. L2 1.0e-4 per-voxel, 7.1e-5 gradient; alpha 5.0e-5.
   for (const std::string method : {"per-voxel", "gradient"}) {
     Scene s = glowScene(40, method);
     const Image full = render(s, true);
@@ -203,12 +206,14 @@ TEST(FusedMarch, HalfFloatVolumeError) {
     std::printf("%s half vs float: rel L2 %.3g alpha %.3g\n", method.c_str(), e,
                 maxAlphaDifference(half, full));
     EXPECT_GT(e, 0.0) << method;  // the option does change the storage
+    EXPECT_LT(e, 1.5e-4) << method;
+    EXPECT_LT(maxAlphaDifference(half, full), 7.5e-5f) << method;
   }
 }
 
 TEST(FusedMarch, SimdKernelsGiveTheSameImage) {
   // render.march_simd sse2 against avx2 (where the CPU has it) on the glow, per-voxel.
-  // Measured rel. L2 X.
+  // Measured rel. L2 8.6e-8, alpha 2.4e-7.
   if (!cpuHasAvx2Kernel()) GTEST_SKIP() << "no AVX2 + FMA + F16C";
   Scene s = glowScene(40, "per-voxel");
   s.render["march_simd"] = "sse2";
@@ -217,26 +222,35 @@ TEST(FusedMarch, SimdKernelsGiveTheSameImage) {
   const Image b = render(s, true);
   const double e = compareImages(b, a).relL2;
   std::printf("avx2 vs sse2 image rel L2 %.3g alpha %.3g\n", e, maxAlphaDifference(a, b));
-  EXPECT_LT(e, 1e-6);
+  EXPECT_LT(e, 1.3e-7);
+  EXPECT_LT(maxAlphaDifference(a, b), 3.6e-7f);
 }
 
 TEST(MarchScale, ScaleOneIsTheFullMarchAndReducedMarchesStayClose) {
   // render.march_scale 1 is today's march bit for bit; 2 and 4 march one ray per 2² / 4²
-  // pixels and upsample depth-aware. The glow (a lamp inside Gaussian smoke), 96 x 72,
-  // per-voxel at 40³. Measured rel. L2 against full resolution: X (2), X (4).
-  Scene s = glowScene(40, "per-voxel");
+  // pixels and upsample depth-aware. The Fig. 3 plume, 160 x 120, per-voxel at 32³ (a pixel
+  // is 5 times larger than at 800 x 600, so are the errors: 0.33 % and 1.0 % there, see
+  // docs/benchmarks.md). Measured rel. L2 against full resolution: 3.99 % (2), 10.9 % (4).
+  initialize();
+  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
+  s.medium.resolution = IVec3(32);
+  s.camera.width = 160;
+  s.camera.height = 120;
+  s.render = Json{{"method", "per-voxel"}};
   const Image full = render(s, true);
   s.render["march_scale"] = 1;
   const Image one = render(s, true);
   EXPECT_EQ(compareImages(one, full).relL2, 0.0);
   EXPECT_EQ(maxAlphaDifference(one, full), 0.0f);
-  for (const int scale : {2, 4}) {
+  EXPECT_EQ(one.depth(), full.depth());
+  for (const auto& [scale, bound] : {std::pair{2, 0.060}, std::pair{4, 0.164}}) {
     s.render["march_scale"] = scale;
     const Image low = render(s, true);
     const double e = compareImages(low, full).relL2;
     std::printf("march_scale %d: rel L2 %.3g alpha %.3g\n", scale, e,
                 maxAlphaDifference(low, full));
     EXPECT_GT(e, 0.0) << scale;
+    EXPECT_LT(e, bound) << scale;
   }
 }
 
@@ -254,5 +268,5 @@ TEST(MarchScale, MissedPixelsGetTheBackgroundExactly) {
       ++missed;
       EXPECT_EQ(low.pixels()[i], full.pixels()[i]) << i;
     }
-  std::printf("missed pixels %d of %zu\n", missed, full.alpha().size());
+  EXPECT_GT(missed, 1000);  // measured 2302 of 3072
 }
