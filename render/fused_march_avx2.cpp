@@ -2,6 +2,7 @@
 /// called only where the CPU has them (cpuHasAvx2Kernel). The lookup is written with the
 /// intrinsics xsimd 8 has no spelling for (128-bit halves of a 256-bit register, F16C).
 
+#if defined(__AVX2__) && defined(__FMA__) && defined(__F16C__)
 #include <immintrin.h>
 
 #include "render/fused_march.h"
@@ -71,3 +72,20 @@ void fusedLookupsAvx2(const FusedVolumeView& v, const FusedRay& r, int i, int co
 }  // namespace detail
 
 }  // namespace scatterlab
+
+#else  // not x86-64: never chosen (cpuHasAvx2Kernel is false)
+
+#include "render/fused_march.h"
+
+namespace scatterlab::detail {
+void fusedSpanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const FusedRay& r, int i,
+                   int end, FusedMarchState& s) {
+  fusedSpanSse2(v, c, r, i, end, s);
+}
+void fusedLookupsAvx2(const FusedVolumeView& v, const FusedRay& r, int i, int count,
+                      float (*out)[4]) {
+  fusedLookupsSse2(v, r, i, count, out);
+}
+}  // namespace scatterlab::detail
+
+#endif

@@ -81,11 +81,15 @@ void fusedLookupsSse2(const FusedVolumeView& v, const FusedRay& r, int i, int co
 }  // namespace detail
 
 bool cpuHasAvx2Kernel() {
+#if defined(__x86_64__) || defined(__i386__)
   static const bool has = [] {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
            __builtin_cpu_supports("f16c");
   }();
+#else
+  constexpr bool has = false;
+#endif
   return has;
 }
 
