@@ -232,8 +232,23 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
           for (int i = 0; i < n && T > minT;) {
             const MaxDensityGrid::Span sp = walk.span(i);
             if constexpr (MarchesSpans<Lookup>::value) {
-              if (!sp.empty) lookup.marchSpan(r, u0, du, t0, dt, i, sp.end, L, T, wt);
-              i = sp.end;
+              // One call per run of non-empty blocks (the same steps in the same order; fewer
+              // calls and partial groups of steps in the kernel).
+              if (sp.empty) {
+                i = sp.end;
+                continue;
+              }
+              int e = sp.end, next = e;
+              while (e < n) {
+                const MaxDensityGrid::Span nx = walk.span(e);
+                if (nx.empty) {
+                  next = nx.end;
+                  break;
+                }
+                e = next = nx.end;
+              }
+              lookup.marchSpan(r, u0, du, t0, dt, i, e, L, T, wt);
+              i = next;
               continue;
             }
             for (; !sp.empty && i < sp.end && T > minT; i += 4) {
