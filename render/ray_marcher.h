@@ -16,7 +16,8 @@
 /// density are skipped (MaxDensityGrid: they add exactly nothing), the exp of four steps is
 /// taken at once (xsimd; within an ulp of std::exp) and the image is marched in tiles of
 /// kMarchTile² pixels (neighbouring rays share cached voxels); the steps taken and the order
-/// of their sums are the plain march's.
+/// of their sums are the plain march's. With MarchSettings::scale > 1 (render.march_scale)
+/// one ray per scale² pixels is marched and upsampled depth-aware (marchReduced).
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
@@ -55,8 +56,9 @@ struct DensitySourceLookup {
 /// Whether a lookup class also marches whole runs of steps itself:
 ///   void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i,
 ///                  int end, Vec3& L, float& T, float& wt) const
-/// (steps [i, end) of a non-empty block, in the order and with the sums of the loop below; the
-/// fused volume's SIMD kernels, render/fused_march.h). The fast march then calls it per block.
+/// (steps [i, end) of a run of non-empty blocks, in the order and with the sums of the loop
+/// below; the fused volume's SIMD kernels, render/fused_march.h). The fast march then calls it
+/// once per run.
 template <class L, class = void>
 struct MarchesSpans : std::false_type {};
 template <class L>
