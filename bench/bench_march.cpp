@@ -1,6 +1,13 @@
-/// The CPU march (issue 14): the integrator stage with render.fast_march off (the plain march,
-/// argument 0) and on (1), in one binary so a run gives the ratio at one load:
-///   March/<scene>/<fast>: ray-marcher through a 128³ density + radiance volume, 800×600;
+/// The CPU march (issue 14): the integrator stage in one binary so a run gives the ratios at one
+/// load:
+///   March/<scene>/<mode>: ray-marcher through a 128³ density + radiance volume, 800×600;
+///     mode 0 = the plain march (render.fast_march false), 1 = fast march with the sse2 kernel
+///     (the previous session's fast march, moved into render/fused_march_sse2.cpp), 2 = the avx2
+///     kernel (render.march_simd avx2), 3 = avx2 with render.half_float_volumes, 4 and 5 = avx2
+///     with render.march_scale 2 and 4 (depth-aware upsampling; not the same image), 6 and 7 =
+///     plain and avx2 with factored lights (the default of gradient and adaptive: S = V·A with
+///     A evaluated per step; the volume's values are not V here, which does not change the work);
+///   Exact/<scene>/<fast>: fast march off (0) or on (1);
 ///   Exact/<scene>/<fast>: the exact integrator (shadow rays traced per step), 800×600.
 /// Scenes: fig3 (the Fig. 3 plume: 800 Gaussians, about half the voxels empty), smoke1
 /// (data/scenes/smoke1_sun.json: OpenVDB smoke1 resampled to 128³, sparse, directional light),
@@ -19,6 +26,7 @@
 #include "api/scatterlab.h"
 #include "core/method.h"
 #include "core/stages.h"
+#include "render/fused_march.h"
 
 namespace scatterlab {
 namespace {
@@ -32,10 +40,18 @@ Scene marchScene(const std::string& name, bool native = false) {
   return s;
 }
 
-PipelineSettings marchSettings(const Scene& scene, bool fast) {
+PipelineSettings marchSettings(const Scene& scene, int mode) {
   PipelineSettings s;
   s.march.step = s.delta1 = s.delta2 = scene.medium.voxelSize();
-  s.march.fast = fast;
+  s.march.fast = mode != 0;
+  s.march.simd = mode == 1 ? MarchSimd::Sse2 : mode >= 2 ? MarchSimd::Avx2 : MarchSimd::Auto;
+  s.march.halfFloat = mode == 3;
+  s.march.scale = mode == 4 ? 2 : mode == 5 ? 4 : 1;
+  if (mode >= 6) {
+    s.march.fast = mode == 7;
+    s.march.simd = MarchSimd::Avx2;
+    s.factorLights = true;
+  }
   s.radianceResolution = scene.medium.resolution;
   return s;
 }
@@ -57,7 +73,7 @@ MarchInputs& marchInputs(const std::string& name) {
   in.frame->buildDensity(in.scene);
   Json sp = {{"count", 512}};
   Params p(sp, "sampler");
-  const PipelineSettings ps = marchSettings(in.scene, true);
+  const PipelineSettings ps = marchSettings(in.scene, 1);
   std::vector<RadianceSample> samples = samplers()
                                             .get("jittered", "sampler")(p, in.scene)
                                             ->generate(in.scene, in.frame->hostDensity());
@@ -73,10 +89,14 @@ MarchInputs& marchInputs(const std::string& name) {
 }
 
 void BM_March(benchmark::State& state, const std::string& name) {
+  if (state.range(0) >= 2 && state.range(0) != 6 && !cpuHasAvx2Kernel()) {
+    state.SkipWithError("this CPU has no AVX2 + FMA + F16C");
+    return;
+  }
   MarchInputs& in = marchInputs(name);
   auto ig = integrators()
                 .get("ray-marcher", "")
-                .on[int(Backend::Cpu)](marchSettings(in.scene, state.range(0) != 0));
+                .on[int(Backend::Cpu)](marchSettings(in.scene, int(state.range(0))));
   for (auto _ : state) {
     Image img = ig->integrate(*in.frame, in.scene, nullptr);
     benchmark::DoNotOptimize(img.pixels().data());
@@ -92,7 +112,7 @@ void BM_Exact(benchmark::State& state, const std::string& name) {
     in.frame = backends()[int(Backend::Cpu)].makeFrame();
     in.frame->buildDensity(in.scene);
   }
-  PipelineSettings ps = marchSettings(in.scene, state.range(0) != 0);
+  PipelineSettings ps = marchSettings(in.scene, int(state.range(0)));
   ps.delta1 = 3.0f * in.scene.medium.voxelSize();
   auto ig = integrators().get("exact", "").on[int(Backend::Cpu)](ps);
   for (auto _ : state) {
@@ -102,22 +122,19 @@ void BM_Exact(benchmark::State& state, const std::string& name) {
 }
 
 BENCHMARK_CAPTURE(BM_March, fig3, std::string("fig3"))
-    ->Arg(0)
-    ->Arg(1)
+    ->DenseRange(0, 7)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime()
     ->Iterations(2);
 BENCHMARK_CAPTURE(BM_March, smoke1, std::string("smoke1"))
-    ->Arg(0)
-    ->Arg(1)
+    ->DenseRange(0, 7)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime()
     ->Iterations(2);
 BENCHMARK_CAPTURE(BM_March, shaft, std::string("shaft"))
-    ->Arg(0)
-    ->Arg(1)
+    ->DenseRange(0, 7)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime()

@@ -55,6 +55,9 @@ struct RadianceSample {
 };
 
 /// View-ray marching settings (render keys march_step, min_transmittance).
+/// Instruction set of the fast march's kernel: the best this CPU has, or one named.
+enum class MarchSimd { Auto, Sse2, Avx2 };
+
 struct MarchSettings {
   float step = 0.0f;  ///< view-ray step in world units
   /// March stops when transmittance falls below this (its share of the result is below it).
@@ -62,6 +65,13 @@ struct MarchSettings {
   /// render.fast_march: empty-space skipping (MaxDensityGrid), tiles and, for volume lookups,
   /// one fused density + radiance lookup per step; false runs the plain march (the reference).
   bool fast = true;
+  /// render.half_float_volumes: the fast march's fused density + radiance volume in IEEE half.
+  bool halfFloat = false;
+  /// render.march_simd: which compiled kernel the fast march runs (render/fused_march.h).
+  MarchSimd simd = MarchSimd::Auto;
+  /// render.march_scale: march one ray per scale × scale pixels and upsample depth-aware
+  /// (render/ray_marcher.h); 1 marches every pixel.
+  int scale = 1;
 };
 
 /// How the GPU marcher lays its slices (render key slicing; the CPU marcher steps along each

@@ -34,6 +34,16 @@ const std::vector<KeyDoc>& pipelineKeys() {
        "CPU march: skip blocks of zero density, march in tiles, one fused density + radiance "
        "lookup per step, exact's shadow rays 4 or 8 steps at once (SIMD) (same images within "
        "1e-6); false: the plain march (reference)"},
+      {"march_scale", "int", "1", "1, 2, 4 (2 and 4 need camera.spp = 1)",
+       "CPU view march at 1/scale of the resolution per axis (one ray per scale × scale pixels), "
+       "upsampled depth-aware to full resolution (box entry/exit depths; edges marched in full); "
+       "error in docs/benchmarks.md"},
+      {"half_float_volumes", "bool", "false", "true, false",
+       "fast CPU march: store the fused density + radiance volume in IEEE half (8 instead of 16 "
+       "bytes per voxel; error in docs/benchmarks.md); methods with a radiance volume"},
+      {"march_simd", "string", "auto", "auto, sse2, avx2",
+       "fast CPU march's kernel: auto = avx2 where the CPU has AVX2, FMA and F16C, else sse2 "
+       "(same images within 1e-6); methods with a radiance volume"},
       {"delta1", "number", "one voxel edge", "(diag·1e-6, diag]",
        "volume-tracing step towards the lights (the paper's Δ1)"},
       {"delta2", "number", "one voxel edge", "(diag·1e-6, diag]",
@@ -211,6 +221,19 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
     s.march.step = p.real("march_step", voxel, steps);
     s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
     s.march.fast = p.boolean("fast_march", true);
+    s.march.scale = int(p.integer("march_scale", 1, Interval::closed(1, 4)));
+    if (s.march.scale == 3) p.fail("march_scale", "is 3; allowed: 1, 2, 4");
+    if (s.march.scale > 1 && scene.camera.spp > 1)
+      p.fail("march_scale", "is " + std::to_string(s.march.scale) +
+                                "; a reduced march needs camera.spp = 1 (got " +
+                                std::to_string(scene.camera.spp) + ")");
+    if (d.radianceVolume()) {
+      s.march.halfFloat = p.boolean("half_float_volumes", false);
+      const std::string simd = p.choice("march_simd", {"auto", "sse2", "avx2"}, "auto");
+      s.march.simd = simd == "sse2"   ? MarchSimd::Sse2
+                     : simd == "avx2" ? MarchSimd::Avx2
+                                      : MarchSimd::Auto;
+    }
   }
   s.delta1 = p.real("delta1", voxel, steps);
   s.shadowMap = parseShadowMap(p);
@@ -259,7 +282,8 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 
 std::vector<std::string> methodKeys(const MethodDesc& d) {
   std::vector<std::string> k = {"delta1", "shadow_map"};
-  if (d.viewMarch) k.insert(k.end(), {"march_step", "min_transmittance", "fast_march"});
+  if (d.viewMarch)
+    k.insert(k.end(), {"march_step", "min_transmittance", "fast_march", "march_scale"});
   if (d.integrator == "light-space-march")
     for (const KeyDoc& key : lightSpaceMarchKeys()) k.emplace_back(key.name);
   if (d.integrator == "radial-blur")
@@ -268,6 +292,7 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
     k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
                        "bounded_taylor", "sampler", "evaluator"});
   if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
+  if (d.radianceVolume() && d.viewMarch) k.insert(k.end(), {"half_float_volumes", "march_simd"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())
     for (const KeyDoc& key : dynamicSamplingKeys()) k.emplace_back(key.name);

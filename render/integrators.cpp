@@ -4,10 +4,12 @@
 
 #include "core/stages.h"
 #include "core/transport.h"
+#include "render/froxel.h"
+#include "render/fused_march.h"
+#include "render/fused_volume.h"
+#include "render/jittered_march.h"
 #include "render/light_space_march.h"
 #include "render/radial_blur.h"
-#include "render/froxel.h"
-#include "render/jittered_march.h"
 #include "render/ray_marcher.h"
 #include "render/shadow_rays.h"
 
@@ -15,78 +17,58 @@ namespace scatterlab {
 
 namespace {
 
-/// Density and source radiance interleaved per voxel (D, S.r, S.g, S.b): one trilinear lookup
-/// of 4-float batches (xsimd) gives both, with the weights and corner addresses computed once.
-/// Built per frame by the fast march when the two volumes share bounds and dimensions.
-class DensityRadianceVolume {
- public:
-  using Batch = xsimd::make_sized_batch_t<float, 4>;
-
-  DensityRadianceVolume(const DensityGrid& d, const RadianceGrid& r)
-      : maxIndex_(d.dims() - 1), maxBase_(glm::max(d.dims() - 2, IVec3(0))) {
-    const IVec3 n = d.dims();
-    step_ = IVec3(n.x > 1 ? 4 : 0, n.y > 1 ? 4 * n.x : 0, n.z > 1 ? 4 * n.x * n.y : 0);
-    rowStride_ = std::size_t(n.x);
-    sliceStride_ = std::size_t(n.x) * n.y;
-    data_.resize(4 * d.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.size(), 1 << 14),
-                      [&](const tbb::blocked_range<std::size_t>& b) {
-                        for (std::size_t i = b.begin(); i < b.end(); ++i) {
-                          const Vec3& s = r.data()[i];
-                          float* p = &data_[4 * i];
-                          p[0] = d.data()[i];
-                          p[1] = s.r;
-                          p[2] = s.g;
-                          p[3] = s.b;
-                        }
-                      });
-  }
-  static bool compatible(const DensityGrid& d, const RadianceGrid& r) {
-    return d.dims() == r.dims() && d.bounds().min == r.bounds().min &&
-           d.bounds().max == r.bounds().max;
-  }
-
-  /// (D, S) at index coordinates u, clamped as Grid3::sampleIndex.
-  Batch sample(Vec3 u) const {
-    for (int a = 0; a < 3; ++a) {
-      u[a] = u[a] > 0.0f ? u[a] : 0.0f;
-      u[a] = u[a] < maxIndex_[a] ? u[a] : maxIndex_[a];
-    }
-    const IVec3 b = glm::min(IVec3(u), maxBase_);
-    const Vec3 f = u - Vec3(b);
-    const float* p = data_.data() +
-                     4 * ((std::size_t(b.z) * sliceStride_) + std::size_t(b.y) * rowStride_ + b.x);
-    const std::size_t dx = step_.x, dy = step_.y, dz = step_.z;
-    const auto at = [&](std::size_t o) { return Batch::load_aligned(p + o); };
-    const Batch fx(f.x), fy(f.y), fz(f.z);
-    const auto lerp = [](const Batch& a, const Batch& c, const Batch& t) {
-      return a + (c - a) * t;
-    };
-    const Batch c00 = lerp(at(0), at(dx), fx), c10 = lerp(at(dy), at(dy + dx), fx);
-    const Batch c01 = lerp(at(dz), at(dz + dx), fx), c11 = lerp(at(dz + dy), at(dz + dy + dx), fx);
-    return lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
-  }
-
- private:
-  std::vector<float, xsimd::aligned_allocator<float, 16>> data_;
-  Vec3 maxIndex_;
-  IVec3 maxBase_, step_{0};
-  std::size_t rowStride_ = 0, sliceStride_ = 0;
-};
-
-/// The march's lookup (DensitySourceLookup's interface) through a DensityRadianceVolume, times
-/// the analytic factor A of the lights when the volume holds V = S / A.
+/// The march's lookups through a FusedVolume by the SIMD kernels (render/fused_march.h), in
+/// runs of steps (MarchesSpans in render/ray_marcher.h). Without a light factor the span
+/// kernel marches a run itself; with one (the volume holds V = S / A) the lookup kernel gives
+/// four steps at a time, S = V·A(x, ω) per step, then exp of the four at once and the sums in
+/// the plain march's order.
 struct FusedLookup {
-  const DensityRadianceVolume& volume;
+  const FusedVolume& volume;
   const LightFactor* factor;
+  FusedSpanKernel span;
+  FusedLookupKernel lookups;
+  FusedMarchConstants c;
+  /// One step (DensitySourceLookup's interface; the fast march calls marchSpan instead).
   bool operator()(const Vec3& u, const Ray& r, float t, float& D, Vec3& S) const {
     alignas(16) float v[4];
-    volume.sample(u).store_aligned(v);
+    volume.sample(u, v);
     D = v[0];
     if (D <= 0.0f) return false;
     S = Vec3(v[1], v[2], v[3]);
     if (factor) S *= (*factor)(r.at(t), -r.dir);
     return true;
+  }
+  void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
+                 Vec3& L, float& T, float& wt) const {
+    const FusedRay fr{{u0.x, u0.y, u0.z}, {du.x, du.y, du.z}, t0, dt};
+    if (!factor) {
+      FusedMarchState s{{L.x, L.y, L.z}, T, wt};
+      span(volume.view(), c, fr, i, end, s);
+      L = Vec3(s.L[0], s.L[1], s.L[2]);
+      T = s.T;
+      wt = s.wt;
+      return;
+    }
+    using Batch = xsimd::make_sized_batch_t<float, 4>;
+    for (; i < end && T > c.minT; i += 4) {
+      const int q1 = std::min(4, end - i);
+      alignas(16) float V[4][4], D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
+      Vec3 S[4];
+      lookups(volume.view(), fr, i, q1, V);
+      for (int q = 0; q < q1; ++q) {
+        if (!(V[q][0] > 0.0f)) continue;
+        D[q] = V[q][0];
+        const float t = t0 + (float(i + q) + 0.5f) * dt;
+        S[q] = Vec3(V[q][1], V[q][2], V[q][3]) * (*factor)(r.at(t), -r.dir);
+      }
+      xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
+      for (int q = 0; q < q1 && T > c.minT; ++q) {
+        if (!(D[q] > 0.0f)) continue;
+        L += (T * c.ratio * (1.0f - a[q])) * S[q];
+        wt += T * (1.0f - a[q]) * (t0 + (float(i + q) + 0.5f) * dt);
+        T *= a[q];
+      }
+    }
   }
 };
 
@@ -103,10 +85,14 @@ class RayMarcher : public Integrator {
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LightFactor A(scene);
-    if (march_.fast && DensityRadianceVolume::compatible(*f.density, radiance)) {
-      const DensityRadianceVolume volume(*f.density, radiance);
-      return marchWith(scene, *f.density, FusedLookup{volume, factored_ ? &A : nullptr}, march_,
-                       progress, delta1_);
+    if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
+      const FusedVolume volume(*f.density, radiance, march_.halfFloat);
+      const FusedLookup lookup{volume,
+                               factored_ ? &A : nullptr,
+                               fusedSpanKernel(march_.simd),
+                               fusedLookupKernel(march_.simd),
+                               {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
+      return marchWith(scene, *f.density, lookup, march_, progress, delta1_);
     }
     const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
     if (factored_) {

@@ -107,6 +107,10 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 8;
         else if (k == "slicing")
           s.render[k] = "ray-steps";
+        else if (k == "march_scale")
+          s.render[k] = 2;
+        else if (k == "march_simd")
+          s.render[k] = "sse2";
         else if (k == "evaluator")
           s.render[k] = "volume-tracer";
         else if (k == "integrator")
