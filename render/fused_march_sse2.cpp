@@ -3,6 +3,7 @@
 
 #include <Imath/half.h>
 
+#include "core/cpu_features.h"
 #include "core/error.h"
 #include "render/fused_march.h"
 // Included here, outside the kernel namespace, so that fused_march_impl.h only adds the loop.
@@ -82,15 +83,11 @@ void fusedLookupsSse2(const FusedVolumeView& v, const FusedRay& r, int i, int co
 
 bool cpuHasAvx2Kernel() {
 #if defined(__x86_64__) || defined(__i386__)
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-           __builtin_cpu_supports("f16c");
-  }();
+  const CpuFeatures& f = cpuFeatures();
+  return f.avx2 && f.fma && f.f16c;
 #else
-  constexpr bool has = false;
+  return false;
 #endif
-  return has;
 }
 
 FusedSpanKernel fusedSpanKernel(MarchSimd simd) {

@@ -1,5 +1,6 @@
 #include "render/gather_rows.h"
 
+#include "core/cpu_features.h"
 #include "render/gather_rows_impl.h"
 
 namespace scatterlab {
@@ -22,8 +23,7 @@ namespace {
 /// Whether the rows run the AVX2 instantiation (same operations, 8 lanes instead of 4).
 bool useAvx2() {
 #ifdef SCATTERLAB_GATHER_AVX2
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
+  return cpuFeatures().avx2;
 #else
   return false;
 #endif

@@ -1,5 +1,6 @@
 #include "render/shadow_rays.h"
 
+#include "core/cpu_features.h"
 #include "render/shadow_rays_kernel.h"
 
 namespace scatterlab {
@@ -17,9 +18,7 @@ using SumFn = float (*)(const DensityLayout&, const float*, const float*, int, f
 
 SumFn chooseKernel() {
 #ifdef SCATTERLAB_SHADOW_AVX2
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
-    return &shadow_detail::densitySumAvx2;
+  if (cpuFeatures().avx2 && cpuFeatures().fma) return &shadow_detail::densitySumAvx2;
 #endif
   return &shadow_detail::densitySum<xsimd::sse2>;
 }
