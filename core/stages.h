@@ -152,8 +152,11 @@ struct PipelineSettings {
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
   bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)
-  float delta1 = 0.0f;        ///< volume-tracing step towards the lights (the paper's Δ1)
-  float delta2 = 0.0f;        ///< central-difference step of ∇S (the paper's Δ2)
+  /// The CPU march's keys the scene set (fast_march, march_scale, half_float_volumes,
+  /// march_simd, as key paths): reported unused on the GPU, whose slice marcher has none of them.
+  std::vector<std::string> cpuMarchKeysGiven;
+  float delta1 = 0.0f;  ///< volume-tracing step towards the lights (the paper's Δ1)
+  float delta2 = 0.0f;  ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
   ShadowMapSettings shadowMap;
   /// The keys of the integrators `light-space-march` and `radial-blur` (core/realtime.h); read

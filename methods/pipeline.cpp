@@ -100,6 +100,10 @@ class PipelineMethod : public Method {
 
     frame->report(st);
     integrator->describe(st);
+    if (backend_ == Backend::Gpu && !settings_.cpuMarchKeysGiven.empty()) {
+      Json& unused = st.extra["unused_keys"];
+      for (const std::string& k : settings_.cpuMarchKeysGiven) unused.push_back(k);
+    }
     if (sampler) {
       st.samples = (long long)samples.size();
       st.extra["sampler"] = samplerType;

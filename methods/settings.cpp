@@ -227,6 +227,8 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
       p.fail("march_scale", "is " + std::to_string(s.march.scale) +
                                 "; a reduced march needs camera.spp = 1 (got " +
                                 std::to_string(scene.camera.spp) + ")");
+    for (const char* k : {"fast_march", "march_scale", "half_float_volumes", "march_simd"})
+      if (p.has(k)) s.cpuMarchKeysGiven.push_back(p.keyPath(k));
     if (d.radianceVolume()) {
       s.march.halfFloat = p.boolean("half_float_volumes", false);
       const std::string simd = p.choice("march_simd", {"auto", "sse2", "avx2"}, "auto");

@@ -297,3 +297,28 @@ TEST(GpuMethods, UploadedDensityInAFreshProcessMatchesCpu) {
 
 }  // namespace
 }  // namespace scatterlab::testing
+
+namespace scatterlab::testing {
+namespace {
+
+// The CPU march's keys have no meaning for the GPU's slice marcher: a scene that sets them
+// renders on the GPU and names them in the stats as unused (as `slicing` on the CPU), instead
+// of being ignored silently.
+TEST(GpuStages, CpuMarchKeysAreReportedUnused) {
+  SCATTERLAB_REQUIRE_GPU();
+  initialize();
+  Json doc = blobSceneDoc(16, 32, 24);
+  doc["render"]["method"] = "gradient";
+  doc["render"]["march_scale"] = 2;
+  doc["render"]["fast_march"] = false;
+  const Scene s = parseScene(doc, ".");
+  const RenderResult gpu = createMethod(s, "", "gpu")->render(s, nullptr);
+  ASSERT_TRUE(gpu.stats.extra.contains("unused_keys"));
+  EXPECT_EQ(gpu.stats.extra["unused_keys"],
+            Json::array({"render.fast_march", "render.march_scale"}));
+  const RenderResult cpu = createMethod(s, "", "cpu")->render(s, nullptr);
+  EXPECT_FALSE(cpu.stats.extra.contains("unused_keys"));
+}
+
+}  // namespace
+}  // namespace scatterlab::testing
