@@ -3,13 +3,14 @@
 # build-fuzz/ and runs each for SECONDS (default 60), seeded from the repository's files
 # (JSON from data/ and tests/; .sog, .vdb and .exr written by the GCC build in BUILD, default
 # build/, and ../shared/data/vdb). Usage: scripts/fuzz.sh [SECONDS] [TARGET...]. A crash
-# leaves crash-* in build-fuzz/TARGET/ and exits 1.
+# leaves crash-* in build-fuzz/TARGET/ and exits 1. Objects are compiled through ccache (when
+# installed), two at a time, into build-fuzz/TARGET/obj/. SECONDS = build: only build the targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_EACH=${1:-60}
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_json fuzz_set fuzz_sog fuzz_vdb fuzz_exr)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_json fuzz_set fuzz_sog fuzz_vdb fuzz_exr fuzz_scene)
 OUT=build-fuzz
 # libFuzzer reports allocations above its -rss_limit_mb (2 GiB): the library's own memory limit
 # is set below it, so a size the limit refuses is an error, not a finding.
@@ -17,8 +18,12 @@ export SCATTERLAB_MEMORY_LIMIT=${SCATTERLAB_MEMORY_LIMIT:-64M}
 CLI=${BUILD:-build}/bin/scatterlab
 mkdir -p "$OUT"
 CXX=${CXX_FUZZ:-clang++-14}
-FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
-  -I. -I/usr/include/glm)
+CCACHE=$(command -v ccache || true)
+# Objects get libFuzzer's coverage (fuzzer-no-link); the link adds libFuzzer's main.
+FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined
+  -fno-sanitize-recover=undefined -I. -I/usr/include/glm -I/usr/include/eigen3
+  -DOPENVDB_ABI_VERSION_NUMBER=10 -DOPENVDB_USE_DELAYED_LOADING "-DFUZZ_SOURCE_DIR=\"$PWD\"")
+LINK=(-fsanitize=fuzzer,address,undefined)
 status=0
 # Sources compiled into each target with coverage (the code under test; the libraries it
 # calls, OpenVDB, OpenEXR, TBB, are Debian's, without coverage).
@@ -27,27 +32,45 @@ declare -A SOURCES=(
   [fuzz_set]="core/params.cpp core/limits.cpp"
   [fuzz_sog]="media/sog.cpp media/procedural.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_vdb]="media/vdb.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
-  [fuzz_exr]="core/image.cpp core/atomic_file.cpp core/limits.cpp")
+  [fuzz_exr]="core/image.cpp core/atomic_file.cpp core/limits.cpp"
+  [fuzz_scene]="$(echo core/*.cpp media/*.cpp sampling/*.cpp render/*.cpp methods/*.cpp \
+    experiment/*.cpp)")
 declare -A LIBS=(
   [fuzz_sog]="-ltbb" [fuzz_vdb]="-lopenvdb -ltbb -lImath-3_1"
-  [fuzz_exr]="-lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng")
+  [fuzz_exr]="-lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng"
+  [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng -lpthread")
 EXR_INCLUDES=(-I/usr/include/OpenEXR -I/usr/include/Imath)
 tmpseeds=$(mktemp -d)
 trap 'rm -rf "$tmpseeds"' EXIT
 for name in "${TARGETS[@]}"; do
   src=fuzz/$name.cpp
   mkdir -p "$OUT/$name/corpus"
+  # One object per source (ccache makes an unchanged one a cache hit), two compilers at once.
+  objs=()
+  for f in "$src" ${SOURCES[$name]}; do objs+=("$OUT/$name/obj/${f%.cpp}.o"); done
   # shellcheck disable=SC2086
-  if [ ! -x "$OUT/$name/$name" ] || [ -n "$(find "$src" ${SOURCES[$name]} core/*.h media/*.h \
-    -newer "$OUT/$name/$name" 2>/dev/null)" ]; then
-    "$CXX" "${FLAGS[@]}" "${EXR_INCLUDES[@]}" "$src" ${SOURCES[$name]} -o "$OUT/$name/$name" \
-      ${LIBS[$name]:-}
-  fi
+  printf '%s\n' "$src" ${SOURCES[$name]} | xargs -P 2 -I{} sh -c \
+    'mkdir -p "$(dirname "$0/obj/$1")" && $2 $3 -c "$1" -o "$0/obj/$(echo "$1" | sed "s/\.cpp$//").o"' \
+    "$OUT/$name" {} "$CCACHE $CXX" "${FLAGS[*]} ${EXR_INCLUDES[*]}"
+  # shellcheck disable=SC2086
+  "$CXX" "${LINK[@]}" "${objs[@]}" -o "$OUT/$name/$name" ${LIBS[$name]:-}
+  [ "$SECONDS_EACH" = build ] && continue
   seeds=("$OUT/$name/seeds")
   rm -rf "${seeds[0]}"
   mkdir -p "${seeds[0]}"
   case $name in
     fuzz_json) find data tests -name '*.json' -size -64k -exec cp {} "${seeds[0]}/" \; ;;
+    fuzz_scene)  # first byte: even = scene (byte/2 picks the method), odd = experiment config
+      for f in data/scenes/*.json $(find tests -name '*.json' -size -64k); do
+        grep -q '"file"\|"frames"' "$f" && continue
+        b=$(basename "$f" .json)
+        { printf '\000'; cat "$f"; } >"${seeds[0]}/s0_$b"
+        { printf '\006'; cat "$f"; } >"${seeds[0]}/s3_$b"
+        { printf '\016'; cat "$f"; } >"${seeds[0]}/s7_$b"
+      done
+      for f in data/experiments/*.json; do
+        { printf '\001'; cat "$f"; } >"${seeds[0]}/e_$(basename "$f" .json)"
+      done ;;
     fuzz_set)
       printf 'camera.position=[1e39,0,0]' >"${seeds[0]}/a"
       printf 'a.b.c={"x":[1,2,{"y":null}]}' >"${seeds[0]}/b"
