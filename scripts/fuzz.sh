@@ -38,7 +38,8 @@ declare -A SOURCES=(
 declare -A LIBS=(
   [fuzz_sog]="-ltbb" [fuzz_vdb]="-lopenvdb -ltbb -lImath-3_1"
   [fuzz_exr]="-lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng"
-  [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng -lpthread")
+  [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng -lembree3
+    -ltinyobjloader -lpthread")
 EXR_INCLUDES=(-I/usr/include/OpenEXR -I/usr/include/Imath)
 tmpseeds=$(mktemp -d)
 trap 'rm -rf "$tmpseeds"' EXIT
