@@ -107,19 +107,20 @@ Image readExr(const std::string& path) {
     const int w = int(w64), h = int(h64);
     Image img(w, h);
     Imf::FrameBuffer fb;
-    char* base = reinterpret_cast<char*>(img.pixels().data());
+    // Slice::Make offsets the buffer by the window's origin in integer arithmetic: the origin
+    // may be negative or far from 0, and `base - origin * stride` in unsigned pointer
+    // arithmetic overflowed (UBSan; fuzz_exr found a 1x1 window at (-1, -1)).
+    const char* base = reinterpret_cast<const char*>(img.pixels().data());
     const size_t xs = sizeof(Vec3), ys = sizeof(Vec3) * w;
-    base -= (dw.min.x * xs + dw.min.y * ys);
-    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys, 1, 1, 0.0));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys, 1, 1, 0.0));
-    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys, 1, 1, 0.0));
+    fb.insert("R", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
+    fb.insert("G", Imf::Slice::Make(Imf::FLOAT, base + sizeof(float), dw, xs, ys));
+    fb.insert("B", Imf::Slice::Make(Imf::FLOAT, base + 2 * sizeof(float), dw, xs, ys));
     for (const auto& [name, values] :
          {std::pair<const char*, std::vector<float>*>{"A", &img.alpha()}, {"Z", &img.depth()}}) {
       if (!ch.findChannel(name)) continue;
       values->assign(size_t(w) * h, 0.0f);
-      char* vbase = reinterpret_cast<char*>(values->data()) -
-                    (dw.min.x * sizeof(float) + dw.min.y * sizeof(float) * w);
-      fb.insert(name, Imf::Slice(Imf::FLOAT, vbase, sizeof(float), sizeof(float) * w, 1, 1, 0.0));
+      fb.insert(name,
+                Imf::Slice::Make(Imf::FLOAT, values->data(), dw, sizeof(float), sizeof(float) * w));
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);

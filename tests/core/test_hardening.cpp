@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -255,6 +259,40 @@ TEST(SignalCleanup, InterruptDuringAWriteLeavesNoTemporary) {
 // fuzz_exr's finding: a data window of 4325382x769 pixels in a 0.4 KB file made readExr
 // allocate 40 GB (ASan: out of memory; without ASan the allocation's luck decided). Now the
 // window is checked in 64 bits and its memory against the limit, before allocating.
+TEST(BinaryInputs, ExrWithANegativeDataWindowOriginIsReadWhole) {
+  // fuzz_exr found a 1x1 data window at (-1, -1): `base - origin * stride` in unsigned pointer
+  // arithmetic overflowed (UBSan). The input is read now (its pixels are garbage: an IoError
+  // is fine, a sanitizer report is not).
+  try {
+    (void)readExr(SCATTERLAB_SOURCE_DIR "/fuzz/regressions/fuzz_exr_negative_window_origin.exr");
+  } catch (const IoError&) {
+  }
+  // A valid 3x2 window at (-2, -3): every pixel comes back in its place.
+  const std::string p = (std::filesystem::temp_directory_path() /
+                         ("scatterlab_negwin_" + std::to_string(getpid()) + ".exr"))
+                            .string();
+  const Imath::Box2i dw(Imath::V2i(-2, -3), Imath::V2i(0, -2));
+  std::vector<float> rgb(3 * 2 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = float(i);
+  {
+    Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(7, 7)), dw);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c) {
+      header.channels().insert(std::string(1, "RGB"[c]), Imf::Channel(Imf::FLOAT));
+      fb.insert(std::string(1, "RGB"[c]), Imf::Slice::Make(Imf::FLOAT, rgb.data() + c, dw, 12, 36));
+    }
+    Imf::OutputFile out(p.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(2);
+  }
+  const Image img = readExr(p);
+  std::filesystem::remove(p);
+  ASSERT_EQ(img.width(), 3);
+  ASSERT_EQ(img.height(), 2);
+  for (std::size_t k = 0; k < 6; ++k)
+    EXPECT_EQ(img.pixels()[k], Vec3(float(3 * k), float(3 * k + 1), float(3 * k + 2))) << k;
+}
+
 TEST(BinaryInputs, ExrWithAHugeDataWindowIsRefusedBeforeAllocating) {
   const std::string p = SCATTERLAB_SOURCE_DIR "/fuzz/regressions/fuzz_exr_huge_data_window.exr";
   const std::string m = messageOf<LimitError>([&] { readExr(p); });
