@@ -172,7 +172,8 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   // The sum of the planned allocations and the samples' tracing work, before anything is built.
   checkRenderPlan(p, scene, d, settings, plannedSamples,
                   m->reconstruction && m->reconstruction->needsGradients(),
-                  m->dynamic ? &*m->dynamic : nullptr, integratorName);
+                  m->dynamic ? &*m->dynamic : nullptr,
+                  b == Backend::Cpu && integratorName == "ray-marcher");
   return m;
 }
 

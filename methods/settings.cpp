@@ -307,7 +307,7 @@ std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string&
 
 void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s,
                      long long samples, bool gradients, const DynamicSamplingSettings* dynamic,
-                     const std::string& integrator) {
+                     bool cpuRayMarcher) {
   const auto voxels = [](IVec3 r) { return double(r.x) * double(r.y) * double(r.z); };
   const auto dims = [](IVec3 r) {
     return std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z);
@@ -333,7 +333,7 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
     plan.add(p.keyPath("radiance_resolution"),
              "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
     // The fast march fuses density and radiance (4 floats per voxel) when their grids agree.
-    if (d.viewMarch && s.march.fast && integrator == "ray-marcher" && r == res)
+    if (d.viewMarch && s.march.fast && cpuRayMarcher && r == res)
       plan.add(p.keyPath("fast_march"),
                "the fused density + radiance volume of " + dims(r) + " voxels",
                voxels(r) * 4 * sizeof(float));

@@ -79,9 +79,10 @@ struct DynamicSamplingSettings;
 ///    central differences of ∇S when `gradients`, the probes of dynamic sampling's level 0)
 ///    × ⌈diagonal / delta1⌉ × lights, against kMaxLightSteps, a LimitError naming the keys.
 /// `samples`: the planned count (makeSampler), 0 without a sampler; `dynamic`: null without
-/// dynamic sampling; `integrator`: the integrator's name (the fused volume is ray-marcher's).
+/// dynamic sampling; `cpuRayMarcher`: the image is marched by the CPU's ray-marcher (which fuses
+/// density and radiance into one volume when fast_march is on and their grids agree).
 void checkRenderPlan(Params& render, const Scene& scene, const MethodDesc& desc,
                      const PipelineSettings& settings, long long samples, bool gradients,
-                     const DynamicSamplingSettings* dynamic, const std::string& integrator);
+                     const DynamicSamplingSettings* dynamic, bool cpuRayMarcher);
 
 }  // namespace scatterlab
