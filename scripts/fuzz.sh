@@ -4,8 +4,9 @@
 # (JSON from data/ and tests/; .sog, .vdb and .exr written by the GCC build in BUILD, default
 # build/, and ../shared/data/vdb). Usage: scripts/fuzz.sh [SECONDS] [TARGET...]. A crash
 # leaves crash-* in build-fuzz/TARGET/ and exits 1, and so does an input that runs longer than
-# 60 s (timeout-*). Objects are compiled through ccache (when installed), two at a time, into
-# build-fuzz/TARGET/obj/. SECONDS = build: only build the targets.
+# 60 s (timeout-*) or grows the process past 2 GiB resident (oom-*). Objects are compiled
+# through ccache (when installed), two at a time, into build-fuzz/TARGET/obj/. SECONDS = build:
+# only build the targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_EACH=${1:-60}
@@ -96,7 +97,7 @@ for name in "${TARGETS[@]}"; do
   maxlen=65536
   case $name in fuzz_sog | fuzz_vdb | fuzz_exr) maxlen=600000 ;; esac
   echo "== $name: ${SECONDS_EACH} s"
-  rm -f "$OUT/$name"/crash-* "$OUT/$name"/timeout-*
+  rm -f "$OUT/$name"/crash-* "$OUT/$name"/timeout-* "$OUT/$name"/oom-*
   # fuzz_vdb: OpenVDB parses in a forked child (media/vdb.cpp). A huge allocation there is a
   # bad_alloc as without ASan (allocator_may_return_null); a memory error there is reported by
   # the child's ASan and libFuzzer handlers, which write a crash-* from the child while this
@@ -105,10 +106,10 @@ for name in "${TARGETS[@]}"; do
   [ "$name" = fuzz_vdb ] && opts="allocator_may_return_null=1${opts:+:$opts}"
   (cd "$OUT/$name" && ASAN_OPTIONS=$opts ./"$name" -max_total_time="$SECONDS_EACH" -max_len="$maxlen" -rss_limit_mb=2048 \
     -timeout=60 -print_final_stats=1 corpus seeds 2>&1 |
-    grep -E "stat::number_of_executed_units|Done|ERROR|crash-|timeout-|Slowest unit" ) ||
+    grep -E "stat::number_of_executed_units|Done|ERROR|crash-|timeout-|oom-|Slowest unit" ) ||
     status=1
   shielded=0
-  for c in "$OUT/$name"/crash-* "$OUT/$name"/timeout-*; do
+  for c in "$OUT/$name"/crash-* "$OUT/$name"/timeout-* "$OUT/$name"/oom-*; do
     [ -e "$c" ] || continue
     if [ "$name" = fuzz_vdb ] && (cd "$OUT/$name" && ASAN_OPTIONS=$opts ./"$name" -runs=1 \
       -artifact_prefix=replay- "$(basename "$c")" >/dev/null 2>&1); then
