@@ -342,17 +342,17 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
   if (samples > 0)
     plan.add(p.keyPath("sampler.count"), std::to_string(samples) + " radiance samples",
              double(samples) * (perSample + 2 * sizeof(std::int64_t)));
-  if (dynamic && samples > 0) {
+  // Probes are traced only when there is a level to split into.
+  const int probes = dynamic && !dynamic->levels.empty() ? dynamic->probes : 0;
+  if (probes > 0 && samples > 0) {
     plan.add(p.keyPath("probes"),
              "the probes of " + std::to_string(samples) + " level-0 samples (" +
                  std::to_string(dynamic->probes) + " each)",
              double(samples) * dynamic->probes * perSample);
-    if (!dynamic->levels.empty()) {
-      const double n = std::pow(double(dynamic->levels.back()), 3.0);
-      plan.add(p.keyPath("levels"),
-               "the grid buffer of level " + std::to_string(dynamic->levels.back()) + "^3",
-               n * (sizeof(std::uint8_t) + sizeof(std::int32_t)));
-    }
+    const double n = std::pow(double(dynamic->levels.back()), 3.0);
+    plan.add(p.keyPath("levels"),
+             "the grid buffer of level " + std::to_string(dynamic->levels.back()) + "^3",
+             n * (sizeof(std::uint8_t) + sizeof(std::int32_t)));
   }
   plan.check();
 
@@ -361,18 +361,17 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
   const double diag = glm::length(glm::dvec3(scene.medium.bounds.extent()));
   const double perTrace =
       std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
-  const int probes = dynamic ? dynamic->probes : 0;
   const double points = 1.0 + (gradients || dynamic ? 6.0 : 0.0) + probes;
   const double steps = double(samples) * points * perTrace;
   if (steps > kMaxLightSteps) {
     std::string keys = "'" + p.keyPath("sampler.count") + "', '" + p.keyPath("delta1") + "'";
-    if (dynamic) keys += ", '" + p.keyPath("probes") + "'";
+    if (probes) keys += ", '" + p.keyPath("probes") + "'";
     throw LimitError(keys + ": evaluating " + std::to_string(samples) + " samples traces " +
                      sci(points) + " points each (S" + (points > 1 ? ", 6 for its gradient" : "") +
                      (probes ? ", " + std::to_string(probes) + " probes" : "") + ") with " +
                      sci(perTrace) + " light-march steps each (delta1 " + sci(s.delta1) + "), " +
                      sci(steps) + " steps in all, above the bound of " + sci(kMaxLightSteps) +
-                     (dynamic ? " (level 0 alone; finer levels add more)" : "") +
+                     (probes ? " (level 0 alone; finer levels add more)" : "") +
                      "; use fewer samples or a longer delta1");
   }
 }
