@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "core/work_limits.h"
 
 namespace scatterlab {
 
@@ -111,6 +112,38 @@ void checkMemory(const std::string& key, const std::string& what, double bytes) 
       ", above the memory limit of " + formatBytes(double(limit)) +
       " (the default is 75 % of physical memory; change the limit with --memory-limit or " + kEnv +
       ")");
+}
+
+void MemoryPlan::add(const std::string& key, const std::string& what, double bytes) {
+  if (bytes > 0) items_.push_back({key, what, bytes});
+}
+
+double MemoryPlan::total() const {
+  double t = 0;
+  for (const Item& i : items_) t += i.bytes;
+  return t;
+}
+
+void MemoryPlan::check() const {
+  const std::uint64_t limit = memoryLimit();
+  const double sum = total();
+  if (!(sum > double(limit))) return;
+  std::vector<Item> largest = items_;
+  std::stable_sort(largest.begin(), largest.end(),
+                   [](const Item& a, const Item& b) { return a.bytes > b.bytes; });
+  std::string parts;
+  for (std::size_t i = 0; i < largest.size() && i < 3; ++i)
+    parts += (i ? "; " : "") + ("'" + largest[i].key + "': " + largest[i].what + ", " +
+                                formatBytes(largest[i].bytes));
+  if (largest.size() > 3)
+    parts += "; and " + std::to_string(largest.size() - 3) + " smaller, " +
+             formatBytes(sum - largest[0].bytes - largest[1].bytes - largest[2].bytes);
+  throw LimitError("the render's planned allocations need about " + formatBytes(sum) +
+                   " in all, above the memory limit of " + formatBytes(double(limit)) +
+                   "; the largest: " + parts +
+                   " (the default limit is 75 % of physical memory; change it with "
+                   "--memory-limit or " +
+                   kEnv + ")");
 }
 
 }  // namespace scatterlab

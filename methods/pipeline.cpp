@@ -153,8 +153,10 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   const PipelineSettings settings = parsePipelineSettings(p, scene, d);
   auto m = std::make_unique<PipelineMethod>(d, b, settings, std::move(note));
   std::string evaluatorName, integratorName = d.integrator;
+  long long plannedSamples = 0;
   if (d.sampler) {
-    m->sampler = makeSampler(p, scene, m->samplerType, settings.paper ? "" : d.extendedSampler);
+    m->sampler = makeSampler(p, scene, m->samplerType, settings.paper ? "" : d.extendedSampler,
+                             &plannedSamples);
     evaluatorName = p.string("evaluator", "volume-tracer");
   }
   if (!d.refiner.empty()) m->dynamic = parseDynamicSampling(p, scene, settings.paper);
@@ -171,6 +173,11 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
                                 "reconstruction")(settings);
   m->integrator =
       variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(settings);
+  // The sum of the planned allocations and the samples' tracing work, before anything is built.
+  checkRenderPlan(p, scene, d, settings, plannedSamples,
+                  m->reconstruction && m->reconstruction->needsGradients(),
+                  m->dynamic ? &*m->dynamic : nullptr,
+                  b == Backend::Cpu && integratorName == "ray-marcher");
   return m;
 }
 

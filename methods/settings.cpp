@@ -4,8 +4,12 @@
 #include <cstdio>
 
 #include "core/error.h"
+#include "core/limits.h"
+#include "core/work_limits.h"
+#include "media/sog.h"
 #include "methods/march_settings.h"
 #include "sampling/dynamic_sampling.h"
+#include "sampling/samplers.h"
 
 namespace scatterlab {
 
@@ -164,11 +168,7 @@ RadialBlurSettings parseRadialBlur(Params& p) {
   return s;
 }
 
-/// Bounds on marching work, checked before a render starts (docs/reliability.md): view-ray
-/// steps (pixels × spp × diagonal / march_step), and light-march steps taken per view step
-/// (exact) or per voxel (per-voxel). 1e10 view steps take minutes on a few cores.
-constexpr double kMaxViewSteps = 1e10;
-constexpr double kMaxLightSteps = 1e12;
+// Bounds on marching work (kMaxViewSteps, kMaxLightSteps): core/limits.h.
 
 std::string sci(double v) {
   char b[32];
@@ -306,7 +306,8 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
 }
 
 std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type,
-                                     const std::string& extendedDefault) {
+                                     const std::string& extendedDefault,
+                                     long long* plannedSamples) {
   const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
   const Json defaultSampler = !extendedDefault.empty() ? Json::parse(extendedDefault)
                               : hasGaussians           ? Json{{"type", "gaussian-centres"}}
@@ -317,7 +318,90 @@ std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string&
   type = sp.string("type", defaultSampler["type"].get<std::string>());
   std::unique_ptr<Sampler> sampler = samplers().get(type, sp.keyPath("type"))(sp, scene);
   sp.finish();
+  if (plannedSamples) {
+    // `count` has been validated by the sampler (an integer in [1, 1e8]).
+    const long long count = sp.has("count") && sp.raw("count").is_number()
+                                ? (long long)sp.raw("count").get<double>()
+                                : -1;
+    const long long gaussians =
+        hasGaussians ? (long long)scene.medium.density->gaussians()->size() : 0;
+    *plannedSamples = type == "gaussian-centres"
+                          ? (count >= 0 ? std::min(count, gaussians) : gaussians)
+                      : count >= 0 ? count
+                                   : kDefaultSampleCount;
+  }
   return sampler;
+}
+
+void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s,
+                     long long samples, bool gradients, const DynamicSamplingSettings* dynamic,
+                     bool cpuRayMarcher) {
+  const auto voxels = [](IVec3 r) { return double(r.x) * double(r.y) * double(r.z); };
+  const auto dims = [](IVec3 r) {
+    return std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z);
+  };
+  const IVec3 res = scene.medium.resolution;
+  MemoryPlan plan;
+  plan.add("medium.resolution", "the density volume of " + dims(res) + " voxels",
+           voxels(res) * sizeof(float));
+  const IVec3 blocks = (res + IVec3(7)) / IVec3(8);  // MaxDensityGrid::kBlock
+  plan.add("medium.resolution", "the max-density grid", voxels(blocks) * sizeof(float));
+  if (const auto* sog = dynamic_cast<const SogDensity*>(scene.medium.density.get()))
+    plan.add("medium.file", "the .sog model's residual hash",
+             double(sog->model().residual.memoryBytes()));
+  if (const auto* g = scene.medium.density ? scene.medium.density->gaussians() : nullptr)
+    plan.add("medium", "the medium's " + std::to_string(g->size()) + " Gaussians",
+             double(g->size()) * sizeof(GaussianBlob));
+  const Camera& c = scene.camera;
+  plan.add("camera.width', 'camera.height",
+           "an image of " + std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels",
+           double(c.width) * double(c.height) * 32.0);
+  if (d.radianceVolume()) {
+    const IVec3 r = s.radianceResolution;
+    plan.add(p.keyPath("radiance_resolution"),
+             "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
+    // The fast march fuses density and radiance (4 floats per voxel) when their grids agree.
+    if (d.viewMarch && s.march.fast && cpuRayMarcher && r == res)
+      plan.add(p.keyPath("fast_march"),
+               "the fused density + radiance volume of " + dims(r) + " voxels",
+               voxels(r) * 4 * sizeof(float));
+  }
+  const double perSample = double(sizeof(RadianceSample));
+  if (samples > 0)
+    plan.add(p.keyPath("sampler.count"), std::to_string(samples) + " radiance samples",
+             double(samples) * (perSample + 2 * sizeof(std::int64_t)));
+  // Probes are traced only when there is a level to split into.
+  const int probes = dynamic && !dynamic->levels.empty() ? dynamic->probes : 0;
+  if (probes > 0 && samples > 0) {
+    plan.add(p.keyPath("probes"),
+             "the probes of " + std::to_string(samples) + " level-0 samples (" +
+                 std::to_string(dynamic->probes) + " each)",
+             double(samples) * dynamic->probes * perSample);
+    const double n = std::pow(double(dynamic->levels.back()), 3.0);
+    plan.add(p.keyPath("levels"),
+             "the grid buffer of level " + std::to_string(dynamic->levels.back()) + "^3",
+             n * (sizeof(std::uint8_t) + sizeof(std::int32_t)));
+  }
+  plan.check();
+
+  // The samples' tracing: every traced point marches ⌈diagonal / delta1⌉ steps to each light.
+  if (samples <= 0) return;
+  const double diag = glm::length(glm::dvec3(scene.medium.bounds.extent()));
+  const double perTrace =
+      std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
+  const double points = 1.0 + (gradients || dynamic ? 6.0 : 0.0) + probes;
+  const double steps = double(samples) * points * perTrace;
+  if (steps > kMaxLightSteps) {
+    std::string keys = "'" + p.keyPath("sampler.count") + "', '" + p.keyPath("delta1") + "'";
+    if (probes) keys += ", '" + p.keyPath("probes") + "'";
+    throw LimitError(keys + ": evaluating " + std::to_string(samples) + " samples traces " +
+                     sci(points) + " points each (S" + (points > 1 ? ", 6 for its gradient" : "") +
+                     (probes ? ", " + std::to_string(probes) + " probes" : "") + ") with " +
+                     sci(perTrace) + " light-march steps each (delta1 " + sci(s.delta1) + "), " +
+                     sci(steps) + " steps in all, above the bound of " + sci(kMaxLightSteps) +
+                     (probes ? " (level 0 alone; finer levels add more)" : "") +
+                     "; use fewer samples or a longer delta1");
+  }
 }
 
 }  // namespace scatterlab

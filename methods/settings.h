@@ -61,7 +61,28 @@ std::vector<std::string> methodKeys(const MethodDesc& desc);
 /// The render.sampler object; `type` receives the sampler's name. Default: `extendedDefault`
 /// (JSON of a sampler object) when non-empty, else the paper's: Gaussian centres when the
 /// medium has Gaussians, else 512 jittered samples.
+/// `plannedSamples`, when given, receives about how many samples the sampler will make (its
+/// `count`, or the medium's Gaussians for gaussian-centres) for checkRenderPlan.
 std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type,
-                                     const std::string& extendedDefault = "");
+                                     const std::string& extendedDefault = "",
+                                     long long* plannedSamples = nullptr);
+
+struct DynamicSamplingSettings;
+
+/// Checks a render's plan before anything is built (docs/reliability.md):
+///  - memory: the sum of its planned allocations (MemoryPlan: the density volume, the
+///    max-density grid, the radiance volume and the fused density + radiance volume of the fast
+///    march, the image, the sample set, dynamic sampling's level-0 probes and finest grid
+///    buffer, a .sog medium's Gaussians and hash) against the memory limit, a LimitError naming
+///    the largest contributors;
+///  - work: the light-march steps of evaluating the samples, samples × traced points (S, the 6
+///    central differences of ∇S when `gradients`, the probes of dynamic sampling's level 0)
+///    × ⌈diagonal / delta1⌉ × lights, against kMaxLightSteps, a LimitError naming the keys.
+/// `samples`: the planned count (makeSampler), 0 without a sampler; `dynamic`: null without
+/// dynamic sampling; `cpuRayMarcher`: the image is marched by the CPU's ray-marcher (which fuses
+/// density and radiance into one volume when fast_march is on and their grids agree).
+void checkRenderPlan(Params& render, const Scene& scene, const MethodDesc& desc,
+                     const PipelineSettings& settings, long long samples, bool gradients,
+                     const DynamicSamplingSettings* dynamic, bool cpuRayMarcher);
 
 }  // namespace scatterlab

@@ -186,7 +186,7 @@ void registerSamplers() {
   });
   const auto cell = [](bool jitter) {
     return [jitter](Params& p, const Scene&) {
-      const long long count = p.integer("count", 512, kCount);
+      const long long count = p.integer("count", kDefaultSampleCount, kCount);
       checkSampleMemory(p, count);
       const float scale = p.real("radius_scale", jitter ? 1.75 : 1.0, Interval::above(0));
       const std::uint64_t seed =

@@ -26,6 +26,9 @@ namespace scatterlab {
 /// with a ConfigError naming the key.
 void registerSamplers();
 
+/// `count` of the grid and jittered samplers when none is given.
+inline constexpr long long kDefaultSampleCount = 512;
+
 /// Cell layout of the grid and jittered samplers, exposed for tests.
 struct SampleCells {
   IVec3 dims{1};

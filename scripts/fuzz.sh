@@ -3,13 +3,16 @@
 # build-fuzz/ and runs each for SECONDS (default 60), seeded from the repository's files
 # (JSON from data/ and tests/; .sog, .vdb and .exr written by the GCC build in BUILD, default
 # build/, and ../shared/data/vdb). Usage: scripts/fuzz.sh [SECONDS] [TARGET...]. A crash
-# leaves crash-* in build-fuzz/TARGET/ and exits 1.
+# leaves crash-* in build-fuzz/TARGET/ and exits 1, and so does an input that runs longer than
+# 60 s (timeout-*) or grows the process past 2 GiB resident (oom-*). Objects are compiled
+# through ccache (when installed), two at a time, into build-fuzz/TARGET/obj/. SECONDS = build:
+# only build the targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_EACH=${1:-60}
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_json fuzz_set fuzz_sog fuzz_vdb fuzz_exr)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_json fuzz_set fuzz_sog fuzz_vdb fuzz_exr fuzz_scene)
 OUT=build-fuzz
 # libFuzzer reports allocations above its -rss_limit_mb (2 GiB): the library's own memory limit
 # is set below it, so a size the limit refuses is an error, not a finding.
@@ -17,8 +20,12 @@ export SCATTERLAB_MEMORY_LIMIT=${SCATTERLAB_MEMORY_LIMIT:-64M}
 CLI=${BUILD:-build}/bin/scatterlab
 mkdir -p "$OUT"
 CXX=${CXX_FUZZ:-clang++-14}
-FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
-  -I. -I/usr/include/glm)
+CCACHE=$(command -v ccache || true)
+# Objects get libFuzzer's coverage (fuzzer-no-link); the link adds libFuzzer's main.
+FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined
+  -fno-sanitize-recover=undefined -I. -I/usr/include/glm -I/usr/include/eigen3
+  -DOPENVDB_ABI_VERSION_NUMBER=10 -DOPENVDB_USE_DELAYED_LOADING "-DFUZZ_SOURCE_DIR=\"$PWD\"")
+LINK=(-fsanitize=fuzzer,address,undefined)
 status=0
 # Sources compiled into each target with coverage (the code under test; the libraries it
 # calls, OpenVDB, OpenEXR, TBB, are Debian's, without coverage).
@@ -27,27 +34,46 @@ declare -A SOURCES=(
   [fuzz_set]="core/params.cpp core/limits.cpp"
   [fuzz_sog]="media/sog.cpp media/procedural.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_vdb]="media/vdb.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
-  [fuzz_exr]="core/image.cpp core/atomic_file.cpp core/limits.cpp")
+  [fuzz_exr]="core/image.cpp core/atomic_file.cpp core/limits.cpp"
+  [fuzz_scene]="$(echo core/*.cpp media/*.cpp sampling/*.cpp render/*.cpp methods/*.cpp \
+    experiment/*.cpp)")
 declare -A LIBS=(
   [fuzz_sog]="-ltbb" [fuzz_vdb]="-lopenvdb -ltbb -lImath-3_1"
-  [fuzz_exr]="-lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng")
+  [fuzz_exr]="-lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng"
+  [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng -lembree3
+    -ltinyobjloader -lpthread")
 EXR_INCLUDES=(-I/usr/include/OpenEXR -I/usr/include/Imath)
 tmpseeds=$(mktemp -d)
 trap 'rm -rf "$tmpseeds"' EXIT
 for name in "${TARGETS[@]}"; do
   src=fuzz/$name.cpp
   mkdir -p "$OUT/$name/corpus"
+  # One object per source (ccache makes an unchanged one a cache hit), two compilers at once.
+  objs=()
+  for f in "$src" ${SOURCES[$name]}; do objs+=("$OUT/$name/obj/${f%.cpp}.o"); done
   # shellcheck disable=SC2086
-  if [ ! -x "$OUT/$name/$name" ] || [ -n "$(find "$src" ${SOURCES[$name]} core/*.h media/*.h \
-    -newer "$OUT/$name/$name" 2>/dev/null)" ]; then
-    "$CXX" "${FLAGS[@]}" "${EXR_INCLUDES[@]}" "$src" ${SOURCES[$name]} -o "$OUT/$name/$name" \
-      ${LIBS[$name]:-}
-  fi
+  printf '%s\n' "$src" ${SOURCES[$name]} | xargs -P 2 -I{} sh -c \
+    'mkdir -p "$(dirname "$0/obj/$1")" && $2 $3 -c "$1" -o "$0/obj/$(echo "$1" | sed "s/\.cpp$//").o"' \
+    "$OUT/$name" {} "$CCACHE $CXX" "${FLAGS[*]} ${EXR_INCLUDES[*]}"
+  # shellcheck disable=SC2086
+  "$CXX" "${LINK[@]}" "${objs[@]}" -o "$OUT/$name/$name" ${LIBS[$name]:-}
+  [ "$SECONDS_EACH" = build ] && continue
   seeds=("$OUT/$name/seeds")
   rm -rf "${seeds[0]}"
   mkdir -p "${seeds[0]}"
   case $name in
     fuzz_json) find data tests -name '*.json' -size -64k -exec cp {} "${seeds[0]}/" \; ;;
+    fuzz_scene)  # first byte: even = scene (byte/2 picks the method), odd = experiment config
+      for f in data/scenes/*.json $(find tests -name '*.json' -size -64k); do
+        grep -q '"file"\|"frames"' "$f" && continue
+        b=$(basename "$f" .json)
+        { printf '\000'; cat "$f"; } >"${seeds[0]}/s0_$b"
+        { printf '\006'; cat "$f"; } >"${seeds[0]}/s3_$b"
+        { printf '\016'; cat "$f"; } >"${seeds[0]}/s7_$b"
+      done
+      for f in data/experiments/*.json; do
+        { printf '\001'; cat "$f"; } >"${seeds[0]}/e_$(basename "$f" .json)"
+      done ;;
     fuzz_set)
       printf 'camera.position=[1e39,0,0]' >"${seeds[0]}/a"
       printf 'a.b.c={"x":[1,2,{"y":null}]}' >"${seeds[0]}/b"
@@ -71,7 +97,7 @@ for name in "${TARGETS[@]}"; do
   maxlen=65536
   case $name in fuzz_sog | fuzz_vdb | fuzz_exr) maxlen=600000 ;; esac
   echo "== $name: ${SECONDS_EACH} s"
-  rm -f "$OUT/$name"/crash-*
+  rm -f "$OUT/$name"/crash-* "$OUT/$name"/timeout-* "$OUT/$name"/oom-*
   # fuzz_vdb: OpenVDB parses in a forked child (media/vdb.cpp). A huge allocation there is a
   # bad_alloc as without ASan (allocator_may_return_null); a memory error there is reported by
   # the child's ASan and libFuzzer handlers, which write a crash-* from the child while this
@@ -79,10 +105,11 @@ for name in "${TARGETS[@]}"; do
   opts=${ASAN_OPTIONS:-}
   [ "$name" = fuzz_vdb ] && opts="allocator_may_return_null=1${opts:+:$opts}"
   (cd "$OUT/$name" && ASAN_OPTIONS=$opts ./"$name" -max_total_time="$SECONDS_EACH" -max_len="$maxlen" -rss_limit_mb=2048 \
-    -print_final_stats=1 corpus seeds 2>&1 | grep -E "stat::number_of_executed_units|Done|ERROR|crash-" ) ||
+    -timeout=60 -print_final_stats=1 corpus seeds 2>&1 |
+    grep -E "stat::number_of_executed_units|Done|ERROR|crash-|timeout-|oom-|Slowest unit" ) ||
     status=1
   shielded=0
-  for c in "$OUT/$name"/crash-*; do
+  for c in "$OUT/$name"/crash-* "$OUT/$name"/timeout-* "$OUT/$name"/oom-*; do
     [ -e "$c" ] || continue
     if [ "$name" = fuzz_vdb ] && (cd "$OUT/$name" && ASAN_OPTIONS=$opts ./"$name" -runs=1 \
       -artifact_prefix=replay- "$(basename "$c")" >/dev/null 2>&1); then

@@ -11,8 +11,12 @@ BUILD=${1:-build-asan}
 JOBS=${SCATTERLAB_JOBS:-2}
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# -Wno-maybe-uninitialized (this tree only): at -O1 with ASan, GCC 12 reports a false
+# -Wmaybe-uninitialized inside <regex> (the std::function of std::__detail::_NFA's states, from
+# tests/methods/test_key_docs.cpp: 10 warnings); the Release tree keeps the warning.
 cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" -DSCATTERLAB_SANITIZE=ON \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" -DCMAKE_CXX_FLAGS="-Wno-maybe-uninitialized" \
+  -DSCATTERLAB_SANITIZE=ON \
   -DSCATTERLAB_BUILD_BENCH=OFF -DSCATTERLAB_PYTHON=OFF -DSCATTERLAB_INSTALL=OFF \
   -DPython3_EXECUTABLE=/usr/bin/python3 "${launcher[@]}" >/dev/null
 cmake --build "$BUILD" -j "$JOBS"

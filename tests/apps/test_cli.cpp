@@ -397,6 +397,21 @@ TEST_F(Cli, WorkBoundsNameTheStepBeforeRendering) {
                     big + "--set render.march_step=2e-6");
   expectRenderFails(scene, {"'render.delta1': a step of 2e-06", "above the bound of 1e+12"},
                     big + "--set render.delta1=2e-6");
+  // The samples' evaluation: 1e6 samples x 7 traced points (S, 6 for ∇S) x 866 026 steps.
+  expectRenderFails(
+      scene,
+      {"'render.sampler.count', 'render.delta1': evaluating 1000000 samples",
+       "6.06e+12 steps in all, above the bound of 1e+12"},
+      "--method gradient --set render.delta1=2e-6 --set render.sampler.count=1000000");
+}
+
+TEST_F(Cli, MemoryLimitIsCheckedOnTheSumOfTheAllocations) {
+  // per-voxel at 128^3: density 8 MiB, radiance 24 MiB, fused volume 32 MiB, each below 48 MiB.
+  const std::string scene = writeScene(tinyScene());
+  expectRenderFails(scene,
+                    {"scatterlab: error: the render's planned allocations need about 64 MiB in "
+                     "all, above the memory limit of 48 MiB; the largest: 'render.fast_march'"},
+                    "--memory-limit 48M --method per-voxel --set medium.resolution=128");
 }
 
 TEST_F(Cli, MemoryLimitFlagAndEnvironment) {

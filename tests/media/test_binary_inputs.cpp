@@ -169,6 +169,19 @@ TEST(VdbCorruption, FlippedBytesAreErrorsNamingTheFileNeverACrash) {
   EXPECT_GT(loaded, 0);
 }
 
+TEST(VdbCorruption, OpenVdbsBloscHeapOverflowStaysInTheReaderProcess) {
+  // fuzz_vdb (10-minute run) reproduced the upstream bug: on this 40 KB mutant of the
+  // dragon, OpenVDB's io::bloscFromStream copies past a heap buffer (ASan: heap-buffer-overflow
+  // in readCompressedValues). In the reader child of the Release build glibc then aborts on
+  // the corrupt heap (signal 6); under ASan the child's report ends it (exit 1). Either way
+  // this process gets an IoError naming the file, and lives.
+  const std::string p = SCATTERLAB_SOURCE_DIR "/fuzz/regressions/fuzz_vdb_blosc_heap_overflow.vdb";
+  const std::string m = vdbError(p);
+  EXPECT_EQ(m.rfind("cannot read VDB file '" + p + "': OpenVDB's reader ", 0), 0u) << m;
+  EXPECT_NE(m.find("): the file is corrupt (it was read in a separate process)"), std::string::npos)
+      << m;
+}
+
 TEST(VdbCorruption, TruncationsAndLyingLengthsAreCaughtBeforeOpenVdbReads) {
   testing::TempDir tmp("vdbcut");
   const std::string good = slurp(smallVdb(tmp));
