@@ -122,17 +122,62 @@ void checkExrAttributeSizes(const std::string& path) {
     for (;;) {
       const std::string name = cstring("an attribute name");
       if (name.empty()) break;
-      (void)cstring("an attribute type");
+      const std::string type = cstring("an attribute type");
+      const std::string shown = "header: attribute '" + printable(name.substr(0, 40)) + "'";
       std::int32_t size;
-      if (n - pos < 4)
-        throw IoError("header: attribute '" + printable(name.substr(0, 40)) + "' is truncated");
+      if (n - pos < 4) throw IoError(shown + " is truncated");
       std::memcpy(&size, bytes.data() + pos, 4);
       pos += 4;
       if (size < 0 || std::size_t(size) > n - pos)
-        throw IoError("header: attribute '" + printable(name.substr(0, 40)) + "' announces " +
-                      std::to_string(size) + " bytes, beyond the end of the file (" +
-                      std::to_string(n) + " bytes)");
-      pos += std::size_t(size);
+        throw IoError(shown + " announces " + std::to_string(size) +
+                      " bytes, beyond the end of the file (" + std::to_string(n) + " bytes)");
+      // OpenEXR's C++ reader reads a known type by its own layout, not by the announced size
+      // (a float is 4 bytes whatever the size says; a chlist runs to its empty name; a preview
+      // allocates width x height x 4 bytes): where the two disagree it goes on from another
+      // byte than this walk, and an attribute read from there can announce gigabytes
+      // (fuzz_exr: a 308-byte file, 1.69 GB allocated). So the sizes of known types must be
+      // their layouts' (true of every well-formed file).
+      const std::size_t at = pos, end = pos + std::size_t(size);
+      const auto expect = [&](std::size_t want) {
+        if (std::size_t(size) != want)
+          throw IoError(shown + " of type '" + printable(type.substr(0, 40)) + "' has " +
+                        std::to_string(size) + " bytes; its layout has " + std::to_string(want));
+      };
+      const auto u32 = [&](std::size_t o) {
+        std::uint32_t v;
+        std::memcpy(&v, bytes.data() + o, 4);
+        return v;
+      };
+      static const std::pair<const char*, std::size_t> kFixed[] = {
+          {"box2i", 16},      {"box2f", 16},   {"chromaticities", 32},
+          {"compression", 1}, {"double", 8},   {"envmap", 1},
+          {"float", 4},       {"int", 4},      {"keycode", 28},
+          {"lineOrder", 1},   {"m33f", 36},    {"m33d", 72},
+          {"m44f", 64},       {"m44d", 128},   {"rational", 8},
+          {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+          {"v2f", 8},         {"v2d", 16},     {"v3i", 12},
+          {"v3f", 12},        {"v3d", 24},     {"deepImageState", 1}};
+      for (const auto& [t, bytesOf] : kFixed)
+        if (type == t) expect(bytesOf);
+      if (type == "preview") {
+        if (size < 8) expect(8);
+        expect(8 + std::size_t(u32(at)) * u32(at + 4) * 4);
+      } else if (type == "chlist") {
+        std::size_t q = at;  // entries: name, NUL, 16 bytes; then an empty name
+        for (;;) {
+          const std::size_t z = q < end ? bytes.find('\0', q) : std::string::npos;
+          if (z == std::string::npos || z >= end)
+            throw IoError(shown + " (a channel list) does not end within its " +
+                          std::to_string(size) + " bytes");
+          if (z == q) {
+            q = z + 1;
+            break;
+          }
+          q = z + 1 + 16;
+        }
+        expect(q - at);
+      }
+      pos = end;
     }
     if (!multipart || pos >= n || bytes[pos] == '\0') break;
   }
