@@ -215,36 +215,57 @@ int iters(int n) {
   return e && std::atoi(e) > 0 ? std::atoi(e) : n;
 }
 
-/// Wall-clock time of GPU dynamic sampling alone (shaft scene, 541 grid samples, ε 1e-4,
-/// levels 16, 32, 64 up to half the resolution), the result read back: what the host waits for,
-/// read-backs and buffer creation included (issue 14: no per-level read-back).
-void BM_GpuDynamicSamplingWall(benchmark::State& state) {
+/// The GPU dynamic-sampling benchmarks' input: the shaft scene at resolution³, 541 grid
+/// samples, ε 1e-4, levels 16, 32, 64 up to half the resolution.
+struct DynamicSamplingInput {
+  Scene scene;
+  gpu::Volume density;
+  std::vector<RadianceSample> initial;
+  DynamicSamplingSettings settings;
+  float voxel = 0.0f;
+
+  explicit DynamicSamplingInput(int res) {
+    initialize();
+    scene = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
+    scene.medium.resolution = IVec3(res);
+    density = gpu::buildDensity(scene);
+    const DensityGrid hd = gpu::readDensity(density);
+    const Json samplerCfg{{"type", "grid"}, {"count", 541}};
+    Params sp(samplerCfg, "sampler");
+    initial = samplers().get("grid", "sampler")(sp, scene)->generate(scene, hd);
+    voxel = scene.medium.voxelSize();
+    settings.epsilon = 1e-4;
+    settings.levels.clear();
+    for (int l : {16, 32, 64})
+      if (l <= res / 2) settings.levels.push_back(l);
+    settings.delta1 = voxel;
+  }
+};
+
+/// Wall-clock time of GPU dynamic sampling alone (DynamicSamplingInput), the result read back:
+/// what the host waits for, read-backs and buffer creation included (issue 14: no per-level
+/// read-back). With `kept`, as the GPU refiner runs it from the second frame on: its buffers
+/// kept in a workspace (no buffer created).
+void gpuDynamicSamplingWall(benchmark::State& state, bool kept) {
   if (!needGpu(state)) return;
-  initialize();
-  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
-  const int res = int(state.range(0));
-  s.medium.resolution = IVec3(res);
-  const gpu::Volume d = gpu::buildDensity(s);
-  const DensityGrid hd = gpu::readDensity(d);
-  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
-  Params sp(samplerCfg, "sampler");
-  auto sampler = samplers().get("grid", "sampler")(sp, s);
-  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
-  const float vox = s.medium.voxelSize();
-  DynamicSamplingSettings ds;
-  ds.epsilon = 1e-4;
-  ds.levels.clear();
-  for (int l : {16, 32, 64})
-    if (l <= res / 2) ds.levels.push_back(l);
-  ds.delta1 = vox;
+  const DynamicSamplingInput in(int(state.range(0)));
+  gpu::DynamicSamplingWorkspace workspace;
   std::size_t count = 0;
   for (auto _ : state) {
-    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds);
+    const DynamicSamplingResult r =
+        gpu::dynamicSamplingGpu(in.scene, in.density, in.initial, {in.voxel, in.voxel}, in.settings,
+                                nullptr, nullptr, nullptr, kept ? &workspace : nullptr);
     glFinish();
     count = r.samples.size();
   }
   state.counters["samples"] = double(count);
   state.SetLabel(gpu::context().info().renderer);
+}
+void BM_GpuDynamicSamplingWall(benchmark::State& state) {
+  gpuDynamicSamplingWall(state, false);
+}
+void BM_GpuDynamicSamplingWallKept(benchmark::State& state) {
+  gpuDynamicSamplingWall(state, true);
 }
 BENCHMARK(BM_GpuDynamicSamplingWall)
     ->Arg(64)
@@ -252,39 +273,6 @@ BENCHMARK(BM_GpuDynamicSamplingWall)
     ->UseRealTime()
     ->Iterations(iters(3))
     ->Unit(benchmark::kMillisecond);
-
-/// GPU dynamic sampling as the GPU refiner runs it from the second frame on: with its buffers
-/// kept in a workspace (no buffer created). Same scene and settings as BM_GpuDynamicSamplingWall.
-void BM_GpuDynamicSamplingWallKept(benchmark::State& state) {
-  if (!needGpu(state)) return;
-  initialize();
-  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/shaft.json");
-  const int res = int(state.range(0));
-  s.medium.resolution = IVec3(res);
-  const gpu::Volume d = gpu::buildDensity(s);
-  const DensityGrid hd = gpu::readDensity(d);
-  const Json samplerCfg{{"type", "grid"}, {"count", 541}};
-  Params sp(samplerCfg, "sampler");
-  auto sampler = samplers().get("grid", "sampler")(sp, s);
-  const std::vector<RadianceSample> initial = sampler->generate(s, hd);
-  const float vox = s.medium.voxelSize();
-  DynamicSamplingSettings ds;
-  ds.epsilon = 1e-4;
-  ds.levels.clear();
-  for (int l : {16, 32, 64})
-    if (l <= res / 2) ds.levels.push_back(l);
-  ds.delta1 = vox;
-  gpu::DynamicSamplingWorkspace workspace;
-  std::size_t count = 0;
-  for (auto _ : state) {
-    const DynamicSamplingResult r = gpu::dynamicSamplingGpu(s, d, initial, {vox, vox}, ds, nullptr,
-                                                            nullptr, nullptr, &workspace);
-    glFinish();
-    count = r.samples.size();
-  }
-  state.counters["samples"] = double(count);
-  state.SetLabel(gpu::context().info().renderer);
-}
 BENCHMARK(BM_GpuDynamicSamplingWallKept)
     ->Arg(64)
     ->Arg(128)

@@ -188,6 +188,18 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
   checkGl("dynamic sampling: upload level 0");
 }
 
+/// One invocation per sample of level k: level 0's size is known on the host (its capacity);
+/// a later level's is the dispatch size the count pass left in w.counts (no read-back).
+void dispatchOverLevel(const DynamicSamplingWorkspace& w, std::size_t k, std::size_t L) {
+  if (k == 0) {
+    glDispatchCompute(groups(w.levels[0].capacity, 64), 1, 1);
+    return;
+  }
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
+  glDispatchComputeIndirect(GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+}
+
 /// Evaluate level k (indirect dispatch after level 0): S, ∇S, E_j and on level 0 (not final)
 /// the contributions. GPU time: "ds evaluate+error".
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
@@ -217,13 +229,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
   l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
   l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
   w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-  if (k == 0) {
-    glDispatchCompute(groups(l.capacity, 64), 1, 1);
-  } else {
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
-    glDispatchComputeIndirect(GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
-  }
+  dispatchOverLevel(w, k, L);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
@@ -273,13 +279,7 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size
   w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
   w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
   w.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
-  if (k == 0) {
-    glDispatchCompute(groups(l.capacity, 64), 1, 1);
-  } else {
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
-    glDispatchComputeIndirect(GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
-  }
+  dispatchOverLevel(w, k, L);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
