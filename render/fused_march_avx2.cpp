@@ -99,15 +99,7 @@ void spanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const Fuse
     }
     alignas(32) float a[8];
     (xsimd::exp(B8(-c.sigmaT) * B8::load_aligned(D) * B8(r.dt))).store_aligned(a);
-    for (int q = 0; q < q1 && T > minT; ++q) {
-      if (!(D[q] > 0.0f)) continue;
-      const float w = T * ratio * (1.0f - a[q]);
-      L0 += w * V[q][1];
-      L1 += w * V[q][2];
-      L2 += w * V[q][3];
-      wt += T * (1.0f - a[q]) * (r.t0 + (float(i + q) + 0.5f) * r.dt);
-      T *= a[q];
-    }
+    accumulateGroup<8>(V, D, a, i, q1, r, ratio, minT, L0, L1, L2, T, wt);
   }
   s.L[0] = L0;
   s.L[1] = L1;

@@ -8,6 +8,23 @@
 
 #include "render/fused_march.h"
 
+/// Adds the steps i … i + q1 − 1 of a group to the running sums in step order (their lookups
+/// V = (D, S), clamped densities D and e^(−σt·D·dt) in a), until T falls to minT.
+template <int G>
+inline void accumulateGroup(const float (&V)[G][4], const float (&D)[G], const float (&a)[G], int i,
+                            int q1, const scatterlab::FusedRay& r, float ratio, float minT,
+                            float& L0, float& L1, float& L2, float& T, float& wt) {
+  for (int q = 0; q < q1 && T > minT; ++q) {
+    if (!(D[q] > 0.0f)) continue;
+    const float w = T * ratio * (1.0f - a[q]);
+    L0 += w * V[q][1];
+    L1 += w * V[q][2];
+    L2 += w * V[q][3];
+    wt += T * (1.0f - a[q]) * (r.t0 + (float(i + q) + 0.5f) * r.dt);
+    T *= a[q];
+  }
+}
+
 /// Marches steps [i, end) with `lookup(v, u, out)` writing (D, S.r, S.g, S.b) at index
 /// coordinates u to out; exp of G steps at once.
 template <int G, class Lookup>
@@ -28,15 +45,7 @@ inline void spanLoop(const scatterlab::FusedVolumeView& v, const scatterlab::Fus
       D[q] = V[q][0] > 0.0f ? V[q][0] : 0.0f;
     }
     (xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(r.dt))).store_aligned(a);
-    for (int q = 0; q < q1 && T > minT; ++q) {
-      if (!(D[q] > 0.0f)) continue;
-      const float w = T * ratio * (1.0f - a[q]);
-      L0 += w * V[q][1];
-      L1 += w * V[q][2];
-      L2 += w * V[q][3];
-      wt += T * (1.0f - a[q]) * (r.t0 + (float(i + q) + 0.5f) * r.dt);
-      T *= a[q];
-    }
+    accumulateGroup<G>(V, D, a, i, q1, r, ratio, minT, L0, L1, L2, T, wt);
   }
   s.L[0] = L0;
   s.L[1] = L1;
