@@ -26,4 +26,13 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0:strict_strin
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
 # Leaks inside Mesa's llvmpipe driver are not ours (scripts/lsan.supp says which).
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$(cd .. && pwd)/scripts/lsan.supp:print_suppressions=0}
-ctest --output-on-failure -j "$JOBS" --timeout 1800
+# Run by hand, not by ctest: under ctest (every time, also alone with -R) LeakSanitizer's own
+# tracer dies at this test's exit ("Tracer caught signal 11 ... LeakSanitizer has encountered a
+# fatal error") after the test passed; run directly, with the same options, working directory
+# and piped output, its leak check completes and reports nothing (measured 2026-11-23, 12 runs).
+# It still runs under ASan + UBSan + LSan here, only outside ctest.
+direct='GpuResident.SogDensitySplattedOnTheGpuEqualsTheCpuSplat'
+ctest --output-on-failure -j "$JOBS" --timeout 1800 -E "^${direct}\$"
+if [ -x bin/test_gpu ]; then
+  (cd tests && ../bin/test_gpu --gtest_filter="$direct")
+fi
