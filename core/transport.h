@@ -31,21 +31,46 @@ float opticalDepth(const Field& field, const Box& box, const Vec3& a, const Vec3
   return sum * dt;
 }
 
+/// The midpoint-rule steps of the segment a→b clipped to grid g's box, in g's index space: step
+/// i looks up u0 + i·du, n steps of dt world units (at most `step`); n = 0 when the segment is
+/// empty or misses the box. With `clipInside` false the clip is skipped when both ends lie in
+/// the box ([0, len], what the clip gives unless b is on the boundary and the exit rounds an
+/// ulp short of len).
+struct IndexSteps {
+  Vec3 u0{0.0f}, du{0.0f};
+  int n = 0;
+  float dt = 0.0f;
+};
+
+inline IndexSteps indexSteps(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
+                             bool clipInside = true) {
+  IndexSteps out;
+  const Vec3 d = b - a;
+  const float len = glm::length(d);
+  if (len <= 0.0f) return out;
+  const Ray r{a, d / len};
+  float t0 = 0.0f, t1 = len;
+  const Box& box = g.bounds();
+  if ((clipInside || !(box.contains(a) && box.contains(b))) &&
+      (!box.intersect(r, t0, t1, 0.0f, len) || t1 <= t0))
+    return out;
+  out.n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  out.dt = (t1 - t0) / float(out.n);
+  const Vec3 s = g.indexScale();
+  out.u0 = r.at(t0 + 0.5f * out.dt) * s + g.indexOffset();
+  out.du = r.dir * out.dt * s;
+  return out;
+}
+
 /// opticalDepth(g, a, b, step) that stops once the sum passes `maxDepth` (checked every
 /// eight steps): the same sum until then, so the same result where the depth stays below it.
 inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
                           float maxDepth) {
-  const Vec3 d = b - a;
-  const float len = glm::length(d);
-  if (len <= 0.0f) return 0.0f;
-  const Ray r{a, d / len};
-  float t0, t1;
-  if (!g.bounds().intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
-  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
-  const float dt = (t1 - t0) / float(n);
-  const Vec3 s = g.indexScale();
-  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
-  const Vec3 du = r.dir * dt * s;
+  const IndexSteps st = indexSteps(g, a, b, step);
+  if (st.n == 0) return 0.0f;
+  const int n = st.n;
+  const float dt = st.dt;
+  const Vec3 u0 = st.u0, du = st.du;
   const float sumMax = maxDepth / dt;
   float sum = 0.0f;
   for (int i = 0; i < n && sum <= sumMax;)
@@ -69,17 +94,11 @@ inline constexpr float kShadowDepthCutoff = 25.0f;
 /// beyond maxDepth, smaller than the whole segment's).
 inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, const Vec3& a,
                           const Vec3& b, float step, float maxDepth = kInfinity) {
-  const Vec3 d = b - a;
-  const float len = glm::length(d);
-  if (len <= 0.0f) return 0.0f;
-  const Ray r{a, d / len};
-  float t0, t1;
-  if (!g.bounds().intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
-  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
-  const float dt = (t1 - t0) / float(n);
-  const Vec3 s = g.indexScale();
-  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
-  const Vec3 du = r.dir * dt * s;
+  const IndexSteps st = indexSteps(g, a, b, step);
+  if (st.n == 0) return 0.0f;
+  const int n = st.n;
+  const float dt = st.dt;
+  const Vec3 u0 = st.u0, du = st.du;
   MaxDensityGrid::Walk walk(skip, u0, du, n);
   const float sumMax = maxDepth / dt;
   float sum = 0.0f;

@@ -45,22 +45,13 @@ DensityLayout densityLayout(const DensityGrid& g) {
 
 float opticalDepthSimd(const DensityGrid& g, const DensityLayout& layout, const Vec3& a,
                        const Vec3& b, float step, float maxDepth, ShadowKernel kernel) {
-  // The steps of opticalDepth (core/transport.h); the box clip is skipped when both ends lie
-  // in the box (a view step and the box exit towards a directional light): [0, len], what
-  // the clip gives unless b is on the boundary and the exit rounds an ulp short of len.
-  const Vec3 d = b - a;
-  const float len = glm::length(d);
-  if (len <= 0.0f) return 0.0f;
-  const Ray r{a, d / len};
-  float t0 = 0.0f, t1 = len;
-  const Box& box = g.bounds();
-  if (!(box.contains(a) && box.contains(b)) && (!box.intersect(r, t0, t1, 0.0f, len) || t1 <= t0))
-    return 0.0f;
-  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
-  const float dt = (t1 - t0) / float(n);
-  const Vec3 s = g.indexScale();
-  const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + g.indexOffset();
-  const Vec3 du = r.dir * dt * s;
+  // The steps of opticalDepth (core/transport.h), the box clip skipped when both ends lie in
+  // the box (a view step and the box exit towards a directional light).
+  const IndexSteps st = indexSteps(g, a, b, step, /*clipInside=*/false);
+  if (st.n == 0) return 0.0f;
+  const int n = st.n;
+  const float dt = st.dt;
+  const Vec3 u0 = st.u0, du = st.du;
   const float uu[3] = {u0.x, u0.y, u0.z}, dd[3] = {du.x, du.y, du.z};
   SumFn sum = kSum;
   if (kernel == ShadowKernel::Sse2) sum = &shadow_detail::densitySum<xsimd::sse2>;
