@@ -2,11 +2,11 @@
 
 #include <mutex>
 
+#include "cpu/integrators.h"
+#include "cpu/interpolation.h"
+#include "cpu/radiance_evaluator.h"
 #include "media/register.h"
 #include "methods/register.h"
-#include "render/integrators.h"
-#include "render/interpolation.h"
-#include "render/radiance_evaluator.h"
 #include "sampling/dynamic_sampling.h"
 #include "sampling/samplers.h"
 #ifdef SCATTERLAB_HAS_GPU

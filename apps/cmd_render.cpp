@@ -10,8 +10,8 @@
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "cpu/sample_view.h"
 #include "media/vdb.h"
-#include "render/sample_view.h"
 
 namespace scatterlab::cli {
 

@@ -7,9 +7,9 @@
 
 #include "api/scatterlab.h"
 #include "core/stages.h"
-#include "render/interpolation.h"
-#include "render/per_voxel.h"
-#include "render/radiance_evaluator.h"
+#include "cpu/interpolation.h"
+#include "cpu/per_voxel.h"
+#include "cpu/radiance_evaluator.h"
 
 namespace scatterlab {
 namespace {

@@ -2,7 +2,7 @@
 /// load:
 ///   March/<scene>/<mode>: ray-marcher through a 128³ density + radiance volume, 800×600;
 ///     mode 0 = the plain march (render.fast_march false), 1 = fast march with the sse2 kernel
-///     (the previous session's fast march, moved into render/fused_march_sse2.cpp), 2 = the avx2
+///     (the previous session's fast march, moved into cpu/fused_march_sse2.cpp), 2 = the avx2
 ///     kernel (render.march_simd avx2), 3 = avx2 with render.half_float_volumes, 4 and 5 = avx2
 ///     with render.march_scale 2 and 4 (depth-aware upsampling; not the same image), 6 and 7 =
 ///     plain and avx2 with factored lights (the default of gradient and adaptive: S = V·A with
@@ -26,7 +26,7 @@
 #include "api/scatterlab.h"
 #include "core/method.h"
 #include "core/stages.h"
-#include "render/fused_march.h"
+#include "cpu/fused_march.h"
 
 namespace scatterlab {
 namespace {
@@ -69,7 +69,7 @@ MarchInputs& marchInputs(const std::string& name) {
   initialize();
   MarchInputs in;
   in.scene = marchScene(name);
-  in.frame = backends()[int(Backend::Cpu)].makeFrame();
+  in.frame = backends()[int(Backend::Cpu)].makeFrame(PipelineSettings{});
   in.frame->buildDensity(in.scene);
   Json sp = {{"count", 512}};
   Params p(sp, "sampler");
@@ -109,7 +109,7 @@ void BM_Exact(benchmark::State& state, const std::string& name) {
   if (!in.frame) {
     initialize();
     in.scene = marchScene(name, true);
-    in.frame = backends()[int(Backend::Cpu)].makeFrame();
+    in.frame = backends()[int(Backend::Cpu)].makeFrame(PipelineSettings{});
     in.frame->buildDensity(in.scene);
   }
   PipelineSettings ps = marchSettings(in.scene, int(state.range(0)));

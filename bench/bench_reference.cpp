@@ -5,7 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include "api/scatterlab.h"
-#include "render/per_voxel.h"
+#include "cpu/per_voxel.h"
 
 using namespace scatterlab;
 

@@ -41,7 +41,7 @@ Scene stageScene(int res) {
 
 /// A frame of backend `b` with the scene's density built in it.
 std::unique_ptr<Frame> frameWithDensity(Backend b, const Scene& scene) {
-  std::unique_ptr<Frame> f = backends()[int(b)].makeFrame();
+  std::unique_ptr<Frame> f = backends()[int(b)].makeFrame(PipelineSettings{});
   f->buildDensity(scene);
   return f;
 }

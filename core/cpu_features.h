@@ -1,7 +1,7 @@
 #pragma once
 /// The CPU's instruction-set extensions that the run-time-dispatched SIMD kernels need (the
 /// build targets baseline x86-64; AVX2 kernels live in their own files, compiled with -mavx2 and
-/// chosen at run time: render/fused_march.h, render/shadow_rays.h, render/gather_rows.h).
+/// chosen at run time: cpu/fused_march.h, cpu/shadow_rays.h, cpu/gather_rows.h).
 /// Queried once (cpuid); all false off x86.
 
 namespace scatterlab {

@@ -30,7 +30,7 @@ struct Light {
   };
 
   /// Geometry towards the light from x before anything is cut off: what incident() and the
-  /// singular-light factorization (core/transport.h) both start from.
+  /// singular-light factorization (shading/transport.h) both start from.
   struct Geometry {
     Vec3 toLight;     ///< unit direction from x towards the light
     float distance;   ///< infinity for directional lights

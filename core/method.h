@@ -1,6 +1,6 @@
 #pragma once
 /// Stage interface: a whole rendering method (scene -> image), composed from the other stages
-/// or standing alone (the exact reference). Implementations live in render/ (CPU) and gpu/.
+/// or standing alone (the exact reference). Implementations live in cpu/ (CPU) and gpu/.
 
 #include <functional>
 #include <memory>

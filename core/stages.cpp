@@ -24,7 +24,9 @@ void HostFrame::report(RenderStats& stats) {
 std::array<BackendEntry, kBackendCount>& backends() {
   static std::array<BackendEntry, kBackendCount> b = [] {
     std::array<BackendEntry, kBackendCount> a;
-    a[int(Backend::Cpu)].makeFrame = [] { return std::unique_ptr<Frame>(new HostFrame()); };
+    a[int(Backend::Cpu)].makeFrame = [](const PipelineSettings&) {
+      return std::unique_ptr<Frame>(new HostFrame());
+    };
     a[int(Backend::Cpu)].preferred = [](std::string*) { return false; };
     return a;
   }();

@@ -4,7 +4,7 @@
 /// call per pass. The volumes a frame's stages share live in a Frame of the backend that runs
 /// them (host grids on the CPU, 3D textures in gpu/), so a GPU pipeline never goes through the
 /// host. A stage is registered once by name, with a variant per backend: CPU variants by
-/// render/ and sampling/, GPU ones beside them by gpu/. Every variant is built from the same
+/// cpu/ and sampling/, GPU ones beside them by gpu/. Every variant is built from the same
 /// PipelineSettings, parsed once by the method layer (methods/settings.h), so a key valid on
 /// one backend is valid on the other.
 
@@ -22,7 +22,6 @@
 #include "core/image.h"
 #include "core/params.h"
 #include "core/progress.h"
-#include "core/realtime.h"
 #include "core/registry.h"
 #include "core/scene.h"
 #include "core/stats.h"
@@ -67,10 +66,10 @@ struct MarchSettings {
   bool fast = true;
   /// render.half_float_volumes: the fast march's fused density + radiance volume in IEEE half.
   bool halfFloat = false;
-  /// render.march_simd: which compiled kernel the fast march runs (render/fused_march.h).
+  /// render.march_simd: which compiled kernel the fast march runs (cpu/fused_march.h).
   MarchSimd simd = MarchSimd::Auto;
   /// render.march_scale: march one ray per scale × scale pixels and upsample depth-aware
-  /// (render/ray_marcher.h); 1 marches every pixel.
+  /// (cpu/ray_marcher.h); 1 marches every pixel.
   int scale = 1;
 };
 
@@ -79,6 +78,18 @@ struct MarchSettings {
 enum class Slicing {
   RaySteps,    ///< layer k = step k of each pixel's own ray: the CPU marcher's sample points
   ViewPlanes,  ///< the paper's slabs perpendicular to the view axis
+};
+
+/// How the GPU backend runs the stages of a method with a radiance volume (render key
+/// gpu_pipeline; docs/gpu.md). Both are kept and measured side by side.
+enum class GpuPipeline {
+  /// Compute shaders: the view march one invocation per pixel (gpu/view_march.h), the
+  /// radiance splat as a binned gather (gpu/radiance_gather.h). Fast on every GPU, and on
+  /// datacenter GPUs (H100/H200), which shade fragments on 4 of 132 SMs, by far.
+  Compute,
+  /// The paper's rasterised passes: slice marching with blending (gpu::SliceMarcher) and the
+  /// radiance splat drawn slice by slice (gpu::GradientSplatGpu).
+  Raster,
 };
 
 /// Shadow maps of the GPU backend (render.shadow_map, docs/objects.md): the visibility V_l of
@@ -99,14 +110,42 @@ struct ShadowMapSettings {
   bool given = false;  ///< the scene set `shadow_map`
 };
 
-/// Per-pixel ray offsets of `jittered-march` (render/jittered_march.h).
+/// How light-space-march attenuates the light on its way to a sample point.
+enum class LightTransmittance {
+  /// Tóth & Umenhoffer's homogeneous model: e^(−σt·D̄·d), D̄ the mean of the density volume,
+  /// d the length inside the medium box of the segment from the point to the light.
+  Mean,
+  /// The real density traced with step delta1 (what `exact` does), to separate the two errors.
+  Traced,
+};
+
+/// `light-space-march` keys (methods/settings.cpp, lightSpaceMarchKeys(); their shared geometry:
+/// shading/post_process.h).
+struct LightSpaceMarchSettings {
+  int steps = 128;     ///< N: terms of each view ray's sum, from the visible surface to the eye
+  int interleave = 4;  ///< M: M×M pixel blocks, each pixel evaluates every M²-th term
+  LightTransmittance light = LightTransmittance::Mean;
+};
+
+/// `radial-blur` keys (methods/settings.cpp, radialBlurKeys()).
+struct RadialBlurSettings {
+  int samples = 64;        ///< n: samples per pixel along the screen ray towards the light
+  float density = 1.0f;    ///< fraction of the pixel→light segment the n samples span
+  float weight = 1.0f;     ///< per-sample scale
+  float decay = 1.0f;      ///< sample i is scaled by decay^i
+  float exposure = 1.0f;   ///< overall scale
+  int downsample = 1;      ///< the pre-pass is rendered at 1/downsample of the image size
+  float guardBand = 0.5f;  ///< the light's screen position is clamped to this margin (image sizes)
+};
+
+/// Per-pixel ray offsets of `jittered-march` (cpu/jittered_march.h).
 enum class Jitter {
   None,       ///< every sample at the middle of its step
   Ign,        ///< interleaved gradient noise (Jimenez 2014) of the pixel
-  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (render/blue_noise.h)
+  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (cpu/blue_noise.h)
 };
 
-/// `jittered-march` (render/jittered_march.h): keys steps, jitter, downsample
+/// `jittered-march` (cpu/jittered_march.h): keys steps, jitter, downsample
 /// (methods/march_settings.cpp holds their table).
 struct JitteredMarchSettings {
   int steps = 32;  ///< view-ray steps per ray, whatever its length in the medium
@@ -117,7 +156,7 @@ struct JitteredMarchSettings {
 /// How froxel depth slices are spaced between near and far (view depth).
 enum class DepthDistribution { Exponential, Linear };
 
-/// `froxel` (render/froxel.h): keys froxel_grid, depth_distribution, near, far,
+/// `froxel` (cpu/froxel.h): keys froxel_grid, depth_distribution, near, far,
 /// light_transmittance, transmittance_map_resolution (methods/march_settings.cpp).
 struct FroxelSettings {
   IVec3 grid{160, 90, 64};  ///< froxels across, down, and depth slices
@@ -151,7 +190,10 @@ struct PipelineSettings {
   bool boundedTaylor = false;
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
-  bool slicingGiven = false;  ///< the scene set `slicing` (reported unused on the CPU)
+  GpuPipeline gpuPipeline = GpuPipeline::Compute;
+  /// The GPU-only keys the scene set (slicing, gpu_pipeline, as key paths): reported unused on
+  /// the CPU, whose marcher steps along each ray; slicing also under the compute pipeline.
+  std::vector<std::string> gpuKeysGiven;
   /// The CPU march's keys the scene set (fast_march, march_scale, half_float_volumes,
   /// march_simd, as key paths): reported unused on the GPU, whose slice marcher has none of them.
   std::vector<std::string> cpuMarchKeysGiven;
@@ -159,7 +201,7 @@ struct PipelineSettings {
   float delta2 = 0.0f;  ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
   ShadowMapSettings shadowMap;
-  /// The keys of the integrators `light-space-march` and `radial-blur` (core/realtime.h); read
+  /// The keys of the integrators `light-space-march` and `radial-blur` (defined above); read
   /// only for those methods, defaults otherwise.
   LightSpaceMarchSettings lightSpaceMarch;
   RadialBlurSettings radialBlur;
@@ -235,7 +277,9 @@ DensityGrid buildDensityVolume(const Scene& scene);
 
 /// A backend: makes the frames its stage variants work in.
 struct BackendEntry {
-  std::function<std::unique_ptr<Frame>()> makeFrame;
+  /// A frame for a method built from `settings` (the GPU's reads gpuPipeline: how the density
+  /// of Gaussians is built).
+  std::function<std::unique_ptr<Frame>(const PipelineSettings& settings)> makeFrame;
   /// For backend "auto": whether this backend should be chosen now (e.g. a hardware GPU is
   /// present), with a sentence saying what was found. May create a GL context.
   std::function<bool(std::string* why)> preferred;

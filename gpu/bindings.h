@@ -53,6 +53,11 @@ inline constexpr GLuint kScanIn = 0;
 inline constexpr GLuint kScanOut = 1;
 inline constexpr GLuint kScanBlockSums = 2;
 inline constexpr GLuint kScanScannedSums = 3;
+/// The compute gathers' bins (gpu/sphere_bins.h): uint offset of each bin's list (bins + 1),
+/// and the lists (sphere indices, ascending within a bin). Low numbers (GL guarantees only 8
+/// storage-buffer bindings per compute shader); no pass that bins also uses ancestors or counters.
+inline constexpr GLuint kBinOffsets = 2;
+inline constexpr GLuint kBinItems = 3;
 /// GpuShadowLight[] per scene light (shadow.glsl, gpu/shadow_maps.h).
 inline constexpr GLuint kShadowLights = 12;
 /// mat4 world -> clip per shadow-map layer (shadow.glsl).
@@ -63,7 +68,7 @@ inline constexpr GLuint kObjectVertices = 14;
 inline constexpr GLuint kResidualEntries = 0;
 /// double error scale and absolute threshold of dynamic sampling (dynamic_level.comp.glsl).
 inline constexpr GLuint kThreshold = 15;
-/// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (core/screen_march.h).
+/// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (shading/screen_march.h).
 inline constexpr GLuint kJitterTable = 1;
 
 // ---- texture units
@@ -161,6 +166,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_LOW_RES_IMAGE", binding::kLowResImage},
     {"BINDING_LOW_RES_DEPTH_IMAGE", binding::kLowResDepthImage},
     {"BINDING_OUTPUT_IMAGE", binding::kOutputImage},
+    {"BINDING_BIN_OFFSETS", binding::kBinOffsets},
+    {"BINDING_BIN_ITEMS", binding::kBinItems},
     {"BINDING_FROXEL_IMAGE", binding::kFroxelImage},
     {"BINDING_TRANSMITTANCE_MAP_IMAGE", binding::kTransmittanceMapImage},
     {"BINDING_RESIDUAL_IMAGE", binding::kResidualImage},

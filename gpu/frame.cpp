@@ -10,7 +10,7 @@ GpuFrame::GpuFrame(const DensityGrid& d) : density(uploadDensity(d)) {}
 void GpuFrame::buildDensity(const Scene& scene) {
   context();  // current before the first timer query or upload
   density = Volume();
-  density = gpu::buildDensity(scene, &timer, &splatted_);
+  density = gpu::buildDensity(scene, &timer, &splatted_, pipeline_);
   host_.reset();
 }
 
@@ -109,6 +109,7 @@ Image SliceMarcher::integrate(Frame& frame, const Scene& scene, Progress*) {
 }
 
 void SliceMarcher::describe(RenderStats& st) const {
+  st.extra["gpu_pipeline"] = "raster";
   st.extra["slicing"] = raySteps_ ? "ray-steps" : "view-planes";
   st.extra["slices"] = slices_;
 }

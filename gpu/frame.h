@@ -20,7 +20,8 @@ class GpuFrame : public Frame {
   RecyclingScope recycling_;  ///< first: outlives every GL object of the frame
 
  public:
-  GpuFrame() = default;
+  /// `pipeline`: how a density of Gaussians is built (gather or the paper's slice splat).
+  explicit GpuFrame(GpuPipeline pipeline = GpuPipeline::Compute) : pipeline_(pipeline) {}
   /// A frame over an uploaded copy of `density` (tests; needs the context).
   explicit GpuFrame(const DensityGrid& density);
 
@@ -49,6 +50,7 @@ class GpuFrame : public Frame {
   SceneShadows objects;
 
  private:
+  GpuPipeline pipeline_ = GpuPipeline::Compute;
   bool splatted_ = false;
   std::vector<std::size_t> marks_;  ///< timer.count() at each sync() of this render
   std::optional<DensityGrid> host_;

@@ -6,9 +6,10 @@
 #include "gpu/context.h"
 #include "gpu/dynamic_sampling.h"
 #include "gpu/frame.h"
-#include "gpu/realtime.h"
+#include "gpu/post_process.h"
 #include "gpu/screen_march.h"
 #include "gpu/stages.h"
+#include "gpu/view_march.h"
 #include "sampling/dynamic_sampling.h"
 
 namespace scatterlab::gpu {
@@ -61,19 +62,26 @@ bool preferGpu(std::string* why) {
 
 void registerGpuStages() {
   backends()[int(Backend::Gpu)] =
-      BackendEntry{[] { return std::unique_ptr<Frame>(new GpuFrame()); }, preferGpu};
+      BackendEntry{[](const PipelineSettings& s) {
+                     return std::unique_ptr<Frame>(new GpuFrame(s.gpuPipeline));
+                   },
+                   preferGpu};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<RadianceEvaluator>(
         new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace, s.shadowMap));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(
-        new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s)));
+        new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s),
+                             s.gpuPipeline));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1, s.shadowMap));
   });
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
+    if (s.gpuPipeline == GpuPipeline::Compute)
+      return std::unique_ptr<Integrator>(
+          new ViewMarchGpu(s.march, s.factorLights, s.delta1, s.shadowMap));
     return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps,
                                                         s.factorLights, s.delta1, s.shadowMap));
   });

@@ -7,7 +7,7 @@ namespace scatterlab::gpu {
 /// Registers the GPU backend's frame (backends()) and the GPU variants beside the CPU ones:
 /// evaluator "volume-tracer", reconstructions "gradient" and "per-voxel", integrator
 /// "ray-marcher" (the slice marcher; slicing from PipelineSettings), integrators
-/// "light-space-march" and "radial-blur" (gpu/realtime.h), refiner "dynamic". Backend
+/// "light-space-march" and "radial-blur" (gpu/post_process.h), refiner "dynamic". Backend
 /// "auto" prefers the GPU only on hardware (not a software rasteriser).
 void registerGpuStages();
 

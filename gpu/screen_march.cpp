@@ -3,7 +3,6 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/screen_march.h"
 #include "gpu/bindings.h"
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
@@ -11,6 +10,7 @@
 #include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
 #include "gpu/stages.h"
+#include "shading/screen_march.h"
 
 namespace scatterlab::gpu {
 

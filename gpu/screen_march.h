@@ -1,7 +1,7 @@
 #pragma once
 /// GL variants of the per-pixel competitors (docs/competitors.md), integrators behind the
 /// interface of core/stages.h, registered in gpu/register.cpp beside the CPU ones of
-/// render/integrators.cpp:
+/// cpu/integrators.cpp:
 ///   "jittered-march" — pass 1 marches every low-res pixel (jittered_march.comp.glsl), pass 2
 ///                      upsamples bilaterally and adds the background (jittered_upsample);
 ///   "froxel"         — optional per-light transmittance maps (froxel_map), then scatter and

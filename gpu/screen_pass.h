@@ -1,5 +1,5 @@
 #pragma once
-/// The set-up every per-pixel GPU pass shares (gpu/realtime.cpp: light-space-march and
+/// The set-up every per-pixel GPU pass shares (gpu/post_process.cpp: light-space-march and
 /// radial-blur; gpu/screen_march.cpp: jittered-march and froxel): the scene objects' shadow
 /// maps, the tracing inputs, the surface pass, programs with the shadow-map variant, the camera
 /// uniforms, and the read-back of the RGBA32F result. Needs the GL context.

@@ -6,10 +6,10 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "core/error.h"
-#include "core/shadow_projection.h"
 #include "gpu/bindings.h"
 #include "gpu/dispatch.h"
 #include "gpu/shaders.h"
+#include "shading/shadow_projection.h"
 
 namespace scatterlab::gpu {
 
@@ -26,7 +26,7 @@ ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
     : settings_(settings) {
   if (!scene.objects) throw Error("ShadowMaps: the scene has no objects");
   const int res = settings.resolution;
-  // The projections the CPU maps use too (core/shadow_projection.h).
+  // The projections the CPU maps use too (shading/shadow_projection.h).
   const ShadowProjections proj = shadowProjections(scene, res);
   std::vector<GpuShadowLight> records;
   for (const ShadowLightMaps& l : proj.lights) {

@@ -9,7 +9,7 @@
 /// lights (the order of common.glsl's lights[]).
 ///
 /// Per light, every map stores the distance metric d of the nearest surface per texel (the
-/// projections of core/shadow_projection.h, which the CPU maps of render/shadow_map.h share):
+/// projections of shading/shadow_projection.h, which the CPU maps of cpu/shadow_map.h share):
 ///   spot        one perspective map along the spot axis, field of view 2·outer half-angle
 ///               (a cube like a point light's when that exceeds 120°); d = |x − s|
 ///   point       a cube: six 90° perspective faces (+x, −x, +y, −y, +z, −z); d = |x − s|

@@ -9,6 +9,7 @@
 #include "gpu/dispatch.h"
 #include "gpu/records.h"
 #include "gpu/shaders.h"
+#include "gpu/sphere_bins.h"
 
 namespace scatterlab::gpu {
 
@@ -112,7 +113,9 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
                                      StageTimer* timer) {
   context();
   const bool occlusion = occlusion_ && sigmaT_ > 0.0f;
-  std::string splatKey = occlusion ? "radiance splat (occlusion)" : "radiance splat";
+  const bool gather = pipeline_ == GpuPipeline::Compute;
+  std::string splatKey = gather ? "radiance gather" : "radiance splat";
+  if (occlusion) splatKey += " (occlusion)";
   std::vector<std::string> splatDefines;
   if (occlusion) splatDefines.push_back("SL_OCCLUSION");
   if (bounds_) {
@@ -120,6 +123,11 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     splatKey += " bounded";
   }
   const Program& splat = cachedProgram(splatKey, [&] {
+    if (gather)
+      return computeProgram(occlusion ? std::vector<std::string>{"common.glsl",
+                                                                 "radiance_gather.comp.glsl"}
+                                      : std::vector<std::string>{"radiance_gather.comp.glsl"},
+                            splatDefines, splatKey);
     if (!occlusion)
       return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"},
                              splatDefines, splatKey);
@@ -143,8 +151,18 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums");
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)");
   const Vec3 cell = bounds.extent() / Vec3(dims);
+  std::optional<BinBuffers> bins;
+  IVec3 binDims{0};
+  if (gather) {
+    std::vector<glm::vec4> spheres;
+    spheres.reserve(samples.size());
+    for (const RadianceSample& s : samples) spheres.emplace_back(s.position, s.radius);
+    const SphereBins b = binSpheres(spheres, bounds, dims, "radiance gather");
+    binDims = b.bins;
+    bins.emplace(b);
+  }
   {
-    ScopedGpuTimer t(timer, "radiance splat");
+    ScopedGpuTimer t(timer, gather ? "radiance gather" : "radiance splat");
     splat.use();
     sampleBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
     if (bounds_) glUniform2f(splat.uniform("uTaylorBounds"), bounds_->lo, bounds_->hi);
@@ -157,9 +175,21 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
       const Vec3 dc = density.cellSize();
       glUniform1f(splat.uniform("uDensityVoxel"), std::min(dc.x, std::min(dc.y, dc.z)));
     }
-    splatSlices(splat, sums, bounds, dims, GLsizei(samples.size()), "radiance splat");
+    if (gather) {
+      bins->bind();
+      glBindImageTexture(binding::kSumsImage, sums.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                         GL_RGBA32F);
+      setVec3(splat, "uGridMin", bounds.min);
+      setVec3(splat, "uGridCell", cell);
+      setIVec3(splat, "uGridDims", dims);
+      setIVec3(splat, "uBins", binDims);
+      glUniform1i(splat.uniform("uBinVoxels"), kBinVoxels);
+      glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+    } else {
+      splatSlices(splat, sums, bounds, dims, GLsizei(samples.size()), "radiance splat");
+    }
   }
-  checkGl("radiance splat");
+  checkGl(gather ? "radiance gather" : "radiance splat");
   {
     ScopedGpuTimer t(timer, "radiance normalize");
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);

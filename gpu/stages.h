@@ -55,7 +55,7 @@ struct SceneShadows {
 /// after `color` was cleared to (background, 1); its view-ray distance goes into `distance`
 /// (R32F, 3e38 where no surface), and its depth into `depth` (the depth range nearD..farD of
 /// the camera's projection). The slice marcher composites over `color` with `depth` as its
-/// depth buffer; the per-pixel methods (gpu/realtime.h, gpu/screen_march.h) read `distance`
+/// depth buffer; the per-pixel methods (gpu/post_process.h, gpu/screen_march.h) read `distance`
 /// and `color` (ScreenSurfaces). Needs the context, `objects` built and `inputs` made with its
 /// maps.
 struct SurfacePass {
@@ -111,10 +111,13 @@ class VolumeTracerGpu : public RadianceEvaluator {
   ShadowMapSettings shadowMap_;
 };
 
-/// Radiance splatting (paper Sec. 4, Eq. 4) by rasterisation: for each z slice of the output
-/// volume, one quad per sample bounding its valid sphere's cut, blending
-/// (W·(S_j + (x − x_j)·∇S_j), W), W = R_j/‖x − x_j‖, into an RGBA32F layer; then a compute
-/// pass normalises into the source-radiance volume. Voxels no sphere covers get S = 0.
+/// Radiance splatting (paper Sec. 4, Eq. 4): every voxel centre x sums
+/// (W·(S_j + (x − x_j)·∇S_j), W), W = R_j/‖x − x_j‖, over the samples whose valid sphere holds
+/// it, into an RGBA32F volume; then a compute pass normalises into the source-radiance volume.
+/// Voxels no sphere covers get S = 0. GpuPipeline::Compute gathers per voxel from the samples
+/// binned on the host (gpu/sphere_bins.h, radiance_gather.comp.glsl); GpuPipeline::Raster is the
+/// paper's splat: for each z slice, one quad per sample bounding its valid sphere's cut,
+/// blended into the slice. Both sum in sample order.
 class GradientSplatGpu : public Reconstruction {
  public:
   /// logSpace: the samples hold ln V; the normalised result is exponentiated. occlusion: the
@@ -122,8 +125,9 @@ class GradientSplatGpu : public Reconstruction {
   /// setOcclusion, or through the frame override, which takes it from the scene).
   /// bounds: each sample's Taylor estimate is clamped to it (PipelineSettings::boundedTaylor).
   explicit GradientSplatGpu(bool logSpace = false, bool occlusion = false,
-                            std::optional<TaylorBounds> bounds = std::nullopt)
-      : log_(logSpace), occlusion_(occlusion), bounds_(bounds) {}
+                            std::optional<TaylorBounds> bounds = std::nullopt,
+                            GpuPipeline pipeline = GpuPipeline::Compute)
+      : log_(logSpace), occlusion_(occlusion), bounds_(bounds), pipeline_(pipeline) {}
   bool needsGradients() const override { return true; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
@@ -137,6 +141,7 @@ class GradientSplatGpu : public Reconstruction {
  private:
   bool log_, occlusion_;
   std::optional<TaylorBounds> bounds_;
+  GpuPipeline pipeline_;
   float sigmaT_ = 0.0f;  ///< for the occlusion weights
 };
 

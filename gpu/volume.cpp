@@ -9,6 +9,7 @@
 #include "gpu/dispatch.h"
 #include "gpu/records.h"
 #include "gpu/shaders.h"
+#include "gpu/sphere_bins.h"
 #include "media/sog.h"
 
 namespace scatterlab::gpu {
@@ -104,9 +105,53 @@ void splatSlices(const Program& program, const Texture& target, const Box& bound
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+namespace {
+
+/// splatGaussians under GpuPipeline::Compute.
+Volume gatherGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
+                       StageTimer* timer) {
+  const Program& program = cachedProgram("density gather", [] {
+    return computeProgram({"density_gather.comp.glsl"}, {}, "density gather");
+  });
+  Volume v;
+  v.bounds = bounds;
+  v.dims = dims;
+  v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (gathered)");
+  std::vector<GpuBlob> packed;
+  std::vector<glm::vec4> spheres;
+  packed.reserve(blobs.size());
+  spheres.reserve(blobs.size());
+  for (const GaussianBlob& b : blobs) {
+    packed.push_back(packBlob(b));
+    spheres.emplace_back(b.center, kGaussianCullRadius * b.radius);
+  }
+  const SphereBins bins = binSpheres(spheres, bounds, dims, "density gather");
+  const BinBuffers binBufs(bins);
+  const Buffer blobBuf(packed.size() * sizeof(GpuBlob), packed.data(), 0, "gaussian blobs");
+  ScopedGpuTimer t(timer, "density gather");
+  program.use();
+  glUniform1f(program.uniform("uCull"), kGaussianCullRadius);
+  setVec3(program, "uGridMin", bounds.min);
+  setVec3(program, "uGridCell", bounds.extent() / Vec3(dims));
+  setIVec3(program, "uGridDims", dims);
+  setIVec3(program, "uBins", bins.bins);
+  glUniform1i(program.uniform("uBinVoxels"), kBinVoxels);
+  blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBlobs);
+  binBufs.bind();
+  glBindImageTexture(binding::kDensityImage, v.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
+  glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                  GL_TEXTURE_UPDATE_BARRIER_BIT);
+  checkGl("density gather");
+  return v;
+}
+
+}  // namespace
+
 Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
-                      StageTimer* timer) {
+                      StageTimer* timer, GpuPipeline pipeline) {
   context();
+  if (pipeline == GpuPipeline::Compute) return gatherGaussians(blobs, bounds, dims, timer);
   const Program& program = cachedProgram("density splat", [] {
     return graphicsProgram({"density_splat.vert.glsl"}, {"density_splat.frag.glsl"}, {},
                            "density splat");
@@ -193,9 +238,9 @@ const Texture& residualLattice(const std::shared_ptr<const SogDensity>& sog, Sta
 }  // namespace
 
 Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds, IVec3 dims,
-                StageTimer* timer, bool* residualUploaded) {
+                StageTimer* timer, bool* residualUploaded, GpuPipeline pipeline) {
   const SogModel& model = sog->model();
-  Volume v = splatGaussians(model.gaussians, bounds, dims, timer);
+  Volume v = splatGaussians(model.gaussians, bounds, dims, timer, pipeline);
   bool uploaded = false;
   const bool useF = model.residual.size() > 0;
   const Texture* lattice = useF ? &residualLattice(sog, timer, &uploaded) : nullptr;
@@ -224,15 +269,16 @@ Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds,
   return v;
 }
 
-Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted) {
+Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted,
+                    GpuPipeline pipeline) {
   const Medium& m = scene.medium;
   if (m.density->isSumOfGaussians()) {
     if (splatted) *splatted = true;
-    return splatGaussians(*m.density->gaussians(), m.bounds, m.resolution, timer);
+    return splatGaussians(*m.density->gaussians(), m.bounds, m.resolution, timer, pipeline);
   }
   if (const auto sog = std::dynamic_pointer_cast<const SogDensity>(m.density)) {
     if (splatted) *splatted = true;
-    return splatSog(sog, m.bounds, m.resolution, timer);
+    return splatSog(sog, m.bounds, m.resolution, timer, nullptr, pipeline);
   }
   if (splatted) *splatted = false;
   DensityGrid grid(m.bounds, m.resolution);

@@ -9,6 +9,7 @@
 #include "core/density_model.h"
 #include "core/grid.h"
 #include "core/scene.h"
+#include "core/stages.h"
 #include "gpu/gl.h"
 #include "gpu/timer.h"
 
@@ -52,8 +53,12 @@ Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label)
 void splatSlices(const Program& program, const Texture& target, const Box& bounds, IVec3 dims,
                  GLsizei instances, const char* pass);
 
+/// The Gaussians' density w·exp(−|x − c|²/r²), culled at kGaussianCullRadius·r, summed at the
+/// voxel centres in blob order (GaussianDensity::build's twin): GpuPipeline::Compute gathers
+/// per voxel from the blobs binned on the host (density_gather.comp.glsl; GPU time "density
+/// gather"), GpuPipeline::Raster splats slice by slice (the paper's; "density splat").
 Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
-                      StageTimer* timer = nullptr);
+                      StageTimer* timer = nullptr, GpuPipeline pipeline = GpuPipeline::Compute);
 
 /// The density of a .sog medium on the GPU (SogModel::splat's twin): the Gaussians splatted
 /// (splatGaussians), then F added by a compute pass that samples the residual lattice as the CPU
@@ -63,11 +68,13 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
 /// density of a kept medium) uploads no residual; `residualUploaded` says whether this call
 /// uploaded it. GPU times: "density splat", "residual upload", "residual add".
 Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds, IVec3 dims,
-                StageTimer* timer = nullptr, bool* residualUploaded = nullptr);
+                StageTimer* timer = nullptr, bool* residualUploaded = nullptr,
+                GpuPipeline pipeline = GpuPipeline::Compute);
 
 /// The scene's density volume at medium.resolution: splatted on the GPU when the medium is a
 /// sum of Gaussians or a .sog model (splatSog), else built on the CPU and uploaded (stage
 /// "density upload"). `splatted` reports which.
-Volume buildDensity(const Scene& scene, StageTimer* timer = nullptr, bool* splatted = nullptr);
+Volume buildDensity(const Scene& scene, StageTimer* timer = nullptr, bool* splatted = nullptr,
+                    GpuPipeline pipeline = GpuPipeline::Compute);
 
 }  // namespace scatterlab::gpu

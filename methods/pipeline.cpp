@@ -46,7 +46,7 @@ class PipelineMethod : public Method {
                        kept_.bounds.max == scene.medium.bounds.max &&
                        kept_.resolution == scene.medium.resolution;
     std::unique_ptr<Frame> frame =
-        reuse ? std::move(frame_) : backends()[int(backend_)].makeFrame();
+        reuse ? std::move(frame_) : backends()[int(backend_)].makeFrame(settings_);
     if (reuse) frame->newRender();
     // Every stage: a progress phase, and a wall time that ends when the backend's work is done.
     const auto stage = [&](const char* name, const auto& body) {
@@ -100,9 +100,14 @@ class PipelineMethod : public Method {
 
     frame->report(st);
     integrator->describe(st);
-    if (backend_ == Backend::Gpu && !settings_.cpuMarchKeysGiven.empty()) {
-      Json& unused = st.extra["unused_keys"];
-      for (const std::string& k : settings_.cpuMarchKeysGiven) unused.push_back(k);
+    if (backend_ == Backend::Gpu) {
+      // The CPU march's keys, and slicing (the raster slice marcher's) under the compute
+      // pipeline, have no meaning here.
+      std::vector<std::string> unused = settings_.cpuMarchKeysGiven;
+      if (settings_.gpuPipeline == GpuPipeline::Compute)
+        for (const std::string& k : settings_.gpuKeysGiven)
+          if (k.ends_with(".slicing")) unused.push_back(k);
+      for (const std::string& k : unused) st.extra["unused_keys"].push_back(k);
     }
     if (sampler) {
       st.samples = (long long)samples.size();

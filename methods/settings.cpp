@@ -58,6 +58,10 @@ const std::vector<KeyDoc>& pipelineKeys() {
       {"slicing", "string", "ray-steps", "ray-steps, view-planes",
        "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
        "slabs; accepted and reported unused on the CPU"},
+      {"gpu_pipeline", "string", "compute", "compute, raster",
+       "GPU backend: compute shaders (view march one invocation per pixel, radiance splat as a "
+       "binned gather) or the paper's rasterised slice march and slice splat; accepted and "
+       "reported unused on the CPU"},
       {"evaluator", "string", "volume-tracer", "a registered radiance evaluator",
        "how S and ∇S are computed at the samples; methods with samples"},
       {"integrator", "string", "ray-marcher", "a registered integrator",
@@ -265,10 +269,14 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   if (d.radianceVolume()) {
     s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution,
                                         sizeof(Vec3), "the source-radiance volume (RGB float)");
-    s.slicingGiven = p.has("slicing");
+    for (const char* k : {"slicing", "gpu_pipeline"})
+      if (p.has(k)) s.gpuKeysGiven.push_back(p.keyPath(k));
     s.slicing = p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps"
                     ? Slicing::RaySteps
                     : Slicing::ViewPlanes;
+    s.gpuPipeline = p.choice("gpu_pipeline", {"compute", "raster"}, "compute") == "compute"
+                        ? GpuPipeline::Compute
+                        : GpuPipeline::Raster;
   }
   // The per-pixel competitors' own keys (methods/march_settings.cpp). They march one ray per
   // (low-resolution) pixel or froxel column: no camera.spp.
@@ -293,7 +301,7 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
   if (d.sampler)
     k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
                        "bounded_taylor", "sampler", "evaluator"});
-  if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing"});
+  if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing", "gpu_pipeline"});
   if (d.radianceVolume() && d.viewMarch) k.insert(k.end(), {"half_float_volumes", "march_simd"});
   if (d.integratorSelectable) k.push_back("integrator");
   if (!d.refiner.empty())

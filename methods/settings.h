@@ -43,8 +43,9 @@ const std::vector<KeyDoc>& pipelineKeys();
 /// Key table of render.shadow_map (ShadowMapSettings).
 const std::vector<KeyDoc>& shadowMapKeys();
 
-/// Key tables of the real-time methods (core/realtime.h), read for the methods whose integrator
-/// is "light-space-march" or "radial-blur" (docs/light-space-march.md, docs/radial-blur.md).
+/// Key tables of the real-time methods (shading/post_process.h), read for the methods whose
+/// integrator is "light-space-march" or "radial-blur" (docs/light-space-march.md,
+/// docs/radial-blur.md).
 const std::vector<KeyDoc>& lightSpaceMarchKeys();
 const std::vector<KeyDoc>& radialBlurKeys();
 

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <functional>
 
-#include "core/transport.h"
 #include "sampling/scan.h"
+#include "shading/transport.h"
 
 namespace scatterlab {
 

@@ -35,7 +35,7 @@ declare -A SOURCES=(
   [fuzz_sog]="media/sog.cpp media/procedural.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_vdb]="media/vdb.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_exr]="core/image.cpp core/atomic_file.cpp core/limits.cpp"
-  [fuzz_scene]="$(echo core/*.cpp media/*.cpp sampling/*.cpp render/*.cpp methods/*.cpp \
+  [fuzz_scene]="$(echo core/*.cpp media/*.cpp sampling/*.cpp cpu/*.cpp methods/*.cpp \
     experiment/*.cpp)")
 declare -A LIBS=(
   [fuzz_sog]="-ltbb" [fuzz_vdb]="-lopenvdb -ltbb -lImath-3_1"

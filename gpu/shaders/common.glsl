@@ -1,6 +1,6 @@
 // Shared by every stage that traces source radiance (DESIGN.md §2). Mirrors, line for line,
 // core/light.h (Light::geometry, incident, spotFalloff), core/phase.h (Phase::evalCos), core/math.h
-// (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and core/transport.h
+// (Box::intersect, smoothStep), core/grid.h (Grid3::sampleIndex) and shading/transport.h
 // (opticalDepth, lightSegmentEnd, SourceRadiance); tests/gpu holds them in step (CPU == GPU).
 // With SL_OBJECTS (scene objects), shadow.glsl must be compiled with it: each light's term is
 // multiplied by its shadow-map visibility lightVisibility(light, x), the GPU's V_l.
@@ -173,7 +173,7 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
   return s;
 }
 
-// One light's analytic weight, the twin of FactoredSourceRadiance::term (core/transport.h):
+// One light's analytic weight, the twin of FactoredSourceRadiance::term (shading/transport.h):
 // w = E0·f (cone not applied), the cone factor, and the far end of the segment to trace.
 bool lightTerm(int li, vec3 x, vec3 toViewer, out vec3 w, out float cone, out vec3 segEnd) {
   GpuLight l = lights[li];
@@ -203,7 +203,7 @@ float lightTransmittance(int li, vec3 x, vec3 segEnd) {
   return vis * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
 }
 
-// LightFactor::operator() (core/transport.h): A(x, ω), the lights' analytic, unshadowed source
+// LightFactor::operator() (shading/transport.h): A(x, ω), the lights' analytic, unshadowed source
 // radiance (singular-light factorization, docs/fidelity.md).
 vec3 lightFactor(vec3 x, vec3 toViewer) {
   vec3 a = vec3(0.0);
@@ -255,7 +255,7 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
 
 // What the samples hold at p seen from the camera at uEye (per-voxel and evaluator
 // convention): S; V = S / A with SL_FACTOR_LIGHTS; ln V (V clamped below at 1e-9, kMinV of
-// render/radiance_evaluator.h) with SL_LOG_SPACE too.
+// cpu/radiance_evaluator.h) with SL_LOG_SPACE too.
 uniform vec3 uEye;
 vec3 sourceTowardsEye(vec3 p) {
   vec3 v = uEye - p;

@@ -1,4 +1,4 @@
-// froxel, pass 2 (render/froxel.cpp, froxelLookup and froxelRender): one trilinear lookup per
+// froxel, pass 2 (cpu/froxel.cpp, froxelLookup and froxelRender): one trilinear lookup per
 // pixel at the far depth, then T·background; where the pixel's ray hits a surface (the surface
 // pass), the lookup is at the surface's view depth, then T·L_p (above min_transmittance).
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -11,7 +11,7 @@ uniform int uExponential;
 uniform vec3 uBackground;
 uniform float uMinTransmittance;
 
-// FroxelSlicing::coordinate (core/screen_march.h).
+// FroxelSlicing::coordinate (shading/screen_march.h).
 float sliceCoordinate(float z) {
   if (!(z > uNear)) return 0.0;
   float s = uExponential != 0 ? log(z / uNear) / log(uFar / uNear) : (z - uNear) / (uFar - uNear);

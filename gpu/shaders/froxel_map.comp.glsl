@@ -1,4 +1,4 @@
-// froxel, light_transmittance = map (render/froxel.cpp, TransmittanceMaps): voxel centre x of
+// froxel, light_transmittance = map (cpu/froxel.cpp, TransmittanceMaps): voxel centre x of
 // light l's map holds e^(−σt·τ(x → l)), whether or not x is inside a spot's cone. The maps are
 // stacked along z: voxel (i, j, l·R + k).
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;

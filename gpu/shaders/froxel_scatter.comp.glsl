@@ -1,4 +1,4 @@
-// froxel, pass 1 (render/froxel.cpp, froxelAccumulate): one invocation per froxel column, front
+// froxel, pass 1 (cpu/froxel.cpp, froxelAccumulate): one invocation per froxel column, front
 // to back over the depth slices; at each froxel's centre the in-scattering of its slice is
 // composited, and (L, T) after the froxel is stored.
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -12,7 +12,7 @@ uniform float uNear;
 uniform float uFar;
 uniform int uExponential;
 
-// FroxelSlicing::depth (core/screen_march.h).
+// FroxelSlicing::depth (shading/screen_march.h).
 float sliceDepth(float k) {
   float s = k / float(uGrid.z);
   return uExponential != 0 ? uNear * pow(uFar / uNear, s) : uNear + (uFar - uNear) * s;

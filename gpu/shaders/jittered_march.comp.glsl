@@ -1,4 +1,4 @@
-// jittered-march, pass 1 (render/jittered_march.cpp, jitteredMarchLowRes): one invocation per
+// jittered-march, pass 1 (cpu/jittered_march.cpp, jitteredMarchLowRes): one invocation per
 // low-resolution pixel, uSteps steps over the ray's piece inside the box at offsets
 // (k + o)·Δt, S traced to every light at each sample. SL_OBJECTS: the ray ends at the surface
 // pass's first surface, and S's visibility comes from the shadow maps (common.glsl).

@@ -1,4 +1,4 @@
-// jittered-march, pass 2 (render/jittered_march.cpp, upsampleWeights and jitteredMarch): each
+// jittered-march, pass 2 (cpu/jittered_march.cpp, upsampleWeights and jitteredMarch): each
 // full-resolution pixel takes the bilateral average of its four low-resolution neighbours
 // (bilinear × e^(−|Δdepth| / (σ·depth))), then adds T·background, or T·L_p of the surface
 // pass's first surface (above min_transmittance; alpha 1) where the pixel's ray hits one.

@@ -1,4 +1,4 @@
-// light-space-march (Tóth & Umenhoffer 2009), the GPU twin of render/light_space_march.cpp
+// light-space-march (Tóth & Umenhoffer 2009), the GPU twin of cpu/light_space_march.cpp
 // (LightSpaceMarcher::march, blockSum): line for line the same sums.
 //   SL_MARCH:     one invocation per pixel: the pixel's interleaving class k = (x mod M) +
 //                 M·(y mod M); the terms n ≡ k (mod M²) of its N-step view ray go to the "out"
@@ -6,7 +6,7 @@
 //                 SL_OBJECTS: the ray ends at the surface of the surface pass, whose boundary
 //                 term is T_N·L_p (alpha 1), and v_l comes from the shadow maps (shadow.glsl).
 //   SL_BLOCK_SUM: one direction of the separable M-wide sliding-window sum (blockWindowStart of
-//                 core/realtime.h) from "in" to "out"; the vertical pass adds "base" and writes
+//                 shading/post_process.h) from "in" to "out"; the vertical pass adds "base" and writes
 //                 base's alpha.
 #ifndef SL_BLOCK_SUM
 #ifndef SL_MARCH
@@ -56,7 +56,7 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     vec3 segEnd = directional ? boxExit(x, toLight) : x + toLight * dist;
     float tau = opticalDepth(x, segEnd, uDelta1);
 #else
-    // lengthInBox (core/realtime.h)
+    // lengthInBox (shading/post_process.h)
     float t0, t1, tau = 0.0;
     if (intersectBox(x, toLight, 0.0, directional ? kInf : dist, t0, t1) && t1 > t0)
       tau = uMeanDensity * (t1 - t0);

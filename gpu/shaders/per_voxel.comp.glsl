@@ -1,4 +1,4 @@
-// Per-voxel source radiance (the paper's baseline; render/per_voxel.cpp on the CPU): S traced
+// Per-voxel source radiance (the paper's baseline; cpu/per_voxel.cpp on the CPU): S traced
 // at each voxel centre of the radiance volume, skipping voxels whose trilinear neighbourhood
 // in the density volume is empty (identical to tracing them).
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
@@ -14,7 +14,7 @@ void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(v, uRadDims))) return;
   vec3 c = uRadMin + (vec3(v) + 0.5) * uRadCell;
-  // Same rule as VoxelOccupancy (render/per_voxel.h), 1e-4 voxel inside against rounding.
+  // Same rule as VoxelOccupancy (cpu/per_voxel.h), 1e-4 voxel inside against rounding.
   ivec3 lo = max(ivec3(floor((c - uRadCell) * uDensityScale + uDensityOffset + 1e-4)), ivec3(0));
   ivec3 hi = min(ivec3(ceil((c + uRadCell) * uDensityScale + uDensityOffset - 1e-4)),
                  uDensityDims - 1);

@@ -1,4 +1,4 @@
-// radial-blur (Mitchell, GPU Gems 3 ch. 13), the GPU twin of render/radial_blur.cpp:
+// radial-blur (Mitchell, GPU Gems 3 ch. 13), the GPU twin of cpu/radial_blur.cpp:
 //   SL_BASE:    per pixel, T·background of the view ray (march_step steps, stopping below
 //               min_transmittance) into "out" (rgb) with alpha 1 − T (marchImage with S = 0);
 //   SL_PREPASS: per pre-pass pixel, light uLight's unshadowed in-scattering along the view ray
@@ -121,7 +121,7 @@ vec3 fetch(int i, int j) {
   return imageLoad(uIn, ivec2(i, j)).rgb;
 }
 
-// bilinear (render/radial_blur.cpp)
+// bilinear (cpu/radial_blur.cpp)
 vec3 bilinear(float u, float v) {
   u = clamp(u, 0.0, float(uPreSize.x - 1));
   v = clamp(v, 0.0, float(uPreSize.y - 1));

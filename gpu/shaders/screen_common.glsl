@@ -1,6 +1,6 @@
 // Shared by the per-pixel competitors' passes (jittered-march, froxel): the camera's rays
 // (Camera::RayGenerator::at, core/camera.h), the density with the box test of Grid3::sample,
-// and interleaved gradient noise (core/screen_march.h). After common.glsl.
+// and interleaved gradient noise (shading/screen_march.h). After common.glsl.
 uniform vec3 uForward;
 uniform vec3 uRight;
 uniform vec3 uUp;

@@ -1,5 +1,5 @@
 // The radiance leaving scene-object surfaces towards the camera, per pixel (the twin of
-// SurfaceRadiance, core/transport.h): L_p = albedo/π·Σ_l E_l(p)·max(0, n_s·ω_l)·V_l(p)·T(p, l),
+// SurfaceRadiance, shading/transport.h): L_p = albedo/π·Σ_l E_l(p)·max(0, n_s·ω_l)·V_l(p)·T(p, l),
 // the light in front of the geometric face too, V_l from the shadow maps (shadow.glsl),
 // T marched through the density with step uDelta1 from p moved off the surface by
 // uSurfaceOffset along n. Alpha 0: the slice marcher's transmittance channel becomes 0

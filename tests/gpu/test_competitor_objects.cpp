@@ -1,5 +1,5 @@
 /// The four competitors' GPU variants on scenes with objects (issue 13 with issue 12's objects):
-/// light-space-march and radial-blur (gpu/realtime.h), jittered-march and froxel
+/// light-space-march and radial-blur (gpu/post_process.h), jittered-march and froxel
 /// (gpu/screen_march.h) against their CPU variants on a sphere's shadow in homogeneous fog
 /// over a floor, for a spot, a point and a directional light. The GPU takes V_l from shadow
 /// maps (render.shadow_map) and the first surface from the surface pass's raster of the
@@ -105,7 +105,7 @@ Json withKey(Json render, const char* key, const Json& value) {
 //   radial-blur        0.0410    0.03376   0.005013
 //   jittered-march     0.1963    0.08804   0.005972
 //   froxel             0.2047    0.09086   0.005974
-// light-space-march's CPU map is built with the GPU's projections (core/shadow_projection.h)
+// light-space-march's CPU map is built with the GPU's projections (shading/shadow_projection.h)
 // and looked up the same way, so its medium agrees to float rounding (directional); the other
 // methods' CPU variants trace exact shadow rays, so the 256² texels show on shadow edges.
 // Where they differ: with the spot (light-space-march), six floor pixels on the edge of the

@@ -1,5 +1,5 @@
 /// The GPU variants of `jittered-march` and `froxel` (gpu/screen_march.cpp) against their CPU
-/// variants (render/), end to end through createMethod: every jitter pattern and downsample,
+/// variants (cpu/), end to end through createMethod: every jitter pattern and downsample,
 /// both depth distributions and both light-transmittance sources. Scenes with objects:
 /// tests/gpu/test_competitor_objects.cpp.
 

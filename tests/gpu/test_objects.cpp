@@ -102,6 +102,7 @@ TEST(GpuObjects, SurfaceThroughFogMatchesCpu) {
   RenderResult gpu, cpu;
   const double err = gpuVsCpu(doc, &gpu, &cpu);
   // The paper's view-plane slabs, clipped at the wall where they straddle it.
+  doc["render"]["gpu_pipeline"] = "raster";
   doc["render"]["slicing"] = "view-planes";
   const double planes = gpuVsCpu(doc);
   std::printf("surface through fog: gpu vs cpu %.4g, view-planes %.4g\n", err, planes);
@@ -148,8 +149,10 @@ TEST(GpuObjects, NothingBehindAnOpaqueSurfaceContributes) {
   Json doc = homogeneousBoxDoc(1.0f, 1.5f, 0.8f, Vec3(0.5f, 0.5f, 0.5f), 3.0f, 64, 48, 16);
   doc["objects"] = Json::array(
       {{{"type", "box"}, {"min", {0.3, 0.3, -0.3}}, {"max", {0.7, 0.7, -0.2}}, {"albedo", 0}}});
-  for (const char* slicing : {"view-planes", "ray-steps"}) {
-    doc["render"] = {{"method", "per-voxel"}, {"slicing", slicing}};
+  for (const char* slicing : {"view-planes", "ray-steps", "compute"}) {
+    doc["render"] = std::string(slicing) == "compute"
+                        ? Json{{"method", "per-voxel"}}
+                        : Json{{"method", "per-voxel"}, {"gpu_pipeline", "raster"}, {"slicing", slicing}};
     const RenderResult gpu = renderOn(doc, "gpu");
     const Image& img = gpu.image;
     EXPECT_EQ(img.at(32, 24), Vec3(0.0f)) << slicing;

@@ -1,5 +1,5 @@
-/// The GPU variants of the real-time methods (gpu/realtime.h) against their CPU twins
-/// (render/light_space_march.h, render/radial_blur.h), end to end through createMethod, on
+/// The GPU variants of the real-time methods (gpu/post_process.h) against their CPU twins
+/// (cpu/light_space_march.h, cpu/radial_blur.h), end to end through createMethod, on
 /// llvmpipe in CI; and what the GPU variants refuse (a light behind the camera).
 
 #include "core/method.h"

@@ -9,14 +9,14 @@
 #include <random>
 
 #include "core/stages.h"
-#include "core/transport.h"
+#include "cpu/per_voxel.h"
+#include "cpu/ray_marcher.h"
 #include "gpu/frame.h"
 #include "gpu/stages.h"
 #include "gpu/volume.h"
 #include "gpu_support.h"
 #include "media/procedural.h"
-#include "render/per_voxel.h"
-#include "render/ray_marcher.h"
+#include "shading/transport.h"
 
 namespace scatterlab::testing {
 namespace {
@@ -42,7 +42,9 @@ TEST(GpuDensitySplat, MatchesGaussianDensityBuild) {
   const IVec3 dims(24, 20, 18);  // not a cube: catches axis mix-ups
   DensityGrid cpu(scene.medium.bounds, dims);
   gauss.build(cpu);
-  const gpu::Volume v = gpu::splatGaussians(gauss.blobs(), scene.medium.bounds, dims);
+  // The paper's slice splat (the compute gather: test_compute_pipeline.cpp).
+  const gpu::Volume v =
+      gpu::splatGaussians(gauss.blobs(), scene.medium.bounds, dims, nullptr, GpuPipeline::Raster);
   const DensityGrid gpuGrid = gpu::readDensity(v);
   expectNoGlError();
   float maxD = 0;
@@ -213,6 +215,8 @@ double sliceVsCpu(bool lightInside, float stepVoxels, const char* slicing = "vie
   PipelineSettings ps;
   ps.march = ms;
   ps.slicing = std::string(slicing) == "ray-steps" ? Slicing::RaySteps : Slicing::ViewPlanes;
+  ps.gpuPipeline = GpuPipeline::Raster;  // the paper's slice marcher (the compute march:
+                                         // test_compute_pipeline.cpp)
   auto integ = integrators().get("ray-marcher", "integrator").on[int(Backend::Gpu)](ps);
   gpu::GpuFrame frame(density);
   frame.radiance = gpu::uploadRadiance(radiance);

@@ -107,6 +107,8 @@ std::set<std::string> keysTheCodeReads() {
           s.render[k] = 8;
         else if (k == "slicing")
           s.render[k] = "ray-steps";
+        else if (k == "gpu_pipeline")
+          s.render[k] = "raster";
         else if (k == "march_scale")
           s.render[k] = 2;
         else if (k == "march_simd")

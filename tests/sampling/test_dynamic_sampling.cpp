@@ -5,10 +5,10 @@
 #include <functional>
 #include <random>
 
-#include "core/transport.h"
-#include "render/radiance_evaluator.h"
+#include "cpu/radiance_evaluator.h"
 #include "sampling/dynamic_sampling.h"
 #include "sampling/scan.h"
+#include "shading/transport.h"
 #include "support/scenes.h"
 
 using namespace scatterlab;
@@ -30,7 +30,7 @@ class AnalyticEvaluator : public RadianceEvaluator {
   }
 };
 
-/// The CPU radiance evaluator itself (render/radiance_evaluator.h): traced S with Δ1 = one voxel
+/// The CPU radiance evaluator itself (cpu/radiance_evaluator.h): traced S with Δ1 = one voxel
 /// and central-difference ∇S with Δ2 = half a voxel.
 class TracingEvaluator : public RadianceEvaluator {
  public:

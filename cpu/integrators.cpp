@@ -1,0 +1,199 @@
+#include "cpu/integrators.h"
+
+#include <xsimd/xsimd.hpp>
+
+#include "core/stages.h"
+#include "cpu/froxel.h"
+#include "cpu/fused_march.h"
+#include "cpu/fused_volume.h"
+#include "cpu/jittered_march.h"
+#include "cpu/light_space_march.h"
+#include "cpu/radial_blur.h"
+#include "cpu/ray_marcher.h"
+#include "cpu/shadow_rays.h"
+#include "shading/transport.h"
+
+namespace scatterlab {
+
+namespace {
+
+/// The march's lookups through a FusedVolume by the SIMD kernels (cpu/fused_march.h), in
+/// runs of steps (MarchesSpans in cpu/ray_marcher.h). Without a light factor the span
+/// kernel marches a run itself; with one (the volume holds V = S / A) the lookup kernel gives
+/// four steps at a time, S = V·A(x, ω) per step, then exp of the four at once and the sums in
+/// the plain march's order.
+struct FusedLookup {
+  const FusedVolume& volume;
+  const LightFactor* factor;
+  FusedSpanKernel span;
+  FusedLookupKernel lookups;
+  FusedMarchConstants c;
+  /// One step (DensitySourceLookup's interface; the fast march calls marchSpan instead).
+  bool operator()(const Vec3& u, const Ray& r, float t, float& D, Vec3& S) const {
+    alignas(16) float v[4];
+    volume.sample(u, v);
+    D = v[0];
+    if (D <= 0.0f) return false;
+    S = Vec3(v[1], v[2], v[3]);
+    if (factor) S *= (*factor)(r.at(t), -r.dir);
+    return true;
+  }
+  void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
+                 Vec3& L, float& T, float& wt) const {
+    const FusedRay fr{{u0.x, u0.y, u0.z}, {du.x, du.y, du.z}, t0, dt};
+    if (!factor) {
+      FusedMarchState s{{L.x, L.y, L.z}, T, wt};
+      span(volume.view(), c, fr, i, end, s);
+      L = Vec3(s.L[0], s.L[1], s.L[2]);
+      T = s.T;
+      wt = s.wt;
+      return;
+    }
+    using Batch = xsimd::make_sized_batch_t<float, 4>;
+    for (; i < end && T > c.minT; i += 4) {
+      const int q1 = std::min(4, end - i);
+      alignas(16) float V[4][4], D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
+      Vec3 S[4];
+      lookups(volume.view(), fr, i, q1, V);
+      for (int q = 0; q < q1; ++q) {
+        if (!(V[q][0] > 0.0f)) continue;
+        D[q] = V[q][0];
+        const float t = t0 + (float(i + q) + 0.5f) * dt;
+        S[q] = Vec3(V[q][1], V[q][2], V[q][3]) * (*factor)(r.at(t), -r.dir);
+      }
+      xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
+      for (int q = 0; q < q1 && T > c.minT; ++q) {
+        if (!(D[q] > 0.0f)) continue;
+        L += (T * c.ratio * (1.0f - a[q])) * S[q];
+        wt += T * (1.0f - a[q]) * (t0 + (float(i + q) + 0.5f) * dt);
+        T *= a[q];
+      }
+    }
+  }
+};
+
+class RayMarcher : public Integrator {
+ public:
+  explicit RayMarcher(const PipelineSettings& s)
+      : march_(s.march),
+        gpuKeysGiven_(s.gpuKeysGiven),
+        factored_(s.factorLights),
+        delta1_(s.delta1) {}
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    const HostFrame& f = static_cast<const HostFrame&>(frame);
+    const RadianceGrid& radiance = *f.radiance;
+    if (progress) progress->restart("march", scene.camera.height);
+    // The volume holds V = S / A; A is analytic (one evaluation per light and step).
+    const LightFactor A(scene);
+    if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
+      const FusedVolume volume(*f.density, radiance, march_.halfFloat);
+      const FusedLookup lookup{volume,
+                               factored_ ? &A : nullptr,
+                               fusedSpanKernel(march_.simd),
+                               fusedLookupKernel(march_.simd),
+                               {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
+      return marchWith(scene, *f.density, lookup, march_, progress, delta1_);
+    }
+    const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
+    if (factored_) {
+      const auto lookup = [&](const Vec3& x, const Vec3& toViewer) {
+        return radiance.sampleIndex(x * s + o) * A(x, toViewer);
+      };
+      return marchImage(scene, *f.density, lookup, march_, progress, delta1_);
+    }
+    const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
+    return marchImage(scene, *f.density, lookup, march_, progress, delta1_);
+  }
+  void describe(RenderStats& stats) const override {
+    // The CPU marcher steps along each ray: the GPU's slicing and pipeline mean nothing here.
+    if (!gpuKeysGiven_.empty()) stats.extra["unused_keys"] = gpuKeysGiven_;
+  }
+
+ private:
+  MarchSettings march_;
+  std::vector<std::string> gpuKeysGiven_;
+  bool factored_;
+  float delta1_;
+};
+
+class ExactIntegrator : public Integrator {
+ public:
+  explicit ExactIntegrator(const PipelineSettings& s) : march_(s.march), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    const DensityGrid& density = frame.hostDensity();
+    if (progress) progress->restart("exact", scene.camera.height);
+    // The shadow rays stop at an optical depth where no light gets through. (Skipping empty
+    // blocks along them too, SourceRadiance's `skip`, was measured slower on smoke1: their
+    // steps of three voxels cross a block in about three lookups, and few blocks are empty.)
+    // With the fast march the shadow rays are traced with SIMD over their steps
+    // (cpu/shadow_rays.h); the plain march keeps the scalar opticalDepth.
+    const SimdShadowRays shadows(density);
+    const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast,
+                                march_.fast ? shadows.fn() : ShadowDepthFn{});
+    return marchImage(scene, density, source, march_, progress, delta1_);
+  }
+
+ private:
+  MarchSettings march_;
+  float delta1_;
+};
+
+/// `jittered-march` (cpu/jittered_march.h): no radiance volume, S traced per sample.
+class JitteredMarchIntegrator : public Integrator {
+ public:
+  explicit JitteredMarchIntegrator(const PipelineSettings& s)
+      : s_(s.jittered), march_(s.march), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    return jitteredMarch(scene, frame.hostDensity(), s_, march_, delta1_, progress);
+  }
+  void describe(RenderStats& stats) const override { describeJitteredMarch(stats, s_); }
+
+ private:
+  JitteredMarchSettings s_;
+  MarchSettings march_;
+  float delta1_;
+};
+
+/// `froxel` (cpu/froxel.h).
+class FroxelIntegrator : public Integrator {
+ public:
+  explicit FroxelIntegrator(const PipelineSettings& s)
+      : s_(s.froxel), minT_(s.march.minTransmittance), delta1_(s.delta1) {}
+  bool needsRadiance() const override { return false; }
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
+    passes_ = Json::object();
+    return froxelRender(scene, frame.hostDensity(), s_, delta1_, minT_, progress, &passes_);
+  }
+  void describe(RenderStats& stats) const override {
+    describeFroxel(stats, s_);
+    stats.extra["pass_ms"] = passes_;
+  }
+
+ private:
+  FroxelSettings s_;
+  float minT_, delta1_;
+  Json passes_;
+};
+
+}  // namespace
+
+void registerIntegrators() {
+  integrators().addVariant("jittered-march", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new JitteredMarchIntegrator(s));
+  });
+  integrators().addVariant("froxel", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new FroxelIntegrator(s));
+  });
+  integrators().addVariant("ray-marcher", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new RayMarcher(s));
+  });
+  integrators().addVariant("exact", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<Integrator>(new ExactIntegrator(s));
+  });
+  registerLightSpaceMarch();
+  registerRadialBlur();
+}
+
+}  // namespace scatterlab

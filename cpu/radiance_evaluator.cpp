@@ -1,0 +1,81 @@
+#include "cpu/radiance_evaluator.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "shading/transport.h"
+
+namespace scatterlab {
+
+namespace {
+
+template <class Source>
+void evaluateWith(const Source& source, const Scene& scene, float delta2,
+                  std::span<RadianceSample> samples, bool gradients) {
+  const Vec3 eye = scene.camera.position;
+  const auto S = [&](const Vec3& p) {
+    const Vec3 v = eye - p;
+    const float len = glm::length(v);
+    return source(p, len > 0.0f ? v / len : Vec3(0, 0, 1));
+  };
+  const float h = delta2, inv2h = 0.5f / delta2;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 16),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t n = r.begin(); n < r.end(); ++n) {
+                        RadianceSample& s = samples[n];
+                        s.S = S(s.position);
+                        for (int a = 0; a < 3; ++a) {
+                          if (!gradients) {
+                            s.dS[a] = Vec3(0.0f);
+                            continue;
+                          }
+                          Vec3 e(0.0f);
+                          e[a] = h;
+                          s.dS[a] = (S(s.position + e) - S(s.position - e)) * inv2h;
+                        }
+                      }
+                    });
+}
+
+}  // namespace
+
+void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
+                     std::span<RadianceSample> samples, bool gradients) {
+  if (steps.factorLights && steps.logSpace) {
+    const FactoredSourceRadiance v(scene, density, steps.delta1);
+    const auto logV = [&](const Vec3& x, const Vec3& toViewer) {
+      return glm::log(glm::max(v(x, toViewer), Vec3(kMinV)));
+    };
+    evaluateWith(logV, scene, steps.delta2, samples, gradients);
+  } else if (steps.factorLights)
+    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
+                 gradients);
+  else
+    evaluateWith(SourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
+                 gradients);
+}
+
+namespace {
+
+class VolumeTracerEvaluator : public RadianceEvaluator {
+ public:
+  explicit VolumeTracerEvaluator(TracerSteps s) : steps_(s) {}
+  void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
+                bool gradients) override {
+    evaluateSamples(scene, frame.hostDensity(), steps_, samples, gradients);
+  }
+
+ private:
+  TracerSteps steps_;
+};
+
+}  // namespace
+
+void registerRadianceEvaluators() {
+  radianceEvaluators().addVariant("volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerEvaluator(
+        TracerSteps{s.delta1, s.delta2, s.factorLights, s.factorLights && s.logSpace}));
+  });
+}
+
+}  // namespace scatterlab

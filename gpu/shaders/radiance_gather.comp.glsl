@@ -1,0 +1,58 @@
+// Radiance splatting (paper Sec. 4, Eq. 4) as a gather (render.gpu_pipeline = compute;
+// gpu::GradientSplatGpu): each voxel centre x sums (W·(S_j + (x − x_j)·∇S_j), W),
+// W = R_j/‖x − x_j‖, over the samples whose valid sphere holds it, reading only its bin's list
+// (gpu/sphere_bins.h: ascending sample order, the order in which the rasterised splat blends,
+// radiance_splat.frag.glsl, whose per-sample arithmetic this mirrors). The sums go to the same
+// image the normalisation reads. With SL_OCCLUSION compiled after common.glsl.
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+
+struct SplatSample { vec4 positionRadius; vec4 S; vec4 dS[3]; };  // gpu::GpuSplatSample
+layout(std430, binding = BINDING_SPLAT_SAMPLES) readonly buffer Samples { SplatSample samples[]; };
+layout(std430, binding = BINDING_BIN_OFFSETS) readonly buffer BinOffsets { uint binOffsets[]; };
+layout(std430, binding = BINDING_BIN_ITEMS) readonly buffer BinItems { uint binItems[]; };
+layout(rgba32f, binding = BINDING_SUMS_IMAGE) uniform writeonly image3D uSums;
+uniform vec3 uGridMin;
+uniform vec3 uGridCell;
+uniform ivec3 uGridDims;
+uniform ivec3 uBins;
+uniform int uBinVoxels;
+#ifdef SL_OCCLUSION
+uniform float uDensityVoxel;  // smallest density voxel edge (world units)
+#endif
+#ifdef SL_BOUNDED
+uniform vec2 uTaylorBounds;  // TaylorBounds (lo, hi): each Taylor estimate is clamped to it
+#endif
+
+void main() {
+  ivec3 v = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(v, uGridDims))) return;
+  // The rasterised splat's voxel centre: (min.xy + gl_FragCoord.xy·cell.xy, the slice's z).
+  vec3 x = vec3(uGridMin.xy + (vec2(v.xy) + 0.5) * uGridCell.xy,
+                uGridMin.z + (float(v.z) + 0.5) * uGridCell.z);
+  ivec3 b = v / uBinVoxels;
+  int bin = (b.z * uBins.y + b.y) * uBins.x + b.x;
+  vec4 sum = vec4(0.0);
+  for (uint k = binOffsets[bin]; k < binOffsets[bin + 1]; ++k) {
+    SplatSample s = samples[binItems[k]];
+    vec3 d = x - s.positionRadius.xyz;
+    float dist = length(d);
+    float R = s.positionRadius.w;
+    if (!(dist < R)) continue;
+    float W = R / max(dist, 1e-6 * R);
+#ifdef SL_OCCLUSION
+    vec3 p = s.positionRadius.xyz;
+    int steps = max(1, int(ceil(dist / uDensityVoxel)));
+    float tau = 0.0;
+    for (int m = 0; m < steps; ++m)
+      tau += densityAtIndex((p + d * ((float(m) + 0.5) / float(steps))) * uDensityScale +
+                            uDensityOffset);
+    W *= exp(-uSigmaT * tau * (dist / float(steps)));
+#endif
+    vec3 taylor = s.S.rgb + d.x * s.dS[0].rgb + d.y * s.dS[1].rgb + d.z * s.dS[2].rgb;
+#ifdef SL_BOUNDED
+    taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(uTaylorBounds.y));
+#endif
+    sum += vec4(W * taylor, W);
+  }
+  imageStore(uSums, v, sum);
+}

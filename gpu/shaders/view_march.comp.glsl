@@ -1,0 +1,93 @@
+// The compute view march (render.gpu_pipeline = compute; gpu/view_march.h): one invocation per
+// pixel, front to back with early exit, the CPU marcher's steps exactly (cpu/ray_marcher.h
+// marchWith): n = ceil((t1 − t0)/step) equal steps between the box entry and the box exit (or
+// the first surface), lookups at the steps' middles in index space u0 + i·du,
+//   L += T·Ω·(1 − a)·S,  T *= a,  a = exp(−σt·D·Δt),
+// until T <= uMinT; then L + T·L_p (the surface's, from the surface pass) or L + T·background.
+// camera.spp = k²: k × k stratum centres per pixel, box filter (as the CPU). After common.glsl
+// and screen_common.glsl.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(rgba32f, binding = BINDING_OUTPUT_IMAGE) uniform writeonly image2D uOutput;
+layout(binding = BINDING_RADIANCE_TEXTURE) uniform sampler3D uRadiance;
+uniform vec3 uRadScale;  // world -> radiance index
+uniform vec3 uRadOffset;
+uniform ivec3 uRadDims;
+uniform float uStep;
+uniform float uMinT;
+uniform int uStrata;  // k: k × k rays per pixel
+uniform vec3 uBackground;
+
+// Grid3::sampleIndex of the RGB radiance volume: the eight neighbours interpolated in float, in
+// the CPU's order (densityAtIndex's twin).
+vec3 radianceAtIndex(vec3 u) {
+  u = clamp(u, vec3(0.0), vec3(uRadDims - 1));
+  ivec3 i0 = min(ivec3(u), uRadDims - 1);
+  ivec3 i1 = min(i0 + 1, uRadDims - 1);
+  vec3 f = u - vec3(i0);
+  vec3 c000 = texelFetch(uRadiance, i0, 0).rgb;
+  vec3 c100 = texelFetch(uRadiance, ivec3(i1.x, i0.y, i0.z), 0).rgb;
+  vec3 c010 = texelFetch(uRadiance, ivec3(i0.x, i1.y, i0.z), 0).rgb;
+  vec3 c110 = texelFetch(uRadiance, ivec3(i1.x, i1.y, i0.z), 0).rgb;
+  vec3 c001 = texelFetch(uRadiance, ivec3(i0.x, i0.y, i1.z), 0).rgb;
+  vec3 c101 = texelFetch(uRadiance, ivec3(i1.x, i0.y, i1.z), 0).rgb;
+  vec3 c011 = texelFetch(uRadiance, ivec3(i0.x, i1.y, i1.z), 0).rgb;
+  vec3 c111 = texelFetch(uRadiance, i1, 0).rgb;
+  vec3 c00 = c000 + (c100 - c000) * f.x;
+  vec3 c10 = c010 + (c110 - c010) * f.x;
+  vec3 c01 = c001 + (c101 - c001) * f.x;
+  vec3 c11 = c011 + (c111 - c011) * f.x;
+  vec3 c0 = c00 + (c10 - c00) * f.y;
+  vec3 c1 = c01 + (c11 - c01) * f.y;
+  return c0 + (c1 - c0) * f.z;
+}
+
+// One ray: radiance in rgb, the pixel's alpha in a (1 − T, or 1 where a surface is hit).
+vec4 marchRay(vec3 dir, ivec2 pixel) {
+  vec3 L = vec3(0.0);
+  float T = 1.0;
+  float tSurface = surfaceDistance(pixel);
+  bool hit = tSurface < kInf;
+  float t0, t1;
+  if (uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
+    if (hit) t1 = min(t1, tSurface);
+    if (t1 > t0) {
+      int n = max(1, int(ceil((t1 - t0) / uStep)));
+      float dt = (t1 - t0) / float(n);
+      vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
+      vec3 du = dir * dt * uDensityScale;
+      for (int i = 0; i < n && T > uMinT; ++i) {
+        float D = densityAtIndex(u0 + float(i) * du);
+        if (!(D > 0.0)) continue;
+        vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+        vec3 S = radianceAtIndex(x * uRadScale + uRadOffset);
+#ifdef SL_FACTOR_LIGHTS
+        S *= lightFactor(x, -dir);  // the volume holds V = S / A
+#endif
+        float a = exp(-uSigmaT * D * dt);
+        L += (T * uAlbedo * (1.0 - a)) * S;
+        T *= a;
+      }
+    }
+  }
+  if (!hit) return vec4(L + T * uBackground, 1.0 - T);
+#ifdef SL_OBJECTS
+  // Below uMinT the surface's share is below it too (as for the medium).
+  vec3 Lp = texelFetch(uSurfaceRadiance, pixel, 0).rgb;
+  return vec4(T > uMinT ? L + T * Lp : L, 1.0);
+#else
+  return vec4(L, 1.0);
+#endif
+}
+
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (p.x >= int(uSize.x) || p.y >= int(uSize.y)) return;
+  vec4 sum = vec4(0.0);
+  for (int j = 0; j < uStrata; ++j)
+    for (int i = 0; i < uStrata; ++i) {
+      vec2 f = vec2(p) + (vec2(i, j) + 0.5) / float(uStrata);
+      sum += marchRay(cameraRay(f), p);
+    }
+  imageStore(uOutput, p, sum / float(uStrata * uStrata));
+}

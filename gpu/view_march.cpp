@@ -1,0 +1,64 @@
+#include "gpu/view_march.h"
+
+#include <cmath>
+
+#include "gpu/bindings.h"
+#include "gpu/dispatch.h"
+#include "gpu/frame.h"
+#include "gpu/screen_pass.h"
+
+namespace scatterlab::gpu {
+
+Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
+  GpuFrame& f = static_cast<GpuFrame&>(frame);
+  return integrate(scene, f.density, f.radiance, &f.timer);
+}
+
+void ViewMarchGpu::describe(RenderStats& stats) const {
+  stats.extra["gpu_pipeline"] = "compute";
+}
+
+Image ViewMarchGpu::integrate(const Scene& scene, const DensityGrid& density,
+                              const RadianceGrid& radiance) {
+  const Volume d = uploadDensity(density);
+  const Volume r = uploadRadiance(radiance);
+  return integrate(scene, d, r, nullptr);
+}
+
+Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
+                              StageTimer* timer) {
+  // The surfaces' T(p, l) is traced with delta1 (the slice marcher's and CPU's convention).
+  const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
+  std::vector<std::string> defines;
+  std::string key = "view march";
+  if (factor_) {
+    defines.push_back("SL_FACTOR_LIGHTS");
+    key += " x A";
+  }
+  const Program& march =
+      pass.program(key, {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"}, defines);
+  const Camera& cam = scene.camera;
+  const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image");
+  const int strata = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
+  {
+    ScopedGpuTimer t(timer, "view march");
+    march.use();
+    pass.bind(march);
+    glBindTextureUnit(binding::kRadianceTexture, radiance.texture.id());
+    setVec3(march, "uRadScale", radiance.indexScale());
+    setVec3(march, "uRadOffset", radiance.indexOffset());
+    setIVec3(march, "uRadDims", radiance.dims);
+    glUniform1f(march.uniform("uStep"), settings_.step);
+    glUniform1f(march.uniform("uMinT"), settings_.minTransmittance);
+    glUniform1i(march.uniform("uStrata"), strata);
+    setVec3(march, "uBackground", scene.background);
+    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+  }
+  checkGl("view march");
+  return readScreenImage(out, cam.width, cam.height, OutputAlpha::Alpha, "view march read-back",
+                         timer);
+}
+
+}  // namespace scatterlab::gpu

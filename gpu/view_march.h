@@ -1,0 +1,39 @@
+#pragma once
+/// The compute view march (render.gpu_pipeline = compute, the default; docs/gpu.md): the GPU
+/// "ray-marcher" integrator as one compute dispatch, one invocation per pixel, marching front to
+/// back with early exit at min_transmittance and the CPU marcher's step placement
+/// (cpu/ray_marcher.h marchWith: the same sample points, the same sums, camera.spp strata), so
+/// that CPU ≡ GPU holds to float rounding. The paper's rasterised slice marcher
+/// (gpu::SliceMarcher, render.gpu_pipeline = raster) stays beside it. Scene objects: their
+/// surfaces are rasterised once (the surface pass of gpu/stages.h) and the march stops at
+/// their distance and adds T·L_p. Needs the GL context for integrate().
+
+#include "core/stages.h"
+#include "gpu/stages.h"
+
+namespace scatterlab::gpu {
+
+class ViewMarchGpu : public Integrator {
+ public:
+  /// factorLights: the radiance volume holds V = S / A; A is multiplied back at each step.
+  /// delta1: the step of the surfaces' T(p, l); shadowMap: their visibility lookups.
+  ViewMarchGpu(MarchSettings settings, bool factorLights, float delta1,
+               ShadowMapSettings shadowMap)
+      : settings_(settings), factor_(factorLights), delta1_(delta1), shadowMap_(shadowMap) {}
+  Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
+  /// gpu_pipeline "compute".
+  void describe(RenderStats& stats) const override;
+  /// The march over uploaded volumes (tests: CPU ≡ GPU).
+  Image integrate(const Scene& scene, const DensityGrid& density, const RadianceGrid& radiance);
+  /// The pass itself; GPU times "view march" and "read-back" into `timer` (may be null).
+  Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
+                  StageTimer* timer);
+
+ private:
+  MarchSettings settings_;
+  bool factor_;
+  float delta1_;
+  ShadowMapSettings shadowMap_;
+};
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,349 @@
+#pragma once
+/// Transport physics shared by every backend and stage (volume tracing, paper Sec. 4, Eq. 1):
+/// transmittance along straight segments through the density volume, and the source radiance S(x,
+/// ω) = Σ_l f(ω_l → ω)·E_l(x) of DESIGN.md §2. Header-only templates so the inner loops inline; no
+/// virtual calls per step.
+
+#include <vector>
+
+#include "core/grid.h"
+#include "core/light.h"
+#include "core/max_density_grid.h"
+#include "core/phase.h"
+#include "core/scene.h"
+
+namespace scatterlab {
+
+/// ∫ D along the segment a→b, restricted to `box`, by the midpoint rule with steps of at most
+/// `step` (the paper's Δ1). `field(p)` returns D at a world point inside the box.
+template <class Field>
+float opticalDepth(const Field& field, const Box& box, const Vec3& a, const Vec3& b, float step) {
+  const Vec3 d = b - a;
+  const float len = glm::length(d);
+  if (len <= 0.0f) return 0.0f;
+  const Ray r{a, d / len};
+  float t0, t1;
+  if (!box.intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
+  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  const float dt = (t1 - t0) / float(n);
+  float sum = 0.0f;
+  for (int i = 0; i < n; ++i) sum += field(r.at(t0 + (float(i) + 0.5f) * dt));
+  return sum * dt;
+}
+
+/// The midpoint-rule steps of the segment a→b clipped to grid g's box, in g's index space: step
+/// i looks up u0 + i·du, n steps of dt world units (at most `step`); n = 0 when the segment is
+/// empty or misses the box. With `clipInside` false the clip is skipped when both ends lie in
+/// the box ([0, len], what the clip gives unless b is on the boundary and the exit rounds an
+/// ulp short of len).
+struct IndexSteps {
+  Vec3 u0{0.0f}, du{0.0f};
+  int n = 0;
+  float dt = 0.0f;
+};
+
+inline IndexSteps indexSteps(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
+                             bool clipInside = true) {
+  IndexSteps out;
+  const Vec3 d = b - a;
+  const float len = glm::length(d);
+  if (len <= 0.0f) return out;
+  const Ray r{a, d / len};
+  float t0 = 0.0f, t1 = len;
+  const Box& box = g.bounds();
+  if ((clipInside || !(box.contains(a) && box.contains(b))) &&
+      (!box.intersect(r, t0, t1, 0.0f, len) || t1 <= t0))
+    return out;
+  out.n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  out.dt = (t1 - t0) / float(out.n);
+  const Vec3 s = g.indexScale();
+  out.u0 = r.at(t0 + 0.5f * out.dt) * s + g.indexOffset();
+  out.du = r.dir * out.dt * s;
+  return out;
+}
+
+/// opticalDepth(g, a, b, step) that stops once the sum passes `maxDepth` (checked every
+/// eight steps): the same sum until then, so the same result where the depth stays below it.
+inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step,
+                          float maxDepth) {
+  const IndexSteps st = indexSteps(g, a, b, step);
+  if (st.n == 0) return 0.0f;
+  const int n = st.n;
+  const float dt = st.dt;
+  const Vec3 u0 = st.u0, du = st.du;
+  const float sumMax = maxDepth / dt;
+  float sum = 0.0f;
+  for (int i = 0; i < n && sum <= sumMax;)
+    for (const int e = std::min(n, i + 8); i < e; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+  return sum * dt;
+}
+
+/// Fast path of opticalDepth for a DensityGrid covering `box`: marches in index space (the
+/// stopping overload never stops: the same sum in the same order).
+inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, float step) {
+  return opticalDepth(g, a, b, step, std::numeric_limits<float>::infinity());
+}
+
+/// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
+/// gets through, below what the float sums of a pixel resolve.
+inline constexpr float kShadowDepthCutoff = 25.0f;
+
+/// opticalDepth(g, a, b, step) skipping the steps in blocks of `skip` (built from g) whose
+/// maximum is zero: the same steps are summed in the same order, so the result is the same,
+/// unless the sum passes `maxDepth`, checked after each block: then it stops there (a depth
+/// beyond maxDepth, smaller than the whole segment's).
+inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, const Vec3& a,
+                          const Vec3& b, float step, float maxDepth = kInfinity) {
+  const IndexSteps st = indexSteps(g, a, b, step);
+  if (st.n == 0) return 0.0f;
+  const int n = st.n;
+  const float dt = st.dt;
+  const Vec3 u0 = st.u0, du = st.du;
+  MaxDensityGrid::Walk walk(skip, u0, du, n);
+  const float sumMax = maxDepth / dt;
+  float sum = 0.0f;
+  for (int i = 0; i < n && sum <= sumMax;) {
+    const MaxDensityGrid::Span sp = walk.span(i);
+    if (!sp.empty)
+      for (; i < sp.end; ++i) sum += g.sampleIndex(u0 + float(i) * du);
+    i = sp.end;
+  }
+  return sum * dt;
+}
+
+/// The far end of the segment from x towards a light: the light itself, or for directional
+/// lights the point where the ray leaves the box (or x when it is outside).
+inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Box& box,
+                            const Vec3& x) {
+  if (l.type != Light::Type::Directional) return x + inc.toLight * inc.distance;
+  float t0, t1;
+  if (!box.intersect(Ray{x, inc.toLight}, t0, t1)) return x;
+  return x + inc.toLight * t1;
+}
+
+/// A replacement for the shadow rays' opticalDepth(density, a, b, step, maxDepth) (the one with a
+/// cutoff): fn(ctx, a, b, step, maxDepth). cpu/shadow_rays.h provides the SIMD one `exact` uses.
+struct ShadowDepthFn {
+  float (*fn)(const void* ctx, const Vec3& a, const Vec3& b, float step, float maxDepth) = nullptr;
+  const void* ctx = nullptr;
+};
+
+/// Evaluates the source radiance S(x, ω) for the scene's lights through a density volume.
+/// S excludes σs and D: the in-scattered radiance per unit length is σs·D(x)·S(x, ω).
+class SourceRadiance {
+ public:
+  /// `delta1`: volume tracing step (world units). `skip` (optional, built from `density`):
+  /// the shadow rays skip its empty blocks (same sums). With `skip` or `cutoff` they stop at
+  /// an optical depth of kShadowDepthCutoff / σt (transmittance below 1.4e-11). References
+  /// must outlive this object. `shadow` (optional): traces the shadow rays instead, with the
+  /// cutoff (and without `skip`).
+  SourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
+                 const MaxDensityGrid* skip = nullptr, bool cutoff = false,
+                 ShadowDepthFn shadow = {})
+      : lights_(scene.lights),
+        phase_(scene.medium.phase),
+        sigmaT_(scene.medium.sigmaT),
+        density_(density),
+        delta1_(delta1),
+        objects_(scene.objects.get()),
+        skip_(skip),
+        shadow_(shadow),
+        cutoff_(cutoff || skip || shadow.fn),
+        depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {}
+
+  /// S at x for light leaving towards the viewer along unit `toViewer`.
+  Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 s(0.0f);
+    for (const Light& l : lights_) {
+      Light::Incident inc;
+      if (!l.incident(x, inc)) continue;
+      if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
+      const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
+      const float tau = shadow_.fn ? shadow_.fn(shadow_.ctx, x, end, delta1_, depthCutoff_)
+                        : skip_    ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
+                        : cutoff_  ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
+                                   : opticalDepth(density_, x, end, delta1_);
+      s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
+    }
+    return s;
+  }
+
+ private:
+  const std::vector<Light>& lights_;
+  Phase phase_;
+  float sigmaT_;
+  const DensityGrid& density_;
+  float delta1_;
+  const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
+  const MaxDensityGrid* skip_;   ///< empty-space skipping of the shadow rays, or null
+  ShadowDepthFn shadow_;         ///< the shadow rays' tracer, when given
+  bool cutoff_;                  ///< shadow rays stop at depthCutoff_ (always with skip_)
+  float depthCutoff_;            ///< τ at which a shadow ray stops
+};
+
+/// The radiance leaving a Lambertian surface point towards any direction (DESIGN.md §2):
+/// L_p = albedo/π · Σ_l E_l(p)·max(0, n·ω_l)·V_l(p)·T(p, l), with V_l through the scene's
+/// objects (shadow rays leave p offset by the objects' epsilon along n) and T traced through
+/// the density volume with step delta1. Every method shades surfaces with this, per pixel.
+class SurfaceRadiance {
+ public:
+  /// References must outlive this object.
+  SurfaceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
+      : lights_(scene.lights),
+        sigmaT_(scene.medium.sigmaT),
+        density_(density),
+        delta1_(delta1),
+        objects_(scene.objects.get()) {}
+
+  Vec3 operator()(const SurfaceHit& h) const {
+    if (h.albedo == Vec3(0.0f)) return Vec3(0.0f);
+    const Vec3 p = h.position + h.normal * (objects_ ? objects_->epsilon() : 0.0f);
+    Vec3 e(0.0f);
+    for (const Light& l : lights_) {
+      Light::Incident inc;
+      if (!l.incident(p, inc)) continue;
+      // The light must be in front of the face itself; the cosine is the shading normal's.
+      const float cosine = glm::dot(h.shading, inc.toLight);
+      if (cosine <= 0.0f || glm::dot(h.normal, inc.toLight) <= 0.0f) continue;
+      if (objects_ && objects_->occluded(p, inc.toLight, 0.0f, inc.distance)) continue;
+      const float tau =
+          opticalDepth(density_, p, lightSegmentEnd(l, inc, density_.bounds(), p), delta1_);
+      e += inc.irradiance * (cosine * std::exp(-sigmaT_ * tau));
+    }
+    return h.albedo * e * (1.0f / kPi);
+  }
+
+ private:
+  const std::vector<Light>& lights_;
+  float sigmaT_;
+  const DensityGrid& density_;
+  float delta1_;
+  const SceneObjects* objects_;
+};
+
+/// The singular-light factorization (docs/fidelity.md): S(x, ω) = A(x, ω) ⊙ V(x, ω), per RGB
+/// channel, with A = Σ_l f(ω_l → ω)·E⁰_l(x) the analytic, unshadowed source radiance (E⁰ =
+/// I·cone/d² for point and spot lights, the sun's irradiance for directional ones) and
+/// V = S / A the light-weighted transmittance, in [0, 1]. A carries the 1/d² singularity, the
+/// spot cone's edge and the phase function exactly; V is as smooth as the transmittance, so
+/// V is what the samples hold and the volume interpolates, and the integrator multiplies A
+/// back at each step.
+class LightFactor {
+ public:
+  /// References must outlive this object.
+  explicit LightFactor(const Scene& scene) : lights_(scene.lights), phase_(scene.medium.phase) {}
+
+  /// A(x, toViewer): one analytic evaluation per light (no tracing).
+  Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 a(0.0f);
+    for (const Light& l : lights_) {
+      Light::Incident inc;
+      if (!l.incident(x, inc)) continue;
+      a += inc.irradiance * phase_.eval(-inc.toLight, toViewer);
+    }
+    return a;
+  }
+
+ private:
+  const std::vector<Light>& lights_;
+  Phase phase_;
+};
+
+/// V(x, ω) = S / A of LightFactor, traced like SourceRadiance. Where A is zero in a channel
+/// (outside every spot cone) S is zero too and any V reproduces it; there V is the weighted
+/// transmittance with the cones ignored — the continuation of V from inside the cone — so that
+/// samples outside a cone do not drag the interpolated V down at its edge.
+class FactoredSourceRadiance {
+ public:
+  /// `delta1`: volume tracing step (world units). References must outlive this object.
+  FactoredSourceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
+      : lights_(scene.lights),
+        phase_(scene.medium.phase),
+        sigmaT_(scene.medium.sigmaT),
+        density_(density),
+        delta1_(delta1),
+        objects_(scene.objects.get()) {
+    for (const Light& l : lights_) lit_ = glm::max(lit_, l.intensity);
+  }
+
+  Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 s(0.0f), a(0.0f);
+    bool outside = false;  // some light's cone excludes x
+    for (std::size_t i = 0; i < lights_.size(); ++i) {
+      Term t;
+      if (!term(i, x, toViewer, t)) continue;
+      if (t.cone <= 0.0f) {
+        outside = true;
+        continue;
+      }
+      s += t.w * (t.cone * transmittance(x, t));
+      a += t.w * t.cone;
+    }
+    Vec3 v(0.0f), free(-1.0f);
+    for (int c = 0; c < 3; ++c) {
+      if (a[c] > 0.0f) {
+        v[c] = s[c] / a[c];
+      } else if (outside && lit_[c] > 0.0f) {
+        if (free.x < 0.0f) free = freeV(x, toViewer);
+        v[c] = free[c];
+      }
+    }
+    return v;
+  }
+
+ private:
+  /// One light's analytic weight w = E⁰·f (cone not applied), its cone factor, and the far end
+  /// of the segment to trace.
+  struct Term {
+    Vec3 w, end, toLight;
+    float cone = 1.0f;
+    float distance = 0.0f;  ///< to the light (infinity: directional), for visibility
+  };
+  bool term(std::size_t i, const Vec3& x, const Vec3& toViewer, Term& t) const {
+    const Light& l = lights_[i];
+    Light::Geometry g;
+    if (!l.geometry(x, g)) return false;
+    t.cone = g.cone;
+    t.toLight = g.toLight;
+    t.distance = g.distance;
+    Vec3 e0;
+    if (l.type == Light::Type::Directional) {
+      e0 = l.intensity;
+      float t0, t1;
+      t.end = density_.bounds().intersect(Ray{x, g.toLight}, t0, t1) ? x + g.toLight * t1 : x;
+    } else {
+      e0 = l.intensity / g.distance2;
+      t.end = l.position;
+    }
+    t.w = e0 * phase_.eval(-g.toLight, toViewer);
+    return true;
+  }
+  /// V_l·T towards the light of `t` (objects block it entirely).
+  float transmittance(const Vec3& x, const Term& t) const {
+    if (objects_ && objects_->occluded(x, t.toLight, 0.0f, t.distance)) return 0.0f;
+    return std::exp(-sigmaT_ * opticalDepth(density_, x, t.end, delta1_));
+  }
+  /// V with every cone ignored (every light traced).
+  Vec3 freeV(const Vec3& x, const Vec3& toViewer) const {
+    Vec3 s(0.0f), a(0.0f);
+    for (std::size_t i = 0; i < lights_.size(); ++i) {
+      Term t;
+      if (!term(i, x, toViewer, t)) continue;
+      s += t.w * transmittance(x, t);
+      a += t.w;
+    }
+    Vec3 v(0.0f);
+    for (int c = 0; c < 3; ++c) v[c] = a[c] > 0.0f ? s[c] / a[c] : 0.0f;
+    return v;
+  }
+
+  const std::vector<Light>& lights_;
+  Phase phase_;
+  float sigmaT_;
+  const DensityGrid& density_;
+  float delta1_;
+  const SceneObjects* objects_;
+  Vec3 lit_{0.0f};  ///< channels some light emits in
+};
+
+}  // namespace scatterlab
