@@ -35,8 +35,12 @@ void Renderer::rebuild(const Json& doc, double t) {
   const Json none;
   const Json& medium = work.contains("medium") ? work["medium"] : none;
   const Json& render = work.contains("render") ? work["render"] : none;
+  const Json& objects = work.contains("objects") ? work["objects"] : none;
   const bool sameMedium = method_ && medium == mediumDoc_;
   Scene s = sameMedium ? parseScene(work, baseDir_, &scene_.medium) : parseScene(work, baseDir_);
+  // The same objects stay the same object: the method sees the visibility unchanged (and
+  // keeps its radiance volume where nothing else it depends on changed).
+  if (method_ && objects == objectsDoc_) s.objects = scene_.objects;
   std::unique_ptr<Method> m;
   if (!sameMedium || render != renderDoc_) {
     m = createMethod(s, methodName_, backend_);
@@ -46,6 +50,7 @@ void Renderer::rebuild(const Json& doc, double t) {
   time_ = t;
   scene_ = std::move(s);
   mediumDoc_ = medium;
+  objectsDoc_ = objects;
   renderDoc_ = render;
   if (m) method_ = std::move(m);
 }

@@ -15,9 +15,13 @@
 /// changes (a `medium.*` key, or setTime on a medium that moves with time: procedural models
 /// with a rate, velocity or wind, .sog sequences); the method (and with it the density) when a
 /// `render.*` key changes. The sampler's sample points are kept with the density (a sampler
-/// reads only the medium); S and ∇S at them, dynamic sampling's splits, the radiance volume and
-/// the image are computed every render (they depend on the lights). `exact` marches the kept
-/// density volume too.
+/// reads only the medium); S and ∇S at them, dynamic sampling's splits and the radiance volume
+/// are computed again when what they depend on changed: the lights, the phase function, σt, the
+/// objects, or the camera position where S depends on it (an anisotropic phase function, or
+/// dynamic sampling, which weighs its error by the transmittance to the camera). So a camera
+/// move with an isotropic phase function, or a change of background or image size, costs
+/// only the march (stats: "radiance_reused"). The image is marched every render. `exact`
+/// marches the kept density volume too.
 ///
 /// Light paths: a light may carry `"path": [{"t": T, "position": [x,y,z]}, ...]` with strictly
 /// increasing T; its position at time t is the linear interpolation (held constant before the
@@ -75,7 +79,7 @@ class Renderer {
   std::string methodName_, backend_;
   double time_ = 0.0;
   Scene scene_;
-  Json mediumDoc_, renderDoc_;  ///< what scene_.medium and method_ were made from
+  Json mediumDoc_, objectsDoc_, renderDoc_;  ///< what scene_.medium, .objects, method_ came from
   std::unique_ptr<Method> method_;
 };
 

@@ -61,19 +61,16 @@ bool preferGpu(std::string* why) {
 }  // namespace
 
 void registerGpuStages() {
-  backends()[int(Backend::Gpu)] =
-      BackendEntry{[](const PipelineSettings& s) {
-                     return std::unique_ptr<Frame>(new GpuFrame(s.gpuPipeline));
-                   },
-                   preferGpu};
+  backends()[int(Backend::Gpu)] = BackendEntry{
+      [](const PipelineSettings& s) { return std::unique_ptr<Frame>(new GpuFrame(s.gpuPipeline)); },
+      preferGpu};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<RadianceEvaluator>(
         new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace, s.shadowMap));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(
-        new GradientSplatGpu(s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s),
-                             s.gpuPipeline));
+    return std::unique_ptr<Reconstruction>(new GradientSplatGpu(
+        s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s), s.gpuPipeline));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1, s.shadowMap));

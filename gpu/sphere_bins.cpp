@@ -60,7 +60,8 @@ SphereBins binSpheres(std::span<const glm::vec4> spheres, const Box& bounds, IVe
   const std::size_t itemBytes = total * sizeof(GLuint);
   if (total > 0xffffffffu || (maxBlock > 0 && itemBytes > std::size_t(maxBlock)))
     throw GpuError(std::string(pass) + ": the bin lists of " + std::to_string(spheres.size()) +
-                   " spheres need " + mib(itemBytes) + " in one storage buffer; the device allows " +
+                   " spheres need " + mib(itemBytes) +
+                   " in one storage buffer; the device allows " +
                    mib(std::size_t(std::max<GLint64>(maxBlock, 0))) +
                    " (GL_MAX_SHADER_STORAGE_BLOCK_SIZE, 32-bit offsets); use fewer or smaller "
                    "spheres (samples), a coarser volume, or render.gpu_pipeline = raster");

@@ -19,9 +19,9 @@ namespace scatterlab::gpu {
 inline constexpr int kBinVoxels = 8;
 
 struct SphereBins {
-  IVec3 bins{0};                  ///< bins per axis: ceil(dims / kBinVoxels)
-  std::vector<GLuint> offsets;    ///< bin b's list is items[offsets[b], offsets[b + 1])
-  std::vector<GLuint> items;      ///< sphere indices
+  IVec3 bins{0};                ///< bins per axis: ceil(dims / kBinVoxels)
+  std::vector<GLuint> offsets;  ///< bin b's list is items[offsets[b], offsets[b + 1])
+  std::vector<GLuint> items;    ///< sphere indices
 };
 
 /// Bins spheres (xyz centre, w radius; world units) over the voxel centres of the grid of

@@ -124,10 +124,10 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   }
   const Program& splat = cachedProgram(splatKey, [&] {
     if (gather)
-      return computeProgram(occlusion ? std::vector<std::string>{"common.glsl",
-                                                                 "radiance_gather.comp.glsl"}
-                                      : std::vector<std::string>{"radiance_gather.comp.glsl"},
-                            splatDefines, splatKey);
+      return computeProgram(
+          occlusion ? std::vector<std::string>{"common.glsl", "radiance_gather.comp.glsl"}
+                    : std::vector<std::string>{"radiance_gather.comp.glsl"},
+          splatDefines, splatKey);
     if (!occlusion)
       return graphicsProgram({"radiance_splat.vert.glsl"}, {"radiance_splat.frag.glsl"},
                              splatDefines, splatKey);
@@ -177,8 +177,7 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     }
     if (gather) {
       bins->bind();
-      glBindImageTexture(binding::kSumsImage, sums.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
-                         GL_RGBA32F);
+      glBindImageTexture(binding::kSumsImage, sums.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
       setVec3(splat, "uGridMin", bounds.min);
       setVec3(splat, "uGridCell", cell);
       setIVec3(splat, "uGridDims", dims);

@@ -269,8 +269,7 @@ Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds,
   return v;
 }
 
-Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted,
-                    GpuPipeline pipeline) {
+Volume buildDensity(const Scene& scene, StageTimer* timer, bool* splatted, GpuPipeline pipeline) {
   const Medium& m = scene.medium;
   if (m.density->isSumOfGaussians()) {
     if (splatted) *splatted = true;

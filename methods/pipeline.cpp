@@ -20,6 +20,51 @@ const Maker& variant(const StageRegistry<Maker>& registry, const std::string& na
   return entry.on[int(b)];
 }
 
+/// One stage of a render: a progress phase, and a wall time that ends when the backend's work
+/// is done.
+template <class Body>
+void runStage(const char* name, Frame& frame, RenderStats& st, Progress* progress,
+              const Body& body) {
+  if (progress) progress->restart(name, 1);
+  ScopedTimer t(st, name);
+  body();
+  frame.sync();
+}
+
+/// What the radiance volume of a render depends on besides the density and the method's keys:
+/// the lights, the phase function, σt, the objects (visibility), and the camera position where
+/// the source radiance is evaluated towards it (an anisotropic phase function) or dynamic
+/// sampling weighs its error by the transmittance to it.
+struct RadianceInputs {
+  std::vector<Light> lights;
+  Phase phase;
+  float sigmaT = 0.0f;
+  std::shared_ptr<const SceneObjects> objects;
+  Vec3 eye{0.0f};
+  bool eyeMatters = true;
+
+  RadianceInputs() = default;
+  RadianceInputs(const Scene& s, bool refines)
+      : lights(s.lights),
+        phase(s.medium.phase),
+        sigmaT(s.medium.sigmaT),
+        objects(s.objects),
+        eye(s.camera.position),
+        eyeMatters(refines || s.medium.phase.type != Phase::Type::Isotropic) {}
+
+  bool operator==(const RadianceInputs& o) const {
+    const auto same = [](const Light& a, const Light& b) {
+      return a.type == b.type && a.position == b.position && a.direction == b.direction &&
+             a.intensity == b.intensity && a.cosInner == b.cosInner && a.cosOuter == b.cosOuter;
+    };
+    if (lights.size() != o.lights.size()) return false;
+    for (std::size_t i = 0; i < lights.size(); ++i)
+      if (!same(lights[i], o.lights[i])) return false;
+    return phase.type == o.phase.type && phase.g == o.phase.g && sigmaT == o.sigmaT &&
+           objects == o.objects && eyeMatters == o.eyeMatters && (!eyeMatters || eye == o.eye);
+  }
+};
+
 class PipelineMethod : public Method {
  public:
   PipelineMethod(MethodDesc desc, Backend backend, PipelineSettings settings, std::string note)
@@ -48,15 +93,23 @@ class PipelineMethod : public Method {
     std::unique_ptr<Frame> frame =
         reuse ? std::move(frame_) : backends()[int(backend_)].makeFrame(settings_);
     if (reuse) frame->newRender();
-    // Every stage: a progress phase, and a wall time that ends when the backend's work is done.
+    const bool radianceKept = keptRadiance_;
+    keptRadiance_ = false;  // the frame is taken; set again when this render completes
     const auto stage = [&](const char* name, const auto& body) {
-      if (progress) progress->restart(name, 1);
-      ScopedTimer t(st, name);
-      body();
-      frame->sync();
+      runStage(name, *frame, st, progress, body);
     };
     if (!reuse) stage("density", [&] { frame->buildDensity(scene); });
     if (retainDensity) st.extra["density_reused"] = reuse;
+    // A kept frame whose radiance volume was made from the same inputs marches it again:
+    // a camera move with an isotropic phase function, or a change of background or image
+    // size, costs only the march.
+    const RadianceInputs inputs(scene, bool(refiner));
+    const bool reuseRadiance = reuse && reconstruction && radianceKept && keptInputs_ == inputs;
+    if (retainDensity && reconstruction) st.extra["radiance_reused"] = reuseRadiance;
+    if (reuseRadiance) {
+      finish(std::move(frame), scene, r, *keptRadianceSamples_, progress);
+      return r;
+    }
     // A sampler reads only the medium and its density volume (Sampler), so with the density
     // kept its samples are kept too; S and ∇S are evaluated anew (they depend on the lights).
     std::vector<RadianceSample> samples;
@@ -93,10 +146,22 @@ class PipelineMethod : public Method {
         st.extra["traced_voxels"] = rs.traced;
         st.extra["empty_voxels"] = rs.skipped;
       }
+    }
+    finish(std::move(frame), scene, r, std::move(samples), progress);
+    return r;
+  }
+
+ private:
+  /// The march and everything after it: the stats, the exports, and keeping the frame.
+  void finish(std::unique_ptr<Frame> frame, const Scene& scene, RenderResult& r,
+              std::vector<RadianceSample> samples, Progress* progress) {
+    RenderStats& st = r.stats;
+    runStage("march", *frame, st, progress,
+             [&] { r.image = integrator->integrate(*frame, scene, progress); });
+    if (reconstruction) {
       const IVec3 res = settings_.radianceResolution;
       st.extra["radiance_resolution"] = {res.x, res.y, res.z};
     }
-    stage("march", [&] { r.image = integrator->integrate(*frame, scene, progress); });
 
     frame->report(st);
     integrator->describe(st);
@@ -119,19 +184,26 @@ class PipelineMethod : public Method {
     if (!ignoredKeys.empty()) st.extra["ignored_keys"] = ignoredKeys;
     r.density = frame->exportDensity();
     r.radiance = frame->exportRadiance();
-    r.samples = std::move(samples);
     if (retainDensity) {
       kept_ = scene.medium;
       frame_ = std::move(frame);
+      if (reconstruction) {
+        keptInputs_ = RadianceInputs(scene, bool(refiner));
+        keptRadianceSamples_ = samples;
+        keptRadiance_ = true;
+      }
     }
-    return r;
+    r.samples = std::move(samples);
   }
 
- private:
   std::unique_ptr<Frame> frame_;  ///< kept between renders when retainDensity
   /// The sampler's output for frame_'s density (positions, radii, weights; S and ∇S zero).
   std::optional<std::vector<RadianceSample>> keptSamples_;
   Medium kept_;  ///< the medium frame_'s density was built from
+  /// frame_'s radiance volume, the inputs it was made from and the samples it was made of.
+  bool keptRadiance_ = false;
+  RadianceInputs keptInputs_;
+  std::optional<std::vector<RadianceSample>> keptRadianceSamples_;
   MethodDesc desc_;
   Backend backend_;
   PipelineSettings settings_;

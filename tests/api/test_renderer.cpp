@@ -132,6 +132,51 @@ TEST(Renderer, KeptDensityEqualsFreshRenderGpu) {
   EXPECT_FALSE(second.stats.extra.at("gpu_ms").contains("density"));
 }
 
+/// Interactive re-rendering: after a camera move with an isotropic phase function only the march
+/// runs, and the image equals a fresh render of the moved camera; a light move, an anisotropic
+/// phase function or dynamic sampling (camera-weighted error) rebuild the radiance volume.
+void radianceReuse(const char* backend) {
+  initialize();
+  for (const char* method : {"per-voxel", "gradient", "adaptive"}) {
+    SCOPED_TRACE(std::string(method) + " " + backend);
+    Renderer r(blobDoc(), ".", method, backend);
+    EXPECT_FALSE(r.render().stats.extra.at("radiance_reused").get<bool>());
+    r.set("camera.position=[0.6,0.55,-1.4]");
+    const RenderResult moved = r.render();
+    const bool refines = std::string(method) == "adaptive";
+    EXPECT_EQ(moved.stats.extra.at("radiance_reused").get<bool>(), !refines);
+    if (!refines)
+      for (const auto& [stage, ms] : moved.stats.timingsMs)
+        EXPECT_TRUE(stage == "march" || stage == "total") << stage;
+    Json doc = blobDoc();
+    applyOverride(doc, "camera.position=[0.6,0.55,-1.4]");
+    EXPECT_EQ(maxAbsDiff(moved.image, freshRender(doc, method, backend)), 0.0);
+    r.set("background=[0.1,0.1,0.2]");  // the march's only
+    r.set("camera.width=40");           // dynamic sampling reads only the camera's position
+    EXPECT_TRUE(r.render().stats.extra.at("radiance_reused").get<bool>());
+    r.set("lights.0.position=[0.2,1.1,0.3]");
+    EXPECT_FALSE(r.render().stats.extra.at("radiance_reused").get<bool>());
+    r.set("medium.phase={\"type\":\"henyey-greenstein\",\"g\":0.4}");
+    r.render();
+    r.set("camera.position=[0.5,0.5,-1.5]");
+    EXPECT_FALSE(r.render().stats.extra.at("radiance_reused").get<bool>());
+  }
+}
+
+TEST(Renderer, CameraMoveWithIsotropicPhaseMarchesOnlyCpu) {
+  radianceReuse("cpu");
+}
+
+TEST(Renderer, CameraMoveWithIsotropicPhaseMarchesOnlyGpu) {
+#ifdef SCATTERLAB_HAS_GPU
+  std::string why;
+  if (!gpu::tryContext(&why)) GTEST_SKIP() << why;
+  radianceReuse("gpu");
+#else
+  GTEST_SKIP() << "built without the GPU backend";
+#endif
+}
+
 TEST(Renderer, MovingMediumIsRebuiltAtTheNewTime) {
   initialize();
   const Json doc = blobDoc(Vec3(0.2f, 0, 0));

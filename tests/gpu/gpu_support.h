@@ -55,15 +55,9 @@ inline Json blobSceneDoc(int resolution, int width, int height) {
       {"render", {{"method", "per-voxel"}}}};
 }
 
+/// Relative L2 of a against the reference b (core's definition, docs/metrics.md).
 inline double relL2(const Image& a, const Image& b) {
-  double num = 0, den = 0;
-  for (size_t i = 0; i < a.pixels().size(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      const double d = double(a.pixels()[i][c]) - b.pixels()[i][c];
-      num += d * d;
-      den += double(b.pixels()[i][c]) * b.pixels()[i][c];
-    }
-  return std::sqrt(num / std::max(den, 1e-300));
+  return compareImages(a, b).relL2;
 }
 
 }  // namespace scatterlab::testing

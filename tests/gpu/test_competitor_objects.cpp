@@ -116,7 +116,8 @@ Json withKey(Json render, const char* key, const Json& value) {
 INSTANTIATE_TEST_SUITE_P(
     Methods, GpuCompetitorObjects,
     ::testing::Values(
-        Case{"spot", kLsm, 0.302}, Case{"point", kLsm, 0.134}, Case{"directional", kLsm, 2e-6},
+        // directional, light-space-march: llvmpipe 1.3e-6, an NVIDIA H200 1.9e-4 (issue 23).
+        Case{"spot", kLsm, 0.302}, Case{"point", kLsm, 0.134}, Case{"directional", kLsm, 2.9e-4},
         Case{"spot", kBlur, 0.0615}, Case{"point", kBlur, 0.0506},
         Case{"directional", kBlur, 0.0075}, Case{"spot", kJitter, 0.294},
         Case{"point", kJitter, 0.132}, Case{"directional", kJitter, 0.009},

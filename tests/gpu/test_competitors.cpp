@@ -32,18 +32,19 @@ TEST(GpuJitteredMarch, MatchesCpuForEveryJitterAndDownsample) {
   SCATTERLAB_REQUIRE_GPU();
   const std::string m = "jittered-march";
   // Measured on llvmpipe: 9.5e-7, 4.2e-7, 1.1e-6, 1.5e-6 (float rounding of exp and of the
-  // IGN's fract; per-pixel work, so deterministic); limit 1.5x the largest.
+  // IGN's fract; per-pixel work, so deterministic); on an NVIDIA H200 (driver 580), 2026-11, issue
+  // 23: up to 3.3e-6 (hardware exp). Limit 1.5x the largest.
   for (const Json& r : {Json{{"method", m}}, Json{{"method", m}, {"jitter", "none"}, {"steps", 7}},
                         Json{{"method", m}, {"jitter", "blue-noise"}, {"downsample", 2}},
                         Json{{"method", m}, {"jitter", "ign"}, {"downsample", 4}}})
-    EXPECT_LT(gpuVsCpu(r), 2.3e-6) << r.dump();
+    EXPECT_LT(gpuVsCpu(r), 5.0e-6) << r.dump();
 }
 
 TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
   SCATTERLAB_REQUIRE_GPU();
   const std::string m = "froxel";
-  // Measured on llvmpipe: 9.8e-7, 3.2e-7, 9.5e-7 (float rounding of pow, log and exp); limit
-  // 1.5x the largest.
+  // Measured on llvmpipe: 9.8e-7, 3.2e-7, 9.5e-7 (float rounding of pow, log and exp); on an
+  // NVIDIA H200 (driver 580), 2026-11, issue 23: up to 2.8e-6. Limit 1.5x the largest.
   for (const Json& r :
        {Json{{"method", m}, {"froxel_grid", {20, 15, 32}}},
         Json{{"method", m}, {"froxel_grid", {40, 30, 16}}, {"depth_distribution", "linear"}},
@@ -51,7 +52,7 @@ TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
              {"froxel_grid", {13, 11, 24}},
              {"light_transmittance", "map"},
              {"transmittance_map_resolution", 16}}})
-    EXPECT_LT(gpuVsCpu(r), 1.5e-6) << r.dump();
+    EXPECT_LT(gpuVsCpu(r), 4.2e-6) << r.dump();
 }
 
 }  // namespace

@@ -67,10 +67,10 @@ double viewMarchVsCpu(const MarchCase& c) {
   double alphaErr = 0.0;
   for (std::size_t i = 0; i < cpu.alpha().size(); ++i)
     alphaErr = std::max(alphaErr, double(std::abs(g.alpha()[i] - cpu.alpha()[i])));
-  std::printf("compute view march vs CPU (light %s, factor %d, spp %d, minT %g): relative L2 "
-              "%.3g, alpha max abs %.3g\n",
-              c.lightInside ? "inside" : "outside", int(c.factor), c.spp, double(c.minT), err,
-              alphaErr);
+  std::printf(
+      "compute view march vs CPU (light %s, factor %d, spp %d, minT %g): relative L2 "
+      "%.3g, alpha max abs %.3g\n",
+      c.lightInside ? "inside" : "outside", int(c.factor), c.spp, double(c.minT), err, alphaErr);
   EXPECT_LT(alphaErr, 1e-5);
   return err;
 }
@@ -197,7 +197,8 @@ TEST(GpuSphereBins, ListsEverySphereThatReachesABinInAscendingOrder) {
   EXPECT_EQ(b.bins, IVec3(3, 2, 3));
   ASSERT_EQ(b.offsets.size(), 3u * 2u * 3u + 1u);
   for (std::size_t bin = 0; bin + 1 < b.offsets.size(); ++bin) {
-    std::vector<GLuint> list(b.items.begin() + b.offsets[bin], b.items.begin() + b.offsets[bin + 1]);
+    std::vector<GLuint> list(b.items.begin() + b.offsets[bin],
+                             b.items.begin() + b.offsets[bin + 1]);
     EXPECT_TRUE(std::is_sorted(list.begin(), list.end()));
     EXPECT_TRUE(std::count(list.begin(), list.end(), 1u) == 1) << "bin " << bin;
     EXPECT_EQ(std::count(list.begin(), list.end(), 2u), 0);
@@ -206,11 +207,11 @@ TEST(GpuSphereBins, ListsEverySphereThatReachesABinInAscendingOrder) {
   // Bin (1, 0, 1) holds voxels 8..15 × 0..7 × 8..15 (x centres 0.425..0.775, y 0.056..0.833,
   // z 0.5..0.912): sphere 0's centre voxel (10, 4, 8) is in it; bin (2, 1, 2) is far from it.
   const std::size_t centre = (1 * 2 + 0) * 3 + 1, far = (2 * 2 + 1) * 3 + 2;
-  EXPECT_EQ(std::count(b.items.begin() + b.offsets[centre], b.items.begin() + b.offsets[centre + 1],
-                       0u),
-            1);
   EXPECT_EQ(
-      std::count(b.items.begin() + b.offsets[far], b.items.begin() + b.offsets[far + 1], 0u), 0);
+      std::count(b.items.begin() + b.offsets[centre], b.items.begin() + b.offsets[centre + 1], 0u),
+      1);
+  EXPECT_EQ(std::count(b.items.begin() + b.offsets[far], b.items.begin() + b.offsets[far + 1], 0u),
+            0);
 }
 
 TEST(GpuSphereBins, ListsLargerThanTheDeviceAllowsAreAGpuErrorBeforeAnyWork) {

@@ -283,8 +283,10 @@ TEST_P(GpuGradientMethod, EndToEndMatchesCpuMethod) {
   EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains("radiance evaluation"));
   const double err = relL2(gpu.image, cpu.image);
   std::printf("gradient (paper %d) gpu vs cpu: relative L2 %.3g\n", int(GetParam()), err);
-  // Measured on llvmpipe 2026-11-23: extensions 1.16e-6, paper 1.61e-6; ×1.5 of the larger.
-  EXPECT_LT(err, 2.4e-6);
+  // Measured on llvmpipe 2026-11-26 (compute pipeline): extensions 1.46e-6, paper 1.66e-6; on
+  // an NVIDIA H200 (driver 580), 2026-11, issue 23 (raster pipeline, hardware exp/fma in the
+  // tracing): 9.1e-5. ×1.5 of the larger.
+  EXPECT_LT(err, 1.4e-4);
 }
 INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuGradientMethod, ::testing::Bool());
 
@@ -312,8 +314,11 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
   const double err = relL2(gpu.image, cpu.image);
   std::printf("adaptive (paper %d) gpu vs cpu: %lld samples, relative L2 %.3g\n", int(GetParam()),
               *gpu.stats.samples, err);
-  // Measured on llvmpipe 2026-11-23: extensions 1.67e-6, paper 1.13e-6; ×1.5 of the larger.
-  EXPECT_LT(err, 2.5e-6);
+  // Measured on llvmpipe 2026-11-26 (compute pipeline): extensions 1.45e-6, paper 1.33e-6; on
+  // an NVIDIA H200 (driver 580), 2026-11, issue 23 (raster pipeline): extensions 3.3e-5,
+  // paper 1.0e-3 (the paper's tiny epsilon splits where hardware and CPU arithmetic differ by a
+  // rounding: the same sample counts, other splits' order). ×1.5 of the larger, per variant.
+  EXPECT_LT(err, GetParam() ? 1.5e-3 : 5.0e-5);
 }
 INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuAdaptiveMethod, ::testing::Bool());
 
@@ -374,8 +379,9 @@ double adaptiveExtensionGpuVsCpu(const char* key, const Json& levels) {
 // sample and voxel as the CPU gather does.
 TEST(GpuOcclusionWeights, AdaptiveMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  // Measured on llvmpipe 2026-11-23: 5.52e-7; ×1.5.
-  EXPECT_LT(adaptiveExtensionGpuVsCpu("occlusion_weights", {8}), 8.3e-7);
+  // Measured on llvmpipe 2026-11-26 (compute pipeline): 2.82e-7; on an NVIDIA H200 (driver 580),
+  // 2026-11, issue 23 (raster pipeline): 3.3e-5. ×1.5 of the larger.
+  EXPECT_LT(adaptiveExtensionGpuVsCpu("occlusion_weights", {8}), 5.0e-5);
 }
 
 // Log space (render.log_space) with the bounded Taylor terms: the GPU error pass compares
@@ -383,8 +389,10 @@ TEST(GpuOcclusionWeights, AdaptiveMatchesCpu) {
 // normalisation exponentiates, as the CPU does.
 TEST(GpuLogSpace, AdaptiveMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  // Measured on llvmpipe 2026-11-23: 6.09e-7 (446 samples, as many as the CPU's); ×1.5.
-  EXPECT_LT(adaptiveExtensionGpuVsCpu("log_space", {8, 10}), 9.2e-7);
+  // Measured on llvmpipe 2026-11-26 (compute pipeline): 3.41e-7 (446 samples, as many as the
+  // CPU's); on an NVIDIA H200 (driver 580), 2026-11, issue 23 (raster pipeline): 5.3e-5. ×1.5 of
+  // the larger.
+  EXPECT_LT(adaptiveExtensionGpuVsCpu("log_space", {8, 10}), 8.0e-5);
 }
 
 }  // namespace

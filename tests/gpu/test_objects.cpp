@@ -150,9 +150,10 @@ TEST(GpuObjects, NothingBehindAnOpaqueSurfaceContributes) {
   doc["objects"] = Json::array(
       {{{"type", "box"}, {"min", {0.3, 0.3, -0.3}}, {"max", {0.7, 0.7, -0.2}}, {"albedo", 0}}});
   for (const char* slicing : {"view-planes", "ray-steps", "compute"}) {
-    doc["render"] = std::string(slicing) == "compute"
-                        ? Json{{"method", "per-voxel"}}
-                        : Json{{"method", "per-voxel"}, {"gpu_pipeline", "raster"}, {"slicing", slicing}};
+    doc["render"] =
+        std::string(slicing) == "compute"
+            ? Json{{"method", "per-voxel"}}
+            : Json{{"method", "per-voxel"}, {"gpu_pipeline", "raster"}, {"slicing", slicing}};
     const RenderResult gpu = renderOn(doc, "gpu");
     const Image& img = gpu.image;
     EXPECT_EQ(img.at(32, 24), Vec3(0.0f)) << slicing;

@@ -32,10 +32,12 @@ TEST(GpuLightSpaceMarch, MatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
   const Scene scene = sceneFromJson(blobSceneDoc(20, 32, 24));
   // Measured on llvmpipe: 2.24e-6 (mean, M = 4), 7.4e-7 (traced, M = 1), 1.84e-6 (traced,
-  // M = 2): float transcendental functions and summation order only.
+  // M = 2): float transcendental functions and summation order only. On an NVIDIA H200 (driver
+  // 580), 2026-11, issue 23: 2.1e-6 for traced, M = 1 (hardware exp); the others within 1.5x
+  // llvmpipe's. The limit is 1.5x the larger of the two.
   const std::vector<std::pair<Json, double>> cases = {
       {{{"light_transmittance", "mean"}, {"steps", 64}, {"interleave", 4}}, 2.24e-6},
-      {{{"light_transmittance", "traced"}, {"steps", 32}, {"interleave", 1}}, 7.4e-7},
+      {{{"light_transmittance", "traced"}, {"steps", 32}, {"interleave", 1}}, 2.1e-6},
       {{{"light_transmittance", "traced"}, {"steps", 48}, {"interleave", 2}}, 1.84e-6}};
   for (const auto& [keys, measured] : cases) {
     Json render = {{"method", "light-space-march"}};

@@ -57,8 +57,9 @@ TEST(GpuResident, SogDensitySplattedOnTheGpuEqualsTheCpuSplat) {
   std::printf("sog density: max |gpu - cpu| = %.3g (max D %.3g), %d clamped voxels\n", worst, maxD,
               clamped);
   // Measured on llvmpipe: 1.79e-7 with max D 0.959 (the Gaussians' exp in the splat; F is added
-  // with the CPU's operations): 1.5x.
-  const float tol = 2.7e-7f;
+  // with the CPU's operations); on an NVIDIA H200 (driver 580), 2026-11, issue 23: 2.98e-7
+  // (hardware exp). 1.5x the larger.
+  const float tol = 4.5e-7f;
   EXPECT_LE(worst, tol);
   EXPECT_GT(clamped, 0);
   // The same model object again (another resolution): the residual lattice is kept.
@@ -100,8 +101,11 @@ TEST_F(GpuSogMethod, PerVoxelImageMatchesCpu) {
   EXPECT_EQ(gpu.stats.extra.at("density_construction"), "gpu splat");
   const double err = relL2(gpu.image, cpu.image);
   std::printf("sog per-voxel, gpu vs cpu: relative L2 %.3g\n", err);
-  // Measured on llvmpipe: 1.29e-6 (the per-voxel stage's own CPU/GPU difference, docs/gpu.md).
-  EXPECT_LE(err, 1.9e-6);
+  // Measured on llvmpipe: 9.96e-7 (compute pipeline; the per-voxel stage's own CPU/GPU
+  // difference, docs/gpu.md); on an NVIDIA H200 (driver 580), 2026-11, issue 23 (raster
+  // pipeline): 4.1e-4 (hardware exp in every traced voxel, over the smoke's long dense light
+  // paths). 1.5x the larger.
+  EXPECT_LE(err, 6.2e-4);
 }
 
 TEST(GpuRecycling, SameDescriptionTakesTheNameOverOnlyInsideAScope) {
