@@ -45,6 +45,7 @@ void Renderer::rebuild(const Json& doc, double t) {
   if (!sameMedium || render != renderDoc_) {
     m = createMethod(s, methodName_, backend_);
     m->retainDensity = true;
+    m->imageOnDevice = imageOnDevice_;
   }
   doc_ = doc;
   time_ = t;
@@ -64,6 +65,11 @@ void Renderer::set(const std::string& assignment) {
 void Renderer::setTime(double t) {
   if (!std::isfinite(t)) throw ConfigError("time must be finite, got " + std::to_string(t));
   if (t != time_) rebuild(doc_, t);
+}
+
+void Renderer::keepImageOnDevice(bool on) {
+  imageOnDevice_ = on;
+  if (method_) method_->imageOnDevice = on;
 }
 
 Method& Renderer::method() {

@@ -64,6 +64,11 @@ class Renderer {
   /// pipelines, "density_reused".
   RenderResult render(Progress* progress = nullptr);
 
+  /// Leave the image on the GPU from the next render() on (RenderResult::deviceImage: a GL
+  /// texture name in scatterlab's context, valid until the next render), where the method's
+  /// integrator can (GPU backend, compute pipeline's view march); `image` is then empty. For an
+  /// engine that draws the texture, and for frame times without the read-back.
+  void keepImageOnDevice(bool on);
   /// The scene as the next render() will see it.
   const Scene& scene() const { return scene_; }
   /// The scene document (with light paths), after every set().
@@ -81,6 +86,7 @@ class Renderer {
   Scene scene_;
   Json mediumDoc_, objectsDoc_, renderDoc_;  ///< what scene_.medium, .objects, method_ came from
   std::unique_ptr<Method> method_;
+  bool imageOnDevice_ = false;
 };
 
 }  // namespace scatterlab

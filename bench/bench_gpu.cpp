@@ -15,6 +15,7 @@
 #include "gpu/dynamic_sampling.h"
 #include "gpu/stages.h"
 #include "gpu/timer.h"
+#include "gpu/view_march.h"
 #include "gpu/volume.h"
 #include "media/procedural.h"
 #include "media/sog.h"
@@ -64,14 +65,25 @@ std::vector<RadianceSample> samples512(const Scene& s) {
   return out;
 }
 
+/// Arg 1 of the benchmarks with both pipelines: 0 compute (render.gpu_pipeline's default), 1
+/// the paper's rasterised passes.
+GpuPipeline pipelineArg(const benchmark::State& state) {
+  return state.range(1) ? GpuPipeline::Raster : GpuPipeline::Compute;
+}
+const char* pipelineName(const benchmark::State& state) {
+  return state.range(1) ? "raster" : "compute";
+}
+
 void BM_GpuDensitySplat(benchmark::State& state) {
   if (!needGpu(state)) return;
   const Scene s = glowScene(int(state.range(0)));
   const auto& g = dynamic_cast<const GaussianDensity&>(*s.medium.density);
   gpuLoop(state, [&](gpu::StageTimer& t) {
-    gpu::Volume v = gpu::splatGaussians(g.blobs(), s.medium.bounds, s.medium.resolution, &t);
+    gpu::Volume v = gpu::splatGaussians(g.blobs(), s.medium.bounds, s.medium.resolution, &t,
+                                        pipelineArg(state));
     benchmark::DoNotOptimize(v.texture.id());
   });
+  state.SetLabel(std::string(pipelineName(state)) + ", " + gpu::context().info().renderer);
 }
 
 void BM_GpuVolumeTracer512(benchmark::State& state) {
@@ -93,10 +105,11 @@ void BM_GpuGradientSplat512(benchmark::State& state) {
   const float vox = s.medium.voxelSize();
   gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, nullptr);
   gpuLoop(state, [&](gpu::StageTimer& t) {
-    gpu::Volume v = gpu::GradientSplatGpu().reconstruct(d, samples, s.medium.bounds,
-                                                        s.medium.resolution, nullptr, &t);
+    gpu::Volume v = gpu::GradientSplatGpu(false, false, std::nullopt, pipelineArg(state))
+                        .reconstruct(d, samples, s.medium.bounds, s.medium.resolution, nullptr, &t);
     benchmark::DoNotOptimize(v.texture.id());
   });
+  state.SetLabel(std::string(pipelineName(state)) + ", " + gpu::context().info().renderer);
 }
 
 void BM_GpuPerVoxel(benchmark::State& state) {
@@ -124,6 +137,57 @@ void BM_GpuSliceMarch800x600(benchmark::State& state) {
     benchmark::DoNotOptimize(img.pixels().data());
   });
   state.counters["slices"] = slices;
+}
+
+/// The compute view march (render.gpu_pipeline = compute) on the same volumes and image as
+/// BM_GpuSliceMarch800x600; the read-back is timed apart ("read-back" is not in the sum).
+void BM_GpuViewMarch800x600(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  const Scene s = glowScene(int(state.range(0)));
+  const gpu::Volume d = gpu::buildDensity(s);
+  const gpu::Volume r = gpu::PerVoxelGpu(s.medium.voxelSize())
+                            .build(s, d, s.medium.bounds, s.medium.resolution, nullptr, nullptr);
+  MarchSettings ms;
+  ms.step = s.medium.voxelSize();
+  gpu::ViewMarchGpu march(ms, false, ms.step, ShadowMapSettings{});
+  for (auto _ : state) {
+    gpu::StageTimer timer;
+    gpu::Texture kept;
+    Image img = march.integrate(s, d, r, &timer, &kept);
+    benchmark::DoNotOptimize(img.pixels().data());
+    double ms = 0;
+    for (const auto& [stage, t] : timer.results()) ms += t;
+    state.SetIterationTime(ms * 1e-3);
+  }
+  state.SetLabel(gpu::context().info().renderer);
+}
+
+/// Wall time of one scatterlab::Renderer frame of `gradient` with the paper's 512 samples
+/// (render.paper, the glow scene, 800×600), the light moved every frame so that every stage
+/// but the density runs (sampling kept: the medium does not change), the image left on the GPU
+/// (Renderer::keepImageOnDevice: no read-back); Arg 1 chooses the pipeline. What an engine
+/// calling the library each frame waits for.
+void BM_GpuRendererFrameGradient512(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  Json doc = readJsonFile(SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json");
+  doc["medium"]["resolution"] = state.range(0);
+  doc["camera"]["width"] = 800;
+  doc["camera"]["height"] = 600;
+  doc["render"] = {{"method", "gradient"},
+                   {"paper", true},
+                   {"sampler", {{"type", "jittered"}, {"count", 512}}},
+                   {"gpu_pipeline", pipelineName(state)}};
+  Renderer r(doc, SCATTERLAB_SOURCE_DIR "/data/scenes", "", "gpu");
+  r.keepImageOnDevice(true);
+  r.render();  // the density, the samples and the programs
+  int frame = 0;
+  for (auto _ : state) {
+    r.set("lights.0.intensity=[" + std::to_string(1.0 + 0.01 * (++frame % 7)) + ",1,1]");
+    const RenderResult res = r.render();
+    benchmark::DoNotOptimize(res.deviceImage);
+  }
+  state.SetLabel(std::string(pipelineName(state)) + ", " + gpu::context().info().renderer);
 }
 
 /// Like gpuLoop, and adds each stage's mean GPU ms as a counter (per-stage times of a pipeline).
@@ -339,8 +403,7 @@ BENCHMARK(BM_GpuSogDensity128)
     ->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_GpuDensitySplat)
-    ->Arg(64)
-    ->Arg(128)
+    ->ArgsProduct({{64, 128}, {0, 1}})
     ->UseManualTime()
     ->Iterations(iters(3))
     ->Unit(benchmark::kMillisecond);
@@ -351,8 +414,7 @@ BENCHMARK(BM_GpuVolumeTracer512)
     ->Iterations(iters(2))
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GpuGradientSplat512)
-    ->Arg(64)
-    ->Arg(128)
+    ->ArgsProduct({{64, 128}, {0, 1}})
     ->UseManualTime()
     ->Iterations(iters(2))
     ->Unit(benchmark::kMillisecond);
@@ -408,6 +470,18 @@ BENCHMARK(BM_GpuSliceMarch800x600)
     ->Arg(128)
     ->UseManualTime()
     ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuViewMarch800x600)
+    ->Arg(64)
+    ->Arg(128)
+    ->Arg(256)
+    ->UseManualTime()
+    ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuRendererFrameGradient512)
+    ->ArgsProduct({{128, 256}, {0, 1}})
+    ->UseRealTime()
+    ->Iterations(iters(2))
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/image.h"
@@ -26,6 +27,15 @@ struct RenderResult {
   /// build one; `exact` has none). Null where a method has none or keeps it on the GPU.
   std::shared_ptr<const DensityGrid> density;
   std::shared_ptr<const RadianceGrid> radiance;
+  /// With Method::imageOnDevice, where the GPU integrator left the image: an RGBA32F 2D texture
+  /// (rgb radiance, a the alpha of `image`), row 0 at the top as in `image`, in scatterlab's GL
+  /// context (gpu::context(); share it, or copy the texture, to use it in another context).
+  /// Valid until the next render() of the same method. `image` is then empty (0 × 0).
+  struct DeviceImage {
+    unsigned texture = 0;  ///< the GL texture name
+    int width = 0, height = 0;
+  };
+  std::optional<DeviceImage> deviceImage;
 };
 
 class Method {
@@ -49,6 +59,12 @@ class Method {
   /// own volumes); set by scatterlab::Renderer (api/renderer.h). Methods without a density stage
   /// ignore it.
   bool retainDensity = false;
+  /// Leave the image on the GPU (RenderResult::deviceImage) instead of reading it back: for an
+  /// engine that draws it, or a frame timed without the read-back. Where the integrator cannot
+  /// (the CPU backend, the raster slice marcher, the screen-space competitors) the image is
+  /// read back as usual and deviceImage stays empty. Needs retainDensity (the texture lives in
+  /// the kept frame).
+  bool imageOnDevice = false;
 };
 
 /// A registered method (methods/register.cpp registers each built-in one once).

@@ -251,6 +251,12 @@ class Frame {
   /// live on a device (or were not built).
   virtual std::shared_ptr<const DensityGrid> exportDensity() const { return nullptr; }
   virtual std::shared_ptr<const RadianceGrid> exportRadiance() const { return nullptr; }
+  /// Method::imageOnDevice: the integrator may leave the image in a device texture of this
+  /// frame (a backend without one ignores the request).
+  virtual void keepImageOnDevice(bool) {}
+  /// The image an integrator left on the device in this render, if any: (GL texture name,
+  /// width, height).
+  virtual std::optional<std::array<unsigned, 3>> deviceImage() const { return std::nullopt; }
 };
 
 /// The CPU backend's frame: the volumes as host grids. No GL context.
@@ -296,6 +302,10 @@ class Sampler {
   /// lights, camera or objects): a method that keeps its density between renders
   /// (Method::retainDensity) keeps the samples with it.
   virtual std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid& density) = 0;
+  /// Whether generate() reads the density volume. When not, it gets an empty grid, and a GPU
+  /// frame reads nothing back for it (a density read-back is a host round trip of the whole
+  /// volume).
+  virtual bool readsDensity() const { return true; }
 };
 
 /// Computes S (and ∇S when `gradients`) at each sample's position, by volume tracing with step

@@ -26,7 +26,13 @@ void GpuFrame::newRender() {
   context();  // the queries are deleted in the frame's context
   timer = StageTimer();
   objects = SceneShadows();
+  image = Texture();
   marks_.clear();
+}
+
+std::optional<std::array<unsigned, 3>> GpuFrame::deviceImage() const {
+  if (!imageOnDevice || !image) return std::nullopt;
+  return std::array<unsigned, 3>{image.id(), unsigned(imageWidth), unsigned(imageHeight)};
 }
 
 void GpuFrame::sync() {

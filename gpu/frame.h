@@ -45,7 +45,15 @@ class GpuFrame : public Frame {
     return objects.build(scene, settings, &timer);
   }
 
+  void keepImageOnDevice(bool on) override { imageOnDevice = on; }
+  std::optional<std::array<unsigned, 3>> deviceImage() const override;
+
   Volume density, radiance;
+  /// Method::imageOnDevice: the compute view march leaves its image in `image` (RGBA32F, alpha
+  /// = the image's alpha) and returns an empty Image.
+  bool imageOnDevice = false;
+  Texture image;
+  int imageWidth = 0, imageHeight = 0;
   StageTimer timer;
   SceneShadows objects;
 

@@ -11,7 +11,10 @@ namespace scatterlab::gpu {
 
 Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
-  return integrate(scene, f.density, f.radiance, &f.timer);
+  if (!f.imageOnDevice) return integrate(scene, f.density, f.radiance, &f.timer);
+  f.imageWidth = scene.camera.width;
+  f.imageHeight = scene.camera.height;
+  return integrate(scene, f.density, f.radiance, &f.timer, &f.image);
 }
 
 void ViewMarchGpu::describe(RenderStats& stats) const {
@@ -26,7 +29,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const DensityGrid& density,
 }
 
 Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
-                              StageTimer* timer) {
+                              StageTimer* timer, Texture* keep) {
   // The surfaces' T(p, l) is traced with delta1 (the slice marcher's and CPU's convention).
   const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
   std::vector<std::string> defines;
@@ -38,7 +41,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   const Program& march =
       pass.program(key, {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"}, defines);
   const Camera& cam = scene.camera;
-  const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image");
+  Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image");
   const int strata = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
   {
     ScopedGpuTimer t(timer, "view march");
@@ -57,6 +60,13 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
   }
   checkGl("view march");
+  if (keep) {
+    // Whoever samples or copies it next sees the writes.
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                    GL_PIXEL_BUFFER_BARRIER_BIT);
+    *keep = std::move(out);
+    return Image();
+  }
   return readScreenImage(out, cam.width, cam.height, OutputAlpha::Alpha, "view march read-back",
                          timer);
 }

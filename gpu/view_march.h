@@ -24,9 +24,10 @@ class ViewMarchGpu : public Integrator {
   void describe(RenderStats& stats) const override;
   /// The march over uploaded volumes (tests: CPU ≡ GPU).
   Image integrate(const Scene& scene, const DensityGrid& density, const RadianceGrid& radiance);
-  /// The pass itself; GPU times "view march" and "read-back" into `timer` (may be null).
+  /// The pass itself; GPU times "view march" and "read-back" into `timer` (may be null). With
+  /// `keep`, the image stays in *keep (RGBA32F) and an empty Image is returned.
   Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
-                  StageTimer* timer);
+                  StageTimer* timer, Texture* keep = nullptr);
 
  private:
   MarchSettings settings_;

@@ -93,6 +93,7 @@ class PipelineMethod : public Method {
     std::unique_ptr<Frame> frame =
         reuse ? std::move(frame_) : backends()[int(backend_)].makeFrame(settings_);
     if (reuse) frame->newRender();
+    frame->keepImageOnDevice(imageOnDevice && retainDensity);
     const bool radianceKept = keptRadiance_;
     keptRadiance_ = false;  // the frame is taken; set again when this render completes
     const auto stage = [&](const char* name, const auto& body) {
@@ -117,7 +118,11 @@ class PipelineMethod : public Method {
       samples = *keptSamples_;
       st.extra["samples_reused"] = true;
     } else if (sampler) {
-      stage("sampling", [&] { samples = sampler->generate(scene, frame->hostDensity()); });
+      static const DensityGrid kNoDensity;
+      stage("sampling", [&] {
+        samples =
+            sampler->generate(scene, sampler->readsDensity() ? frame->hostDensity() : kNoDensity);
+      });
       if (retainDensity) {
         keptSamples_ = samples;
         st.extra["samples_reused"] = false;
@@ -184,6 +189,8 @@ class PipelineMethod : public Method {
     if (!ignoredKeys.empty()) st.extra["ignored_keys"] = ignoredKeys;
     r.density = frame->exportDensity();
     r.radiance = frame->exportRadiance();
+    if (const auto d = frame->deviceImage())
+      r.deviceImage = RenderResult::DeviceImage{(*d)[0], int((*d)[1]), int((*d)[2])};
     if (retainDensity) {
       kept_ = scene.medium;
       frame_ = std::move(frame);

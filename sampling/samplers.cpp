@@ -61,6 +61,7 @@ class GaussianCentresSampler : public Sampler {
  public:
   GaussianCentresSampler(std::optional<long long> count, float scale)
       : count_(count), scale_(scale) {}
+  bool readsDensity() const override { return false; }
   std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid&) override {
     const std::vector<GaussianBlob>* blobs = scene.medium.density->gaussians();
     if (!blobs) throw ConfigError("sampler 'gaussian-centres' needs a sum-of-Gaussians medium");

@@ -5,6 +5,7 @@
 #include "api/scatterlab.h"
 #ifdef SCATTERLAB_HAS_GPU
 #include "gpu/context.h"
+#include "gpu/gl.h"
 #endif
 #include "support/scenes.h"
 
@@ -172,6 +173,47 @@ TEST(Renderer, CameraMoveWithIsotropicPhaseMarchesOnlyGpu) {
   std::string why;
   if (!gpu::tryContext(&why)) GTEST_SKIP() << why;
   radianceReuse("gpu");
+#else
+  GTEST_SKIP() << "built without the GPU backend";
+#endif
+}
+
+// An engine's frame: the image left in a GL texture (no read-back), equal to the read-back image
+// of the same frame once read; a camera move on the kept frame marches into a new texture.
+TEST(Renderer, ImageStaysOnTheGpuWhenAsked) {
+#ifdef SCATTERLAB_HAS_GPU
+  std::string why;
+  if (!gpu::tryContext(&why)) GTEST_SKIP() << why;
+  initialize();
+  Renderer r(blobDoc(), ".", "gradient", "gpu");
+  const Image host = r.render().image;
+  r.keepImageOnDevice(true);
+  const RenderResult dev = r.render();
+  ASSERT_TRUE(dev.deviceImage.has_value());
+  EXPECT_EQ(dev.image.width(), 0);
+  EXPECT_EQ(dev.deviceImage->width, 32);
+  EXPECT_EQ(dev.deviceImage->height, 24);
+  EXPECT_FALSE(dev.stats.extra["gpu_ms"].contains("read-back")) << dev.stats.extra["gpu_ms"];
+  std::vector<float> rgba(32 * 24 * 4);
+  glGetTextureImage(dev.deviceImage->texture, 0, GL_RGBA, GL_FLOAT,
+                    GLsizei(rgba.size() * sizeof(float)), rgba.data());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < 32 * 24; ++i) {
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(worst, double(std::abs(rgba[4 * i + c] - host.pixels()[i][c])));
+    worst = std::max(worst, double(std::abs(rgba[4 * i + 3] - host.alpha()[i])));
+  }
+  EXPECT_EQ(worst, 0.0);
+  r.keepImageOnDevice(false);
+  const RenderResult back = r.render();
+  EXPECT_FALSE(back.deviceImage.has_value());
+  EXPECT_EQ(maxAbsDiff(back.image, host), 0.0);
+  // The CPU backend has no device: the image comes back as usual.
+  Renderer c(blobDoc(), ".", "gradient", "cpu");
+  c.keepImageOnDevice(true);
+  const RenderResult cr = c.render();
+  EXPECT_FALSE(cr.deviceImage.has_value());
+  EXPECT_EQ(cr.image.width(), 32);
 #else
   GTEST_SKIP() << "built without the GPU backend";
 #endif

@@ -283,5 +283,22 @@ TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {
   EXPECT_EQ(r.stats.extra["unused_keys"], Json::array({"render.slicing"}));
 }
 
+// No host round trip for a sampler that does not read the density (gaussian-centres): the frame
+// reads nothing back; a jittered sampler (skips empty cells: reads it) does.
+TEST(GpuComputePipeline, DensityIsReadBackOnlyForASamplerThatReadsIt) {
+  SCATTERLAB_REQUIRE_GPU();
+  initialize();
+  Json doc = blobSceneDoc(16, 16, 12);
+  doc["render"] = {{"method", "gradient"}, {"sampler", {{"type", "gaussian-centres"}}}};
+  const Scene centres = parseScene(doc, ".");
+  const RenderResult a = createMethod(centres, "", "gpu")->render(centres, nullptr);
+  EXPECT_FALSE(a.stats.extra["gpu_ms"].contains("density read-back")) << a.stats.extra["gpu_ms"];
+  EXPECT_EQ(*a.stats.samples, 4);
+  doc["render"]["sampler"] = {{"type", "jittered"}, {"count", 32}};
+  const Scene jittered = parseScene(doc, ".");
+  const RenderResult b = createMethod(jittered, "", "gpu")->render(jittered, nullptr);
+  EXPECT_TRUE(b.stats.extra["gpu_ms"].contains("density read-back")) << b.stats.extra["gpu_ms"];
+}
+
 }  // namespace
 }  // namespace scatterlab::testing
