@@ -35,14 +35,24 @@ struct Interval {
 };
 
 /// One row of a settings key table (Mitsuba-plugin style), kept at the top of the code that
-/// reads the keys: the reader's reference, the list of keys a method knows, and what
-/// tests/core/test_key_docs.cpp checks docs/scene-format.md against.
+/// reads the keys: the reader's reference, the list of keys a method knows (methodKeys()), and
+/// what tests/methods/test_key_docs.cpp checks docs/scene-format.md against. A key's name is
+/// written here once; the reads use the same literal in the same file.
 struct KeyDoc {
   std::string_view name;     ///< key in its object, e.g. "delta1"
   std::string_view type;     ///< "number", "int or [nx,ny,nz]", ...
   std::string_view def;      ///< default, in words
   std::string_view range;    ///< allowed values, in words
   std::string_view meaning;  ///< one line
+  /// A valid value other than the default, as JSON text (valid on every demo scene): what the
+  /// key-docs test sets to reach the code that reads the key when given. Empty for an object
+  /// whose keys have a table of their own (`fields`).
+  std::string_view example = {};
+  /// For an object-valued key: the table of its keys (the test builds its example from it).
+  const std::vector<KeyDoc>& (*fields)() = nullptr;
+  /// "cpu" or "gpu" when the key means something on that backend only: the other accepts it
+  /// and reports it in the stats as unused (a scene valid on one backend is valid on both).
+  std::string_view only = {};
 };
 
 /// Reads one JSON object. A Params shares ownership of the document it reads (the constructor

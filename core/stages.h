@@ -8,6 +8,7 @@
 /// PipelineSettings, parsed once by the method layer (methods/settings.h), so a key valid on
 /// one backend is valid on the other.
 
+#include <any>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -15,7 +16,9 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
+#include <typeinfo>
 #include <vector>
 
 #include "core/grid.h"
@@ -110,61 +113,25 @@ struct ShadowMapSettings {
   bool given = false;  ///< the scene set `shadow_map`
 };
 
-/// How light-space-march attenuates the light on its way to a sample point.
-enum class LightTransmittance {
-  /// Tóth & Umenhoffer's homogeneous model: e^(−σt·D̄·d), D̄ the mean of the density volume,
-  /// d the length inside the medium box of the segment from the point to the light.
-  Mean,
-  /// The real density traced with step delta1 (what `exact` does), to separate the two errors.
-  Traced,
-};
+/// A stage family's own settings struct, which core does not know (it is declared in the
+/// family's own file, e.g. FroxelSettings in shading/screen_march.h): set by the family's key
+/// parser (StageDecl), read by its variants with get<T>().
+class StageOwnSettings {
+ public:
+  template <class T>
+  void set(T v) {
+    v_ = std::move(v);
+  }
+  /// Throws std::logic_error when no T was set (a variant built without its family's keys).
+  template <class T>
+  const T& get() const {
+    if (const T* p = std::any_cast<T>(&v_)) return *p;
+    throw std::logic_error(std::string("stage settings: no ") + typeid(T).name() + " was parsed");
+  }
+  bool has() const { return v_.has_value(); }
 
-/// `light-space-march` keys (methods/settings.cpp, lightSpaceMarchKeys(); their shared geometry:
-/// shading/post_process.h).
-struct LightSpaceMarchSettings {
-  int steps = 128;     ///< N: terms of each view ray's sum, from the visible surface to the eye
-  int interleave = 4;  ///< M: M×M pixel blocks, each pixel evaluates every M²-th term
-  LightTransmittance light = LightTransmittance::Mean;
-};
-
-/// `radial-blur` keys (methods/settings.cpp, radialBlurKeys()).
-struct RadialBlurSettings {
-  int samples = 64;        ///< n: samples per pixel along the screen ray towards the light
-  float density = 1.0f;    ///< fraction of the pixel→light segment the n samples span
-  float weight = 1.0f;     ///< per-sample scale
-  float decay = 1.0f;      ///< sample i is scaled by decay^i
-  float exposure = 1.0f;   ///< overall scale
-  int downsample = 1;      ///< the pre-pass is rendered at 1/downsample of the image size
-  float guardBand = 0.5f;  ///< the light's screen position is clamped to this margin (image sizes)
-};
-
-/// Per-pixel ray offsets of `jittered-march` (cpu/jittered_march.h).
-enum class Jitter {
-  None,       ///< every sample at the middle of its step
-  Ign,        ///< interleaved gradient noise (Jimenez 2014) of the pixel
-  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (cpu/blue_noise.h)
-};
-
-/// `jittered-march` (cpu/jittered_march.h): keys steps, jitter, downsample
-/// (methods/march_settings.cpp holds their table).
-struct JitteredMarchSettings {
-  int steps = 32;  ///< view-ray steps per ray, whatever its length in the medium
-  Jitter jitter = Jitter::Ign;
-  int downsample = 1;  ///< 1, 2 or 4: the march runs at 1/downsample of the resolution
-};
-
-/// How froxel depth slices are spaced between near and far (view depth).
-enum class DepthDistribution { Exponential, Linear };
-
-/// `froxel` (cpu/froxel.h): keys froxel_grid, depth_distribution, near, far,
-/// light_transmittance, transmittance_map_resolution (methods/march_settings.cpp).
-struct FroxelSettings {
-  IVec3 grid{160, 90, 64};  ///< froxels across, down, and depth slices
-  DepthDistribution distribution = DepthDistribution::Exponential;
-  float near = 0.0f,
-        far = 0.0f;  ///< view depths of the grid; 0: the medium box's (see froxelRange)
-  bool transmittanceMap = false;  ///< light transmittance from a per-light map, else traced
-  int mapResolution = 64;         ///< voxels per axis of each light's transmittance map
+ private:
+  std::any v_;
 };
 
 /// The settings every stage variant is built from, whichever backend runs it. Parsed once,
@@ -201,12 +168,9 @@ struct PipelineSettings {
   float delta2 = 0.0f;  ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
   ShadowMapSettings shadowMap;
-  /// The keys of the integrators `light-space-march` and `radial-blur` (defined above); read
-  /// only for those methods, defaults otherwise.
-  LightSpaceMarchSettings lightSpaceMarch;
-  RadialBlurSettings radialBlur;
-  JitteredMarchSettings jittered;  ///< `jittered-march` only
-  FroxelSettings froxel;           ///< `froxel` only
+  /// The settings of the integrator's and the refiner's own keys (light-space-march's,
+  /// froxel's, dynamic sampling's, ...), parsed by their StageDecl; empty for stages without.
+  StageOwnSettings integratorKeys, refinerKeys;
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.
@@ -302,6 +266,9 @@ class Sampler {
   /// lights, camera or objects): a method that keeps its density between renders
   /// (Method::retainDensity) keeps the samples with it.
   virtual std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid& density) = 0;
+  /// About how many samples generate() will make for `scene` (the medium the sampler was made
+  /// for): what the render's plan counts (memory, tracing work) before anything is built.
+  virtual long long plannedCount(const Scene& scene) const = 0;
   /// Whether generate() reads the density volume. When not, it gets an empty grid, and a GPU
   /// frame reads nothing back for it (a density read-back is a host round trip of the whole
   /// volume).
@@ -355,19 +322,63 @@ class Integrator {
 template <class Stage, class... Args>
 using StageMaker = std::function<std::unique_ptr<Stage>(Args...)>;
 
-/// A registered stage: one maker per backend, empty where that backend has no variant.
+/// A table of render keys and the code that reads them (into PipelineSettings, the same
+/// whichever backend runs). Each key's name is written once, in its table's row and its read,
+/// side by side in one file.
+struct KeyGroup {
+  const std::vector<KeyDoc>& (*table)() = nullptr;
+  /// Reads the table's keys from the render object; must not call finish(). Reads of other
+  /// groups the method has come first (a stage's parser may use what they set, e.g. `paper`).
+  void (*parse)(Params& render, const Scene& scene, PipelineSettings& settings) = nullptr;
+};
+
+/// The light-march (volume-tracing) work a stage does itself, which the work bound counts
+/// before a render (core/work_limits.h): a march to every light from ...
+enum class LightWork {
+  None,
+  EveryViewStep,  ///< ... every view-ray step (exact)
+  EveryVoxel,     ///< ... every voxel of the radiance volume (per-voxel)
+};
+
+/// What a stage family declares, the same for each of its backends' variants (Mitsuba's plugin
+/// properties): the render keys it reads and the facts the method layer plans with. Declared
+/// once per family, in the family's own file (with its settings struct, in shading/, where both
+/// backends' variants read one), and registered by the registration of its CPU variant.
+struct StageDecl {
+  /// Its own keys (none: empty). The method layer reads them, whatever backend runs, before
+  /// any variant is built, and lists them among the method's keys (methodKeys()).
+  std::vector<KeyGroup> keys = {};
+  /// Integrators: the view rays step by march_step (the view march's keys are read:
+  /// march_step, min_transmittance, fast_march, march_scale). False: the integrator has its
+  /// own steps (light-space-march).
+  bool viewMarch = false;
+  /// Integrators: one ray per (low-resolution) pixel, so camera.spp must be 1 (a ConfigError
+  /// when the keys are read).
+  bool onePerPixel = false;
+  /// Integrators: the CPU variant fuses the density and radiance volumes when fast_march is on
+  /// and their grids agree (one more volume in the memory plan).
+  bool fusedVolumeOnCpu = false;
+  LightWork lightWork = LightWork::None;
+};
+
+/// A registered stage: its declaration and one maker per backend, empty where that backend has
+/// no variant.
 template <class Maker>
 struct StageVariants {
+  StageDecl decl;
   std::array<Maker, kBackendCount> on;
   bool has(Backend b) const { return bool(on[int(b)]); }
 };
 
-/// Name -> per-backend variants. addVariant() fills one backend's slot of an entry, creating
-/// the entry on first use, so gpu/ adds its variants beside the CPU ones.
+/// Name -> declaration and per-backend variants. declare() and addVariant() fill an entry,
+/// creating it on first use, so gpu/ adds its variants beside the CPU ones.
 template <class Maker>
 class StageRegistry : public Registry<StageVariants<Maker>> {
  public:
   using Registry<StageVariants<Maker>>::Registry;
+  void declare(const std::string& name, StageDecl decl) {
+    this->entry(name).decl = std::move(decl);
+  }
   void addVariant(const std::string& name, Backend b, Maker make) {
     this->entry(name).on[int(b)] = std::move(make);
   }

@@ -11,6 +11,7 @@
 #include "cpu/radial_blur.h"
 #include "cpu/ray_marcher.h"
 #include "cpu/shadow_rays.h"
+#include "shading/screen_march.h"
 #include "shading/transport.h"
 
 namespace scatterlab {
@@ -143,7 +144,7 @@ class ExactIntegrator : public Integrator {
 class JitteredMarchIntegrator : public Integrator {
  public:
   explicit JitteredMarchIntegrator(const PipelineSettings& s)
-      : s_(s.jittered), march_(s.march), delta1_(s.delta1) {}
+      : s_(s.integratorKeys.get<JitteredMarchSettings>()), march_(s.march), delta1_(s.delta1) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     return jitteredMarch(scene, frame.hostDensity(), s_, march_, delta1_, progress);
@@ -160,7 +161,9 @@ class JitteredMarchIntegrator : public Integrator {
 class FroxelIntegrator : public Integrator {
  public:
   explicit FroxelIntegrator(const PipelineSettings& s)
-      : s_(s.froxel), minT_(s.march.minTransmittance), delta1_(s.delta1) {}
+      : s_(s.integratorKeys.get<FroxelSettings>()),
+        minT_(s.march.minTransmittance),
+        delta1_(s.delta1) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     passes_ = Json::object();
@@ -177,18 +180,55 @@ class FroxelIntegrator : public Integrator {
   Json passes_;
 };
 
+/// The ray-marcher's own keys: how the CPU march stores and steps through the fused volume, and
+/// how the GPU's raster marcher lays its slices (the march itself reads the view march's keys).
+const std::vector<KeyDoc>& rayMarcherKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"half_float_volumes", "bool", "false", "true, false",
+       "fast CPU march: store the fused density + radiance volume in IEEE half (8 instead of 16 "
+       "bytes per voxel; error in docs/benchmarks.md); methods with a radiance volume",
+       "true", nullptr, "cpu"},
+      {"march_simd", "string", "auto", "auto, sse2, avx2",
+       "fast CPU march's kernel: auto = avx2 where the CPU has AVX2, FMA and F16C, else sse2 "
+       "(same images within 1e-6); methods with a radiance volume",
+       R"("sse2")", nullptr, "cpu"},
+      {"slicing", "string", "ray-steps", "ray-steps, view-planes",
+       "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
+       "slabs (raster pipeline); accepted and reported unused on the CPU",
+       R"("view-planes")", nullptr, "gpu"},
+  };
+  return keys;
+}
+
+void parseRayMarcher(Params& p, const Scene&, PipelineSettings& s) {
+  s.march.halfFloat = p.boolean("half_float_volumes", false);
+  const std::string simd = p.choice("march_simd", {"auto", "sse2", "avx2"}, "auto");
+  s.march.simd = simd == "sse2"   ? MarchSimd::Sse2
+                 : simd == "avx2" ? MarchSimd::Avx2
+                                  : MarchSimd::Auto;
+  s.slicing = p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps"
+                  ? Slicing::RaySteps
+                  : Slicing::ViewPlanes;
+}
+
 }  // namespace
 
 void registerIntegrators() {
+  integrators().declare("jittered-march", jitteredMarchStage());
   integrators().addVariant("jittered-march", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new JitteredMarchIntegrator(s));
   });
+  integrators().declare("froxel", froxelStage());
   integrators().addVariant("froxel", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new FroxelIntegrator(s));
   });
+  integrators().declare(
+      "ray-marcher",
+      {.keys = {{rayMarcherKeys, parseRayMarcher}}, .viewMarch = true, .fusedVolumeOnCpu = true});
   integrators().addVariant("ray-marcher", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new RayMarcher(s));
   });
+  integrators().declare("exact", {.viewMarch = true, .lightWork = LightWork::EveryViewStep});
   integrators().addVariant("exact", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new ExactIntegrator(s));
   });

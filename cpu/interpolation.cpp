@@ -513,6 +513,33 @@ class PerVoxelReconstruction : public Reconstruction {
   float delta1_;
 };
 
+/// The keys of the reconstructions from samples (gradient, rbf, nearest; the extensions of
+/// docs/fidelity.md, which only gradient's Taylor terms use).
+const std::vector<KeyDoc>& interpolationKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"occlusion_weights", "bool", "false", "true, false",
+       "Eq. 4 weights times exp(−σt·τ) of the segment sample → voxel: no sample contributes "
+       "across a dense occluder; gradient reconstruction",
+       "true"},
+      {"bounded_taylor", "bool", "true (false with paper)", "true, false",
+       "clamp each sample's Taylor estimate to the known range of what is interpolated (V in "
+       "[0, 1], ln V <= 0, S >= 0) before weighting; gradient reconstruction",
+       "false"},
+  };
+  return keys;
+}
+
+void parseInterpolation(Params& p, const Scene&, PipelineSettings& s) {
+  // Off by default: measured (docs/fidelity.md) a clear win with adaptive on occluders (the
+  // perforated sheet, the chimney trail) but 3-30x the frame time and worse on smoke1.
+  s.occlusionWeights = p.boolean("occlusion_weights", false);
+  if (s.paper && s.occlusionWeights)
+    p.fail("occlusion_weights", "is an extension; it cannot be true with render.paper = true");
+  s.boundedTaylor = p.boolean("bounded_taylor", !s.paper);
+  if (s.paper && s.boundedTaylor)
+    p.fail("bounded_taylor", "is an extension; it cannot be true with render.paper = true");
+}
+
 }  // namespace
 
 void registerReconstructions() {
@@ -523,9 +550,14 @@ void registerReconstructions() {
           new InterpolatingReconstruction(k, space, s.occlusionWeights, taylorBounds(s)));
     };
   };
-  reconstructions().addVariant("gradient", Backend::Cpu, interp(Interpolation::Gradient));
-  reconstructions().addVariant("rbf", Backend::Cpu, interp(Interpolation::Rbf));
-  reconstructions().addVariant("nearest", Backend::Cpu, interp(Interpolation::Nearest));
+  const StageDecl fromSamples{.keys = {{interpolationKeys, parseInterpolation}}};
+  for (const auto& [name, kind] : {std::pair{"gradient", Interpolation::Gradient},
+                                   {"rbf", Interpolation::Rbf},
+                                   {"nearest", Interpolation::Nearest}}) {
+    reconstructions().declare(name, fromSamples);
+    reconstructions().addVariant(name, Backend::Cpu, interp(kind));
+  }
+  reconstructions().declare("per-voxel", {.lightWork = LightWork::EveryVoxel});
   reconstructions().addVariant("per-voxel", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelReconstruction(s.delta1));
   });

@@ -16,6 +16,7 @@
 #include "core/progress.h"
 #include "core/scene.h"
 #include "core/stages.h"
+#include "shading/screen_march.h"
 
 namespace scatterlab {
 

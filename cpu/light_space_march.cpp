@@ -127,7 +127,9 @@ namespace {
 class LightSpaceMarchIntegrator : public Integrator {
  public:
   explicit LightSpaceMarchIntegrator(const PipelineSettings& s)
-      : s_(s.lightSpaceMarch), delta1_(s.delta1), shadowMap_(s.shadowMap) {}
+      : s_(s.integratorKeys.get<LightSpaceMarchSettings>()),
+        delta1_(s.delta1),
+        shadowMap_(s.shadowMap) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     checkLightSpaceMarchScene(scene, s_);
@@ -159,6 +161,7 @@ class LightSpaceMarchIntegrator : public Integrator {
 }  // namespace
 
 void registerLightSpaceMarch() {
+  integrators().declare("light-space-march", lightSpaceMarchStage());
   integrators().addVariant("light-space-march", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new LightSpaceMarchIntegrator(s));
   });

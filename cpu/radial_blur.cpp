@@ -121,7 +121,7 @@ namespace {
 class RadialBlurIntegrator : public Integrator {
  public:
   explicit RadialBlurIntegrator(const PipelineSettings& s)
-      : s_(s.radialBlur), march_(s.march), delta1_(s.delta1) {}
+      : s_(s.integratorKeys.get<RadialBlurSettings>()), march_(s.march), delta1_(s.delta1) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     checkRadialBlurScene(scene, s_);
@@ -150,6 +150,7 @@ class RadialBlurIntegrator : public Integrator {
 }  // namespace
 
 void registerRadialBlur() {
+  integrators().declare("radial-blur", radialBlurStage());
   integrators().addVariant("radial-blur", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new RadialBlurIntegrator(s));
   });

@@ -69,9 +69,24 @@ class VolumeTracerEvaluator : public RadianceEvaluator {
   TracerSteps steps_;
 };
 
+/// The volume tracer's own key (its light-march step is the pipeline's delta1).
+const std::vector<KeyDoc>& volumeTracerKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"delta2", "number", "one voxel edge", "(diag·1e-6, diag]",
+       "central-difference step of ∇S (the paper's Δ2); methods with samples", "0.5"},
+  };
+  return keys;
+}
+
+void parseVolumeTracer(Params& p, const Scene& scene, PipelineSettings& s) {
+  s.delta2 = p.real("delta2", scene.medium.voxelSize(),
+                    stepRange(glm::length(scene.medium.bounds.extent())));
+}
+
 }  // namespace
 
 void registerRadianceEvaluators() {
+  radianceEvaluators().declare("volume-tracer", {.keys = {{volumeTracerKeys, parseVolumeTracer}}});
   radianceEvaluators().addVariant("volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<RadianceEvaluator>(new VolumeTracerEvaluator(
         TracerSteps{s.delta1, s.delta2, s.factorLights, s.factorLights && s.logSpace}));

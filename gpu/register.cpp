@@ -83,12 +83,12 @@ void registerGpuStages() {
                                                         s.factorLights, s.delta1, s.shadowMap));
   });
   integrators().addVariant("light-space-march", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(
-        new LightSpaceMarchGpu(s.lightSpaceMarch, s.delta1, s.shadowMap));
+    return std::unique_ptr<Integrator>(new LightSpaceMarchGpu(
+        s.integratorKeys.get<LightSpaceMarchSettings>(), s.delta1, s.shadowMap));
   });
   integrators().addVariant("radial-blur", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Integrator>(
-        new RadialBlurGpu(s.radialBlur, s.march, s.delta1, s.shadowMap));
+    return std::unique_ptr<Integrator>(new RadialBlurGpu(s.integratorKeys.get<RadialBlurSettings>(),
+                                                         s.march, s.delta1, s.shadowMap));
   });
   integrators().addVariant("jittered-march", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new JitteredMarchGpu(s));
@@ -96,14 +96,11 @@ void registerGpuStages() {
   integrators().addVariant("froxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new FroxelGpu(s));
   });
-  refiners().addVariant(
-      "dynamic", Backend::Gpu, [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
-        DynamicSamplingSettings s = ds;
-        s.delta1 = ps.delta1;
-        s.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
-        return std::unique_ptr<SampleRefiner>(new GpuRefiner(
-            std::move(s), {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}, ps.shadowMap));
-      });
+  refiners().addVariant("dynamic", Backend::Gpu, [](const PipelineSettings& ps) {
+    return std::unique_ptr<SampleRefiner>(
+        new GpuRefiner(ps.refinerKeys.get<DynamicSamplingSettings>(),
+                       {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}, ps.shadowMap));
+  });
 }
 
 }  // namespace scatterlab::gpu

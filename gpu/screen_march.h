@@ -15,13 +15,14 @@
 #include "core/stages.h"
 #include "gpu/timer.h"
 #include "gpu/volume.h"
+#include "shading/screen_march.h"
 
 namespace scatterlab::gpu {
 
 class JitteredMarchGpu : public Integrator {
  public:
   explicit JitteredMarchGpu(const PipelineSettings& s)
-      : s_(s.jittered),
+      : s_(s.integratorKeys.get<JitteredMarchSettings>()),
         minT_(s.march.minTransmittance),
         delta1_(s.delta1),
         shadowMap_(s.shadowMap) {}
@@ -40,7 +41,10 @@ class JitteredMarchGpu : public Integrator {
 class FroxelGpu : public Integrator {
  public:
   explicit FroxelGpu(const PipelineSettings& s)
-      : s_(s.froxel), minT_(s.march.minTransmittance), delta1_(s.delta1), shadowMap_(s.shadowMap) {}
+      : s_(s.integratorKeys.get<FroxelSettings>()),
+        minT_(s.march.minTransmittance),
+        delta1_(s.delta1),
+        shadowMap_(s.shadowMap) {}
   bool needsRadiance() const override { return false; }
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
   void describe(RenderStats& stats) const override;

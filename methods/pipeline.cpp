@@ -74,7 +74,6 @@ class PipelineMethod : public Method {
   std::string samplerType;
   std::unique_ptr<RadianceEvaluator> evaluator;
   std::unique_ptr<SampleRefiner> refiner;
-  std::optional<DynamicSamplingSettings> dynamic;
   std::unique_ptr<Reconstruction> reconstruction;
   std::unique_ptr<Integrator> integrator;
 
@@ -133,7 +132,8 @@ class PipelineMethod : public Method {
       stage("dynamic_sampling",
             [&] { ds = refiner->refine(*frame, scene, std::move(samples), *evaluator); });
       samples = std::move(ds.samples);
-      addDynamicSamplingStats(st, ds.levels, samples, *dynamic);
+      addDynamicSamplingStats(st, ds.levels, samples,
+                              settings_.refinerKeys.get<DynamicSamplingSettings>());
     } else if (sampler) {
       stage("evaluation",
             [&] { evaluator->evaluate(*frame, scene, samples, reconstruction->needsGradients()); });
@@ -183,7 +183,7 @@ class PipelineMethod : public Method {
       st.samples = (long long)samples.size();
       st.extra["sampler"] = samplerType;
     }
-    if (desc_.viewMarch) st.extra["march_step"] = settings_.march.step;
+    if (integratorDecl(desc_).viewMarch) st.extra["march_step"] = settings_.march.step;
     st.extra["delta1"] = settings_.delta1;
     if (!note_.empty()) st.extra["backend_choice"] = note_;
     if (!ignoredKeys.empty()) st.extra["ignored_keys"] = ignoredKeys;
@@ -224,7 +224,7 @@ bool pipelineRunsOn(const MethodDesc& d, Backend b) {
   const auto has = [b](const auto& registry, const std::string& name) {
     return registry.contains(name) && registry.get(name, name).has(b);
   };
-  if (d.sampler && !has(radianceEvaluators(), "volume-tracer")) return false;
+  if (d.sampler && !has(radianceEvaluators(), d.evaluator)) return false;
   if (!d.refiner.empty() && !has(refiners(), d.refiner)) return false;
   if (d.radianceVolume() && !has(reconstructions(), d.reconstruction)) return false;
   return has(integrators(), d.integrator);
@@ -239,29 +239,29 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   std::string evaluatorName, integratorName = d.integrator;
   long long plannedSamples = 0;
   if (d.sampler) {
-    m->sampler = makeSampler(p, scene, m->samplerType, settings.paper ? "" : d.extendedSampler,
-                             &plannedSamples);
-    evaluatorName = p.string("evaluator", "volume-tracer");
+    m->sampler =
+        makeSampler(p, scene, m->samplerType, settings.paper ? SamplerChoice{} : d.extendedSampler);
+    plannedSamples = m->sampler->plannedCount(scene);
+    evaluatorName = p.string("evaluator", d.evaluator);
   }
-  if (!d.refiner.empty()) m->dynamic = parseDynamicSampling(p, scene, settings.paper);
   if (d.integratorSelectable) integratorName = p.string("integrator", d.integrator);
 
   if (d.sampler)
     m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
                            "radiance evaluator")(settings);
   if (!d.refiner.empty())
-    m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(
-        *m->dynamic, settings);
+    m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(settings);
   if (d.radianceVolume())
     m->reconstruction = variant(reconstructions(), d.reconstruction, b, p.keyPath("method"),
                                 "reconstruction")(settings);
   m->integrator =
       variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(settings);
   // The sum of the planned allocations and the samples' tracing work, before anything is built.
+  const DynamicSamplingSettings* dynamic =
+      m->refiner ? &settings.refinerKeys.get<DynamicSamplingSettings>() : nullptr;
   checkRenderPlan(p, scene, d, settings, plannedSamples,
-                  m->reconstruction && m->reconstruction->needsGradients(),
-                  m->dynamic ? &*m->dynamic : nullptr,
-                  b == Backend::Cpu && integratorName == "ray-marcher");
+                  m->reconstruction && m->reconstruction->needsGradients(), dynamic,
+                  b == Backend::Cpu && integrators().get(integratorName, "").decl.fusedVolumeOnCpu);
   return m;
 }
 

@@ -7,122 +7,50 @@
 #include "core/limits.h"
 #include "core/work_limits.h"
 #include "media/sog.h"
-#include "methods/march_settings.h"
 #include "sampling/dynamic_sampling.h"
 #include "sampling/samplers.h"
 
 namespace scatterlab {
 
-const std::vector<KeyDoc>& pipelineKeys() {
-  static const std::vector<KeyDoc> keys = {
-      {"paper", "bool", "false", "true, false",
-       "the paper's algorithm exactly: every extension off; methods with samples"},
-      {"factor_lights", "bool", "true for gradient and adaptive, else false (false with paper)",
-       "true, false",
-       "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
-       "back at each march step (singular lights); methods with samples"},
-      {"log_space", "bool", "false", "true, false (true needs factor_lights)",
-       "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
-       "dynamic sampling then measures its error on V; methods with samples"},
-      {"occlusion_weights", "bool", "false", "true, false",
-       "Eq. 4 weights times exp(−σt·τ) of the segment sample → voxel: no sample contributes "
-       "across a dense occluder; gradient reconstruction"},
-      {"bounded_taylor", "bool", "true (false with paper)", "true, false",
-       "clamp each sample's Taylor estimate to the known range of what is interpolated (V in "
-       "[0, 1], ln V <= 0, S >= 0) before weighting; gradient reconstruction"},
-      {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
-       "view-ray step (world units)"},
-      {"min_transmittance", "number", "1e-6", "[0, 1]",
-       "a view ray stops when its transmittance falls below this"},
-      {"fast_march", "bool", "true", "true, false",
-       "CPU march: skip blocks of zero density, march in tiles, one fused density + radiance "
-       "lookup per step, exact's shadow rays 4 or 8 steps at once (SIMD) (same images within "
-       "1e-6); false: the plain march (reference)"},
-      {"march_scale", "int", "1", "1, 2, 4 (2 and 4 need camera.spp = 1)",
-       "CPU view march at 1/scale of the resolution per axis (one ray per scale × scale pixels), "
-       "upsampled depth-aware to full resolution (box entry/exit depths; edges marched in full); "
-       "error in docs/benchmarks.md"},
-      {"half_float_volumes", "bool", "false", "true, false",
-       "fast CPU march: store the fused density + radiance volume in IEEE half (8 instead of 16 "
-       "bytes per voxel; error in docs/benchmarks.md); methods with a radiance volume"},
-      {"march_simd", "string", "auto", "auto, sse2, avx2",
-       "fast CPU march's kernel: auto = avx2 where the CPU has AVX2, FMA and F16C, else sse2 "
-       "(same images within 1e-6); methods with a radiance volume"},
-      {"delta1", "number", "one voxel edge", "(diag·1e-6, diag]",
-       "volume-tracing step towards the lights (the paper's Δ1)"},
-      {"delta2", "number", "one voxel edge", "(diag·1e-6, diag]",
-       "central-difference step of ∇S (the paper's Δ2); methods with samples"},
-      {"radiance_resolution", "int or [nx,ny,nz]", "medium.resolution",
-       "1…4096 per axis, integers, at most 512³ voxels",
-       "voxels of the source-radiance volume; methods that build one"},
-      {"slicing", "string", "ray-steps", "ray-steps, view-planes",
-       "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
-       "slabs; accepted and reported unused on the CPU"},
-      {"gpu_pipeline", "string", "compute", "compute, raster",
-       "GPU backend: compute shaders (view march one invocation per pixel, radiance splat as a "
-       "binned gather) or the paper's rasterised slice march and slice splat; accepted and "
-       "reported unused on the CPU"},
-      {"evaluator", "string", "volume-tracer", "a registered radiance evaluator",
-       "how S and ∇S are computed at the samples; methods with samples"},
-      {"integrator", "string", "ray-marcher", "a registered integrator",
-       "how the image is marched from the volumes; methods with a radiance volume"},
-      {"shadow_map", "object", "see shadowMapKeys()", "",
-       "the shadow maps of scene objects: every GPU method's, and light-space-march's on the CPU "
-       "(depth compare); accepted and unused by the other CPU methods, which trace shadow rays"},
-  };
-  return keys;
-}
-
 const std::vector<KeyDoc>& shadowMapKeys() {
   static const std::vector<KeyDoc> keys = {
       {"type", "string", "vsm", "vsm, depth",
        "variance shadow maps (the paper's: filtered moments, Chebyshev bound) or a plain depth "
-       "compare"},
+       "compare",
+       R"("depth")"},
       {"resolution", "int", "1024", "16…4096",
-       "texels per side of each map (spot: one, directional: one, point: six cube faces)"},
+       "texels per side of each map (spot: one, directional: one, point: six cube faces)", "64"},
       {"bias", "number", "1", "[0, 64]",
        "depth bias in texels: the world size of one texel at the point times this; surface "
-       "points also move this far along their normal"},
+       "points also move this far along their normal",
+       "2"},
       {"filter", "int", "3", "odd, 1…31",
        "filter width in texels: VSM box-blurs the moments, depth compare averages filter² "
-       "compares (PCF); 1 = none"},
+       "compares (PCF); 1 = none",
+       "5"},
       {"bleed_reduction", "number", "0.2", "[0, 1)",
-       "VSM light-bleeding reduction: Chebyshev's p remapped to (p − b)/(1 − b), clamped"},
-  };
-  return keys;
-}
-
-const std::vector<KeyDoc>& lightSpaceMarchKeys() {
-  static const std::vector<KeyDoc> keys = {
-      {"steps", "int", "128", "1…65536, at least interleave²",
-       "N: terms of each view ray's sum, equal steps from the visible surface (or the box's far "
-       "side) to the eye"},
-      {"interleave", "int", "4", "1…32, at most the image's width and height",
-       "M: interleaved sampling in M×M pixel blocks; each pixel evaluates every M²-th term, "
-       "then a separable M×M block sum (1: the plain march)"},
-      {"light_transmittance", "string", "mean", "mean, traced",
-       "the light's transmittance: e^(−σt·D̄·d), D̄ the medium's mean density (Tóth & "
-       "Umenhoffer's homogeneous model), or the real density traced with step delta1"},
-  };
-  return keys;
-}
-
-const std::vector<KeyDoc>& radialBlurKeys() {
-  static const std::vector<KeyDoc> keys = {
-      {"samples", "int", "64", "1…4096", "n: samples per pixel along the screen ray to the light"},
-      {"density", "number", "1", "(0, 1]",
-       "fraction of the pixel→light segment the n samples span (Mitchell's density)"},
-      {"weight", "number", "1", ">= 0", "scale of every sample"},
-      {"decay", "number", "1", "[0, 1]", "sample i is scaled by decay^i"},
-      {"exposure", "number", "1", ">= 0", "scale of the sum"},
-      {"downsample", "int", "1", "1, 2, 4", "the pre-pass has 1/downsample of the pixels per side"},
-      {"guard_band", "number", "0.5", "[0, 10]",
-       "the light's screen position is clamped to this many image sizes beyond each edge"},
+       "VSM light-bleeding reduction: Chebyshev's p remapped to (p − b)/(1 − b), clamped", "0.5"},
   };
   return keys;
 }
 
 namespace {
+
+// The pipeline's own keys, in groups read as the method's stages need them (methodKeyTable());
+// each stage's keys are in its family's file (StageDecl).
+
+/// Every method's.
+const std::vector<KeyDoc>& commonKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"delta1", "number", "one voxel edge", "(diag·1e-6, diag]",
+       "volume-tracing step towards the lights (the paper's Δ1)", "0.5"},
+      {"shadow_map", "object", "see the table below", "",
+       "the shadow maps of scene objects: every GPU method's, and light-space-march's on the CPU "
+       "(depth compare); accepted and unused by the other CPU methods, which trace shadow rays",
+       "", shadowMapKeys},
+  };
+  return keys;
+}
 
 /// render.shadow_map (shadowMapKeys()).
 ShadowMapSettings parseShadowMap(Params& p) {
@@ -144,32 +72,139 @@ ShadowMapSettings parseShadowMap(Params& p) {
   return s;
 }
 
-LightSpaceMarchSettings parseLightSpaceMarch(Params& p) {
-  LightSpaceMarchSettings s;
-  s.steps = int(p.integer("steps", s.steps, Interval::closed(1, 65536)));
-  s.interleave = int(p.integer("interleave", s.interleave, Interval::closed(1, 32)));
-  if (s.interleave * s.interleave > s.steps)
-    p.fail("interleave", "interleave² = " + std::to_string(s.interleave * s.interleave) +
-                             " is more than steps = " + std::to_string(s.steps) +
-                             ": some pixels of every block would evaluate no term; raise "
-                             "render.steps or lower render.interleave");
-  s.light = p.choice("light_transmittance", {"mean", "traced"}, "mean") == "mean"
-                ? LightTransmittance::Mean
-                : LightTransmittance::Traced;
-  return s;
+void parseCommon(Params& p, const Scene& scene, PipelineSettings& s) {
+  s.delta1 = p.real("delta1", scene.medium.voxelSize(),
+                    stepRange(glm::length(scene.medium.bounds.extent())));
+  s.shadowMap = parseShadowMap(p);
 }
 
-RadialBlurSettings parseRadialBlur(Params& p) {
-  RadialBlurSettings s;
-  s.samples = int(p.integer("samples", s.samples, Interval::closed(1, 4096)));
-  s.density = p.real("density", s.density, Interval{0.0, 1.0, true, false});
-  s.weight = p.real("weight", s.weight, Interval::atLeast(0));
-  s.decay = p.real("decay", s.decay, Interval::closed(0, 1));
-  s.exposure = p.real("exposure", s.exposure, Interval::atLeast(0));
-  s.downsample = int(p.integer("downsample", s.downsample, Interval::closed(1, 4)));
-  if (s.downsample == 3) p.fail("downsample", "is 3; allowed: 1, 2, 4");
-  s.guardBand = p.real("guard_band", s.guardBand, Interval::closed(0, 10));
-  return s;
+/// The view march's (integrators that declare StageDecl::viewMarch).
+const std::vector<KeyDoc>& viewMarchKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"march_step", "number", "one voxel edge", "(diag·1e-6, diag], diag = box diagonal",
+       "view-ray step (world units)", "0.5"},
+      {"min_transmittance", "number", "1e-6", "[0, 1]",
+       "a view ray stops when its transmittance falls below this", "0.5"},
+      {"fast_march", "bool", "true", "true, false",
+       "CPU march: skip blocks of zero density, march in tiles, one fused density + radiance "
+       "lookup per step, exact's shadow rays 4 or 8 steps at once (SIMD) (same images within "
+       "1e-6); false: the plain march (reference)",
+       "false", nullptr, "cpu"},
+      {"march_scale", "int", "1", "1, 2, 4 (2 and 4 need camera.spp = 1)",
+       "CPU view march at 1/scale of the resolution per axis (one ray per scale × scale pixels), "
+       "upsampled depth-aware to full resolution (box entry/exit depths; edges marched in full); "
+       "error in docs/benchmarks.md",
+       "2", nullptr, "cpu"},
+  };
+  return keys;
+}
+
+void parseViewMarch(Params& p, const Scene& scene, PipelineSettings& s) {
+  s.march.step = p.real("march_step", scene.medium.voxelSize(),
+                        stepRange(glm::length(scene.medium.bounds.extent())));
+  s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
+  s.march.fast = p.boolean("fast_march", true);
+  s.march.scale = int(p.integer("march_scale", 1, Interval::closed(1, 4)));
+  if (s.march.scale == 3) p.fail("march_scale", "is 3; allowed: 1, 2, 4");
+  if (s.march.scale > 1 && scene.camera.spp > 1)
+    p.fail("march_scale", "is " + std::to_string(s.march.scale) +
+                              "; a reduced march needs camera.spp = 1 (got " +
+                              std::to_string(scene.camera.spp) + ")");
+}
+
+/// Methods with samples: what the samples hold, and the stages that make them.
+const std::vector<KeyDoc>& sampleKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"paper", "bool", "false", "true, false",
+       "the paper's algorithm exactly: every extension off; methods with samples", "false"},
+      {"factor_lights", "bool", "true for gradient and adaptive, else false (false with paper)",
+       "true, false",
+       "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
+       "back at each march step (singular lights); methods with samples",
+       "true"},
+      {"log_space", "bool", "false", "true, false (true needs factor_lights)",
+       "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
+       "dynamic sampling then measures its error on V; methods with samples",
+       "true"},
+      {"sampler", "object", "see the table below", "",
+       "where the samples are placed (render.sampler); methods with samples", "", samplerKeys},
+      {"evaluator", "string", "volume-tracer", "a registered radiance evaluator",
+       "how S and ∇S are computed at the samples; methods with samples", R"("volume-tracer")"},
+  };
+  return keys;
+}
+
+/// paper, factor_lights, log_space (sampler and evaluator: makePipelineMethod). `extended`:
+/// the method's extensions are on by default.
+void parseSampleValues(Params& p, PipelineSettings& s, bool extended) {
+  s.paper = p.boolean("paper", false);
+  s.factorLights = p.boolean("factor_lights", extended && !s.paper);
+  if (s.paper && s.factorLights)
+    p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
+  // Off by default (measured, docs/fidelity.md): with adaptive it wins on dense self-shadowing
+  // smoke (chimney, smoke1) and loses with lamps inside fog and, badly, at the hard shadows
+  // of scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV.
+  s.logSpace = p.boolean("log_space", false);
+  if (s.logSpace && !s.factorLights)
+    p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
+}
+
+/// Methods with a source-radiance volume.
+const std::vector<KeyDoc>& radianceVolumeKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"radiance_resolution", "int or [nx,ny,nz]", "medium.resolution",
+       "1…4096 per axis, integers, at most 512³ voxels",
+       "voxels of the source-radiance volume; methods that build one", "8"},
+      {"gpu_pipeline", "string", "compute", "compute, raster",
+       "GPU backend: compute shaders (view march one invocation per pixel, radiance splat as a "
+       "binned gather) or the paper's rasterised slice march and slice splat; accepted and "
+       "reported unused on the CPU",
+       R"("raster")", nullptr, "gpu"},
+  };
+  return keys;
+}
+
+void parseRadianceVolume(Params& p, const Scene& scene, PipelineSettings& s) {
+  s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution, sizeof(Vec3),
+                                      "the source-radiance volume (RGB float)");
+  s.gpuPipeline = p.choice("gpu_pipeline", {"compute", "raster"}, "compute") == "compute"
+                      ? GpuPipeline::Compute
+                      : GpuPipeline::Raster;
+}
+
+/// Methods whose row lets render.integrator replace its integrator.
+const std::vector<KeyDoc>& integratorChoiceKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"integrator", "string", "ray-marcher", "a registered integrator",
+       "how the image is marched from the volumes; methods with a radiance volume",
+       R"("ray-marcher")"},
+  };
+  return keys;
+}
+
+/// The declarations of `d`'s stages (evaluator, reconstruction, refiner, integrator: the
+/// defaults its row names), in reading order.
+std::vector<const StageDecl*> stageDecls(const MethodDesc& d) {
+  std::vector<const StageDecl*> out;
+  if (d.sampler) out.push_back(&radianceEvaluators().get(d.evaluator, "render.evaluator").decl);
+  if (d.radianceVolume())
+    out.push_back(&reconstructions().get(d.reconstruction, "render.method").decl);
+  if (!d.refiner.empty()) out.push_back(&refiners().get(d.refiner, "render.method").decl);
+  out.push_back(&integratorDecl(d));
+  return out;
+}
+
+/// The tables of `d`'s keys, in reading order (methodKeyTable()).
+std::vector<const std::vector<KeyDoc>*> keyTables(const MethodDesc& d) {
+  std::vector<const std::vector<KeyDoc>*> t;
+  if (integratorDecl(d).viewMarch) t.push_back(&viewMarchKeys());
+  t.push_back(&commonKeys());
+  if (d.sampler) t.push_back(&sampleKeys());
+  if (d.radianceVolume()) t.push_back(&radianceVolumeKeys());
+  if (d.integratorSelectable) t.push_back(&integratorChoiceKeys());
+  for (const StageDecl* st : stageDecls(d))
+    for (const KeyGroup& g : st->keys) t.push_back(&g.table());
+  return t;
 }
 
 // Bounds on marching work (kMaxViewSteps, kMaxLightSteps): core/limits.h.
@@ -186,7 +221,7 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
   const double rays = double(c.width) * c.height * c.spp;
   // Methods that do not step by march_step (light-space-march: `steps` per ray, at most 65536)
   // have no view bound here.
-  const double perRay = d.viewMarch ? std::ceil(diag / s.march.step) : 0.0;
+  const double perRay = integratorDecl(d).viewMarch ? std::ceil(diag / s.march.step) : 0.0;
   const double view = rays * perRay;
   const std::string size = std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels x " +
                            std::to_string(c.spp) + " spp";
@@ -199,14 +234,16 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
       std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
   double light = 0;
   std::string what;
-  if (d.integrator == "exact") {
-    light = view * perLight;
-    what = "at every one of " + sci(view) + " view steps";
-  } else if (d.reconstruction == "per-voxel") {
-    const IVec3 r = s.radianceResolution;
-    const double voxels = double(r.x) * r.y * r.z;
-    light = voxels * perLight;
-    what = "at every one of " + sci(voxels) + " voxels";
+  for (const StageDecl* st : stageDecls(d)) {
+    if (st->lightWork == LightWork::EveryViewStep) {
+      light = view * perLight;
+      what = "at every one of " + sci(view) + " view steps";
+    } else if (st->lightWork == LightWork::EveryVoxel) {
+      const IVec3 r = s.radianceResolution;
+      const double voxels = double(r.x) * r.y * r.z;
+      light = voxels * perLight;
+      what = "at every one of " + sci(voxels) + " voxels";
+    }
   }
   if (light > kMaxLightSteps)
     throw LimitError("'" + p.keyPath("delta1") + "': a step of " + sci(s.delta1) + " gives " +
@@ -217,72 +254,39 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
 
 }  // namespace
 
+const StageDecl& integratorDecl(const MethodDesc& d) {
+  return integrators().get(d.integrator, "render.method").decl;
+}
+
+std::vector<KeyDoc> methodKeyTable(const MethodDesc& d) {
+  std::vector<KeyDoc> rows;
+  for (const std::vector<KeyDoc>* t : keyTables(d)) rows.insert(rows.end(), t->begin(), t->end());
+  return rows;
+}
+
+std::vector<std::string> methodKeys(const MethodDesc& d) {
+  std::vector<std::string> k;
+  for (const KeyDoc& row : methodKeyTable(d)) k.emplace_back(row.name);
+  return k;
+}
+
 PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const MethodDesc& d) {
   PipelineSettings s;
-  const float voxel = scene.medium.voxelSize();
-  const Interval steps = stepRange(glm::length(scene.medium.bounds.extent()));
-  if (d.viewMarch) {
-    s.march.step = p.real("march_step", voxel, steps);
-    s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
-    s.march.fast = p.boolean("fast_march", true);
-    s.march.scale = int(p.integer("march_scale", 1, Interval::closed(1, 4)));
-    if (s.march.scale == 3) p.fail("march_scale", "is 3; allowed: 1, 2, 4");
-    if (s.march.scale > 1 && scene.camera.spp > 1)
-      p.fail("march_scale", "is " + std::to_string(s.march.scale) +
-                                "; a reduced march needs camera.spp = 1 (got " +
-                                std::to_string(scene.camera.spp) + ")");
-    for (const char* k : {"fast_march", "march_scale", "half_float_volumes", "march_simd"})
-      if (p.has(k)) s.cpuMarchKeysGiven.push_back(p.keyPath(k));
-    if (d.radianceVolume()) {
-      s.march.halfFloat = p.boolean("half_float_volumes", false);
-      const std::string simd = p.choice("march_simd", {"auto", "sse2", "avx2"}, "auto");
-      s.march.simd = simd == "sse2"   ? MarchSimd::Sse2
-                     : simd == "avx2" ? MarchSimd::Avx2
-                                      : MarchSimd::Auto;
-    }
+  const StageDecl& integrator = integratorDecl(d);
+  if (integrator.viewMarch) parseViewMarch(p, scene, s);
+  parseCommon(p, scene, s);
+  if (d.sampler) parseSampleValues(p, s, d.extended);
+  if (d.radianceVolume()) parseRadianceVolume(p, scene, s);
+  for (const StageDecl* st : stageDecls(d))
+    for (const KeyGroup& g : st->keys) g.parse(p, scene, s);
+  // The keys that mean something on one backend only, which the other reports as unused.
+  for (const KeyDoc& row : methodKeyTable(d)) {
+    if (row.only.empty() || !p.has(std::string(row.name))) continue;
+    (row.only == "gpu" ? s.gpuKeysGiven : s.cpuMarchKeysGiven)
+        .push_back(p.keyPath(std::string(row.name)));
   }
-  s.delta1 = p.real("delta1", voxel, steps);
-  s.shadowMap = parseShadowMap(p);
-  if (d.integrator == "light-space-march") s.lightSpaceMarch = parseLightSpaceMarch(p);
-  if (d.integrator == "radial-blur") s.radialBlur = parseRadialBlur(p);
-  if (d.sampler) {
-    s.delta2 = p.real("delta2", voxel, steps);
-    s.paper = p.boolean("paper", false);
-    s.factorLights = p.boolean("factor_lights", d.extended && !s.paper);
-    if (s.paper && s.factorLights)
-      p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
-    // Off by default (measured, docs/fidelity.md): with adaptive it wins on dense self-shadowing
-    // smoke (chimney, smoke1) and loses with lamps inside fog and, badly, at the hard shadows
-    // of scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV.
-    s.logSpace = p.boolean("log_space", false);
-    // Off by default: measured (docs/fidelity.md) a clear win with adaptive on occluders (the
-    // perforated sheet, the chimney trail) but 3-30x the frame time and worse on smoke1.
-    s.occlusionWeights = p.boolean("occlusion_weights", false);
-    if (s.paper && s.occlusionWeights)
-      p.fail("occlusion_weights", "is an extension; it cannot be true with render.paper = true");
-    s.boundedTaylor = p.boolean("bounded_taylor", !s.paper);
-    if (s.paper && s.boundedTaylor)
-      p.fail("bounded_taylor", "is an extension; it cannot be true with render.paper = true");
-    if (s.logSpace && !s.factorLights)
-      p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
-  }
-  if (d.radianceVolume()) {
-    s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution,
-                                        sizeof(Vec3), "the source-radiance volume (RGB float)");
-    for (const char* k : {"slicing", "gpu_pipeline"})
-      if (p.has(k)) s.gpuKeysGiven.push_back(p.keyPath(k));
-    s.slicing = p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps"
-                    ? Slicing::RaySteps
-                    : Slicing::ViewPlanes;
-    s.gpuPipeline = p.choice("gpu_pipeline", {"compute", "raster"}, "compute") == "compute"
-                        ? GpuPipeline::Compute
-                        : GpuPipeline::Raster;
-  }
-  // The per-pixel competitors' own keys (methods/march_settings.cpp). They march one ray per
-  // (low-resolution) pixel or froxel column: no camera.spp.
-  if (d.integrator == "jittered-march") s.jittered = parseJitteredMarch(p);
-  if (d.integrator == "froxel") s.froxel = parseFroxel(p);
-  if ((d.integrator == "jittered-march" || d.integrator == "froxel") && scene.camera.spp > 1)
+  // The integrators that march one ray per (low-resolution) pixel or froxel column.
+  if (integrator.onePerPixel && scene.camera.spp > 1)
     throw ConfigError("camera.spp: " + d.name +
                       " renders one ray per pixel; camera.spp must be 1 (got " +
                       std::to_string(scene.camera.spp) + ")");
@@ -290,60 +294,25 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   return s;
 }
 
-std::vector<std::string> methodKeys(const MethodDesc& d) {
-  std::vector<std::string> k = {"delta1", "shadow_map"};
-  if (d.viewMarch)
-    k.insert(k.end(), {"march_step", "min_transmittance", "fast_march", "march_scale"});
-  if (d.integrator == "light-space-march")
-    for (const KeyDoc& key : lightSpaceMarchKeys()) k.emplace_back(key.name);
-  if (d.integrator == "radial-blur")
-    for (const KeyDoc& key : radialBlurKeys()) k.emplace_back(key.name);
-  if (d.sampler)
-    k.insert(k.end(), {"delta2", "paper", "factor_lights", "log_space", "occlusion_weights",
-                       "bounded_taylor", "sampler", "evaluator"});
-  if (d.radianceVolume()) k.insert(k.end(), {"radiance_resolution", "slicing", "gpu_pipeline"});
-  if (d.radianceVolume() && d.viewMarch) k.insert(k.end(), {"half_float_volumes", "march_simd"});
-  if (d.integratorSelectable) k.push_back("integrator");
-  if (!d.refiner.empty())
-    for (const KeyDoc& key : dynamicSamplingKeys()) k.emplace_back(key.name);
-  if (d.integrator == "jittered-march")
-    for (const KeyDoc& key : jitteredMarchKeys()) k.emplace_back(key.name);
-  if (d.integrator == "froxel")
-    for (const KeyDoc& key : froxelKeys()) k.emplace_back(key.name);
-  return k;
-}
-
 std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type,
-                                     const std::string& extendedDefault,
-                                     long long* plannedSamples) {
+                                     const SamplerChoice& extendedDefault) {
   const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
-  const Json defaultSampler = !extendedDefault.empty() ? Json::parse(extendedDefault)
-                              : hasGaussians           ? Json{{"type", "gaussian-centres"}}
-                                                       : Json{{"type", "jittered"}, {"count", 512}};
+  const Json defaultSampler = !extendedDefault.type.empty() ? Json{{"type", extendedDefault.type},
+                                                                   {"count", extendedDefault.count}}
+                              : hasGaussians                ? Json{{"type", "gaussian-centres"}}
+                                                            : Json{{"type", "jittered"}};
   const bool given = p.has("sampler");
   Params sp = given ? p.child("sampler") : Params(defaultSampler, p.keyPath("sampler"));
   if (!given) p.allow("sampler");
   type = sp.string("type", defaultSampler["type"].get<std::string>());
   std::unique_ptr<Sampler> sampler = samplers().get(type, sp.keyPath("type"))(sp, scene);
   sp.finish();
-  if (plannedSamples) {
-    // `count` has been validated by the sampler (an integer in [1, 1e8]).
-    const long long count = sp.has("count") && sp.raw("count").is_number()
-                                ? (long long)sp.raw("count").get<double>()
-                                : -1;
-    const long long gaussians =
-        hasGaussians ? (long long)scene.medium.density->gaussians()->size() : 0;
-    *plannedSamples = type == "gaussian-centres"
-                          ? (count >= 0 ? std::min(count, gaussians) : gaussians)
-                      : count >= 0 ? count
-                                   : kDefaultSampleCount;
-  }
   return sampler;
 }
 
 void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s,
                      long long samples, bool gradients, const DynamicSamplingSettings* dynamic,
-                     bool cpuRayMarcher) {
+                     bool fusedVolume) {
   const auto voxels = [](IVec3 r) { return double(r.x) * double(r.y) * double(r.z); };
   const auto dims = [](IVec3 r) {
     return std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z);
@@ -369,7 +338,7 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
     plan.add(p.keyPath("radiance_resolution"),
              "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
     // The fast march fuses density and radiance (4 floats per voxel) when their grids agree.
-    if (d.viewMarch && s.march.fast && cpuRayMarcher && r == res)
+    if (integratorDecl(d).viewMarch && s.march.fast && fusedVolume && r == res)
       plan.add(p.keyPath("fast_march"),
                "the fused density + radiance volume of " + dims(r) + " voxels",
                voxels(r) * 4 * sizeof(float));
@@ -377,7 +346,7 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
   const double perSample = double(sizeof(RadianceSample));
   if (samples > 0)
     plan.add(p.keyPath("sampler.count"), std::to_string(samples) + " radiance samples",
-             double(samples) * (perSample + 2 * sizeof(std::int64_t)));
+             sampleSetBytes(double(samples)));
   // Probes are traced only when there is a level to split into.
   const int probes = dynamic && !dynamic->levels.empty() ? dynamic->probes : 0;
   if (probes > 0 && samples > 0) {

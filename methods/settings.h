@@ -1,7 +1,8 @@
 #pragma once
-/// The settings of the volume pipelines, read from a scene's render object in one place, the
-/// same whichever backend runs (methods/settings.cpp holds the key table). Which keys a method
-/// reads follows from its stages (MethodDesc).
+/// The settings of the volume pipelines, read from a scene's render object before a backend is
+/// chosen, so the same whichever backend runs. Which keys a method reads follows from its
+/// stages: the pipeline's own keys are here (settings.cpp), each stage's in its family's own
+/// file (StageDecl).
 
 #include <memory>
 #include <string>
@@ -13,60 +14,65 @@
 
 namespace scatterlab {
 
+/// The sampler a method uses when render.sampler is not given and the extensions are on.
+struct SamplerChoice {
+  std::string type = {};  ///< empty: the paper's default (see makeSampler)
+  long long count = 0;
+};
+
 /// One method: which stages it runs (by registered name), each with a variant per backend.
-/// Registered once in methods/register.cpp; a PipelineMethod runs it.
+/// Registered once in methods/register.cpp, one row with designated initializers; a
+/// PipelineMethod runs it. What each stage reads and does is its own declaration (StageDecl).
 struct MethodDesc {
   std::string name;
-  std::string summary;               ///< one line
-  bool sampler = false;              ///< a sampler and the radiance evaluator run (samples)
-  std::string refiner;               ///< a SampleRefiner between them ("dynamic"), or empty
-  std::string reconstruction;        ///< reconstructions() entry, or empty (no radiance volume)
-  std::string integrator;            ///< default integrators() entry (render.integrator)
+  std::string summary;   ///< one line
+  bool sampler = false;  ///< a sampler and the radiance evaluator run (samples)
+  /// radianceEvaluators() entry run with a sampler (render.evaluator may replace it).
+  std::string evaluator = "volume-tracer";
+  std::string refiner = {};          ///< a SampleRefiner between them ("dynamic"), or empty
+  std::string reconstruction = {};   ///< reconstructions() entry, or empty (no radiance volume)
+  std::string integrator = {};       ///< default integrators() entry (render.integrator)
   bool integratorSelectable = true;  ///< whether render.integrator may replace it
   /// The fidelity extensions (docs/fidelity.md) are on by default (`gradient`, `adaptive`); the
   /// baselines keep the paper's algorithm unless asked. render.paper turns them all off.
   bool extended = false;
-  /// The render.sampler a user who sets none gets when the extensions are on (empty: the
-  /// paper's default, which also applies with render.paper).
-  std::string extendedSampler;
-  /// Whether the method reads march_step and min_transmittance (false: light-space-march, whose
-  /// view rays take `steps` steps each).
-  bool viewMarch = true;
+  /// The render.sampler a user who sets none gets when the extensions are on (measured best
+  /// at <= 4000 samples on the fidelity scenes: docs/fidelity.md); with render.paper, or an
+  /// empty type, the paper's default.
+  SamplerChoice extendedSampler = {};
 
   /// Whether the method builds a source-radiance volume (and reads its keys).
   bool radianceVolume() const { return !reconstruction.empty(); }
 };
 
-/// Key table of the pipeline settings (render keys; sampler.* and the refiner's keys have
-/// their own tables in sampling/).
-const std::vector<KeyDoc>& pipelineKeys();
+/// Every render key `desc` reads, as rows of the tables that own them, in reading order: the
+/// pipeline's own (delta1, shadow_map; with samples paper, factor_lights, log_space, sampler,
+/// evaluator; with a radiance volume radiance_resolution, gpu_pipeline, integrator), the view
+/// march's when its integrator declares one, then each of its stages' own (StageDecl::keys).
+/// What methodKeys(), docs and tests derive from.
+std::vector<KeyDoc> methodKeyTable(const MethodDesc& desc);
+
+/// The top-level render keys a method with `desc` reads (the names of methodKeyTable()): for
+/// createMethod's tolerance of other methods' keys.
+std::vector<std::string> methodKeys(const MethodDesc& desc);
+
 /// Key table of render.shadow_map (ShadowMapSettings).
 const std::vector<KeyDoc>& shadowMapKeys();
 
-/// Key tables of the real-time methods (shading/post_process.h), read for the methods whose
-/// integrator is "light-space-march" or "radial-blur" (docs/light-space-march.md,
-/// docs/radial-blur.md).
-const std::vector<KeyDoc>& lightSpaceMarchKeys();
-const std::vector<KeyDoc>& radialBlurKeys();
-
-/// Reads the keys `desc`'s stages use from the render object: march_step, min_transmittance,
-/// delta1 always; delta2 with samples; radiance_resolution and slicing with a radiance volume.
-/// Must not call finish().
+/// Reads the keys of methodKeyTable(desc) into the settings the stage variants are built from,
+/// except sampler, evaluator and integrator (makePipelineMethod reads them as it builds those
+/// stages), and checks the work of the view march and of the stages that trace light at every
+/// step or voxel. Must not call finish().
 PipelineSettings parsePipelineSettings(Params& render, const Scene& scene, const MethodDesc& desc);
 
-/// The top-level render keys a method with `desc` reads (for createMethod's tolerance of other
-/// methods' keys): the pipeline keys above, "sampler", "evaluator", "integrator" and the
-/// refiner's keys, as its stages need them.
-std::vector<std::string> methodKeys(const MethodDesc& desc);
+/// The declaration of `desc`'s default integrator (what its view march and keys are).
+const StageDecl& integratorDecl(const MethodDesc& desc);
 
 /// The render.sampler object; `type` receives the sampler's name. Default: `extendedDefault`
-/// (JSON of a sampler object) when non-empty, else the paper's: Gaussian centres when the
-/// medium has Gaussians, else 512 jittered samples.
-/// `plannedSamples`, when given, receives about how many samples the sampler will make (its
-/// `count`, or the medium's Gaussians for gaussian-centres) for checkRenderPlan.
+/// when its type is set, else the paper's: Gaussian centres when the medium has Gaussians,
+/// else jittered samples (with the sampler's default count).
 std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type,
-                                     const std::string& extendedDefault = "",
-                                     long long* plannedSamples = nullptr);
+                                     const SamplerChoice& extendedDefault = {});
 
 struct DynamicSamplingSettings;
 
@@ -79,11 +85,12 @@ struct DynamicSamplingSettings;
 ///  - work: the light-march steps of evaluating the samples, samples × traced points (S, the 6
 ///    central differences of ∇S when `gradients`, the probes of dynamic sampling's level 0)
 ///    × ⌈diagonal / delta1⌉ × lights, against kMaxLightSteps, a LimitError naming the keys.
-/// `samples`: the planned count (makeSampler), 0 without a sampler; `dynamic`: null without
-/// dynamic sampling; `cpuRayMarcher`: the image is marched by the CPU's ray-marcher (which fuses
-/// density and radiance into one volume when fast_march is on and their grids agree).
+/// `samples`: the planned count (Sampler::plannedCount), 0 without a sampler; `dynamic`: null
+/// without dynamic sampling; `fusedVolume`: the image is marched by a CPU integrator that fuses
+/// density and radiance into one volume when fast_march is on and their grids agree
+/// (StageDecl::fusedVolumeOnCpu).
 void checkRenderPlan(Params& render, const Scene& scene, const MethodDesc& desc,
                      const PipelineSettings& settings, long long samples, bool gradients,
-                     const DynamicSamplingSettings* dynamic, bool cpuRayMarcher);
+                     const DynamicSamplingSettings* dynamic, bool fusedVolume);
 
 }  // namespace scatterlab

@@ -360,17 +360,20 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
   static const std::vector<KeyDoc> keys = {
       {"epsilon", "number", "0.05 (relative); 1e-4 (absolute) with paper", ">= 0",
        "split a sample when its error E_j (Eq. 5) is above epsilon · the mean R³|S|Dτ of the "
-       "initial samples (relative), or, with paper, above epsilon itself (the paper's ε)"},
+       "initial samples (relative), or, with paper, above epsilon itself (the paper's ε)",
+       "0.5"},
       {"levels", "array of int", "[16, 32, 64] (those <= half the medium resolution)",
        "increasing, each 2…1024, finest <= half the medium resolution",
-       "vertices per axis of the split grids G1, G2, …"},
+       "vertices per axis of the split grids G1, G2, …", "[2]"},
       {"tau", "string", "ancestor", "ancestor, sample",
-       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper) or the sample itself"},
+       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper) or the sample itself",
+       R"("sample")"},
       {"probes", "int", "40 (6 with paper)", "6, 14, 26, 40",
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
-       "R/2"},
+       "R/2",
+       "6"},
       {"max_samples", "int", "0 (no cap; not with paper)", ">= 0 (non-integers rounded down)",
-       "most samples in the final set: the threshold is raised until the set fits"},
+       "most samples in the final set: the threshold is raised until the set fits", "100"},
   };
   return keys;
 }
@@ -443,14 +446,22 @@ StageRegistry<RefinerMaker>& refiners() {
   return r;
 }
 
+DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineSettings& ps) {
+  ds.delta1 = ps.delta1;
+  ds.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
+  return ds;
+}
+
 void registerRefiners() {
-  refiners().addVariant("dynamic", Backend::Cpu,
-                        [](const DynamicSamplingSettings& ds, const PipelineSettings& ps) {
-                          DynamicSamplingSettings s = ds;
-                          s.delta1 = ps.delta1;
-                          s.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
-                          return std::unique_ptr<SampleRefiner>(new CpuRefiner(std::move(s)));
-                        });
+  refiners().declare(
+      "dynamic",
+      {.keys = {{dynamicSamplingKeys, [](Params& p, const Scene& scene, PipelineSettings& s) {
+                   s.refinerKeys.set(withPipeline(parseDynamicSampling(p, scene, s.paper), s));
+                 }}}});
+  refiners().addVariant("dynamic", Backend::Cpu, [](const PipelineSettings& s) {
+    return std::unique_ptr<SampleRefiner>(
+        new CpuRefiner(s.refinerKeys.get<DynamicSamplingSettings>()));
+  });
 }
 
 }  // namespace scatterlab

@@ -163,12 +163,17 @@ class SampleRefiner {
                                        std::vector<RadianceSample> initial,
                                        RadianceEvaluator& evaluator) = 0;
 };
-using RefinerMaker =
-    StageMaker<SampleRefiner, const DynamicSamplingSettings&, const PipelineSettings&>;
+/// A refiner's variants are built from the pipeline's settings; "dynamic"'s own keys are in
+/// PipelineSettings::refinerKeys (a DynamicSamplingSettings, withPipeline() applied).
+using RefinerMaker = StageMaker<SampleRefiner, const PipelineSettings&>;
 /// "dynamic": the paper's recursive splitting.
 StageRegistry<RefinerMaker>& refiners();
-/// Registers the CPU variant of "dynamic".
+/// Declares "dynamic" (its keys: dynamicSamplingKeys()) and registers its CPU variant.
 void registerRefiners();
+
+/// `ds` as a pipeline runs it: delta1 is the pipeline's Δ1, and the error compares values as the
+/// pipeline's samples hold them (Taylor bounds, log space). Both backends' variants use this.
+DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineSettings& ps);
 
 /// Adds the dynamic-sampling facts to render stats (shared by the CPU and GPU `adaptive`):
 /// samples_per_level (final samples per level), initial_samples, levels (per level: grid,
@@ -183,7 +188,7 @@ void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& 
 /// absolute ε (default 1e-4), probes default to Eq. 5's six, max_samples is an error. Otherwise
 /// epsilon is relative (a fraction of relativeErrorScale(), default 0.05) and the defaults are
 /// the measured best (docs/dynamic-sampling.md). delta1 is not read here (the pipeline's Δ1 is
-/// used; this sets it to one voxel edge for callers without a pipeline).
+/// used, withPipeline(); this sets it to one voxel edge for callers without a pipeline).
 DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene,
                                              bool paper = false);
 

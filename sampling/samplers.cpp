@@ -62,6 +62,11 @@ class GaussianCentresSampler : public Sampler {
   GaussianCentresSampler(std::optional<long long> count, float scale)
       : count_(count), scale_(scale) {}
   bool readsDensity() const override { return false; }
+  long long plannedCount(const Scene& scene) const override {
+    const auto* blobs = scene.medium.density ? scene.medium.density->gaussians() : nullptr;
+    const long long gaussians = blobs ? (long long)blobs->size() : 0;
+    return count_ ? std::min(*count_, gaussians) : gaussians;
+  }
   std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid&) override {
     const std::vector<GaussianBlob>* blobs = scene.medium.density->gaussians();
     if (!blobs) throw ConfigError("sampler 'gaussian-centres' needs a sum-of-Gaussians medium");
@@ -99,6 +104,8 @@ class CellSampler : public Sampler {
  public:
   CellSampler(bool jitter, long long count, float scale, std::uint64_t seed, bool skipEmpty)
       : jitter_(jitter), count_(count), scale_(scale), seed_(seed), skipEmpty_(skipEmpty) {}
+  /// The cells chosen come as close to `count` as the grid allows (chooseSampleCells).
+  long long plannedCount(const Scene&) const override { return count_; }
   std::vector<RadianceSample> generate(const Scene&, const DensityGrid& density) override {
     const SampleCells cells = chooseSampleCells(density, count_, skipEmpty_);
     const float R = scale_ * std::max({cells.cell.x, cells.cell.y, cells.cell.z});
@@ -131,14 +138,37 @@ class CellSampler : public Sampler {
 };
 
 const Interval kCount = Interval::closed(1, 1e8);
+/// `count` of the grid and jittered samplers when none is given.
+constexpr long long kDefaultCount = 512;
 
 /// `count` samples (and the cells they come from) must fit the memory limit.
 void checkSampleMemory(Params& p, long long count) {
   checkMemory(p.keyPath("count"), std::to_string(count) + " radiance samples",
-              double(count) * double(sizeof(RadianceSample) + 2 * sizeof(std::int64_t)));
+              sampleSetBytes(double(count)));
 }
 
 }  // namespace
+
+const std::vector<KeyDoc>& samplerKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"type", "string",
+       "gradient: jittered with count 2000; adaptive: grid with count 2000; with paper and for "
+       "rbf, nearest: gaussian-centres when the medium is a sum of Gaussians, else jittered",
+       "gaussian-centres, jittered, grid", "how the initial samples are placed", R"("jittered")"},
+      {"count", "int", "512 (gaussian-centres: every Gaussian)", "1…1e8",
+       "number of samples (gaussian-centres: keep the count Gaussians of largest mass)", "8"},
+      {"radius_scale", "number", "3 (gaussian-centres), 1.75 (jittered), 1 (grid)", "> 0",
+       "valid radius R_j in Gaussian radii or cell sizes", "1.5"},
+      {"seed", "int", "0", ">= 0", "jittered: random seed", "1"},
+      {"skip_empty", "bool", "true", "true, false", "jittered, grid: drop cells without density",
+       "false"},
+  };
+  return keys;
+}
+
+double sampleSetBytes(double count) {
+  return count * double(sizeof(RadianceSample) + 2 * sizeof(std::int64_t));
+}
 
 SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty) {
   const Vec3 ext = density.bounds().extent();
@@ -187,7 +217,7 @@ void registerSamplers() {
   });
   const auto cell = [](bool jitter) {
     return [jitter](Params& p, const Scene&) {
-      const long long count = p.integer("count", kDefaultSampleCount, kCount);
+      const long long count = p.integer("count", kDefaultCount, kCount);
       checkSampleMemory(p, count);
       const float scale = p.real("radius_scale", jitter ? 1.75 : 1.0, Interval::above(0));
       const std::uint64_t seed =

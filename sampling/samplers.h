@@ -26,8 +26,13 @@ namespace scatterlab {
 /// with a ConfigError naming the key.
 void registerSamplers();
 
-/// `count` of the grid and jittered samplers when none is given.
-inline constexpr long long kDefaultSampleCount = 512;
+/// Key table of the render.sampler object (every sampler's keys; which sampler reads which is
+/// in each row's meaning).
+const std::vector<KeyDoc>& samplerKeys();
+
+/// The memory of `count` radiance samples with their per-sample bookkeeping (bytes): what a
+/// sampler's `count` is checked against, and what a render's memory plan counts for them.
+double sampleSetBytes(double count);
 
 /// Cell layout of the grid and jittered samplers, exposed for tests.
 struct SampleCells {

@@ -3,8 +3,8 @@
 /// variants live in cpu/ and GPU variants in gpu/ (gpu/post_process.*; both sit above shading/,
 /// so what both need is here): `light-space-march` (Tóth & Umenhoffer 2009,
 /// docs/light-space-march.md) and `radial-blur` (Mitchell, GPU Gems 3 ch. 13, docs/radial-blur.md).
-/// Their settings structs are in core/stages.h; the keys are read, with their tables, in
-/// methods/settings.cpp.
+/// Each one's settings struct, key table and parser are here too (post_process.cpp), declared
+/// by lightSpaceMarchStage() and radialBlurStage().
 
 #include <algorithm>
 #include <string>
@@ -15,6 +15,40 @@
 #include "core/stages.h"
 
 namespace scatterlab {
+
+/// How light-space-march attenuates the light on its way to a sample point.
+enum class LightTransmittance {
+  /// Tóth & Umenhoffer's homogeneous model: e^(−σt·D̄·d), D̄ the mean of the density volume,
+  /// d the length inside the medium box of the segment from the point to the light.
+  Mean,
+  /// The real density traced with step delta1 (what `exact` does), to separate the two errors.
+  Traced,
+};
+
+/// `light-space-march`'s keys (lightSpaceMarchStage()).
+struct LightSpaceMarchSettings {
+  int steps = 128;     ///< N: terms of each view ray's sum, from the visible surface to the eye
+  int interleave = 4;  ///< M: M×M pixel blocks, each pixel evaluates every M²-th term
+  LightTransmittance light = LightTransmittance::Mean;
+};
+
+/// `radial-blur`'s keys (radialBlurStage()).
+struct RadialBlurSettings {
+  int samples = 64;        ///< n: samples per pixel along the screen ray towards the light
+  float density = 1.0f;    ///< fraction of the pixel→light segment the n samples span
+  float weight = 1.0f;     ///< per-sample scale
+  float decay = 1.0f;      ///< sample i is scaled by decay^i
+  float exposure = 1.0f;   ///< overall scale
+  int downsample = 1;      ///< the pre-pass is rendered at 1/downsample of the image size
+  float guardBand = 0.5f;  ///< the light's screen position is clamped to this margin (image sizes)
+};
+
+/// `light-space-march` (an integrator): its keys steps, interleave, light_transmittance into
+/// PipelineSettings::integratorKeys (LightSpaceMarchSettings); own steps, no view march.
+const StageDecl& lightSpaceMarchStage();
+/// `radial-blur` (an integrator): its keys samples, density, weight, decay, exposure,
+/// downsample, guard_band (RadialBlurSettings); the view march's keys for its pre-pass.
+const StageDecl& radialBlurStage();
 
 /// The mean of a density volume over all its voxels (D̄ of LightTransmittance::Mean).
 inline float meanDensity(const DensityGrid& g) {

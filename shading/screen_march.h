@@ -1,6 +1,7 @@
 #pragma once
 /// What the CPU and GPU variants of the per-pixel competitors share (docs/competitors.md):
-/// the jitter patterns of `jittered-march` and the depth slicing of `froxel`. The GPU shaders
+/// their settings and keys (table and parser in screen_march.cpp), the jitter patterns of
+/// `jittered-march` and the depth slicing of `froxel`. The GPU shaders
 /// mirror these formulas line for line (gpu/shaders/jittered_march.comp.glsl,
 /// froxel_scatter.comp.glsl); tests/gpu holds them in step.
 
@@ -13,6 +14,40 @@
 #include "core/stats.h"
 
 namespace scatterlab {
+
+/// Per-pixel ray offsets of `jittered-march` (cpu/jittered_march.h).
+enum class Jitter {
+  None,       ///< every sample at the middle of its step
+  Ign,        ///< interleaved gradient noise (Jimenez 2014) of the pixel
+  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (cpu/blue_noise.h)
+};
+
+/// `jittered-march`'s keys (jitteredMarchStage()).
+struct JitteredMarchSettings {
+  int steps = 32;  ///< view-ray steps per ray, whatever its length in the medium
+  Jitter jitter = Jitter::Ign;
+  int downsample = 1;  ///< 1, 2 or 4: the march runs at 1/downsample of the resolution
+};
+
+/// How froxel depth slices are spaced between near and far (view depth).
+enum class DepthDistribution { Exponential, Linear };
+
+/// `froxel`'s keys (froxelStage()).
+struct FroxelSettings {
+  IVec3 grid{160, 90, 64};  ///< froxels across, down, and depth slices
+  DepthDistribution distribution = DepthDistribution::Exponential;
+  float near = 0.0f,
+        far = 0.0f;  ///< view depths of the grid; 0: the medium box's (see froxelRange)
+  bool transmittanceMap = false;  ///< light transmittance from a per-light map, else traced
+  int mapResolution = 64;         ///< voxels per axis of each light's transmittance map
+};
+
+/// `jittered-march` (an integrator, cpu/jittered_march.h): its keys steps, jitter, downsample
+/// into PipelineSettings::integratorKeys (JitteredMarchSettings); one ray per pixel.
+const StageDecl& jitteredMarchStage();
+/// `froxel` (an integrator, cpu/froxel.h): its keys froxel_grid, depth_distribution, near, far,
+/// light_transmittance, transmittance_map_resolution (FroxelSettings); one ray per pixel.
+const StageDecl& froxelStage();
 
 /// Interleaved gradient noise (Jimenez 2014, "Next generation post processing in Call of Duty:
 /// Advanced Warfare") at integer pixel (x, y): fract(52.9829189·fract(0.06711056·x +

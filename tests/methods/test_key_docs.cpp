@@ -10,6 +10,7 @@
 
 #include "api/scatterlab.h"
 #include "core/stages.h"
+#include "methods/register.h"
 #include "methods/settings.h"
 
 namespace scatterlab {
@@ -64,18 +65,23 @@ std::set<std::string> backticked(const std::string& text) {
   return words;
 }
 
-/// Whether the key tables say `key` is a bool.
-bool isBool(const std::string& key) {
-  for (const KeyDoc& d : pipelineKeys())
-    if (d.name == key) return d.type == "bool";
-  return false;
+/// The value the key tables give for `row`: its example, or for an object the examples of its
+/// own table's keys.
+Json example(const KeyDoc& row) {
+  if (row.fields) {
+    Json o = Json::object();
+    for (const KeyDoc& f : row.fields()) o[std::string(f.name)] = example(f);
+    return o;
+  }
+  EXPECT_FALSE(row.example.empty()) << row.name << " has no example value in its table";
+  return row.example.empty() ? Json() : Json::parse(row.example);
 }
 
-/// The keys read while loading every demo scene and creating every method (all its keys given,
-/// so optional ones are read too) and every sampler type on it.
+/// The keys read while loading every demo scene and creating every method with each of its
+/// keys at its table's example value (so optional ones are read too) and every sampler type on
+/// it.
 std::set<std::string> keysTheCodeReads() {
   initialize();
-  std::set<std::string> read;
   Params::ReadLog log;
   for (const char* name : {"glow", "shaft", "dusty_room", "fig3", "smoke", "cloud", "window",
                            "bunny_spot", "cornell_fog"}) {
@@ -86,77 +92,11 @@ std::set<std::string> keysTheCodeReads() {
     } catch (const IoError&) {
       continue;  // a scene on ../shared/data that this checkout lacks
     }
-    for (const std::string& m : methods().names()) {
+    for (const MethodDesc& d : builtinMethods()) {
       Scene s = base;
-      s.render = {{"method", m}, {"backend", "cpu"}};
-      for (const std::string& k : methods().get(m, "").keys) {
-        // Values of the right type, valid on this scene: the keys' own defaults where known.
-        if (k == "sampler")
-          s.render[k] = {{"type", "jittered"},
-                         {"count", 8},
-                         {"seed", 1},
-                         {"radius_scale", 1.5},
-                         {"skip_empty", true}};
-        else if (k == "shadow_map")
-          s.render[k] = {{"type", "depth"},
-                         {"resolution", 64},
-                         {"bias", 1},
-                         {"filter", 3},
-                         {"bleed_reduction", 0.2}};
-        else if (k == "radiance_resolution")
-          s.render[k] = 8;
-        else if (k == "slicing")
-          s.render[k] = "ray-steps";
-        else if (k == "gpu_pipeline")
-          s.render[k] = "raster";
-        else if (k == "march_scale")
-          s.render[k] = 2;
-        else if (k == "march_simd")
-          s.render[k] = "sse2";
-        else if (k == "evaluator")
-          s.render[k] = "volume-tracer";
-        else if (k == "integrator")
-          s.render[k] = "ray-marcher";
-        else if (k == "levels")
-          s.render[k] = {2};
-        else if (k == "tau")
-          s.render[k] = "ancestor";
-        else if (k == "probes")
-          s.render[k] = 6;
-        else if (k == "steps" && m == "light-space-march")  // at least interleave²
-          s.render[k] = 16;
-        else if (k == "light_transmittance" && m == "light-space-march")
-          s.render[k] = "traced";
-        else if (k == "steps" || k == "downsample")
-          s.render[k] = 2;
-        else if (k == "jitter")
-          s.render[k] = "blue-noise";
-        else if (k == "froxel_grid")
-          s.render[k] = {4, 3, 2};
-        else if (k == "depth_distribution")
-          s.render[k] = "linear";
-        else if (k == "near")
-          s.render[k] = 0.01;
-        else if (k == "far")
-          s.render[k] = 100;
-        else if (k == "light_transmittance")
-          s.render[k] = "map";
-        else if (k == "transmittance_map_resolution")
-          s.render[k] = 4;
-        else if (k == "min_transmittance" || k == "epsilon")
-          s.render[k] = 0.5;
-        else if (k == "interleave")
-          s.render[k] = 2;
-        else if (k == "samples")  // radial-blur
-          s.render[k] = 8;
-        else if (k == "density" || k == "decay" || k == "guard_band")
-          s.render[k] = 0.5;
-        else if (isBool(k))
-          s.render[k] = false;
-        else
-          s.render[k] = s.medium.voxelSize();
-      }
-      createMethod(s);
+      s.render = {{"method", d.name}, {"backend", "cpu"}};
+      for (const KeyDoc& row : methodKeyTable(d)) s.render[std::string(row.name)] = example(row);
+      EXPECT_NO_THROW(createMethod(s)) << name << ", " << d.name << ": " << s.render.dump();
     }
     for (const std::string& type : samplers().names()) {
       if (type == "gaussian-centres" && !base.medium.density->gaussians()) continue;
