@@ -114,8 +114,8 @@ void checkMemory(const std::string& key, const std::string& what, double bytes) 
       ")");
 }
 
-void MemoryPlan::add(const std::string& key, const std::string& what, double bytes) {
-  if (bytes > 0) items_.push_back({key, what, bytes});
+void MemoryPlan::add(std::vector<std::string> keys, const std::string& what, double bytes) {
+  if (bytes > 0) items_.push_back({std::move(keys), what, bytes});
 }
 
 double MemoryPlan::total() const {
@@ -132,9 +132,12 @@ void MemoryPlan::check() const {
   std::stable_sort(largest.begin(), largest.end(),
                    [](const Item& a, const Item& b) { return a.bytes > b.bytes; });
   std::string parts;
-  for (std::size_t i = 0; i < largest.size() && i < 3; ++i)
-    parts += (i ? "; " : "") + ("'" + largest[i].key + "': " + largest[i].what + ", " +
-                                formatBytes(largest[i].bytes));
+  for (std::size_t i = 0; i < largest.size() && i < 3; ++i) {
+    std::string keys;
+    for (const std::string& k : largest[i].keys) keys += (keys.empty() ? "'" : ", '") + k + "'";
+    parts +=
+        (i ? "; " : "") + (keys + ": " + largest[i].what + ", " + formatBytes(largest[i].bytes));
+  }
   if (largest.size() > 3)
     parts += "; and " + std::to_string(largest.size() - 3) + " smaller, " +
              formatBytes(sum - largest[0].bytes - largest[1].bytes - largest[2].bytes);

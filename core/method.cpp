@@ -17,10 +17,9 @@ namespace {
 Backend chooseBackend(const Scene& scene, const std::string& name, const MethodEntry& m,
                       const std::string& asked, std::string* note) {
   const BackendEntry& gpu = backends()[int(Backend::Gpu)];
-  // What the GPU backend cannot render yet: refused when asked for, avoided by "auto".
-  std::string gpuLacks;
-  if (scene.camera.spp > 1)
-    gpuLacks = "camera.spp > 1 is not supported on the GPU backend yet; use --backend cpu";
+  // What the GPU backend cannot render yet (its own limitation, gpu/register.cpp): refused when
+  // asked for, avoided by "auto".
+  const std::string gpuLacks = gpu.unsupported ? gpu.unsupported(scene) : "";
   if (asked == "gpu" && !gpuLacks.empty()) throw ConfigError(gpuLacks);
   if (asked == "auto" && !gpuLacks.empty() && m.runsOn(Backend::Cpu) && m.runsOn(Backend::Gpu)) {
     *note = "auto: " + gpuLacks.substr(0, gpuLacks.find(';')) + "; using the CPU";

@@ -3,7 +3,8 @@
 namespace scatterlab {
 
 const char* backendName(Backend b) {
-  return b == Backend::Gpu ? "gpu" : "cpu";
+  static constexpr std::array<const char*, kBackendCount> names = {"cpu", "gpu"};
+  return names[std::size_t(b)];
 }
 
 void HostFrame::buildDensity(const Scene& scene) {

@@ -253,6 +253,9 @@ struct BackendEntry {
   /// For backend "auto": whether this backend should be chosen now (e.g. a hardware GPU is
   /// present), with a sentence saying what was found. May create a GL context.
   std::function<bool(std::string* why)> preferred;
+  /// What of `scene` this backend cannot render yet, as a sentence ending in the way out (e.g.
+  /// "...; use --backend cpu"); empty when it can. Null: it renders everything.
+  std::function<std::string(const Scene& scene)> unsupported;
 };
 /// Indexed by Backend; the CPU entry is always there, the GPU one when gpu/ registered it.
 std::array<BackendEntry, kBackendCount>& backends();

@@ -14,16 +14,20 @@ namespace scatterlab {
 /// render starts: each one may be below the limit while together they are not.
 class MemoryPlan {
  public:
-  /// One planned allocation: `key` the dotted key (or file) whose value implies it, `what`
+  /// One planned allocation: `keys` the dotted keys (or file) whose values imply it, `what`
   /// what it is ("the density volume of 64x64x64 voxels"). Sizes <= 0 are not recorded.
-  void add(const std::string& key, const std::string& what, double bytes);
+  void add(std::vector<std::string> keys, const std::string& what, double bytes);
+  void add(const std::string& key, const std::string& what, double bytes) {
+    add(std::vector<std::string>{key}, what, bytes);
+  }
   double total() const;
   /// Throws LimitError when total() exceeds memoryLimit(), naming the total, the limit and
   /// the largest contributors (at most three, largest first, with their keys).
   void check() const;
 
   struct Item {
-    std::string key, what;
+    std::vector<std::string> keys;
+    std::string what;
     double bytes = 0;
   };
   const std::vector<Item>& items() const { return items_; }

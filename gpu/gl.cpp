@@ -55,8 +55,8 @@ constexpr std::size_t kMaxFreeBytes = std::size_t(1) << 30;
 
 /// The storage an object of `key` holds (textures: 16 bytes a texel at most; estimated).
 std::size_t storageBytes(const detail::ObjectKey& key) {
-  if (key.kind == 1) return key.bytes;
-  if (key.kind != 2) return 0;
+  if (key.kind == detail::ObjectKind::Buffer) return key.bytes;
+  if (key.kind != detail::ObjectKind::Texture) return 0;
   std::size_t texel = 16;
   if (key.format == GL_R32F || key.format == GL_DEPTH_COMPONENT32F) texel = 4;
   if (key.format == GL_RG32F) texel = 8;
@@ -65,20 +65,22 @@ std::size_t storageBytes(const detail::ObjectKey& key) {
 
 void deleteObject(const detail::ObjectKey& key, GLuint id) {
   switch (key.kind) {
-    case 1:
+    case detail::ObjectKind::Buffer:
       glDeleteBuffers(1, &id);
       break;
-    case 2:
+    case detail::ObjectKind::Texture:
       glDeleteTextures(1, &id);
       break;
-    case 3:
+    case detail::ObjectKind::Framebuffer:
       glDeleteFramebuffers(1, &id);
       break;
-    case 4:
+    case detail::ObjectKind::Query:
       glDeleteQueries(1, &id);
       break;
-    default:
+    case detail::ObjectKind::VertexArray:
+    case detail::ObjectKind::None:
       glDeleteVertexArrays(1, &id);
+      break;
   }
 }
 
@@ -182,7 +184,7 @@ void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
 }
 
 Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view name)
-    : target_(target), key_{2, target, format, w, h, d} {
+    : target_(target), key_{detail::ObjectKind::Texture, target, format, w, h, d} {
   id_ = detail::takeRecycled(key_);
   if (id_) {
     // A new texture's contents are undefined in GL (zeros in practice): a recycled one is zeroed.
@@ -224,7 +226,7 @@ Texture Texture::make2DArray(GLenum format, int w, int h, int layers, std::strin
 }
 
 Framebuffer::Framebuffer(std::string_view name) {
-  id_ = detail::takeRecycled({3});
+  id_ = detail::takeRecycled({detail::ObjectKind::Framebuffer});
   if (id_) {
     // As new: no attachments, draw buffer 0.
     GLint colors = 8;
@@ -282,7 +284,7 @@ Program::Program(std::initializer_list<const Shader*> shaders, std::string_view 
 }
 
 Query::Query(GLenum target, std::string_view name) : target_(target) {
-  id_ = detail::takeRecycled({4, target});
+  id_ = detail::takeRecycled({detail::ObjectKind::Query, target});
   if (!id_) {
     glCreateQueries(target, 1, &id_);
     detail::countCreated();
@@ -291,7 +293,7 @@ Query::Query(GLenum target, std::string_view name) : target_(target) {
 }
 
 VertexArray::VertexArray(std::string_view name) {
-  id_ = detail::takeRecycled({5});
+  id_ = detail::takeRecycled({detail::ObjectKind::VertexArray});
   if (!id_) {
     glCreateVertexArrays(1, &id_);
     detail::countCreated();

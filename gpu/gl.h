@@ -46,9 +46,11 @@ class RecyclingScope {
 };
 
 namespace detail {
+/// The GL object types the wrappers own (and delete by their own glDelete*).
+enum class ObjectKind { None, Buffer, Texture, Framebuffer, Query, VertexArray };
 /// What a recycled object must match to be taken over.
 struct ObjectKey {
-  int kind = 0;  ///< 1 buffer, 2 texture, 3 framebuffer, 4 query, 5 vertex array
+  ObjectKind kind = ObjectKind::None;
   GLenum target = 0, format = 0;
   int w = 0, h = 0, d = 0;
   std::size_t bytes = 0;
@@ -139,7 +141,9 @@ class Buffer : public GlObject<BufferDeleter> {
   void bindBase(GLenum target, GLuint index) const { glBindBufferBase(target, index, id_); }
 
  private:
-  detail::ObjectKey key() const { return {1, 0, 0, 0, 0, 0, size_, flags_}; }
+  detail::ObjectKey key() const {
+    return {detail::ObjectKind::Buffer, 0, 0, 0, 0, 0, size_, flags_};
+  }
   std::size_t size_ = 0;
   GLbitfield flags_ = 0;
 };
@@ -178,7 +182,7 @@ class Framebuffer : public GlObject<FramebufferDeleter> {
  public:
   Framebuffer() = default;
   explicit Framebuffer(std::string_view label);
-  ~Framebuffer() { release({3}); }
+  ~Framebuffer() { release({detail::ObjectKind::Framebuffer}); }
   Framebuffer(Framebuffer&&) noexcept = default;
   Framebuffer& operator=(Framebuffer&&) noexcept = default;
 };
@@ -206,7 +210,7 @@ class Query : public GlObject<QueryDeleter> {
  public:
   Query() = default;
   Query(GLenum target, std::string_view label);
-  ~Query() { release({4, target_}); }
+  ~Query() { release({detail::ObjectKind::Query, target_}); }
   Query(Query&& o) noexcept : GlObject(std::move(o)), target_(o.target_) {}
   Query& operator=(Query&& o) noexcept {
     GlObject::operator=(std::move(o));
@@ -224,7 +228,7 @@ class VertexArray : public GlObject<VertexArrayDeleter> {
  public:
   VertexArray() = default;
   explicit VertexArray(std::string_view label);
-  ~VertexArray() { release({5}); }
+  ~VertexArray() { release({detail::ObjectKind::VertexArray}); }
   VertexArray(VertexArray&&) noexcept = default;
   VertexArray& operator=(VertexArray&&) noexcept = default;
 };

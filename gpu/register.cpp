@@ -58,12 +58,19 @@ bool preferGpu(std::string* why) {
   return true;
 }
 
+/// What the GPU backend cannot render yet.
+std::string unsupported(const Scene& scene) {
+  if (scene.camera.spp > 1)
+    return "camera.spp > 1 is not supported on the GPU backend yet; use --backend cpu";
+  return "";
+}
+
 }  // namespace
 
 void registerGpuStages() {
   backends()[int(Backend::Gpu)] = BackendEntry{
       [](const PipelineSettings& s) { return std::unique_ptr<Frame>(new GpuFrame(s.gpuPipeline)); },
-      preferGpu};
+      preferGpu, unsupported};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<RadianceEvaluator>(
         new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace, s.shadowMap));

@@ -14,9 +14,14 @@ template <class Maker>
 const Maker& variant(const StageRegistry<Maker>& registry, const std::string& name, Backend b,
                      const std::string& key, const std::string& what) {
   const auto& entry = registry.get(name, key);
-  if (!entry.has(b))
+  if (!entry.has(b)) {
+    std::string others;  // the backends that have one
+    for (int o = 0; o < kBackendCount; ++o)
+      if (o != int(b) && entry.has(Backend(o)))
+        others += (others.empty() ? "" : " or ") + std::string(backendName(Backend(o)));
     throw ConfigError("'" + key + "': " + what + " '" + name + "' has no " + backendName(b) +
-                      " variant; use --backend " + backendName(Backend(1 - int(b))));
+                      " variant" + (others.empty() ? "" : "; use --backend " + others));
+  }
   return entry.on[int(b)];
 }
 

@@ -330,7 +330,7 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
     plan.add("medium", "the medium's " + std::to_string(g->size()) + " Gaussians",
              double(g->size()) * sizeof(GaussianBlob));
   const Camera& c = scene.camera;
-  plan.add("camera.width', 'camera.height",
+  plan.add(std::vector<std::string>{"camera.width", "camera.height"},
            "an image of " + std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels",
            double(c.width) * double(c.height) * 32.0);
   if (d.radianceVolume()) {
