@@ -93,7 +93,7 @@ void BM_GpuVolumeTracer512(benchmark::State& state) {
   auto samples = samples512(s);
   const float vox = s.medium.voxelSize();
   gpuLoop(state, [&](gpu::StageTimer& t) {
-    gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, &t);
+    gpu::VolumeTracerGpu({vox, vox}).evaluate(s, d, samples, true, &t);
   });
 }
 
@@ -103,7 +103,7 @@ void BM_GpuGradientSplat512(benchmark::State& state) {
   const gpu::Volume d = gpu::buildDensity(s);
   auto samples = samples512(s);
   const float vox = s.medium.voxelSize();
-  gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, nullptr);
+  gpu::VolumeTracerGpu({vox, vox}).evaluate(s, d, samples, true, nullptr);
   gpuLoop(state, [&](gpu::StageTimer& t) {
     gpu::Volume v = gpu::GradientSplatGpu(false, false, std::nullopt, pipelineArg(state))
                         .reconstruct(d, samples, s.medium.bounds, s.medium.resolution, nullptr, &t);
@@ -226,7 +226,7 @@ void BM_GpuGradientPipeline512(benchmark::State& state) {
   ms.step = vox;
   gpuStageLoop(state, [&](gpu::StageTimer& t) {
     auto samples = samples512(s);
-    gpu::VolumeTracerGpu(vox, vox).evaluate(s, d, samples, true, &t);
+    gpu::VolumeTracerGpu({vox, vox}).evaluate(s, d, samples, true, &t);
     const gpu::Volume r = gpu::GradientSplatGpu().reconstruct(d, samples, s.medium.bounds,
                                                               s.medium.resolution, nullptr, &t);
     Image img = gpu::SliceMarcher(ms).integrate(s, d, r, &t);

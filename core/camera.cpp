@@ -26,6 +26,18 @@ Camera::RayGenerator Camera::rayGenerator() const {
   return g;
 }
 
+Camera::DepthRange Camera::viewDepthRange(const RayGenerator& gen, const Box& b) {
+  DepthRange r{kInfinity, -kInfinity};
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 p((c & 1) ? b.max.x : b.min.x, (c & 2) ? b.max.y : b.min.y,
+                 (c & 4) ? b.max.z : b.min.z);
+    const float z = glm::dot(p - gen.origin, gen.forward);
+    r.near = std::min(r.near, z);
+    r.far = std::max(r.far, z);
+  }
+  return r;
+}
+
 Ray Camera::primaryRay(int px, int py) const {
   return rayGenerator()(px, py);
 }

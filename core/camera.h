@@ -39,6 +39,15 @@ struct Camera {
   };
   RayGenerator rayGenerator() const;
 
+  /// View depths (distances along the forward axis from the eye) of a box's nearest and
+  /// farthest corners; `near` is negative when a corner lies behind the eye.
+  struct DepthRange {
+    float near, far;
+  };
+  /// The view-depth range of `box` seen from `gen`: what froxel slices and the paper's
+  /// view-plane slabs span.
+  static DepthRange viewDepthRange(const RayGenerator& gen, const Box& box);
+
   /// Projects a world point to continuous pixel coordinates (x right, y down); returns false
   /// when the point is behind the camera.
   bool project(const Vec3& p, float& px, float& py) const;

@@ -134,6 +134,19 @@ class StageOwnSettings {
   std::any v_;
 };
 
+/// The volume tracer's steps and what it evaluates: the radiance evaluator's settings on both
+/// backends (PipelineSettings::tracerSteps()), also dynamic sampling's GPU passes'.
+struct TracerSteps {
+  float delta1 = 0.0f;  ///< tracing step towards the lights (world units, the paper's Δ1)
+  float delta2 = 0.0f;  ///< central-difference step of ∇S (world units, the paper's Δ2)
+  /// Evaluate V = S / A (shading/transport.h, FactoredSourceRadiance) instead of S, and ∇V.
+  bool factorLights = false;
+  /// With factorLights: ln V and ∇ ln V (V clamped below at kMinV).
+  bool logSpace = false;
+  /// Whether the values are ln V: the one place where factorLights and logSpace combine.
+  bool logValues() const { return factorLights && logSpace; }
+};
+
 /// The settings every stage variant is built from, whichever backend runs it. Parsed once,
 /// with its key table, by parsePipelineSettings (methods/settings.h).
 struct PipelineSettings {
@@ -171,6 +184,10 @@ struct PipelineSettings {
   /// The settings of the integrator's and the refiner's own keys (light-space-march's,
   /// froxel's, dynamic sampling's, ...), parsed by their StageDecl; empty for stages without.
   StageOwnSettings integratorKeys, refinerKeys;
+
+  TracerSteps tracerSteps() const { return {delta1, delta2, factorLights, logSpace}; }
+  /// The samples and the radiance volume hold ln V (TracerSteps::logValues()).
+  bool logValues() const { return tracerSteps().logValues(); }
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.
@@ -186,7 +203,7 @@ struct TaylorBounds {
 /// The bounds for what `s`'s samples hold (nullopt when boundedTaylor is off).
 inline std::optional<TaylorBounds> taylorBounds(const PipelineSettings& s) {
   if (!s.boundedTaylor) return std::nullopt;
-  if (s.factorLights && s.logSpace) return TaylorBounds{std::log(kMinV), 0.0f};
+  if (s.logValues()) return TaylorBounds{std::log(kMinV), 0.0f};
   if (s.factorLights) return TaylorBounds{0.0f, 1.0f};
   return TaylorBounds{0.0f, std::numeric_limits<float>::max()};
 }

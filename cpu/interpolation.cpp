@@ -545,7 +545,7 @@ void parseInterpolation(Params& p, const Scene&, PipelineSettings& s) {
 void registerReconstructions() {
   const auto interp = [](Interpolation k) {
     return [k](const PipelineSettings& s) {
-      const ValueSpace space = s.factorLights && s.logSpace ? ValueSpace::Log : ValueSpace::Linear;
+      const ValueSpace space = s.logValues() ? ValueSpace::Log : ValueSpace::Linear;
       return std::unique_ptr<Reconstruction>(
           new InterpolatingReconstruction(k, space, s.occlusionWeights, taylorBounds(s)));
     };

@@ -139,13 +139,7 @@ class LightSpaceMarchIntegrator : public Integrator {
     return marcher.render(progress);
   }
   void describe(RenderStats& st) const override {
-    st.extra["steps"] = s_.steps;
-    st.extra["interleave"] = s_.interleave;
-    st.extra["terms_per_pixel"] =
-        (s_.steps + s_.interleave * s_.interleave - 1) / (s_.interleave * s_.interleave);
-    st.extra["light_transmittance"] = s_.light == LightTransmittance::Mean ? "mean" : "traced";
-    if (s_.light == LightTransmittance::Mean) st.extra["mean_density"] = mean_;
-    st.extra["shadow_maps"] = shadowMaps_;
+    describeLightSpaceMarch(st, s_, mean_, shadowMaps_);
     // The CPU maps compare depths whatever render.shadow_map.type (VSM is GPU only).
     if (shadowMaps_ > 0) st.extra["shadow_map_lookup"] = "depth";
   }

@@ -134,11 +134,7 @@ class RadialBlurIntegrator : public Integrator {
     }
     return renderRadialBlur(scene, frame.hostDensity(), s_, march_, delta1_);
   }
-  void describe(RenderStats& st) const override {
-    st.extra["samples_per_pixel"] = s_.samples;
-    st.extra["downsample"] = s_.downsample;
-    st.extra["light_screen_positions"] = positions_;
-  }
+  void describe(RenderStats& st) const override { describeRadialBlur(st, s_, positions_); }
 
  private:
   RadialBlurSettings s_;

@@ -41,7 +41,7 @@ void evaluateWith(const Source& source, const Scene& scene, float delta2,
 
 void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
                      std::span<RadianceSample> samples, bool gradients) {
-  if (steps.factorLights && steps.logSpace) {
+  if (steps.logValues()) {
     const FactoredSourceRadiance v(scene, density, steps.delta1);
     const auto logV = [&](const Vec3& x, const Vec3& toViewer) {
       return glm::log(glm::max(v(x, toViewer), Vec3(kMinV)));
@@ -88,8 +88,7 @@ void parseVolumeTracer(Params& p, const Scene& scene, PipelineSettings& s) {
 void registerRadianceEvaluators() {
   radianceEvaluators().declare("volume-tracer", {.keys = {{volumeTracerKeys, parseVolumeTracer}}});
   radianceEvaluators().addVariant("volume-tracer", Backend::Cpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerEvaluator(
-        TracerSteps{s.delta1, s.delta2, s.factorLights, s.factorLights && s.logSpace}));
+    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerEvaluator(s.tracerSteps()));
   });
 }
 

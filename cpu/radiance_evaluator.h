@@ -7,16 +7,6 @@
 
 namespace scatterlab {
 
-/// Δ1 and Δ2 in world units (PipelineSettings::delta1, delta2).
-struct TracerSteps {
-  float delta1 = 0.0f;
-  float delta2 = 0.0f;
-  /// Evaluate V = S / A (shading/transport.h, FactoredSourceRadiance) instead of S, and ∇V.
-  bool factorLights = false;
-  /// With factorLights: ln V and ∇ ln V (V clamped below at kMinV).
-  bool logSpace = false;
-};
-
 /// Smallest V whose logarithm the samples hold (ln 1e-9 ≈ −20.7: transmittance below it is
 /// black at any exposure).
 

@@ -114,7 +114,7 @@ std::size_t dispatchSlot(std::size_t L) {
   return L + 3;
 }
 
-const Program& errorProgram(const TracingInputs& inputs, const DynamicSamplingGpuSteps& steps,
+const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& steps,
                             const DynamicSamplingSettings& settings) {
   std::string key = "dynamic sampling error";
   std::vector<std::string> defines;
@@ -122,7 +122,7 @@ const Program& errorProgram(const TracingInputs& inputs, const DynamicSamplingGp
     defines.push_back("SL_FACTOR_LIGHTS");
     key += " V";
   }
-  if (steps.factorLights && steps.logSpace) {
+  if (steps.logValues()) {
     defines.push_back("SL_LOG_SPACE");
     key += " ln";
   }
@@ -203,7 +203,7 @@ void dispatchOverLevel(const DynamicSamplingWorkspace& w, std::size_t k, std::si
 /// Evaluate level k (indirect dispatch after level 0): S, ∇S, E_j and on level 0 (not final)
 /// the contributions. GPU time: "ds evaluate+error".
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
-                   std::size_t k, bool final, const DynamicSamplingGpuSteps& steps,
+                   std::size_t k, bool final, const TracerSteps& steps,
                    const DynamicSamplingSettings& settings, StageTimer* timer) {
   const Program& program = errorProgram(inputs, steps, settings);
   const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
@@ -336,8 +336,7 @@ struct LevelReadBack {
 /// level is enqueued without a read-back; the result is read once at the end.
 DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
                                    const TracingInputs& inputs,
-                                   const std::vector<RadianceSample>& initial,
-                                   DynamicSamplingGpuSteps steps,
+                                   const std::vector<RadianceSample>& initial, TracerSteps steps,
                                    const DynamicSamplingSettings& settings, StageTimer* timer,
                                    std::vector<std::vector<float>>* errorsOut,
                                    DynamicSamplingWorkspace& w) {
@@ -448,8 +447,7 @@ std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
 }
 
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
-                                         std::vector<RadianceSample> initial,
-                                         DynamicSamplingGpuSteps steps,
+                                         std::vector<RadianceSample> initial, TracerSteps steps,
                                          const DynamicSamplingSettings& settings, StageTimer* timer,
                                          std::vector<std::vector<float>>* errorsOut,
                                          const ShadowMaps* shadows,

@@ -27,14 +27,6 @@
 
 namespace scatterlab::gpu {
 
-/// Steps of the GPU volume tracer used by dynamic sampling (render keys delta1, delta2).
-struct DynamicSamplingGpuSteps {
-  float delta1 = 0.0f;        ///< tracing step towards the lights
-  float delta2 = 0.0f;        ///< central-difference step of ∇S
-  bool factorLights = false;  ///< samples hold V = S / A (PipelineSettings::factorLights)
-  bool logSpace = false;      ///< ... or ln V (with factorLights)
-};
-
 /// Most samples one level above level 0 may hold (its list's capacity is the smaller of this and
 /// its grid's vertex count): 2^21 samples, 176 MiB of buffers per level (88 bytes a sample).
 inline constexpr std::size_t kMaxLevelSamples = std::size_t(1) << 21;
@@ -74,11 +66,13 @@ struct DynamicSamplingWorkspace {
 /// other). `shadows`: the scene objects' shadow maps (null without objects), so that S at
 /// samples and probes carries V_l as on the CPU. `workspace`: buffers kept from an earlier call
 /// (null: made for this call).
-DynamicSamplingResult dynamicSamplingGpu(
-    const Scene& scene, const Volume& density, std::vector<RadianceSample> initial,
-    DynamicSamplingGpuSteps steps, const DynamicSamplingSettings& settings,
-    StageTimer* timer = nullptr, std::vector<std::vector<float>>* errors = nullptr,
-    const ShadowMaps* shadows = nullptr, DynamicSamplingWorkspace* workspace = nullptr);
+DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
+                                         std::vector<RadianceSample> initial, TracerSteps steps,
+                                         const DynamicSamplingSettings& settings,
+                                         StageTimer* timer = nullptr,
+                                         std::vector<std::vector<float>>* errors = nullptr,
+                                         const ShadowMaps* shadows = nullptr,
+                                         DynamicSamplingWorkspace* workspace = nullptr);
 
 /// Exclusive scan of 0/1 flags by compute shader (the scan used by dynamicSamplingGpu, on host
 /// data: upload, scan, read back), for comparison with scatterlab::exclusiveScan. Returns the

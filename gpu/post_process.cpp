@@ -94,13 +94,7 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
 }
 
 void LightSpaceMarchGpu::describe(RenderStats& st) const {
-  st.extra["steps"] = s_.steps;
-  st.extra["interleave"] = s_.interleave;
-  st.extra["terms_per_pixel"] =
-      (s_.steps + s_.interleave * s_.interleave - 1) / (s_.interleave * s_.interleave);
-  st.extra["light_transmittance"] = s_.light == LightTransmittance::Mean ? "mean" : "traced";
-  if (s_.light == LightTransmittance::Mean) st.extra["mean_density"] = mean_;
-  st.extra["shadow_maps"] = shadowMaps_;
+  describeLightSpaceMarch(st, s_, mean_, shadowMaps_);
 }
 
 // ---------------------------------------------------------------- radial blur
@@ -185,9 +179,7 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
 }
 
 void RadialBlurGpu::describe(RenderStats& st) const {
-  st.extra["samples_per_pixel"] = s_.samples;
-  st.extra["downsample"] = s_.downsample;
-  st.extra["light_screen_positions"] = positions_;
+  describeRadialBlur(st, s_, positions_);
 }
 
 }  // namespace scatterlab::gpu

@@ -21,7 +21,7 @@ namespace {
 /// from one frame to the next.
 class GpuRefiner : public SampleRefiner {
  public:
-  GpuRefiner(DynamicSamplingSettings s, DynamicSamplingGpuSteps steps, ShadowMapSettings shadowMap)
+  GpuRefiner(DynamicSamplingSettings s, TracerSteps steps, ShadowMapSettings shadowMap)
       : s_(std::move(s)), steps_(steps), shadowMap_(shadowMap) {}
   DynamicSamplingResult refine(Frame& frame, const Scene& scene,
                                std::vector<RadianceSample> initial, RadianceEvaluator&) override {
@@ -33,7 +33,7 @@ class GpuRefiner : public SampleRefiner {
 
  private:
   DynamicSamplingSettings s_;
-  DynamicSamplingGpuSteps steps_;
+  TracerSteps steps_;
   ShadowMapSettings shadowMap_;  ///< the objects' visibility at samples and probes
   DynamicSamplingWorkspace workspace_;
 };
@@ -72,12 +72,11 @@ void registerGpuStages() {
       [](const PipelineSettings& s) { return std::unique_ptr<Frame>(new GpuFrame(s.gpuPipeline)); },
       preferGpu, unsupported};
   radianceEvaluators().addVariant("volume-tracer", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<RadianceEvaluator>(
-        new VolumeTracerGpu(s.delta1, s.delta2, s.factorLights, s.logSpace, s.shadowMap));
+    return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(s.tracerSteps(), s.shadowMap));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(new GradientSplatGpu(
-        s.factorLights && s.logSpace, s.occlusionWeights, taylorBounds(s), s.gpuPipeline));
+    return std::unique_ptr<Reconstruction>(
+        new GradientSplatGpu(s.logValues(), s.occlusionWeights, taylorBounds(s), s.gpuPipeline));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1, s.shadowMap));
@@ -104,9 +103,8 @@ void registerGpuStages() {
     return std::unique_ptr<Integrator>(new FroxelGpu(s));
   });
   refiners().addVariant("dynamic", Backend::Gpu, [](const PipelineSettings& ps) {
-    return std::unique_ptr<SampleRefiner>(
-        new GpuRefiner(ps.refinerKeys.get<DynamicSamplingSettings>(),
-                       {ps.delta1, ps.delta2, ps.factorLights, ps.logSpace}, ps.shadowMap));
+    return std::unique_ptr<SampleRefiner>(new GpuRefiner(
+        ps.refinerKeys.get<DynamicSamplingSettings>(), ps.tracerSteps(), ps.shadowMap));
   });
 }
 

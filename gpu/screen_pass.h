@@ -53,7 +53,7 @@ enum class OutputAlpha {
 };
 
 /// Reads a w×h RGBA32F image back into an Image (rgb, and the alpha as `alpha` says). GPU
-/// time: "read-back".
+/// time: "read-back". Also the raster slice marcher's read-back (SliceMarcher).
 Image readScreenImage(const Texture& t, int w, int h, OutputAlpha alpha, const char* pass,
                       StageTimer* timer);
 

@@ -8,6 +8,7 @@
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
 #include "gpu/records.h"
+#include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
 #include "gpu/sphere_bins.h"
 
@@ -400,16 +401,9 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
   const VertexArray vao("attribute-less");
   const TracingInputs inputs(scene, density, surfaces ? delta1_ : 0.0f, shadows);
 
-  // View-depth range of the box (distance along the forward axis from the eye).
+  // View-depth range of the box, from the eye on.
   const Box& b = density.bounds;
-  float zmin = kInfinity, zmax = -kInfinity;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 p((c & 1) ? b.max.x : b.min.x, (c & 2) ? b.max.y : b.min.y,
-                 (c & 4) ? b.max.z : b.min.z);
-    const float z = glm::dot(p - gen.origin, gen.forward);
-    zmin = std::min(zmin, z);
-    zmax = std::max(zmax, z);
-  }
+  auto [zmin, zmax] = Camera::viewDepthRange(gen, b);
   zmin = std::max(zmin, 0.0f);
   const int n = zmax > zmin && m.sigmaT > 0.0f
                     ? std::max(1, int(std::ceil((zmax - zmin) / settings_.step)))
@@ -490,25 +484,10 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
   }
   checkGl("slice march");
-  std::vector<float> rgba(size_t(w) * h * 4);
-  {
-    ScopedGpuTimer t(timer, "read-back");
-    glGetTextureImage(target.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                      rgba.data());
-  }
-  checkGl("slice march read-back");
-  Image img(w, h);
-  img.alpha().resize(size_t(w) * h);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const float* p = &rgba[(size_t(y) * w + x) * 4];
-      img.at(x, y) = Vec3(p[0], p[1], p[2]);
-      // The alpha channel blends as ZERO, SRC_ALPHA from a clear of 1: the view ray's
-      // transmittance, the product of the slabs'; 0 where a surface was drawn (alpha 1 as on
-      // the CPU: the surface is opaque).
-      img.alpha()[size_t(y) * w + x] = 1.0f - p[3];
-    }
-  return img;
+  // The alpha channel blends as ZERO, SRC_ALPHA from a clear of 1: the view ray's
+  // transmittance, the product of the slabs'; 0 where a surface was drawn (alpha 1 as on the
+  // CPU: the surface is opaque).
+  return readScreenImage(target, w, h, OutputAlpha::Transmittance, "slice march read-back", timer);
 }
 
 }  // namespace scatterlab::gpu

@@ -86,16 +86,14 @@ struct ScreenSurfaces {
 /// delta2 along each world axis, each offset point with its own view direction.
 class VolumeTracerGpu : public RadianceEvaluator {
  public:
-  /// delta1: tracing step towards the lights; delta2: central-difference step (world units).
-  /// factorLights / logSpace: evaluate V = S / A (or ln V) instead of S, as the CPU evaluator
-  /// does (PipelineSettings).
+  /// steps: tracing and central-difference steps (world units), and whether V = S / A (or
+  /// ln V) is evaluated instead of S, as the CPU evaluator does (PipelineSettings).
   /// shadowMap: how scene objects' visibility is looked up (render.shadow_map).
-  VolumeTracerGpu(float delta1, float delta2, bool factorLights = false, bool logSpace = false,
-                  ShadowMapSettings shadowMap = {})
-      : delta1_(delta1),
-        delta2_(delta2),
-        factor_(factorLights),
-        log_(factorLights && logSpace),
+  explicit VolumeTracerGpu(TracerSteps steps, ShadowMapSettings shadowMap = {})
+      : delta1_(steps.delta1),
+        delta2_(steps.delta2),
+        factor_(steps.factorLights),
+        log_(steps.logValues()),
         shadowMap_(shadowMap) {}
   void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override;

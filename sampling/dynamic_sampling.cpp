@@ -448,7 +448,7 @@ StageRegistry<RefinerMaker>& refiners() {
 
 DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineSettings& ps) {
   ds.delta1 = ps.delta1;
-  ds.space = {taylorBounds(ps), ps.factorLights && ps.logSpace};
+  ds.space = {taylorBounds(ps), ps.logValues()};
   return ds;
 }
 

@@ -71,6 +71,23 @@ void parseRadialBlur(Params& p, const Scene&, PipelineSettings& settings) {
 
 }  // namespace
 
+void describeLightSpaceMarch(RenderStats& st, const LightSpaceMarchSettings& s, float meanDensity,
+                             int shadowMaps) {
+  st.extra["steps"] = s.steps;
+  st.extra["interleave"] = s.interleave;
+  st.extra["terms_per_pixel"] =
+      (s.steps + s.interleave * s.interleave - 1) / (s.interleave * s.interleave);
+  st.extra["light_transmittance"] = s.light == LightTransmittance::Mean ? "mean" : "traced";
+  if (s.light == LightTransmittance::Mean) st.extra["mean_density"] = meanDensity;
+  st.extra["shadow_maps"] = shadowMaps;
+}
+
+void describeRadialBlur(RenderStats& st, const RadialBlurSettings& s, const Json& positions) {
+  st.extra["samples_per_pixel"] = s.samples;
+  st.extra["downsample"] = s.downsample;
+  st.extra["light_screen_positions"] = positions;
+}
+
 const StageDecl& lightSpaceMarchStage() {
   static const StageDecl d{.keys = {{lightSpaceMarchKeys, parseLightSpaceMarch}}};
   return d;

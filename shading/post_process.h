@@ -50,6 +50,15 @@ const StageDecl& lightSpaceMarchStage();
 /// downsample, guard_band (RadialBlurSettings); the view march's keys for its pre-pass.
 const StageDecl& radialBlurStage();
 
+/// The stats of light-space-march, the same on every backend: steps, interleave,
+/// terms_per_pixel, light_transmittance, mean_density (with the mean model: `meanDensity`),
+/// shadow_maps (how many the objects needed).
+void describeLightSpaceMarch(RenderStats& st, const LightSpaceMarchSettings& s, float meanDensity,
+                             int shadowMaps);
+/// The stats of radial-blur, the same on every backend: samples_per_pixel, downsample,
+/// light_screen_positions (`positions`, one [x, y] per light).
+void describeRadialBlur(RenderStats& st, const RadialBlurSettings& s, const Json& positions);
+
 /// The mean of a density volume over all its voxels (D̄ of LightTransmittance::Mean).
 inline float meanDensity(const DensityGrid& g) {
   double sum = 0.0;

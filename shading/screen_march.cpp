@@ -176,16 +176,8 @@ const std::vector<float>& blueNoiseTable() {
 }
 
 FroxelSlicing froxelSlicing(const Scene& scene, const FroxelSettings& s) {
-  const auto gen = scene.camera.rayGenerator();
-  const Box& b = scene.medium.bounds;
-  float zmin = kInfinity, zmax = -kInfinity;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 p((c & 1) ? b.max.x : b.min.x, (c & 2) ? b.max.y : b.min.y,
-                 (c & 4) ? b.max.z : b.min.z);
-    const float z = glm::dot(p - gen.origin, gen.forward);
-    zmin = std::min(zmin, z);
-    zmax = std::max(zmax, z);
-  }
+  const auto [zmin, zmax] =
+      Camera::viewDepthRange(scene.camera.rayGenerator(), scene.medium.bounds);
   FroxelSlicing f;
   f.slices = s.grid.z;
   f.exponential = s.distribution == DepthDistribution::Exponential;
