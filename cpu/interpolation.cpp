@@ -202,6 +202,274 @@ class UncoveredOccupancy {
   std::vector<int> first_, last_;
 };
 
+/// What every slice of one interpolateSamples call reads.
+struct Gather {
+  Interpolation kind;
+  const DensityGrid& density;
+  std::span<const RadianceSample> samples;
+  RadianceGrid& out;
+  Grid3<float>* weightSum;
+  bool log;               ///< ValueSpace::Log
+  float occlusionSigmaT;  ///< > 0: occlusion-aware gradient weights
+  std::optional<TaylorBounds> bounds;
+  IVec3 n;
+  Vec3 h, lo, invH;    ///< out's voxel size, box minimum, 1 / voxel size
+  float emptyDen;      ///< the weight sum of a voxel no sample reached
+  float densityVoxel;  ///< smallest density voxel edge: the occlusion march's step bound
+  const NearestIndex& nearest;
+  const UncoveredOccupancy& occupied;
+};
+
+/// Samples per Z slice, in sample order (binned once; each slice is one task and owns its
+/// output slice, so threads never write the same voxel).
+std::vector<std::vector<int>> binBySlice(const Gather& g) {
+  std::vector<std::vector<int>> slices(std::size_t(g.n.z));
+  for (std::size_t j = 0; j < g.samples.size(); ++j) {
+    const RadianceSample& s = g.samples[j];
+    if (!usable(s)) continue;
+    int k0, k1;
+    voxelRange(s.position.z, s.radius, g.lo.z, g.invH.z, g.n.z, k0, k1);
+    for (int k = k0; k <= k1; ++k) slices[std::size_t(k)].push_back(int(j));
+  }
+  return slices;
+}
+
+/// One row's accumulators (structure of arrays, so the row loops vectorise).
+struct RowSums {
+  float* r;
+  float* g;
+  float* b;
+  float* w;
+};
+
+/// Occlusion-aware weights exp(−σt·τ) of the segments from sample position p to the voxel
+/// centres i0..i1 of the row at (y, z), into occ[i]: τ by the midpoint rule with steps of at
+/// most one density voxel (a thinner step would not see more of the trilinear field; a
+/// coarser one misses thin sheets).
+void occlusionWeights(const Gather& g, const Vec3& p, float y, float z, int i0, int i1,
+                      float* occ) {
+  for (int i = i0; i <= i1; ++i) {
+    const Vec3 seg = Vec3(g.lo.x + (float(i) + 0.5f) * g.h.x, y, z) - p;
+    const float len = glm::length(seg);
+    const int steps = std::max(1, int(std::ceil(len / g.densityVoxel)));
+    float sum = 0.0f;
+    for (int m = 0; m < steps; ++m)
+      sum += g.density.sample(p + seg * ((float(m) + 0.5f) / float(steps)));
+    occ[std::size_t(i)] = std::exp(-g.occlusionSigmaT * sum * (len / float(steps)));
+  }
+}
+
+/// Sample s's Eq. 4 terms on voxels i0..i1 of row j of slice z (dy, dz from s; c = dy² + dz²),
+/// with the occlusion weights and the bounded Taylor terms as `g` asks (cpu/gather_rows.h).
+void addGradientRow(const Gather& g, const RadianceSample& s, RowSums row, int i0, int i1, int j,
+                    float z, float dy, float dz, float c, float* occ) {
+  const Vec3 p = s.position;
+  const float R = s.radius;
+  const float lox = g.lo.x, hx = g.h.x;
+  if (g.occlusionSigmaT > 0.0f) {
+    occlusionWeights(g, p, g.lo.y + (float(j) + 0.5f) * g.h.y, z, i0, i1, occ);
+    if (g.bounds)
+      gradientRowBounded(row.r, row.g, row.b, row.w, i0, i1, lox, hx, p.x, c, R, kSingularEps,
+                         s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ, g.bounds->lo,
+                         g.bounds->hi);
+    else
+      gradientRowWeighted(row.r, row.g, row.b, row.w, i0, i1, lox, hx, p.x, c, R, kSingularEps,
+                          s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ);
+  } else if (g.bounds) {
+    gradientRowBounded(row.r, row.g, row.b, row.w, i0, i1, lox, hx, p.x, c, R, kSingularEps,
+                       s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], nullptr, g.bounds->lo,
+                       g.bounds->hi);
+  } else {
+    gradientRow(row.r, row.g, row.b, row.w, i0, i1, lox, hx, p.x, c, R, kSingularEps,
+                s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0]);
+  }
+}
+
+/// Sample s's normalised-RBF terms w·B(x) on voxels i0..i1 of a row (c = dy² + dz²).
+void addRbfRow(const Gather& g, const RadianceSample& s, RowSums row, int i0, int i1, float c) {
+  const Vec3 p = s.position;
+  const float R2 = s.radius * s.radius;
+  const float invR2 = 9.0f / R2;  // 1 / r², r = R/3
+  float* __restrict r0 = row.r;
+  float* __restrict g0 = row.g;
+  float* __restrict b0 = row.b;
+  float* __restrict w0 = row.w;
+  for (int i = i0; i <= i1; ++i) {
+    const float dx = (g.lo.x + (float(i) + 0.5f) * g.h.x) - p.x;
+    const float d2 = dx * dx + c;
+    const float wAll = s.weight * std::exp(-d2 * invR2);
+    const float w = d2 < R2 ? wAll : 0.0f;
+    r0[i] += w * s.S.x;
+    g0[i] += w * s.S.y;
+    b0[i] += w * s.S.z;
+    w0[i] += w;
+  }
+}
+
+/// Sample s as the nearest so far of voxels i0..i1 of a row where it is nearer than the one
+/// kept (w holds the squared distance of the one kept).
+void keepNearestRow(const Gather& g, const RadianceSample& s, RowSums row, int i0, int i1,
+                    float c) {
+  const Vec3 p = s.position;
+  const float R2 = s.radius * s.radius;
+  float* __restrict r0 = row.r;
+  float* __restrict g0 = row.g;
+  float* __restrict b0 = row.b;
+  float* __restrict w0 = row.w;
+  for (int i = i0; i <= i1; ++i) {
+    const float dx = (g.lo.x + (float(i) + 0.5f) * g.h.x) - p.x;
+    const float d2 = dx * dx + c;
+    if (d2 < R2 && d2 < w0[i]) {
+      w0[i] = d2;
+      r0[i] = s.S.x;
+      g0[i] = s.S.y;
+      b0[i] = s.S.z;
+    }
+  }
+}
+
+/// Adds every sample of `slice` (the ones whose spheres reach slice k) to the slice's
+/// accumulators, and widens each row's touched span.
+void accumulateSlice(const Gather& g, int k, const std::vector<int>& slice,
+                     SliceAccumulators& acc) {
+  const IVec3 n = g.n;
+  const float z = g.lo.z + (float(k) + 0.5f) * g.h.z;
+  int* spanLo = acc.spanLo.data();
+  int* spanHi = acc.spanHi.data();
+  const bool padRows = g.kind == Interpolation::Gradient && !(g.occlusionSigmaT > 0.0f);
+  for (int idx : slice) {
+    const RadianceSample& s = g.samples[std::size_t(idx)];
+    const Vec3 p = s.position;
+    const float R2 = s.radius * s.radius;
+    const float dz = z - p.z;
+    const float remZ = R2 - dz * dz;
+    if (!(remZ > 0.0f)) continue;
+    int j0, j1;
+    voxelRange(p.y, std::sqrt(remZ), g.lo.y, g.invH.y, n.y, j0, j1);
+    for (int j = j0; j <= j1; ++j) {
+      const float dy = (g.lo.y + (float(j) + 0.5f) * g.h.y) - p.y;
+      const float c = dy * dy + dz * dz;
+      const float rem = R2 - c;
+      if (!(rem > 0.0f)) continue;
+      int i0, i1;
+      voxelRange(p.x, std::sqrt(rem), g.lo.x, g.invH.x, n.x, i0, i1);
+      if (i0 > i1) continue;  // the sphere's row lies outside the volume
+      if (padRows) {
+        // Whole batches of 8 voxels where the row allows: the extra voxels lie outside the
+        // sphere (weight 0, nothing added), and the row loop then has no scalar remainder,
+        // which costs a square root and a division per voxel.
+        const int padded = (i1 - i0 + 8) & ~7;
+        i0 = std::max(0, i1 - padded + 1);
+        i1 = std::min(n.x - 1, i0 + padded - 1);
+      }
+      spanLo[j] = std::min(spanLo[j], i0);
+      spanHi[j] = std::max(spanHi[j], i1);
+      const std::size_t o = std::size_t(j) * n.x;
+      const RowSums row{acc.r.data() + o, acc.g.data() + o, acc.b.data() + o, acc.w.data() + o};
+      switch (g.kind) {
+        case Interpolation::Gradient:
+          addGradientRow(g, s, row, i0, i1, j, z, dy, dz, c, acc.occ.data());
+          break;
+        case Interpolation::Rbf:
+          addRbfRow(g, s, row, i0, i1, c);
+          break;
+        case Interpolation::Nearest:
+          keepNearestRow(g, s, row, i0, i1, c);
+          break;
+      }
+    }
+  }
+}
+
+/// The value of an occupied voxel (i, j, k) no sample covers: the nearest sample's.
+Vec3 uncoveredValue(const Gather& g, int i, int j, int k) {
+  const int m = g.nearest.nearest(g.out.cellCenter(i, j, k));
+  const Vec3 v = m >= 0 ? g.samples[std::size_t(m)].S : Vec3(0.0f);
+  return g.log ? glm::exp(v) : clampNonNegative(v);
+}
+
+/// Writes row j of slice k of the output (and of the weight sums) from the accumulators:
+/// normalisation over the touched span [spanLo, spanHi]; outside it no sphere reached, so a
+/// voxel there is zero unless it is occupied (then it takes the nearest sample), and occupancy
+/// is only looked at where no sphere reached (UncoveredOccupancy: no density read outside the
+/// density rows' non-zero spans). Clears what the row touched for the thread's next slice.
+/// Returns the uncovered voxels.
+long long writeRow(const Gather& g, int j, int k, SliceAccumulators& acc) {
+  const IVec3 n = g.n;
+  long long unc = 0;
+  const bool fastNormalise = !g.log && g.kind != Interpolation::Nearest;
+  Vec3* orow = &g.out.at(0, j, k);
+  float* wrow = g.weightSum ? &g.weightSum->at(0, j, k) : nullptr;
+  int a, b;  // no voxel of the row outside [a, b] is occupied
+  g.occupied.rowRange(j, k, a, b);
+  const int s0 = acc.spanLo[j], s1 = acc.spanHi[j];
+  const auto uncovered = [&](int i) {
+    ++unc;
+    return uncoveredValue(g, i, j, k);
+  };
+  // Voxels before and after the touched span: uncovered.
+  const auto uncoveredRun = [&](int from, int to) {  // [from, to)
+    std::fill(orow + from, orow + to, Vec3(0.0f));
+    if (wrow) std::fill(wrow + from, wrow + to, 0.0f);
+    for (int i = std::max(from, a); i < std::min(to, b + 1); ++i)
+      if (g.occupied(i, j, k)) orow[i] = uncovered(i);
+  };
+  if (s0 > s1) {
+    uncoveredRun(0, n.x);
+    return unc;
+  }
+  uncoveredRun(0, s0);
+  const std::size_t row = std::size_t(j) * n.x;
+  float* ar = acc.r.data();
+  float* ag = acc.g.data();
+  float* ab = acc.b.data();
+  float* den = acc.w.data();
+  if (fastNormalise) {
+    // Gradient and Rbf, linear values: the division and clamp over the span in a loop that
+    // vectorises (the same operations as the general loop below), then the stores.
+    float* __restrict qr = acc.qr.data();
+    float* __restrict qg = acc.qg.data();
+    float* __restrict qb = acc.qb.data();
+    const float* __restrict rr = ar + row;
+    const float* __restrict rg = ag + row;
+    const float* __restrict rb = ab + row;
+    const float* __restrict rw = den + row;
+    normaliseSpan(rr, rg, rb, rw, s0, s1, qr, qg, qb);
+    for (int i = s0; i <= s1; ++i) {
+      const float d = rw[i];
+      if (d > 0.0f) {
+        orow[i] = Vec3(qr[i], qg[i], qb[i]);
+      } else {
+        orow[i] = i >= a && i <= b && g.occupied(i, j, k) ? uncovered(i) : Vec3(0.0f);
+      }
+      if (wrow) wrow[i] = d > 0.0f ? d : 0.0f;
+    }
+  }
+  for (int i = s0; i <= s1 && !fastNormalise; ++i) {
+    const float d = den[row + i];
+    const bool covered = g.kind == Interpolation::Nearest ? d < kInfinity : d > 0.0f;
+    Vec3 v;
+    if (covered) {
+      v = Vec3(ar[row + i], ag[row + i], ab[row + i]);
+      if (g.kind != Interpolation::Nearest) v /= d;
+      v = g.log ? glm::exp(v) : clampNonNegative(v);
+    } else {
+      v = i >= a && i <= b && g.occupied(i, j, k) ? uncovered(i) : Vec3(0.0f);
+    }
+    orow[i] = v;
+    if (wrow) wrow[i] = covered ? (g.kind == Interpolation::Nearest ? 1.0f : d) : 0.0f;
+  }
+  uncoveredRun(s1 + 1, n.x);
+  // Clear what this slice touched for the next slice of this thread.
+  std::fill(ar + row + s0, ar + row + s1 + 1, 0.0f);
+  std::fill(ag + row + s0, ag + row + s1 + 1, 0.0f);
+  std::fill(ab + row + s0, ab + row + s1 + 1, 0.0f);
+  std::fill(den + row + s0, den + row + s1 + 1, g.emptyDen);
+  acc.spanLo[j] = std::numeric_limits<int>::max();
+  acc.spanHi[j] = -1;
+  return unc;
+}
+
 }  // namespace
 
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
@@ -209,216 +477,38 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
                                        Grid3<float>* weightSum, ValueSpace space,
                                        float occlusionSigmaT, std::optional<TaylorBounds> bounds) {
   const IVec3 n = out.dims();
-  const Vec3 h = out.cellSize(), lo = out.bounds().min, invH = 1.0f / h;
   if (weightSum) weightSum->reset(out.bounds(), n, 0.0f);
-
-  // Samples per Z slice, in sample order (binned once; each slice is one task and owns its
-  // output slice, so threads never write the same voxel).
-  std::vector<std::vector<int>> slices(std::size_t(n.z));
-  for (std::size_t j = 0; j < samples.size(); ++j) {
-    const RadianceSample& s = samples[j];
-    if (!usable(s)) continue;
-    int k0, k1;
-    voxelRange(s.position.z, s.radius, lo.z, invH.z, n.z, k0, k1);
-    for (int k = k0; k <= k1; ++k) slices[std::size_t(k)].push_back(int(j));
-  }
-
-  const NearestIndex nearestIndex(samples);
+  const Vec3 dc = density.cellSize();
+  const NearestIndex nearest(samples);
   const UncoveredOccupancy occupied(density, out);
-  std::atomic<long long> uncovered{0};
+  const Gather g{kind,
+                 density,
+                 samples,
+                 out,
+                 weightSum,
+                 space == ValueSpace::Log,
+                 occlusionSigmaT,
+                 bounds,
+                 n,
+                 out.cellSize(),
+                 out.bounds().min,
+                 1.0f / out.cellSize(),
+                 kind == Interpolation::Nearest ? kInfinity : 0.0f,
+                 std::min(dc.x, std::min(dc.y, dc.z)),
+                 nearest,
+                 occupied};
+  const std::vector<std::vector<int>> slices = binBySlice(g);
   const std::size_t nxy = std::size_t(n.x) * n.y;
-  const float emptyDen = kind == Interpolation::Nearest ? kInfinity : 0.0f;
   // Accumulators of one slice, per thread, allocated and cleared once: after a slice only the
-  // span each row was touched in is cleared again.
+  // span each row was touched in is cleared again (writeRow).
   tbb::enumerable_thread_specific<SliceAccumulators> scratch(
-      [&] { return SliceAccumulators(nxy, std::size_t(n.y), std::size_t(n.x), emptyDen); });
-
+      [&] { return SliceAccumulators(nxy, std::size_t(n.y), std::size_t(n.x), g.emptyDen); });
+  std::atomic<long long> uncovered{0};
   tbb::parallel_for(0, n.z, [&](int k) {
-    const float z = lo.z + (float(k) + 0.5f) * h.z;
     SliceAccumulators& acc = scratch.local();
-    // Structure of arrays so the per-row loops vectorise.
-    float* ar = acc.r.data();
-    float* ag = acc.g.data();
-    float* ab = acc.b.data();
-    float* den = acc.w.data();
-    int* spanLo = acc.spanLo.data();
-    int* spanHi = acc.spanHi.data();
-    float* occ = acc.occ.data();
-    const bool padRows = kind == Interpolation::Gradient && !(occlusionSigmaT > 0.0f);
-    const Vec3 dc = density.cellSize();
-    const float densityVoxel = std::min(dc.x, std::min(dc.y, dc.z));
-    for (int idx : slices[std::size_t(k)]) {
-      const RadianceSample& s = samples[std::size_t(idx)];
-      const Vec3 p = s.position;
-      const float R = s.radius, R2 = R * R;
-      const float dz = z - p.z;
-      const float remZ = R2 - dz * dz;
-      if (!(remZ > 0.0f)) continue;
-      int j0, j1;
-      voxelRange(p.y, std::sqrt(remZ), lo.y, invH.y, n.y, j0, j1);
-      for (int j = j0; j <= j1; ++j) {
-        const float dy = (lo.y + (float(j) + 0.5f) * h.y) - p.y;
-        const float c = dy * dy + dz * dz;
-        const float rem = R2 - c;
-        if (!(rem > 0.0f)) continue;
-        int i0, i1;
-        voxelRange(p.x, std::sqrt(rem), lo.x, invH.x, n.x, i0, i1);
-        if (i0 > i1) continue;  // the sphere's row lies outside the volume
-        if (padRows) {
-          // Whole batches of 8 voxels where the row allows: the extra voxels lie outside the
-          // sphere (weight 0, nothing added), and the row loop then has no scalar remainder,
-          // which costs a square root and a division per voxel.
-          const int padded = (i1 - i0 + 8) & ~7;
-          i0 = std::max(0, i1 - padded + 1);
-          i1 = std::min(n.x - 1, i0 + padded - 1);
-        }
-        spanLo[j] = std::min(spanLo[j], i0);
-        spanHi[j] = std::max(spanHi[j], i1);
-        const std::size_t row = std::size_t(j) * n.x;
-        float* __restrict r0 = ar + row;
-        float* __restrict g0 = ag + row;
-        float* __restrict b0 = ab + row;
-        float* __restrict w0 = den + row;
-        switch (kind) {
-          case Interpolation::Gradient:
-            if (occlusionSigmaT > 0.0f) {
-              // Occlusion-aware weight: exp(−σt·τ) of the segment from x_j to the voxel, τ by
-              // the midpoint rule with steps of at most one density voxel (a thinner step
-              // would not see more of the trilinear field; a coarser one misses thin sheets).
-              const float y = lo.y + (float(j) + 0.5f) * h.y;
-              for (int i = i0; i <= i1; ++i) {
-                const Vec3 seg = Vec3(lo.x + (float(i) + 0.5f) * h.x, y, z) - p;
-                const float len = glm::length(seg);
-                const int steps = std::max(1, int(std::ceil(len / densityVoxel)));
-                float sum = 0.0f;
-                for (int m = 0; m < steps; ++m)
-                  sum += density.sample(p + seg * ((float(m) + 0.5f) / float(steps)));
-                occ[std::size_t(i)] = std::exp(-occlusionSigmaT * sum * (len / float(steps)));
-              }
-              if (bounds)
-                gradientRowBounded(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
-                                   s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ, bounds->lo,
-                                   bounds->hi);
-              else
-                gradientRowWeighted(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
-                                    s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], occ);
-            } else if (bounds) {
-              gradientRowBounded(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
-                                 s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0], nullptr, bounds->lo,
-                                 bounds->hi);
-            } else {
-              gradientRow(r0, g0, b0, w0, i0, i1, lo.x, h.x, p.x, c, R, kSingularEps,
-                          s.S + dy * s.dS[1] + dz * s.dS[2], s.dS[0]);
-            }
-            break;
-          case Interpolation::Rbf: {
-            const float invR2 = 9.0f / R2;  // 1 / r², r = R/3
-            for (int i = i0; i <= i1; ++i) {
-              const float dx = (lo.x + (float(i) + 0.5f) * h.x) - p.x;
-              const float d2 = dx * dx + c;
-              const float wAll = s.weight * std::exp(-d2 * invR2);
-              const float w = d2 < R2 ? wAll : 0.0f;
-              r0[i] += w * s.S.x;
-              g0[i] += w * s.S.y;
-              b0[i] += w * s.S.z;
-              w0[i] += w;
-            }
-            break;
-          }
-          case Interpolation::Nearest: {
-            for (int i = i0; i <= i1; ++i) {
-              const float dx = (lo.x + (float(i) + 0.5f) * h.x) - p.x;
-              const float d2 = dx * dx + c;
-              if (d2 < R2 && d2 < w0[i]) {
-                w0[i] = d2;
-                r0[i] = s.S.x;
-                g0[i] = s.S.y;
-                b0[i] = s.S.z;
-              }
-            }
-            break;
-          }
-        }
-      }
-    }
-    // Normalisation, fused with the output: per row, the touched span [spanLo, spanHi] is
-    // divided out; outside it no sphere reached, so a voxel there is zero unless it is occupied
-    // (then it takes the nearest sample), and occupancy is only looked at where no sphere
-    // reached (UncoveredOccupancy: no density read outside the density rows' non-zero spans).
+    accumulateSlice(g, k, slices[std::size_t(k)], acc);
     long long unc = 0;
-    const bool log = space == ValueSpace::Log;
-    const bool fastNormalise = !log && kind != Interpolation::Nearest;
-    const auto uncoveredValue = [&](int i, int j) {
-      ++unc;
-      const int m = nearestIndex.nearest(out.cellCenter(i, j, k));
-      const Vec3 v = m >= 0 ? samples[std::size_t(m)].S : Vec3(0.0f);
-      return log ? glm::exp(v) : clampNonNegative(v);
-    };
-    Vec3* o = &out.at(0, 0, k);
-    float* ws = weightSum ? &weightSum->at(0, 0, k) : nullptr;
-    for (int j = 0; j < n.y; ++j) {
-      Vec3* orow = o + std::size_t(j) * n.x;
-      float* wrow = ws ? ws + std::size_t(j) * n.x : nullptr;
-      int a, b;  // no voxel of the row outside [a, b] is occupied
-      occupied.rowRange(j, k, a, b);
-      const int s0 = spanLo[j], s1 = spanHi[j];
-      // Voxels before and after the touched span: uncovered.
-      const auto uncoveredRun = [&](int from, int to) {  // [from, to)
-        std::fill(orow + from, orow + to, Vec3(0.0f));
-        if (wrow) std::fill(wrow + from, wrow + to, 0.0f);
-        for (int i = std::max(from, a); i < std::min(to, b + 1); ++i)
-          if (occupied(i, j, k)) orow[i] = uncoveredValue(i, j);
-      };
-      if (s0 > s1) {
-        uncoveredRun(0, n.x);
-        continue;
-      }
-      uncoveredRun(0, s0);
-      const std::size_t row = std::size_t(j) * n.x;
-      if (fastNormalise) {
-        // Gradient and Rbf, linear values: the division and clamp over the span in a loop that
-        // vectorises (the same operations as the general loop below), then the stores.
-        float* __restrict qr = acc.qr.data();
-        float* __restrict qg = acc.qg.data();
-        float* __restrict qb = acc.qb.data();
-        const float* __restrict rr = ar + row;
-        const float* __restrict rg = ag + row;
-        const float* __restrict rb = ab + row;
-        const float* __restrict rw = den + row;
-        normaliseSpan(rr, rg, rb, rw, s0, s1, qr, qg, qb);
-        for (int i = s0; i <= s1; ++i) {
-          const float d = rw[i];
-          if (d > 0.0f) {
-            orow[i] = Vec3(qr[i], qg[i], qb[i]);
-          } else {
-            orow[i] = i >= a && i <= b && occupied(i, j, k) ? uncoveredValue(i, j) : Vec3(0.0f);
-          }
-          if (wrow) wrow[i] = d > 0.0f ? d : 0.0f;
-        }
-      }
-      for (int i = s0; i <= s1 && !fastNormalise; ++i) {
-        const float d = den[row + i];
-        const bool covered = kind == Interpolation::Nearest ? d < kInfinity : d > 0.0f;
-        Vec3 v;
-        if (covered) {
-          v = Vec3(ar[row + i], ag[row + i], ab[row + i]);
-          if (kind != Interpolation::Nearest) v /= d;
-          v = log ? glm::exp(v) : clampNonNegative(v);
-        } else {
-          v = i >= a && i <= b && occupied(i, j, k) ? uncoveredValue(i, j) : Vec3(0.0f);
-        }
-        orow[i] = v;
-        if (wrow) wrow[i] = covered ? (kind == Interpolation::Nearest ? 1.0f : d) : 0.0f;
-      }
-      uncoveredRun(s1 + 1, n.x);
-      // Clear what this slice touched for the next slice of this thread.
-      std::fill(ar + row + s0, ar + row + s1 + 1, 0.0f);
-      std::fill(ag + row + s0, ag + row + s1 + 1, 0.0f);
-      std::fill(ab + row + s0, ab + row + s1 + 1, 0.0f);
-      std::fill(den + row + s0, den + row + s1 + 1, emptyDen);
-      spanLo[j] = std::numeric_limits<int>::max();
-      spanHi[j] = -1;
-    }
+    for (int j = 0; j < n.y; ++j) unc += writeRow(g, j, k, acc);
     uncovered += unc;
   });
   ReconstructionStats st;

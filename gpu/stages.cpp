@@ -378,43 +378,122 @@ void ScreenSurfaces::bind() const {
   glBindTextureUnit(binding::kSurfaceRadianceTexture, radiance.id());
 }
 
+namespace {
+
+/// The slice marcher's program: ray-step layers or the paper's view-plane slabs, with the light
+/// factor and the objects' shadow-map variant as asked.
+const Program& sliceMarchProgram(bool raySteps, bool factor, const ShadowMaps* shadows) {
+  std::string key = raySteps ? "slice marcher (ray steps)" : "slice marcher";
+  if (factor) key += " x A";
+  std::vector<std::string> defines, files = {"common.glsl", "slice_march.frag.glsl"};
+  if (raySteps) defines.push_back("SL_RAY_STEPS");
+  if (factor) defines.push_back("SL_FACTOR_LIGHTS");
+  addShadowVariant(shadows, key, files, defines);
+  return cachedProgram(
+      key, [&] { return graphicsProgram({"fullscreen.vert.glsl"}, files, defines, key); });
+}
+
+/// Where the slice marcher's layers lie.
+struct SliceLayout {
+  /// The paper's view-plane slabs: `slabs` of depth dz between the box's view depths zmin
+  /// (from the eye on) and zmax.
+  float zmin = 0.0f, zmax = 0.0f, dz = 0.0f;
+  int slabs = 0;
+  /// Ray-step layers: enough for the longest chord through the box.
+  int layers = 0;
+};
+
+SliceLayout sliceLayout(const Camera::RayGenerator& gen, const Box& b, float sigmaT, float step) {
+  SliceLayout l;
+  const Camera::DepthRange z = Camera::viewDepthRange(gen, b);
+  l.zmin = std::max(z.near, 0.0f);
+  l.zmax = z.far;
+  l.slabs =
+      l.zmax > l.zmin && sigmaT > 0.0f ? std::max(1, int(std::ceil((l.zmax - l.zmin) / step))) : 0;
+  l.dz = l.slabs > 0 ? (l.zmax - l.zmin) / float(l.slabs) : 0.0f;
+  l.layers = sigmaT > 0.0f ? std::max(1, int(std::ceil(glm::length(b.extent()) / step)) + 1) : 0;
+  return l;
+}
+
+/// Binds the march's inputs (density, lights, radiance volume) and sets the camera uniforms of
+/// `p`, which is in use.
+void setSliceMarchInputs(const Program& p, const Scene& scene, const TracingInputs& inputs,
+                         const Volume& radiance) {
+  const auto gen = scene.camera.rayGenerator();
+  inputs.apply(p);
+  glBindTextureUnit(binding::kRadianceTexture, radiance.texture.id());
+  setVec3(p, "uRadScale", radiance.indexScale());
+  setVec3(p, "uRadOffset", radiance.indexOffset());
+  setIVec3(p, "uRadDims", radiance.dims);
+  setVec3(p, "uForward", gen.forward);
+  setVec3(p, "uRight", gen.right);
+  setVec3(p, "uUp", gen.up);
+  glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
+  glUniform2f(p.uniform("uSize"), float(scene.camera.width), float(scene.camera.height));
+  glUniform1f(p.uniform("uAlbedo"), scene.medium.albedo);
+}
+
+/// Draws the layers of `l` far to near into the bound framebuffer with the paper's blending
+/// (rgb: dst = src + a·dst, Sec. 6; alpha: dst = a·dst keeps the transmittance). `surface`:
+/// the objects' surface pass, whose depth the layers behind it fail (view-plane slabs are
+/// drawn at their near plane's depth; ray-step layers at the nearest, and clipped per pixel),
+/// or null. Leaves blending and the depth test off.
+void drawSliceLayers(const Program& p, const SliceLayout& l, bool raySteps, float step,
+                     const SurfacePass* surface) {
+  const GLint nearLoc = p.uniform("uDepthNear"), farLoc = p.uniform("uDepthFar");
+  const GLint slabZLoc = p.uniform("uSlabNdcZ");
+  if (surface) {
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_FALSE);
+    glBindTextureUnit(binding::kSurfaceTexture, surface->distance.id());
+    glUniform1f(slabZLoc, -1.0f);
+  } else {
+    glDisable(GL_DEPTH_TEST);
+  }
+  glDisable(GL_SCISSOR_TEST);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFuncSeparate(GL_ONE, GL_SRC_ALPHA, GL_ZERO, GL_SRC_ALPHA);
+  if (raySteps) {
+    glUniform1f(p.uniform("uStep"), step);
+    const GLint layerLoc = p.uniform("uLayer");
+    for (int k = 0; k < l.layers; ++k) {
+      glUniform1i(layerLoc, k);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+  } else {
+    for (int k = l.slabs - 1; k >= 0; --k) {
+      glUniform1f(nearLoc, l.zmin + float(k) * l.dz);
+      glUniform1f(farLoc, k == l.slabs - 1 ? l.zmax : l.zmin + float(k + 1) * l.dz);
+      if (surface)
+        glUniform1f(slabZLoc, ndcDepth(l.zmin + float(k) * l.dz, surface->nearD, surface->farD));
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+  }
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  glDepthMask(GL_TRUE);
+}
+
+}  // namespace
+
 Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
                               StageTimer* timer, int* sliceCount, const SceneShadows* objects) {
   context();
   const bool surfaces = objects && objects->geometry && objects->maps;
   const ShadowMaps* shadows = surfaces ? objects->maps.get() : nullptr;
-  std::string key = raySteps_ ? "slice marcher (ray steps)" : "slice marcher";
-  if (factor_) key += " x A";
-  std::vector<std::string> defines, files = {"common.glsl", "slice_march.frag.glsl"};
-  if (raySteps_) defines.push_back("SL_RAY_STEPS");
-  if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
-  addShadowVariant(shadows, key, files, defines);
-  const Program& program = cachedProgram(
-      key, [&] { return graphicsProgram({"fullscreen.vert.glsl"}, files, defines, key); });
+  const Program& program = sliceMarchProgram(raySteps_, factor_, shadows);
   const Camera& cam = scene.camera;
-  const auto gen = cam.rayGenerator();
-  const Medium& m = scene.medium;
   const int w = cam.width, h = cam.height;
   const Texture target = Texture::make2D(GL_RGBA32F, w, h, "slice marcher image");
   const Framebuffer fbo("slice marcher target");
   glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0);
   const VertexArray vao("attribute-less");
   const TracingInputs inputs(scene, density, surfaces ? delta1_ : 0.0f, shadows);
-
-  // View-depth range of the box, from the eye on.
-  const Box& b = density.bounds;
-  auto [zmin, zmax] = Camera::viewDepthRange(gen, b);
-  zmin = std::max(zmin, 0.0f);
-  const int n = zmax > zmin && m.sigmaT > 0.0f
-                    ? std::max(1, int(std::ceil((zmax - zmin) / settings_.step)))
-                    : 0;
-  const float dz = n > 0 ? (zmax - zmin) / float(n) : 0.0f;
-  // Ray-step layers: enough for the longest chord through the box.
-  const int layers = m.sigmaT > 0.0f
-                         ? std::max(1, int(std::ceil(glm::length(b.extent()) / settings_.step)) + 1)
-                         : 0;
-  if (sliceCount) *sliceCount = raySteps_ ? layers : n;
-  const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
+  const SliceLayout layout =
+      sliceLayout(cam.rayGenerator(), density.bounds, scene.medium.sigmaT, settings_.step);
+  if (sliceCount) *sliceCount = raySteps_ ? layout.layers : layout.slabs;
 
   // Scene objects: the surface pass fills the image with L_p (alpha 0: opaque), the depth
   // buffer and the view-ray distance of the first surface.
@@ -423,64 +502,18 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
     surfacePass = renderSurfaces(scene, *objects, inputs, target, timer);
     glNamedFramebufferTexture(fbo.id(), GL_DEPTH_ATTACHMENT, surfacePass.depth.id(), 0);
   }
-  const Texture& distance = surfacePass.distance;
-  const float nearD = surfacePass.nearD, farD = surfacePass.farD;
   if (glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw GpuError("slice marcher: RGBA32F image is not a complete framebuffer");
   {
     ScopedGpuTimer t(timer, "slice march");
     glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
     glViewport(0, 0, w, h);
+    const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
     if (!surfaces) glClearBufferfv(GL_COLOR, 0, clear);
     program.use();
-    inputs.apply(program);
-    glBindTextureUnit(binding::kRadianceTexture, radiance.texture.id());
-    setVec3(program, "uRadScale", radiance.indexScale());
-    setVec3(program, "uRadOffset", radiance.indexOffset());
-    setIVec3(program, "uRadDims", radiance.dims);
-    setVec3(program, "uForward", gen.forward);
-    setVec3(program, "uRight", gen.right);
-    setVec3(program, "uUp", gen.up);
-    glUniform2f(program.uniform("uTanHalf"), gen.sx, gen.sy);
-    glUniform2f(program.uniform("uSize"), float(w), float(h));
-    glUniform1f(program.uniform("uAlbedo"), m.albedo);
-    const GLint nearLoc = program.uniform("uDepthNear"), farLoc = program.uniform("uDepthFar");
-    const GLint slabZLoc = program.uniform("uSlabNdcZ");
+    setSliceMarchInputs(program, scene, inputs, radiance);
     glBindVertexArray(vao.id());
-    if (surfaces) {
-      // Layers behind the first surface fail the depth test (view-plane slabs are drawn at
-      // their near plane's depth; ray-step layers at the nearest, and clipped per pixel).
-      glEnable(GL_DEPTH_TEST);
-      glDepthFunc(GL_LESS);
-      glDepthMask(GL_FALSE);
-      glBindTextureUnit(binding::kSurfaceTexture, distance.id());
-      glUniform1f(slabZLoc, -1.0f);
-    } else {
-      glDisable(GL_DEPTH_TEST);
-    }
-    glDisable(GL_SCISSOR_TEST);
-    glEnable(GL_BLEND);
-    glBlendEquation(GL_FUNC_ADD);
-    // rgb: dst = src + a·dst (paper Sec. 6); alpha: dst = a·dst keeps the transmittance.
-    glBlendFuncSeparate(GL_ONE, GL_SRC_ALPHA, GL_ZERO, GL_SRC_ALPHA);
-    if (raySteps_) {
-      glUniform1f(program.uniform("uStep"), settings_.step);
-      const GLint layerLoc = program.uniform("uLayer");
-      for (int k = 0; k < layers; ++k) {
-        glUniform1i(layerLoc, k);
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-      }
-    } else {
-      for (int k = n - 1; k >= 0; --k) {
-        glUniform1f(nearLoc, zmin + float(k) * dz);
-        glUniform1f(farLoc, k == n - 1 ? zmax : zmin + float(k + 1) * dz);
-        if (surfaces) glUniform1f(slabZLoc, ndcDepth(zmin + float(k) * dz, nearD, farD));
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-      }
-    }
-    glDisable(GL_BLEND);
-    glDisable(GL_DEPTH_TEST);
-    glDepthMask(GL_TRUE);
+    drawSliceLayers(program, layout, raySteps_, settings_.step, surfaces ? &surfacePass : nullptr);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
   }
   checkGl("slice march");
