@@ -67,7 +67,9 @@ TEST(Adaptive, MoreProbesCatchTheShaftEdgeBetweenAxisProbes) {
               .image,
           ref)
           .relL2;
-  EXPECT_LT(e26, e6);
+  // Measured: e6 = 0.220, e26 = 0.150 (ratio 0.68; the CPU path is deterministic). The bound
+  // asks for at least a fifth of the error gone, not merely any improvement.
+  EXPECT_LT(e26, 0.8 * e6) << "e6 " << e6 << ", e26 " << e26;
 }
 
 TEST(Adaptive, InfiniteEpsilonEqualsGradientWithTheInitialSamples) {
