@@ -75,21 +75,24 @@ double viewMarchVsCpu(const MarchCase& c) {
   return err;
 }
 
-// Tolerances: measured on llvmpipe (Mesa 22.3.6) 2026-11-26, and to be measured on an NVIDIA
-// H200 (hardware exp/fma): see each test.
+// Tolerances: 1.5x the larger of what llvmpipe (Mesa 22.3.6, 2026-11-26) measured and what an
+// NVIDIA H200 measured for the same arithmetic (issue 23; the compute pipeline itself has not
+// run on hardware yet). The view march on uploaded volumes: llvmpipe 1.93e-6 / 1.99e-6 /
+// 1.02e-6; on the H200 a per-pixel march with the same per-step exp (jittered-march) differed
+// from the CPU by up to 3.3e-6. Limit 5e-6.
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightInsideTheMedium) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({}), 1e-5);
+  EXPECT_LT(viewMarchVsCpu({}), 5e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithFactoredLightsStrataAndEarlyExit) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 1e-5);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 5e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightOutside) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = false}), 1e-5);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = false}), 5e-6);
 }
 
 // A radiance volume built on the density's grid carries the density in alpha, and the march then
@@ -180,6 +183,9 @@ void gatherVsSplat(bool occlusion) {
   std::printf("radiance gather vs raster splat (occlusion %d): relative L2 %.3g, max rel %.3g\n",
               int(occlusion), err, maxRel);
   EXPECT_GT(den, 0.0);
+  // Measured 0 and 0 on llvmpipe (bit-identical). The bounds leave room for a hardware
+  // compiler contracting the fragment's and the compute shader's Taylor sums into fma
+  // differently (a few ulps per voxel), nothing more.
   EXPECT_LT(err, 1e-6);
   EXPECT_LT(maxRel, 1e-5);
 }
@@ -214,8 +220,11 @@ TEST(GpuDensityGather, EqualsTheCpuBuildAndTheRasterSplat) {
   std::printf("density gather: max abs vs CPU %.3g, vs raster %.3g (max density %.3g)\n",
               double(errCpu), double(errRaster), double(maxD));
   EXPECT_GT(maxD, 0.5f);
-  EXPECT_LT(errCpu, 1e-6f * maxD);
-  EXPECT_LT(errRaster, 1e-6f * maxD);
+  // vs CPU: llvmpipe 1.79e-7 at max D 1.13 (the exp); the H200's raster splat of a .sog's
+  // Gaussians 2.98e-7 at max D 0.96: 1.5x of the larger, 4.5e-7. vs raster: 0 on llvmpipe (the
+  // same sums in the same order); the bound is the same.
+  EXPECT_LT(errCpu, 4.5e-7f);
+  EXPECT_LT(errRaster, 4.5e-7f);
 }
 
 TEST(GpuSphereBins, ListsEverySphereThatReachesABinInAscendingOrder) {
@@ -270,6 +279,7 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
   doc["render"]["march_step"] = 0.5 / 20;
   if (std::string(method) != "per-voxel")
     doc["render"]["sampler"] = {{"type", "jittered"}, {"count", 96}};
+  if (std::string(method) == "adaptive") doc["render"]["levels"] = {4, 8};
   const Scene scene = parseScene(doc, ".");
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const RenderResult compute = createMethod(scene, "", "gpu")->render(scene, nullptr);
@@ -288,20 +298,24 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
   EXPECT_EQ(cpuR.stats.extra["unused_keys"], Json::array({"render.gpu_pipeline"}));
 }
 
-// The issue's target: compute ≡ CPU within 1e-4 relative L2 on llvmpipe (1e-3 on hardware).
+// The issue's target: compute ≡ CPU within 1e-4 relative L2 on llvmpipe, 1e-3 on hardware.
+// Measured on llvmpipe 2026-11-26: compute 1.22e-6 / 1.43e-6 / 1.2e-6, raster 9.56e-7 /
+// 8.33e-7 / 1.01e-6 (gradient / per-voxel / adaptive with levels 4, 8). On the H200 (raster
+// pipeline, the same tracing): gradient 9.1e-5, per-voxel (a .sog smoke) 4.1e-4, adaptive 3.3e-5.
+// Limits 1.5x the larger, for both pipelines.
 TEST(GpuComputePipeline, GradientEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("gradient", 1e-4, 0.005);
+  endToEnd("gradient", 1.4e-4, 1.4e-4);
 }
 
 TEST(GpuComputePipeline, PerVoxelEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("per-voxel", 1e-4, 0.005);
+  endToEnd("per-voxel", 6.2e-4, 6.2e-4);
 }
 
 TEST(GpuComputePipeline, AdaptiveEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("adaptive", 1e-3, 0.005);
+  endToEnd("adaptive", 5e-5, 5e-5);
 }
 
 TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {
