@@ -271,6 +271,30 @@ TEST(GpuSphereBins, ListsLargerThanTheDeviceAllowsAreAGpuErrorBeforeAnyWork) {
   }
 }
 
+// A volume larger than the device allows is a GpuError naming the volume and the bytes asked,
+// before anything is allocated (not a GL error later, a driver crash or a black image).
+TEST(GpuComputePipeline, AVolumeLargerThanTheDeviceAllowsIsAGpuError) {
+  SCATTERLAB_REQUIRE_GPU();
+  GLint max3d = 0;
+  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
+  ASSERT_GT(max3d, 0);
+  initialize();
+  Json doc = blobSceneDoc(16, 16, 12);
+  doc["render"] = {{"method", "per-voxel"}, {"radiance_resolution", {max3d + 1, 2, 2}}};
+  const Scene s = parseScene(doc, ".");
+  try {
+    createMethod(s, "", "gpu")->render(s, nullptr);
+    FAIL() << "no error";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("source radiance"), std::string::npos) << m;
+    EXPECT_NE(m.find(std::to_string(max3d + 1) + " x 2 x 2"), std::string::npos) << m;
+    EXPECT_NE(m.find("MiB"), std::string::npos) << m;
+    EXPECT_NE(m.find("GL_MAX_3D_TEXTURE_SIZE"), std::string::npos) << m;
+  }
+  EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+}
+
 /// A method on the CPU and on the GPU under both pipelines, end to end through createMethod.
 void endToEnd(const char* method, double computeTol, double rasterTol) {
   initialize();
