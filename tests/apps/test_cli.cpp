@@ -364,11 +364,12 @@ TEST_F(Cli, UsageErrorsExit2WithThePrefix) {
 
 TEST_F(Cli, DuplicateOutputPathsAreAUsageError) {
   const std::string scene = writeScene(tinyScene());
+  // (-o o.exr --png ./o.exr is refused before this check: --png must end in .png.)
   RunResult r =
-      run("render " + scene + " -o " + out("o.exr") + " --png " + dir_.string() + "/./o.exr");
+      run("render " + scene + " -o " + out("o.png") + " --png " + dir_.string() + "/./o.png");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--output and --png name the same file"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(out("o.exr")));
+  EXPECT_FALSE(fs::exists(out("o.png")));
   r = run("render " + scene + " -o " + out("o.exr") + " --stats " + scene);
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("scene and --stats"), std::string::npos) << r.output;
