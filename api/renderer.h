@@ -43,7 +43,8 @@ class Renderer {
  public:
   /// A renderer of the scene document `doc` (relative paths resolve from `baseDir`) with
   /// `method` ("" = render.method) on `backend` ("cpu", "gpu" or "auto"), as createMethod.
-  /// Parses the scene now: throws ConfigError / IoError as loadScene does.
+  /// Parses the scene now: throws ConfigError / IoError as loadScene does. Calls initialize()
+  /// itself (the free functions loadScene, parseScene and createMethod need it called first).
   Renderer(Json doc, std::filesystem::path baseDir, std::string method = "",
            std::string backend = "auto");
   /// The scene file `path` with `--set` overrides applied in order.

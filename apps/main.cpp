@@ -2,8 +2,10 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "api/scatterlab.h"
@@ -11,6 +13,39 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/suggest.h"
+
+namespace {
+
+/// For a misspelt option or subcommand on the command line: " (did you mean '--method'?)"
+/// for the first word that is neither a known option nor a subcommand, else "".
+std::string suggestOption(CLI::App& app, int argc, char** argv) {
+  std::vector<std::string> options, subcommands;
+  const auto addOptions = [&](const CLI::App& a) {
+    for (const CLI::Option* o : a.get_options())
+      for (const std::string& n : o->get_lnames()) options.push_back("--" + n);
+  };
+  addOptions(app);
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    subcommands.push_back(sub->get_name());
+    addOptions(*sub);
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string word = argv[i];
+    if (word.rfind("--", 0) == 0) {
+      word = word.substr(0, word.find('='));
+      if (std::find(options.begin(), options.end(), word) == options.end())
+        return scatterlab::didYouMean(word, options);
+    } else if (i == 1 && word.rfind('-', 0) != 0 &&
+               std::find(subcommands.begin(), subcommands.end(), word) == subcommands.end()) {
+      const std::string m = scatterlab::didYouMean(word, subcommands);
+      return m.empty() ? std::string() : "; '" + word + "' is not a command" + m;
+    }
+  }
+  return {};
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -54,8 +89,8 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);
     // Usage errors exit with 2 (the project's rule), whatever CLI11's own code (105, 106, 109,
     // ...), with the same prefix as every other error.
-    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
-                 e.what());
+    std::fprintf(stderr, "scatterlab: error: %s%s\nRun with --help for more information.\n",
+                 e.what(), suggestOption(app, argc, argv).c_str());
     return 2;
   }
   std::unique_ptr<tbb::global_control> threadLimit;

@@ -7,6 +7,7 @@
 #include <ImfInputFile.h>
 #include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
 #include <png.h>
 
@@ -62,6 +63,9 @@ void writeExr(const Image& img, const std::string& path, const ExrAttributes& at
       for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
       if (hasAlpha) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
       if (hasDepth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+      // The colour space, for compositors and viewers: scatterlab's RGB is linear with the
+      // Rec. 709 / sRGB primaries and D65 white, which is what Imf::Chromaticities() holds.
+      Imf::addChromaticities(header, Imf::Chromaticities());
       for (const auto& [name, value] : attributes.strings)
         header.insert(name, Imf::StringAttribute(value));
       for (const auto& [name, m] : attributes.matrices)

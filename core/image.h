@@ -55,7 +55,8 @@ struct ExrAttributes {
 
 /// Writes a 32-bit float RGB OpenEXR file (A and Z channels where alpha() and depth() are
 /// non-empty) atomically (temporary file, then rename); on any
-/// failure no file is left at `path`. Throws IoError.
+/// failure no file is left at `path`. The header's standard `chromaticities` attribute says
+/// the colour space: linear, Rec. 709 primaries, D65 white. Throws IoError.
 void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes = {});
 
 /// Reads the R, G, B channels (and A into alpha(), Z into depth(), when the file has them) of an

@@ -88,7 +88,8 @@ Registry<MethodEntry>& methods();
 /// Creates the method the scene's render object names (default "exact"), or `methodOverride`
 /// when non-empty — exactly as if render.method were set to it. backend: "cpu", "gpu" or
 /// "auto" (a hardware GPU when one is there and the method runs on it, else the CPU); the
-/// render object's `backend` applies when this is "auto". Keys that only other registered
+/// render object's `backend` applies when this is "auto". Any other backend string ("GPU",
+/// "cuda", "") is a ConfigError listing the three. Keys that only other registered
 /// methods read are tolerated and listed in Method::ignoredKeys (so a reference can be rendered
 /// from any scene); any other unknown key is a ConfigError naming it, and so is a backend the
 /// method has no variant on.

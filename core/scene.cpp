@@ -1,9 +1,12 @@
 #include "core/scene.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "core/animation.h"
 #include "core/atomic_file.h"
@@ -221,6 +224,32 @@ Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Me
   return s;
 }
 
+namespace {
+
+/// What a file that is not JSON is, by its first bytes or else its extension: for a message
+/// that says what to do instead of where the JSON parser stopped. `densityType` names the
+/// medium.density type that reads such a file ("" when none does); `what` is "" when unknown.
+struct ForeignFile {
+  std::string what, densityType;
+};
+
+ForeignFile foreignFile(const std::string& path, std::string_view head) {
+  const auto starts = [&](std::string_view magic) { return head.substr(0, magic.size()) == magic; };
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower((unsigned char)c));
+  // OpenVDB: the 64-bit magic 0x56444220 ("VDB " little-endian); OpenEXR: 0x762f3101.
+  if (starts(std::string_view("\x20\x42\x44\x56", 4)) || ext == ".vdb")
+    return {"an OpenVDB volume", "vdb"};
+  if (starts(std::string_view("\x76\x2f\x31\x01", 4)) || ext == ".exr")
+    return {"an OpenEXR image", ""};
+  if (starts("\x89PNG") || ext == ".png") return {"a PNG image", ""};
+  if (ext == ".sog") return {"a sum-of-Gaussians model (scatterlab fit)", "sog"};
+  if (ext == ".obj") return {"an OBJ mesh", ""};
+  return {};
+}
+
+}  // namespace
+
 Json readJsonFile(const std::string& path) {
   checkReadableFile(path, "JSON file");
   std::ifstream in(path, std::ios::binary);
@@ -228,7 +257,19 @@ Json readJsonFile(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (!in) throw IoError("cannot read '" + path + "'");
-  return parseJson(text.str(), "'" + path + "'");
+  const std::string t = text.str();
+  try {
+    return parseJson(t, "'" + path + "'");
+  } catch (const IoError&) {
+    const ForeignFile f = foreignFile(path, t);
+    if (f.what.empty()) throw;
+    std::string msg = "'" + path + "' is " + f.what + ", not a scene (a JSON file)";
+    if (!f.densityType.empty())
+      msg += "; render it from a scene whose medium.density is {\"type\": \"" + f.densityType +
+             "\", \"file\": \"" + std::filesystem::path(path).filename().string() +
+             "\"} (docs/scene-format.md; data/scenes/smoke.json is one)";
+    throw IoError(msg + "; `scatterlab info " + path + "` describes it");
+  }
 }
 
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -550,4 +551,41 @@ TEST_F(ExperimentTest, StaleTemporariesAreRemovedOnResume) {
   EXPECT_TRUE(fs::exists(live));
 }
 
+}  // namespace scatterlab
+
+namespace scatterlab {
+namespace {
+
+std::string commandOutput(const std::string& cmd) {
+  std::FILE* p = ::popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[256];
+  while (p && std::fgets(buf, sizeof buf, p)) out += buf;
+  if (p) ::pclose(p);
+  while (!out.empty() && out.back() == '\n') out.pop_back();
+  return out;
+}
+
+// Issue 25: the commit in every record is the one the binary was built from, recorded at build
+// time, wherever the tool runs (it used to run git in the working directory: "unknown" outside
+// the checkout).
+TEST(Experiment, CommitIsRecordedAtBuildTimeWhereverItRuns) {
+  const std::string head =
+      commandOutput("git -C '" SCATTERLAB_SOURCE_DIR "' rev-parse --short=12 HEAD 2>/dev/null");
+  if (head.empty()) GTEST_SKIP() << "the source tree is not a git checkout";
+  const fs::path before = fs::current_path();
+  fs::current_path(fs::temp_directory_path());  // outside any checkout
+  const std::string commit = machineFacts()["commit"].get<std::string>();
+  fs::current_path(before);
+  // A commit of this repository, HEAD or (when commits were made since the build) one of its
+  // ancestors; "+dirty" when the build had uncommitted changes.
+  ASSERT_GE(commit.size(), 12u) << commit;
+  EXPECT_TRUE(commit.size() == 12 || commit.substr(12) == "+dirty") << commit;
+  EXPECT_EQ(commandOutput("git -C '" SCATTERLAB_SOURCE_DIR "' merge-base --is-ancestor " +
+                          commit.substr(0, 12) + " HEAD && echo yes"),
+            "yes")
+      << commit << " vs HEAD " << head;
+}
+
+}  // namespace
 }  // namespace scatterlab
