@@ -3,7 +3,9 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <new>
 #include <vector>
 
 #include "api/scatterlab.h"
@@ -74,6 +76,18 @@ int main(int argc, char** argv) {
                  e.what());
     return 2;
   } catch (const scatterlab::Error& e) {
+    std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    // What the estimates did not foresee (docs/reliability.md: the plan counts what is certain).
+    std::fprintf(stderr,
+                 "scatterlab: error: out of memory: an allocation failed; lower the resolution "
+                 "or image size, or give a --memory-limit below what the machine (or ulimit "
+                 "-v) allows so that it is refused before the work\n");
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A file the library reached without a check of its own: the system's reason, not an
+    // "internal error".
     std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
     return 1;
   } catch (const std::exception& e) {

@@ -1,5 +1,6 @@
 #include "core/limits.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -35,7 +36,22 @@ std::uint64_t initialLimit() {
 }  // namespace
 
 std::uint64_t defaultMemoryLimit() {
-  return physicalMemory() / 4 * 3;
+  const std::uint64_t physical = physicalMemory() / 4 * 3;
+  // Under an address-space limit (ulimit -v, a container's) the process fails at what is
+  // left of it, not at physical memory: 75 % of the room the limit leaves above what is mapped
+  // now (libraries, thread stacks), so that a request above it is refused with its key instead
+  // of ending in std::bad_alloc after seconds of work.
+  rlimit as{};
+  if (::getrlimit(RLIMIT_AS, &as) != 0 || as.rlim_cur == RLIM_INFINITY) return physical;
+  std::uint64_t mapped = 0;
+  if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+    unsigned long long pages = 0;
+    if (std::fscanf(f, "%llu", &pages) == 1) mapped = pages * std::uint64_t(sysconf(_SC_PAGE_SIZE));
+    std::fclose(f);
+  }
+  const std::uint64_t cap = std::uint64_t(as.rlim_cur);
+  const std::uint64_t room = cap > mapped ? cap - mapped : 0;
+  return std::max<std::uint64_t>(std::min(physical, room / 4 * 3), std::uint64_t(1) << 20);
 }
 
 std::uint64_t memoryLimit() {

@@ -97,6 +97,15 @@ class PipelineMethod : public Method {
       st.extra["radiance_resolution"] = {res.x, res.y, res.z};
     }
     stage("march", [&] { r.image = integrator->integrate(*frame, scene, progress); });
+    // The last guard of docs/reliability.md: whatever the parse-time bounds miss (products of
+    // large but allowed values: intensity, sigma_t, densities, weights), no image with a
+    // non-finite pixel leaves a method.
+    if (const NonFiniteValues bad = countNonFinite(r.image); bad.any())
+      throw LimitError("method '" + desc_.name + "' (" + backendName(backend_) + ") produced " +
+                       bad.describe() +
+                       ": the scene's values overflow single precision (3.4e38) somewhere; lower "
+                       "the largest of them (light intensity, sigma_t, density, weights); no "
+                       "image was written");
 
     frame->report(st);
     integrator->describe(st);

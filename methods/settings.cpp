@@ -112,9 +112,9 @@ const std::vector<KeyDoc>& radialBlurKeys() {
       {"samples", "int", "64", "1…4096", "n: samples per pixel along the screen ray to the light"},
       {"density", "number", "1", "(0, 1]",
        "fraction of the pixel→light segment the n samples span (Mitchell's density)"},
-      {"weight", "number", "1", ">= 0", "scale of every sample"},
+      {"weight", "number", "1", "[0, 1e6]", "scale of every sample"},
       {"decay", "number", "1", "[0, 1]", "sample i is scaled by decay^i"},
-      {"exposure", "number", "1", ">= 0", "scale of the sum"},
+      {"exposure", "number", "1", "[0, 1e6]", "scale of the sum"},
       {"downsample", "int", "1", "1, 2, 4", "the pre-pass has 1/downsample of the pixels per side"},
       {"guard_band", "number", "0.5", "[0, 10]",
        "the light's screen position is clamped to this many image sizes beyond each edge"},
@@ -163,9 +163,9 @@ RadialBlurSettings parseRadialBlur(Params& p) {
   RadialBlurSettings s;
   s.samples = int(p.integer("samples", s.samples, Interval::closed(1, 4096)));
   s.density = p.real("density", s.density, Interval{0.0, 1.0, true, false});
-  s.weight = p.real("weight", s.weight, Interval::atLeast(0));
+  s.weight = p.real("weight", s.weight, Interval::closed(0, 1e6));
   s.decay = p.real("decay", s.decay, Interval::closed(0, 1));
-  s.exposure = p.real("exposure", s.exposure, Interval::atLeast(0));
+  s.exposure = p.real("exposure", s.exposure, Interval::closed(0, 1e6));
   s.downsample = int(p.integer("downsample", s.downsample, Interval::closed(1, 4)));
   if (s.downsample == 3) p.fail("downsample", "is 3; allowed: 1, 2, 4");
   s.guardBand = p.real("guard_band", s.guardBand, Interval::closed(0, 10));
