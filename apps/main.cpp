@@ -14,6 +14,31 @@
 #include "core/error.h"
 #include "core/limits.h"
 
+namespace {
+
+/// A message as one error on stderr: a value the user gave may be megabytes long or hold line
+/// breaks (`--method $'x\nscatterlab: error: ...'` printed a fake second error line), so
+/// continuation lines are indented and a message beyond 2000 characters keeps its first 1500
+/// and last 300 with the count of what was left out.
+std::string printable(std::string m) {
+  if (m.size() > 2000)
+    m = m.substr(0, 1500) + " [... " + std::to_string(m.size() - 1800) +
+        " characters left out ...] " + m.substr(m.size() - 300);
+  std::string out;
+  for (char c : m) {
+    out += c == '\r' ? ' ' : c;
+    if (c == '\n') out += "  ";
+  }
+  return out;
+}
+
+void printError(const char* kind, const std::string& what, bool usage = false) {
+  std::fprintf(stderr, "scatterlab: %s: %s\n%s", kind, printable(what).c_str(),
+               usage ? "Run with --help for more information.\n" : "");
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{
       "scatterlab: real-time single-scattering participating media, with references "
@@ -56,8 +81,7 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);
     // Usage errors exit with 2 (the project's rule), whatever CLI11's own code (105, 106, 109,
     // ...), with the same prefix as every other error.
-    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
-                 e.what());
+    printError("error", e.what(), /*usage=*/true);
     return 2;
   }
   std::unique_ptr<tbb::global_control> threadLimit;
@@ -72,11 +96,10 @@ int main(int argc, char** argv) {
     for (auto& [sub, action] : cmds)
       if (sub->parsed()) return action();
   } catch (const scatterlab::cli::UsageError& e) {
-    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
-                 e.what());
+    printError("error", e.what(), /*usage=*/true);
     return 2;
   } catch (const scatterlab::Error& e) {
-    std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
+    printError("error", e.what());
     return 1;
   } catch (const std::bad_alloc&) {
     // What the estimates did not foresee (docs/reliability.md: the plan counts what is certain).
@@ -88,10 +111,10 @@ int main(int argc, char** argv) {
   } catch (const std::filesystem::filesystem_error& e) {
     // A file the library reached without a check of its own: the system's reason, not an
     // "internal error".
-    std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
+    printError("error", e.what());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "scatterlab: internal error: %s\n", e.what());
+    printError("internal error", e.what());
     return 1;
   }
   return 1;

@@ -59,13 +59,19 @@ extern "C" void removeTempsAndReraise(int sig) {
 std::string tempPathFor(const std::string& path, const fs::path& dir = {}) {
   static std::atomic<unsigned> counter{0};
   const fs::path p(path);
+  std::string tail(".tmp");
+  tail += std::to_string(::getpid());
+  tail += "_";
+  tail += std::to_string(counter++);
+  // A valid output name of up to NAME_MAX (255) bytes must not fail for its temporary's ~15
+  // more: the name is shortened to fit (the tail keeps the pattern stale-temporary cleanup
+  // looks for).
+  std::string stem = p.filename().string();
+  if (stem.size() + tail.size() + 1 > 255) stem.resize(255 - tail.size() - 1);
   // Appended piecewise: GCC 12 reports a false -Wrestrict for "." + std::string.
   std::string name(".");
-  name += p.filename().string();
-  name += ".tmp";
-  name += std::to_string(::getpid());
-  name += "_";
-  name += std::to_string(counter++);
+  name += stem;
+  name += tail;
   return ((dir.empty() ? p.parent_path() : dir) / name).string();
 }
 

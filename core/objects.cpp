@@ -140,17 +140,17 @@ class CheckedMaterialReader : public tinyobj::MaterialReader {
     try {
       checkReadableFile(file.string(), "material library (.mtl)");
     } catch (const IoError& e) {
-      throw IoError(key_ + ": " + e.what());
+      throw IoError("'" + key_ + "': " + e.what());
     }
     const std::uintmax_t size = std::filesystem::file_size(file, ec);
-    if (ec) throw IoError(key_ + ": cannot read '" + file.string() + "': " + ec.message());
+    if (ec) throw IoError("'" + key_ + "': cannot read '" + file.string() + "': " + ec.message());
     // Parsed materials (name, strings, numbers) take a few times the text's bytes.
     checkMemory(
         key_,
         "the material library '" + file.string() + "' (" + formatBytes(double(size)) + ", parsed)",
         4.0 * double(size));
     std::ifstream in(file);
-    if (!in) throw IoError(key_ + ": cannot open '" + file.string() + "'");
+    if (!in) throw IoError("'" + key_ + "': cannot open '" + file.string() + "'");
     tinyobj::LoadMtl(matMap, materials, &in, warn, err);
     return true;
   }
@@ -207,7 +207,7 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   const std::string rel = p.string("file");
   const std::filesystem::path file =
       std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : baseDir / rel;
-  const std::string key = p.keyPath("file");
+  const std::string key = "'" + p.keyPath("file") + "'";  // quoted, as Params::fail does
   try {
     checkReadableFile(file.string(), "OBJ mesh");
   } catch (const IoError& e) {
@@ -226,7 +226,7 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   std::string warn, err;
   std::ifstream objIn(file);
   if (!objIn) throw IoError(key + ": cannot open '" + file.string() + "'");
-  CheckedMaterialReader mtl(file.parent_path(), key);
+  CheckedMaterialReader mtl(file.parent_path(), p.keyPath("file"));
   if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &objIn, &mtl,
                         /*triangulate=*/true, /*default_vcols_fallback=*/false) ||
       !err.empty())

@@ -27,9 +27,10 @@ using scatterlab::testing::RunResult;
 
 /// `scatterlab ARGS` under `timeout` and a 2 GiB address-space limit, so that a regression
 /// (a FIFO read forever, /dev/zero read into memory) fails the test instead of hanging it.
-RunResult run(const std::string& args, int seconds = 120) {
-  const std::string cmd = "ulimit -v 2097152; timeout -s KILL " + std::to_string(seconds) + " " +
-                          std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
+RunResult run(const std::string& args, int seconds = 120, long addressSpaceKiB = 2097152) {
+  const std::string cmd = "ulimit -v " + std::to_string(addressSpaceKiB) + "; timeout -s KILL " +
+                          std::to_string(seconds) + " " + std::string(SCATTERLAB_CLI) + " " + args +
+                          " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf;
@@ -78,6 +79,7 @@ using CompareNonFinite = Hardening;
 using OutputPaths = Hardening;
 using SpecialFiles = Hardening;
 using ObjMaterialLib = Hardening;
+using Messages = Hardening;
 
 }  // namespace
 
@@ -220,13 +222,18 @@ TEST_F(OutputPaths, OneNewFileUnderTwoSpellingsIsAUsageError) {
         << r.output;
     EXPECT_FALSE(fs::exists(a)) << a;
   }
-  // Relative against absolute, from the working directory.
+  // Relative against relative and absolute, from the working directory (the cases).
   const fs::path cwd = fs::current_path();
   fs::current_path(dir_);
-  const RunResult r = run("render " + s + " -q -o o.exr --png ./o.exr --stats " + d + "/o.exr");
+  const RunResult dot = run("render " + s + " -q -o o.exr --png ./o.exr");
+  const RunResult abs = run("render " + s + " -q -o o.exr --png " + d + "/o.exr");
+  const RunResult up = run("render " + s + " -q -o o.exr --png sub/../o.exr");
   fs::current_path(cwd);
-  EXPECT_EQ(r.code, 2) << r.output;
-  EXPECT_NE(r.output.find("name the same file"), std::string::npos) << r.output;
+  for (const RunResult& r : {dot, abs, up}) {
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--output and --png name the same file"), std::string::npos)
+        << r.output;
+  }
   EXPECT_FALSE(fs::exists(dir_ / "o.exr"));
   // An existing file and a link to it are one file too.
   std::ofstream(dir_ / "stats.json") << "{}";
@@ -256,15 +263,12 @@ TEST_F(SpecialFiles, StatsAreWrittenThroughDevicesFifosAndLinks) {
   const std::string fifo = out("stats.fifo");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   std::string got;
-  std::thread reader([&] {
-    std::ifstream in(fifo);  // blocks until the tool opens it for writing
-    got.assign(std::istreambuf_iterator<char>(in), {});
-  });
+  std::thread reader([&] { got = scatterlab::testing::drainFifo(fifo, std::chrono::seconds(60)); });
   r = run("render " + s + " -q -o " + out("c.exr") + " --stats " + fifo, 60);
-  if (r.code != 0) std::ofstream(fifo) << "";  // release the reader if the tool did not
   reader.join();
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::is_fifo(fifo));
+  ASSERT_TRUE(Json::accept(got)) << got;
   EXPECT_EQ(Json::parse(got)["width"], 16);
   EXPECT_TRUE(fs::exists(out("c.exr")));
   // -o onto a dangling link: refused before rendering, the link left alone.
@@ -303,4 +307,66 @@ TEST_F(ObjMaterialLib, TheMtlIsCheckedLikeEveryOtherFileAndIndicesAreRangeChecke
   write("m.obj", "mtllib missing.mtl\n" + tri + "f 1 2 3\n");
   r = run("render " + s + " -q -o " + out("b.exr"));
   EXPECT_EQ(r.code, 0) << r.output;
+}
+
+// 9, 10, 12: silent wrong input, limits with gaps, "internal error" where a message belongs.
+TEST_F(Messages, WrongInputIsNamedNotSilentOrInternal) {
+  const std::string s = scene(tinyScene());
+  // --exposure nan wrote an all-black PNG with exit 0; --fps nan exited 1 without naming it.
+  RunResult r = run("render " + s + " -q -o " + out("a.png") + " --exposure nan");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--exposure"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out("a.png")));
+  r = run("render " + s + " -q -o " + out("a.exr") + " --frames 0:1 --fps nan");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--fps"), std::string::npos) << r.output;
+  // A moving density's time of the wrong type became 0.
+  Json j = tinyScene();
+  j["medium"]["density"]["blobs"][0]["velocity"] = {0.1, 0, 0};
+  j["medium"]["density"]["time"] = "soon";
+  expectFails(scene(j, "moving.json"), {"'medium.density.time': expected a number, got \"soon\""});
+  // A value with a line break printed a second, fake `scatterlab: error:` line; a 100 KB value
+  // was echoed whole.
+  r = run("render " + s + " -q -o " + out("b.exr") +
+          " --method \"$(printf 'nonsense\\nscatterlab: error: fake')\"");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_EQ(r.output.rfind("scatterlab: error:", 0), 0u) << r.output;
+  EXPECT_EQ(r.output.find("\nscatterlab: error:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("nonsense\n  scatterlab: error: fake"), std::string::npos) << r.output;
+  r = run("render " + s + " -q -o " + out("b.exr") + " --method " + std::string(100000, 'm'));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_LT(r.output.size(), 2500u);
+  EXPECT_NE(r.output.find("characters left out"), std::string::npos) << r.output.substr(0, 300);
+  // A loop of links was "does not exist".
+  fs::create_symlink(dir_ / "loop2.json", dir_ / "loop1.json");
+  fs::create_symlink(dir_ / "loop1.json", dir_ / "loop2.json");
+  r = run("render " + out("loop1.json") + " -q -o " + out("c.exr"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("is a loop of symbolic links"), std::string::npos) << r.output;
+  // An output name of 250 bytes (valid) failed with "File name too long" for its temporary.
+  const std::string longName = out(std::string(246, 'n') + ".exr");
+  r = run("render " + s + " -q -o " + longName);
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(longName));
+  // experiment -o onto an existing file: "internal error: filesystem error: ..." before.
+  write("exp.json", Json{{"scene", "scene.json"}, {"methods", {"exact"}}}.dump());
+  std::ofstream(out("file")) << "x";
+  r = run("experiment " + out("exp.json") + " -o " + out("file"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("output directory '" + out("file") + "' exists and is not a directory"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST_F(Messages, TheDefaultMemoryLimitFollowsAnAddressSpaceLimit) {
+  // Under ulimit -v 1.5 GiB, per-voxel at 320^3 (about 1.1 GiB planned) ran 11 s and died with
+  // "internal error: std::bad_alloc": the default limit was 75 % of physical memory.
+  const RunResult r = run("render " + scene(tinyScene()) + " -q -o " + out("a.exr") +
+                              " --method per-voxel --set medium.resolution=320",
+                          120, 1536 * 1024);
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("above the memory limit"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out("a.exr")));
 }

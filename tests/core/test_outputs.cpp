@@ -55,32 +55,6 @@ std::string errorOf(F&& f) {
   return "(no IoError)";
 }
 
-/// Reads a FIFO without blocking the test forever: opened non-blocking (so the open succeeds
-/// before a writer exists), polled until a writer has written and closed, or `timeout`.
-std::string drainFifo(const std::string& path, std::chrono::seconds timeout) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK);
-  if (fd < 0) return "(cannot open)";
-  std::string got;
-  bool wrote = false;
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    pollfd p{fd, POLLIN, 0};
-    ::poll(&p, 1, 100);
-    char buf[4096];
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n > 0) {
-      got.append(buf, std::size_t(n));
-      wrote = true;
-    } else if (n == 0 && wrote) {
-      break;  // the writer closed its end after writing
-    } else if (n == 0) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // no writer yet
-    }
-  }
-  ::close(fd);
-  return got;
-}
-
 }  // namespace
 
 // The case: `-o dir/mine.exr --png dir/shared.png` where the second rename fails
@@ -151,7 +125,7 @@ TEST_F(Outputs, DevicesAndFifosAreWrittenThroughNeverReplaced) {
   const std::string fifo = (dir_ / "stats.fifo").string();
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   std::string got;
-  std::thread reader([&] { got = drainFifo(fifo, std::chrono::seconds(20)); });
+  std::thread reader([&] { got = scatterlab::testing::drainFifo(fifo, std::chrono::seconds(20)); });
   scatterlab::PendingOutputs out;
   out.stageStream(fifo, text("{\"through\": \"the fifo\"}\n"));
   out.stageStream((dir_ / "image.txt").string(), text("image"));
