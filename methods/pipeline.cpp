@@ -191,7 +191,7 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   checkRenderPlan(p, scene, d, settings, plannedSamples,
                   m->reconstruction && m->reconstruction->needsGradients(),
                   m->dynamic ? &*m->dynamic : nullptr,
-                  b == Backend::Cpu && integratorName == "ray-marcher");
+                  b == Backend::Cpu && integratorName == "ray-marcher", b == Backend::Cpu);
   return m;
 }
 

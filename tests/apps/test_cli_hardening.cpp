@@ -370,3 +370,31 @@ TEST_F(Messages, TheDefaultMemoryLimitFollowsAnAddressSpaceLimit) {
   EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out("a.exr")));
 }
+
+// 10. No memory or work bound for the per-pixel competitors: a 1024x1024x16 froxel grid peaked
+// at 364 MB under --memory-limit 64M, 4096^2 shadow maps x 4 lights at 1.68 GB under 128M, and
+// renders of hours were accepted.
+TEST_F(Messages, TheCompetitorsHaveMemoryAndWorkBounds) {
+  Json j = tinyScene();
+  j["lights"] = Json::array();
+  for (int i = 0; i < 4; ++i)
+    j["lights"].push_back(
+        {{"type", "point"}, {"position", {0.2 + 0.2 * i, 1.4, 0.5}}, {"intensity", 1.0}});
+  const std::string s = scene(j);
+  const std::string big = " --set camera.width=320 --set camera.height=240 --backend cpu ";
+  expectFails("--memory-limit 64M " + s + " --backend cpu --method froxel" +
+                  " --set 'render.froxel_grid=[1024,1024,16]'",
+              {"'render.froxel_grid': the froxel volume of 1024x1024x16 froxels, 256 MiB",
+               "above the memory limit of 64 MiB"});
+  expectFails("--memory-limit 128M " + s + " --backend cpu --method light-space-march" +
+                  " --set render.shadow_map.resolution=4096",
+              {"'render.shadow_map.resolution': the shadow maps (24 layers of 4.1e+03^2 texels)",
+               "above the memory limit of 128 MiB"});
+  expectFails(s + big + "--method jittered-march --set render.delta1=2e-6",
+              {"'render.delta1'", "light-march steps", "above the bound of 1e+12"});
+  expectFails(s + big + "--method froxel --set render.delta1=1e-6",
+              {"'render.delta1'", "froxels", "above the bound of 1e+12"});
+  expectFails(s + big + "--method light-space-march --set render.steps=65536" +
+                  " --set render.interleave=1 --set camera.width=1024 --set camera.height=1024",
+              {"'render.steps'", "view-ray terms, above the bound of 1e+10"});
+}
