@@ -25,7 +25,8 @@
 ///
 /// Light paths: a light may carry `"path": [{"t": T, "position": [x,y,z]}, ...]` with strictly
 /// increasing T; its position at time t is the linear interpolation (held constant before the
-/// first and after the last key). Not thread-safe: one Renderer per thread.
+/// first and after the last key). Not thread-safe: one Renderer per thread, or a lock around
+/// every call (the Python binding's Renderer takes one, python/module.cpp).
 
 #include <filesystem>
 #include <memory>

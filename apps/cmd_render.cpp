@@ -2,6 +2,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -121,7 +122,16 @@ Action addRender(CLI::App& app) {
                 "VALUE parsed as JSON where it parses, else a string)")
       ->take_all()
       ->allow_extra_args(false);
-  c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)");
+  c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            char* end = nullptr;
+            const double x = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && std::abs(x) <= 100.0
+                       ? ""
+                       : "'" + v + "' is not a number of stops in [-100, 100]";
+          },
+          "STOPS in [-100, 100]"));
   c->add_option("--tonemap", o->tonemap,
                 "Tone curve of the PNG previews (--png, a .png -o, --samples-png): aces "
                 "(Narkowicz, the default: highlights roll off), filmic (Hable) or linear "
@@ -143,13 +153,13 @@ Action addRender(CLI::App& app) {
   c->add_option("--fps", o->fps, "Frames per unit of scene time for --frames (default 24)")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
-            // CLI11's PositiveNumber names its range's upper end, DBL_MAX in 309 digits.
-            double x = 0.0;
-            return CLI::detail::lexical_cast(v, x) && std::isfinite(x) && x > 0.0
+            char* end = nullptr;
+            const double x = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && x > 0.0 && x <= 1e9
                        ? ""
-                       : "'" + v + "' is not a finite number > 0";
+                       : "'" + v + "' is not a frame rate in (0, 1e9]";
           },
-          "FPS > 0"));
+          "FPS in (0, 1e9]"));
   c->add_option("--samples-png", o->samplesPng,
                 "Also write a PNG of the radiance samples over the dimmed image, coloured by "
                 "level (white initial, green/yellow/red finer); sample-based methods only");

@@ -42,8 +42,9 @@ class Method {
  public:
   virtual ~Method() = default;
   /// Renders `scene` (whose `render` settings this method was created from). `progress` may be
-  /// null. Throws scatterlab::Error on failure. Needs no current GL context (GPU methods make
-  /// their own).
+  /// null. Throws scatterlab::Error on failure, LimitError when the image would hold a NaN or
+  /// infinite colour or alpha value (docs/reliability.md). Needs no current GL context (GPU
+  /// methods make their own).
   virtual RenderResult render(const Scene& scene, Progress* progress) = 0;
 
   /// Keys of the render object that only other registered methods read, ignored by this one

@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/objects.h"
 
 namespace scatterlab {
 
@@ -39,7 +40,15 @@ Phase parsePhase(Params p) {
 /// Beyond that single precision has nothing left of the box (and |x|² overflows near 1e19).
 constexpr double kMaxDistanceInDiagonals = 1e6;
 
-/// Checks that `key` (a point already read) lies within kMaxDistanceInDiagonals of the box.
+/// Largest light intensity (point, spot) or irradiance (directional) per channel. Images scale
+/// with it (glow.json: the brightest pixel is ~3 x I, rbf's ~12 x I) and the intermediate sums
+/// of every method must stay within single precision (3.4e38): 1e36 made 18 pixels of `exact`
+/// infinite and the whole radial-blur image NaN. 1e20 leaves those sums 1e18 of headroom.
+constexpr double kMaxLightIntensity = 1e20;
+
+/// Checks that `key` (a point already read) lies within kMaxDistanceInDiagonals of the box and
+/// within +-kMaxCoordinate (a box near that bound has diagonals of up to 3.5e15, so the first
+/// rule alone allowed 3.5e21, beyond what Embree traces).
 void checkNearMedium(const Params& p, const std::string& key, const Vec3& x, const Box& box) {
   const glm::dvec3 c = 0.5 * (glm::dvec3(box.min) + glm::dvec3(box.max));
   const double diag = glm::length(glm::dvec3(box.max) - glm::dvec3(box.min));
@@ -50,6 +59,13 @@ void checkNearMedium(const Params& p, const std::string& key, const Vec3& x, con
                   d / diag, diag);
     p.fail(key, "point " + describeValue(p.json()[key]) + buf + "; allowed: at most 1e6");
   }
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(double(x[a])) <= kMaxCoordinate)) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "; allowed: every coordinate within +-%g", kMaxCoordinate);
+      p.fail(key,
+             "point " + describeValue(p.json()[key]) + " lies beyond the coordinate bound" + buf);
+    }
 }
 
 /// A non-zero direction, normalised in double so that huge finite components do not overflow.
@@ -63,7 +79,7 @@ Vec3 direction(Params& p, const std::string& key) {
 Light parseLight(Params p, const Box& box) {
   Light l;
   const std::string t = p.choice("type", {"point", "spot", "directional"});
-  const Interval positive = Interval::atLeast(0);
+  const Interval positive = Interval::closed(0, kMaxLightIntensity);
   if (t == "point" || t == "spot") {
     l.type = t == "point" ? Light::Type::Point : Light::Type::Spot;
     l.position = p.vec3("position");

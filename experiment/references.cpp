@@ -13,7 +13,7 @@ namespace scatterlab::detail {
 namespace fs = std::filesystem;
 
 Reference& ReferenceCache::get(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed) {
-  Json key = {{"scene", stableHash(readText(r.sceneSpec->file))},
+  Json key = {{"scene", sceneHash(r.sceneSpec->file)},
               {"sets", r.refSets},
               {"lights", r.refLights ? Json(*r.refLights) : Json()},
               {"method", ref.method},

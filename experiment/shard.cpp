@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "experiment/detail.h"
 
@@ -193,9 +194,9 @@ ExperimentResult mergeShards(const std::vector<std::string>& dirs, const std::st
   for (const RunSpec& r : plan.runs)
     if (!recordDir.count(r.id)) throw ConfigError("merge: run '" + r.id + "' is in no shard");
   // Copy what the report needs; a shard directory may be the output directory itself.
-  fs::create_directories(fs::path(outDir) / "runs");
-  fs::create_directories(fs::path(outDir) / "images");
-  fs::create_directories(fs::path(outDir) / "references");
+  createOutputDirectory(outDir);
+  for (const char* sub : {"runs", "images", "references"})
+    createOutputDirectory((fs::path(outDir) / sub).string());
   const auto copy = [&](const fs::path& from, const fs::path& to) {
     if (!fs::exists(from)) return;
     if (fs::exists(to) && fs::equivalent(from, to)) return;

@@ -112,9 +112,9 @@ const std::vector<KeyDoc>& radialBlurKeys() {
       {"samples", "int", "64", "1…4096", "n: samples per pixel along the screen ray to the light"},
       {"density", "number", "1", "(0, 1]",
        "fraction of the pixel→light segment the n samples span (Mitchell's density)"},
-      {"weight", "number", "1", ">= 0", "scale of every sample"},
+      {"weight", "number", "1", "[0, 1e6]", "scale of every sample"},
       {"decay", "number", "1", "[0, 1]", "sample i is scaled by decay^i"},
-      {"exposure", "number", "1", ">= 0", "scale of the sum"},
+      {"exposure", "number", "1", "[0, 1e6]", "scale of the sum"},
       {"downsample", "int", "1", "1, 2, 4", "the pre-pass has 1/downsample of the pixels per side"},
       {"guard_band", "number", "0.5", "[0, 10]",
        "the light's screen position is clamped to this many image sizes beyond each edge"},
@@ -163,9 +163,9 @@ RadialBlurSettings parseRadialBlur(Params& p) {
   RadialBlurSettings s;
   s.samples = int(p.integer("samples", s.samples, Interval::closed(1, 4096)));
   s.density = p.real("density", s.density, Interval{0.0, 1.0, true, false});
-  s.weight = p.real("weight", s.weight, Interval::atLeast(0));
+  s.weight = p.real("weight", s.weight, Interval::closed(0, 1e6));
   s.decay = p.real("decay", s.decay, Interval::closed(0, 1));
-  s.exposure = p.real("exposure", s.exposure, Interval::atLeast(0));
+  s.exposure = p.real("exposure", s.exposure, Interval::closed(0, 1e6));
   s.downsample = int(p.integer("downsample", s.downsample, Interval::closed(1, 4)));
   if (s.downsample == 3) p.fail("downsample", "is 3; allowed: 1, 2, 4");
   s.guardBand = p.real("guard_band", s.guardBand, Interval::closed(0, 10));
@@ -199,6 +199,14 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
       std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
   double light = 0;
   std::string what;
+  // The per-pixel competitors step a fixed count per ray: their view work is rays x steps, and
+  // each step traces the lights (issue 26: renders of hours or days were accepted).
+  const auto checkTerms = [&](const std::string& key, double terms, const std::string& how) {
+    if (terms > kMaxViewSteps)
+      throw LimitError("'" + p.keyPath(key) + "': " + how + " make " + sci(terms) +
+                       " view-ray terms, above the bound of " + sci(kMaxViewSteps) +
+                       "; use fewer steps or a smaller image");
+  };
   if (d.integrator == "exact") {
     light = view * perLight;
     what = "at every one of " + sci(view) + " view steps";
@@ -207,6 +215,37 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
     const double voxels = double(r.x) * r.y * r.z;
     light = voxels * perLight;
     what = "at every one of " + sci(voxels) + " voxels";
+  } else if (d.integrator == "jittered-march") {
+    const int ds = s.jittered.downsample;
+    const double low = std::ceil(double(c.width) / ds) * std::ceil(double(c.height) / ds);
+    const double terms = low * s.jittered.steps;
+    checkTerms("steps", terms,
+               sci(low) + " rays (1/" + std::to_string(ds) + " of " + size + ") x " +
+                   std::to_string(s.jittered.steps) + " steps");
+    light = terms * perLight;
+    what = "at every one of " + sci(terms) + " view steps";
+  } else if (d.integrator == "froxel") {
+    const IVec3 g = s.froxel.grid;
+    const double froxels = double(g.x) * g.y * g.z;
+    if (s.froxel.transmittanceMap) {
+      const double n = std::pow(double(s.froxel.mapResolution), 3.0);
+      light = n * perLight;
+      what = "at every one of " + sci(n) + " voxels of the transmittance maps";
+    } else {
+      light = froxels * perLight;
+      what = "at every one of " + sci(froxels) + " froxels";
+    }
+  } else if (d.integrator == "light-space-march") {
+    const LightSpaceMarchSettings& l = s.lightSpaceMarch;
+    const double terms =
+        rays * std::ceil(double(l.steps) / (double(l.interleave) * double(l.interleave)));
+    checkTerms("steps", terms,
+               size + " x " + std::to_string(l.steps) + " steps / interleave " +
+                   std::to_string(l.interleave) + "^2");
+    if (l.light == LightTransmittance::Traced) {
+      light = terms * perLight;
+      what = "at every one of " + sci(terms) + " view-ray terms (light_transmittance traced)";
+    }
   }
   if (light > kMaxLightSteps)
     throw LimitError("'" + p.keyPath("delta1") + "': a step of " + sci(s.delta1) + " gives " +
@@ -343,7 +382,7 @@ std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string&
 
 void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s,
                      long long samples, bool gradients, const DynamicSamplingSettings* dynamic,
-                     bool cpuRayMarcher) {
+                     bool cpuRayMarcher, bool cpu) {
   const auto voxels = [](IVec3 r) { return double(r.x) * double(r.y) * double(r.z); };
   const auto dims = [](IVec3 r) {
     return std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z);
@@ -389,6 +428,28 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
     plan.add(p.keyPath("levels"),
              "the grid buffer of level " + std::to_string(dynamic->levels.back()) + "^3",
              n * (sizeof(std::uint8_t) + sizeof(std::int32_t)));
+  }
+  // The competitors' own host arrays (CPU): the froxel volume (in-scattered RGB + transmittance)
+  // and the per-light transmittance maps; light-space-march's shadow maps of the scene objects,
+  // up to 6 layers (a cube) per point or wide spot light, 1 per directional light.
+  if (cpu && d.integrator == "froxel") {
+    const IVec3 g = s.froxel.grid;
+    plan.add(p.keyPath("froxel_grid"), "the froxel volume of " + dims(g) + " froxels",
+             voxels(g) * (sizeof(Vec3) + sizeof(float)));
+    if (s.froxel.transmittanceMap)
+      plan.add(p.keyPath("transmittance_map_resolution"),
+               std::to_string(scene.lights.size()) + " transmittance maps of " +
+                   std::to_string(s.froxel.mapResolution) + "^3",
+               double(scene.lights.size()) * std::pow(double(s.froxel.mapResolution), 3.0) *
+                   sizeof(float));
+  }
+  if (cpu && d.integrator == "light-space-march" && scene.objects) {
+    double layers = 0;
+    for (const Light& l : scene.lights) layers += l.type == Light::Type::Directional ? 1 : 6;
+    const double r = s.shadowMap.resolution;
+    plan.add(p.keyPath("shadow_map.resolution"),
+             "the shadow maps (" + sci(layers) + " layers of " + sci(r) + "^2 texels)",
+             layers * r * r * sizeof(float));
   }
   plan.check();
 

@@ -81,9 +81,12 @@ struct DynamicSamplingSettings;
 ///    × ⌈diagonal / delta1⌉ × lights, against kMaxLightSteps, a LimitError naming the keys.
 /// `samples`: the planned count (makeSampler), 0 without a sampler; `dynamic`: null without
 /// dynamic sampling; `cpuRayMarcher`: the image is marched by the CPU's ray-marcher (which fuses
-/// density and radiance into one volume when fast_march is on and their grids agree).
+/// density and radiance into one volume when fast_march is on and their grids agree); `cpu`: the
+/// method runs on the CPU, whose froxel volume, transmittance maps and shadow maps are host
+/// arrays in the plan (`render.froxel_grid`, `render.transmittance_map_resolution`,
+/// `render.shadow_map.resolution`).
 void checkRenderPlan(Params& render, const Scene& scene, const MethodDesc& desc,
                      const PipelineSettings& settings, long long samples, bool gradients,
-                     const DynamicSamplingSettings* dynamic, bool cpuRayMarcher);
+                     const DynamicSamplingSettings* dynamic, bool cpuRayMarcher, bool cpu = true);
 
 }  // namespace scatterlab

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 
 #include "api/scatterlab.h"
@@ -22,8 +23,10 @@ using namespace scatterlab;
 namespace {
 
 /// json.dumps with numpy scalars and arrays (anything with tolist(): np.float32(0.5),
-/// np.array([1, 2, 3])) taken as the plain numbers and lists they hold.
-std::string dumps(const py::handle& obj) {
+/// np.array([1, 2, 3])) taken as the plain numbers and lists they hold, and without NaN or inf
+/// (not JSON: they used to reach nlohmann's parser and surface as a bare RuntimeError
+/// "[json.exception.parse_error.101]"); `what` names the value.
+std::string dumps(const py::handle& obj, const std::string& what) {
   // Made per call: a static py::object would be released after the interpreter finalised.
   const py::object toList = py::cpp_function([](const py::object& o) -> py::object {
     if (py::hasattr(o, "tolist")) return o.attr("tolist")();
@@ -31,13 +34,18 @@ std::string dumps(const py::handle& obj) {
                          py::str(py::type::of(o).attr("__name__")).cast<std::string>() +
                          " is not JSON serializable");
   });
-  py::dict kwargs;
-  kwargs["default"] = toList;
-  return py::str(py::module_::import("json").attr("dumps")(obj, **kwargs));
+  try {
+    return py::str(py::module_::import("json").attr("dumps")(obj, py::arg("default") = toList,
+                                                            py::arg("allow_nan") = false));
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_ValueError)) throw;
+    throw ConfigError(what + ": " + std::string(py::str(e.value())) +
+                      " (NaN and infinity are not JSON numbers; scene values must be finite)");
+  }
 }
 
 Json toJson(const py::handle& obj) {
-  return Json::parse(dumps(obj));
+  return parseJson(dumps(obj, "scene"), "the scene dict");
 }
 
 py::object fromJson(const Json& j) {
@@ -50,8 +58,10 @@ std::vector<std::string> assignments(const py::object& overrides) {
   std::vector<std::string> out;
   if (overrides.is_none()) return out;
   if (py::isinstance<py::dict>(overrides)) {
-    for (auto [k, v] : overrides.cast<py::dict>())
-      out.push_back(py::str(k).cast<std::string>() + "=" + dumps(v));
+    for (auto [k, v] : overrides.cast<py::dict>()) {
+      const std::string key = py::str(k).cast<std::string>();
+      out.push_back(key + "=" + dumps(v, "overrides['" + key + "']"));
+    }
     return out;
   }
   if (py::isinstance<py::str>(overrides))
@@ -76,6 +86,16 @@ PyScene makeScene(Json doc, std::filesystem::path baseDir, const std::string& na
   }
   return s;
 }
+
+/// A Renderer that Python threads may share. Every call takes `lock` after releasing the GIL
+/// (so a thread waiting for the lock never holds up the one rendering, which needs no GIL), and
+/// gives it back before taking the GIL again: set() or `time =` during render() waits for the
+/// render instead of replacing the scene and method under it (which crashed the interpreter).
+struct PyRenderer {
+  explicit PyRenderer(Renderer r) : renderer(std::move(r)) {}
+  Renderer renderer;
+  std::mutex lock;
+};
 
 /// (H, W, 3), or (H, W, 4) with the alpha (1 − view transmittance) as the 4th channel.
 py::array_t<float> imageArray(const Image& img, bool rgba = false) {
@@ -263,50 +283,63 @@ PYBIND11_MODULE(_core, m) {
       "Renders the scene: (image float32 (H,W,3), stats dict), plus a dict of the method's "
       "density and radiance volumes with volumes=True");
 
-  py::class_<Renderer>(m, "Renderer",
-                       "Re-renders one scene as lights, camera or time change, keeping the "
-                       "density volume, fitted model and GL context (docs/python.md)")
+  py::class_<PyRenderer>(m, "Renderer",
+                         "Re-renders one scene as lights, camera or time change, keeping the "
+                         "density volume, fitted model and GL context (docs/python.md). Safe to "
+                         "share between threads: calls take a lock, so set() or time= during "
+                         "render() waits for that render to finish")
       .def(py::init([](const PyScene& s, const std::string& method, const std::string& backend) {
              py::gil_scoped_release unlocked;
-             return Renderer(s.doc, s.baseDir, method, backend);
+             return std::make_unique<PyRenderer>(Renderer(s.doc, s.baseDir, method, backend));
            }),
            py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto")
       .def(
           "set",
-          [](Renderer& r, const std::string& key, const py::object& value) {
-            const std::string a = key + "=" + dumps(value);
+          [](PyRenderer& r, const std::string& key, const py::object& value) {
+            const std::string a = key + "=" + dumps(value, "Renderer.set('" + key + "')");
             py::gil_scoped_release unlocked;
-            r.set(a);
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.set(a);
           },
           py::arg("key"), py::arg("value"),
           "Sets a scene key by dotted path (lights.0.position) to a JSON-able value (numbers, "
           "lists, dicts, numpy scalars and arrays)")
       .def(
           "set",
-          [](Renderer& r, const std::string& assignment) {
+          [](PyRenderer& r, const std::string& assignment) {
             if (assignment.find('=') == std::string::npos)
               throw ConfigError("Renderer.set('" + assignment +
                                 "'): expected set(key, value) or set('key=VALUE')");
             py::gil_scoped_release unlocked;
-            r.set(assignment);
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.set(assignment);
           },
           py::arg("assignment"), "Sets a scene key from 'key=VALUE', as --set and C++ set()")
       .def_property(
-          "time", &Renderer::time,
-          [](Renderer& r, double t) {
+          "time",
+          [](PyRenderer& r) {
             py::gil_scoped_release unlocked;
-            r.setTime(t);
+            const std::lock_guard<std::mutex> hold(r.lock);
+            return r.renderer.time();
+          },
+          [](PyRenderer& r, double t) {
+            py::gil_scoped_release unlocked;
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.setTime(t);
           },
           "Animation time: light paths and a medium that moves with time")
       .def(
           "render",
-          [](Renderer& r, bool volumes, bool rgba) {
+          [](PyRenderer& r, bool volumes, bool rgba) {
             RenderResult res;
+            Box bounds;
             {
               py::gil_scoped_release unlocked;
-              res = r.render(nullptr);
+              const std::lock_guard<std::mutex> hold(r.lock);
+              res = r.renderer.render(nullptr);
+              bounds = r.renderer.scene().medium.bounds;
             }
-            return resultTuple(res, volumes, r.scene().medium.bounds, rgba);
+            return resultTuple(res, volumes, bounds, rgba);
           },
           py::arg("volumes") = false, py::arg("rgba") = false,
           "(image, stats[, volumes]) as scatterlab.render");

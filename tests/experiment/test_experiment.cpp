@@ -551,6 +551,46 @@ TEST_F(ExperimentTest, StaleTemporariesAreRemovedOnResume) {
   EXPECT_TRUE(fs::exists(live));
 }
 
+// Issue 26: the run hash covered the scene JSON but not the files it names; after a mesh edit
+// an experiment "resumed" the old result (60 % off) and reused the cached reference.
+TEST_F(ExperimentTest, EditingAFileTheSceneNamesRedoesTheRunsAndTheReference) {
+  Json scene = Json::parse(std::ifstream(dir / "scene.json"));
+  scene["objects"] = Json::array({{{"type", "mesh"}, {"file", "tri.obj"}}});
+  writeJson(dir / "scene.json", scene);
+  const auto mesh = [&](double y) {
+    std::ofstream(dir / "tri.obj") << "mtllib tri.mtl\nv 0 " << y << " 0\nv 1 " << y << " 0\nv 0.5 "
+                                   << y << " 1\nusemtl m\nf 1 2 3\n";
+  };
+  mesh(0.3);
+  std::ofstream(dir / "tri.mtl") << "newmtl m\nKd 0.8 0.8 0.8\n";
+  Json c = tinyConfig();
+  c.erase("sweeps");
+  c["methods"] = {"per-voxel"};
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const auto runIt = [&] {
+    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  };
+  const ExperimentResult first = runIt();
+  ASSERT_EQ(first.runs.size(), 1u);
+  ASSERT_EQ(first.runs[0].status, "ok") << first.runs[0].error;
+  EXPECT_EQ(runIt().resumed, 1);  // nothing changed: resumed
+  mesh(0.7);                      // the mesh moves
+  const ExperimentResult moved = runIt();
+  EXPECT_EQ(moved.resumed, 0);
+  ASSERT_EQ(moved.runs[0].status, "ok") << moved.runs[0].error;
+  EXPECT_NE(moved.runs[0].hash, first.runs[0].hash);
+  std::ofstream(dir / "tri.mtl") << "newmtl m\nKd 0.1 0.1 0.1\n";  // and its material changes
+  EXPECT_EQ(runIt().resumed, 0);
+  // Two reference files: the first mesh's and the moved one's (the material change a third).
+  int references = 0;
+  for (const auto& e : fs::directory_iterator(dir / "out" / "references"))
+    references += e.path().extension() == ".exr";
+  EXPECT_EQ(references, 3);
+}
+
 }  // namespace scatterlab
 
 namespace scatterlab {

@@ -2,6 +2,7 @@
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -112,6 +113,20 @@ class Compare(unittest.TestCase):
         with self.assertRaisesRegex(sl.ConfigError, "size"):
             sl.compare(np.ones((4, 5, 3)), np.ones((5, 4, 3)))
 
+
+    def test_non_finite_and_empty_images_are_errors(self):
+        # Issue 26: a NaN reference scored rel_l2 0, psnr inf, max_abs 0.
+        a = np.ones((4, 5, 3), np.float32)
+        b = a.copy()
+        b[1, 2, 0] = np.nan
+        with self.assertRaisesRegex(sl.ConfigError, r"the reference has 1 non-finite .*\(1 NaN, 0 inf; "
+                                    r"the first at pixel \(2, 1\)\)"):
+            sl.compare(a, b)
+        b[1, 2, 0] = np.inf
+        with self.assertRaisesRegex(sl.ConfigError, "the image has 1 non-finite"):
+            sl.compare(b, a)
+        with self.assertRaisesRegex(sl.ConfigError, "empty"):
+            sl.compare(np.zeros((0, 0, 3), np.float32), np.zeros((0, 0, 3), np.float32))
 
 class Usability(unittest.TestCase):
     """Issue 25: what a new user types first."""
@@ -303,6 +318,50 @@ class RendererObject(unittest.TestCase):
         doc["lights"][0]["path"][1]["t"] = 0
         with self.assertRaisesRegex(sl.ConfigError, r"lights\[0\]\.path\[1\]\.t.*strictly increase"):
             sl.load_scene(doc)
+
+    def test_shared_between_threads(self):
+        # Issue 26: set() or time= from one thread while render() ran in another killed the
+        # interpreter (10 of 12 runs). Run in a child interpreter so a crash fails this test
+        # instead of ending the suite.
+        code = """
+import json, sys, threading
+import numpy as np
+import scatterlab as sl
+doc = json.loads(sys.argv[1])
+doc["medium"]["density"] = {"type": "gaussians",
+                            "blobs": [{"center": [0.5, 0.5, 0.5], "radius": 0.3,
+                                       "velocity": [0.1, 0, 0]}]}
+r = sl.Renderer(sl.load_scene(doc), method="per-voxel", backend="cpu")
+images, errors = [], []
+stop = threading.Event()
+def render():
+    try:
+        for _ in range(20):
+            images.append(r.render()[0])
+    except Exception as e:
+        errors.append(e)
+    stop.set()
+def change():
+    i = 0
+    while not stop.is_set():
+        i += 1
+        r.set("lights.0.position", [0.5, 1.2 + 0.01 * (i % 10), 0.5])
+        r.time = 0.1 * (i % 5)
+        r.set("medium.resolution", 12 + i % 3)
+        _ = r.time
+threads = [threading.Thread(target=render), threading.Thread(target=change)]
+for t in threads: t.start()
+for t in threads: t.join()
+assert not errors, errors
+assert len(images) == 20
+for img in images:
+    assert img.shape == (18, 24, 3) and np.isfinite(img).all() and img.max() > 0
+print("ok", len(images))
+"""
+        p = subprocess.run([sys.executable, "-c", code, json.dumps(box_scene())],
+                           capture_output=True, text=True, timeout=300)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("ok 20", p.stdout)
 
     def test_gil_released_while_rendering(self):
         scene = sl.load_scene(box_scene(width=160, height=120, resolution=48))
