@@ -392,7 +392,7 @@ TEST_F(Messages, TheCompetitorsHaveMemoryAndWorkBounds) {
                "above the memory limit of 128 MiB"});
   expectFails(s + big + "--method jittered-march --set render.delta1=2e-6",
               {"'render.delta1'", "light-march steps", "above the bound of 1e+12"});
-  expectFails(s + big + "--method froxel --set render.delta1=1e-6",
+  expectFails(s + big + "--method froxel --set render.delta1=2e-6",
               {"'render.delta1'", "froxels", "above the bound of 1e+12"});
   expectFails(s + big + "--method light-space-march --set render.steps=65536" +
                   " --set render.interleave=1 --set camera.width=1024 --set camera.height=1024",
