@@ -207,7 +207,10 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   const std::string rel = p.string("file");
   const std::filesystem::path file =
       std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : baseDir / rel;
-  const std::string key = "'" + p.keyPath("file") + "'";  // quoted, as Params::fail does
+  // Quoted, as Params::fail does (appended: GCC 12's -Wrestrict misfires on "'" + s + "'").
+  std::string key = "'";
+  key += p.keyPath("file");
+  key += "'";
   try {
     checkReadableFile(file.string(), "OBJ mesh");
   } catch (const IoError& e) {

@@ -511,7 +511,7 @@ TEST_F(Cli, BadArgumentsAreUsageErrorsNamingTheFlag) {
   usage("--set camera.width", {"--set 'camera.width': expected KEY=VALUE", "camera.width=640"});
   // --fps: a clear range, not CLI11's upper bound DBL_MAX in 309 digits.
   for (const std::string fps : {"-3", "0", "nan", "inf", "x"}) {
-    o = usage("--frames 0:1 --fps " + fps, {"--fps", "'" + fps + "' is not a finite number > 0"});
+    o = usage("--frames 0:1 --fps " + fps, {"--fps", "'" + fps + "' is not a frame rate in (0, 1e9]"});
     EXPECT_LT(o.size(), 200u) << o;
   }
   usage("--png " + out("o.exr2"), {"--png", "does not end in .png"});

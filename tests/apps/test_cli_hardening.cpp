@@ -210,10 +210,10 @@ TEST_F(OutputPaths, OneNewFileUnderTwoSpellingsIsAUsageError) {
   fs::create_directory_symlink(dir_ / "sub", dir_ / "link");
   const std::string d = dir_.string();
   const std::vector<std::pair<std::string, std::string>> pairs = {
-      {d + "/o.exr", d + "/sub/../o.exr"},
-      {d + "/o.exr", d + "/nosuch/../o.exr"},
-      {d + "/sub/o.exr", d + "/link/o.exr"},
-      {d + "/o.exr", d + "/./o.exr"},
+      {d + "/o.png", d + "/sub/../o.png"},
+      {d + "/o.png", d + "/nosuch/../o.png"},
+      {d + "/sub/o.png", d + "/link/o.png"},
+      {d + "/o.png", d + "/./o.png"},
   };
   for (const auto& [a, b] : pairs) {
     const RunResult r = run("render " + s + " -q -o " + a + " --png " + b);
@@ -225,16 +225,16 @@ TEST_F(OutputPaths, OneNewFileUnderTwoSpellingsIsAUsageError) {
   // Relative against relative and absolute, from the working directory (the issue's cases).
   const fs::path cwd = fs::current_path();
   fs::current_path(dir_);
-  const RunResult dot = run("render " + s + " -q -o o.exr --png ./o.exr");
-  const RunResult abs = run("render " + s + " -q -o o.exr --png " + d + "/o.exr");
-  const RunResult up = run("render " + s + " -q -o o.exr --png sub/../o.exr");
+  const RunResult dot = run("render " + s + " -q -o o.png --png ./o.png");
+  const RunResult abs = run("render " + s + " -q -o o.png --png " + d + "/o.png");
+  const RunResult up = run("render " + s + " -q -o o.png --png sub/../o.png");
   fs::current_path(cwd);
   for (const RunResult& r : {dot, abs, up}) {
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("--output and --png name the same file"), std::string::npos)
         << r.output;
   }
-  EXPECT_FALSE(fs::exists(dir_ / "o.exr"));
+  EXPECT_FALSE(fs::exists(dir_ / "o.png"));
   // An existing file and a link to it are one file too.
   std::ofstream(dir_ / "stats.json") << "{}";
   fs::create_symlink(dir_ / "stats.json", dir_ / "stats-link.json");
@@ -329,12 +329,12 @@ TEST_F(Messages, WrongInputIsNamedNotSilentOrInternal) {
   // was echoed whole.
   r = run("render " + s + " -q -o " + out("b.exr") +
           " --method \"$(printf 'nonsense\\nscatterlab: error: fake')\"");
-  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_EQ(r.code, 2) << r.output;  // an unknown --method is a usage error (issue 25)
   EXPECT_EQ(r.output.rfind("scatterlab: error:", 0), 0u) << r.output;
   EXPECT_EQ(r.output.find("\nscatterlab: error:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("nonsense\n  scatterlab: error: fake"), std::string::npos) << r.output;
   r = run("render " + s + " -q -o " + out("b.exr") + " --method " + std::string(100000, 'm'));
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_LT(r.output.size(), 2500u);
   EXPECT_NE(r.output.find("characters left out"), std::string::npos) << r.output.substr(0, 300);
   // A loop of links was "does not exist".
