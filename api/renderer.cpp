@@ -2,18 +2,21 @@
 
 #include <cmath>
 
+#include "api/scatterlab.h"
 #include "core/error.h"
 
 namespace scatterlab {
 
 Renderer::Renderer(Json doc, std::filesystem::path baseDir, std::string method, std::string backend)
     : baseDir_(std::move(baseDir)), methodName_(std::move(method)), backend_(std::move(backend)) {
+  initialize();  // idempotent: a Renderer needs no call before it
   const double t = documentTime(doc);
   rebuild(doc, t);
 }
 
 Renderer Renderer::fromFile(const std::string& path, const std::vector<std::string>& overrides,
                             std::string method, std::string backend) {
+  initialize();
   Json doc = readJsonFile(path);
   for (const auto& o : overrides) applyOverride(doc, o);
   try {

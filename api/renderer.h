@@ -25,7 +25,8 @@
 ///
 /// Light paths: a light may carry `"path": [{"t": T, "position": [x,y,z]}, ...]` with strictly
 /// increasing T; its position at time t is the linear interpolation (held constant before the
-/// first and after the last key). Not thread-safe: one Renderer per thread.
+/// first and after the last key). Not thread-safe: one Renderer per thread, or a lock around
+/// every call (the Python binding's Renderer takes one, python/module.cpp).
 
 #include <filesystem>
 #include <memory>
@@ -43,7 +44,8 @@ class Renderer {
  public:
   /// A renderer of the scene document `doc` (relative paths resolve from `baseDir`) with
   /// `method` ("" = render.method) on `backend` ("cpu", "gpu" or "auto"), as createMethod.
-  /// Parses the scene now: throws ConfigError / IoError as loadScene does.
+  /// Parses the scene now: throws ConfigError / IoError as loadScene does. Calls initialize()
+  /// itself (the free functions loadScene, parseScene and createMethod need it called first).
   Renderer(Json doc, std::filesystem::path baseDir, std::string method = "",
            std::string backend = "auto");
   /// The scene file `path` with `--set` overrides applied in order.

@@ -23,7 +23,8 @@
 namespace scatterlab {
 
 /// Registers every built-in stage variant (density models, methods, ...). Idempotent and
-/// thread-safe; call before loading scenes.
+/// thread-safe; call before loadScene, parseScene or createMethod (without it they throw a
+/// ConfigError that says so). Renderer calls it itself.
 void initialize();
 
 /// Library version, "MAJOR.MINOR.PATCH".

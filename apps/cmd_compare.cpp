@@ -68,6 +68,14 @@ Action addCompare(CLI::App& app) {
     checkDistinctPaths({{"image", o->image}, {"--diff", o->diff}});
     checkDistinctPaths({{"reference", o->reference}, {"--diff", o->diff}});
     const Image a = readExr(o->image), b = readExr(o->reference);
+    // compareImages refuses them too; here the message names the file.
+    for (const auto& [file, img] : {std::pair{&o->image, &a}, std::pair{&o->reference, &b}}) {
+      if (img->pixels().empty())
+        throw IoError("image '" + *file + "' has no pixels (0x0): there is nothing to compare");
+      if (const NonFiniteValues bad = countNonFinite(*img, /*withAlpha=*/false); bad.any())
+        throw IoError("image '" + *file + "' has " + bad.describe() +
+                      "; compare needs finite pixels (scatterlab info " + *file + " counts them)");
+    }
     // Everything is read and checked before the --diff PNG is written: no partial output.
     std::optional<LightMask> mask;
     if (!o->scene.empty()) {

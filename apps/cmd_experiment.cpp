@@ -90,12 +90,10 @@ Action addExperiment(CLI::App& app) {
     opt.progress = !o->noProgress;
     opt.plots = !o->noPlots;
     if (m->parsed()) {
-      if (!o->config.empty() || !o->shard.empty() || !o->sets.empty()) {
-        std::fprintf(stderr,
-                     "scatterlab experiment merge: takes DIR... -o OUT only (the config and "
-                     "overrides come from the shards' manifests)\n");
-        return 2;
-      }
+      if (!o->config.empty() || !o->shard.empty() || !o->sets.empty())
+        throw UsageError(
+            "experiment merge: takes DIR... -o OUT only (the config and overrides come from "
+            "the shards' manifests)");
       const ExperimentResult r = mergeShards(o->mergeDirs, o->mergeOut, opt);
       return printSummary(r, o->mergeOut, false);
     }
@@ -108,12 +106,8 @@ Action addExperiment(CLI::App& app) {
         if (n == 0 || owner[i] == k - 1) std::printf("%s\n", plan.runs[i].id.c_str());
       return 0;
     }
-    if (o->config.empty() || o->out.empty()) {
-      std::fprintf(stderr,
-                   "scatterlab experiment: give CONFIG and -o DIR (or `experiment merge "
-                   "DIR... -o OUT`); see --help\n");
-      return 2;
-    }
+    if (o->config.empty() || o->out.empty())
+      throw UsageError("experiment: give CONFIG and -o DIR (or `experiment merge DIR... -o OUT`)");
     if (!o->shard.empty()) parseShard(o->shard, &opt.shardIndex, &opt.shardCount);
     const ExperimentResult r = runExperiment(o->config, o->out, opt);
     return printSummary(r, o->out, !o->shard.empty());

@@ -322,21 +322,51 @@ void printSogInfo(const std::string& path) {
       double(m.threshold));
 }
 
+namespace {
+
+/// The registered methods: name, backends, one-line summary (or a JSON object of them).
+void printMethods(bool json) {
+  Json all = Json::object();
+  for (const std::string& name : methods().names()) {
+    const MethodEntry& e = methods().get(name, "method");
+    Json backends = Json::array();
+    if (e.runsOn(Backend::Cpu)) backends.push_back("cpu");
+    if (e.runsOn(Backend::Gpu)) backends.push_back("gpu");
+    all[name] = {{"summary", e.summary}, {"backends", backends}};
+  }
+  if (json) {
+    std::printf("%s\n", all.dump(2).c_str());
+    return;
+  }
+  for (const auto& [name, m] : all.items()) {
+    std::string b;
+    for (const auto& x : m["backends"]) b += (b.empty() ? "" : ", ") + x.get<std::string>();
+    std::printf("%-22s %-9s %s\n", name.c_str(), b.c_str(),
+                m["summary"].get<std::string>().c_str());
+  }
+}
+
+}  // namespace
+
 Action addInfo(CLI::App& app) {
   auto file = std::make_shared<std::string>();
   auto gpuFlag = std::make_shared<bool>(false), jsonFlag = std::make_shared<bool>(false);
   CLI::App* c = app.add_subcommand(
       "info", "Describe a scene (.json), image (.exr, .png), volume (.vdb) or model (.sog)");
+  auto methodsFlag = std::make_shared<bool>(false);
   c->add_option("file", *file, "File to describe");
+  c->add_flag("--methods", *methodsFlag,
+              "List the rendering methods of this build with the backends each runs on");
   c->add_flag("--gpu", *gpuFlag,
               "Print the OpenGL vendor, renderer and version of the GPU backend");
   c->add_flag("--json", *jsonFlag, "Print the file's facts as one JSON object (not with --gpu)");
-  return [file, gpuFlag, jsonFlag]() {
+  return [file, gpuFlag, jsonFlag, methodsFlag]() {
     if (*jsonFlag && *gpuFlag) throw ConfigError("info: --json describes a FILE, not --gpu");
+    if (*methodsFlag) printMethods(*jsonFlag && file->empty());
     if (*gpuFlag) printGpuInfo();
     if (file->empty()) {
-      if (*gpuFlag) return 0;
-      throw ConfigError("info: give a FILE to describe, or --gpu");
+      if (*gpuFlag || *methodsFlag) return 0;
+      throw ConfigError("info: give a FILE to describe, or --gpu, or --methods");
     }
     checkReadableFile(*file);
     std::string ext = std::filesystem::path(*file).extension().string();

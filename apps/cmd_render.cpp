@@ -1,6 +1,8 @@
 #include <sys/resource.h>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -10,6 +12,7 @@
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "core/suggest.h"
 #include "cpu/sample_view.h"
 #include "media/vdb.h"
 
@@ -78,7 +81,9 @@ Action addRender(CLI::App& app) {
     std::string scene, out, png, method, backend = "auto", stats, samplesPng, densityVdb,
                                          radianceVdb;
     std::vector<std::string> sets;
-    std::string frames, tonemap = "linear";
+    // PNGs are previews: the default curve rolls glows off instead of clipping them to white
+    // discs (EXR output stays linear whatever the curve).
+    std::string frames, tonemap = "aces";
     double fps = 24.0;
     float exposure = 0.0f;
     bool quiet = false, depth = false;
@@ -98,9 +103,17 @@ Action addRender(CLI::App& app) {
                        : "";
           },
           "FILE.exr|FILE.png"));
-  c->add_option("--png", o->png, "Also write a tone-mapped sRGB PNG");
+  c->add_option("--png", o->png, "Also write a tone-mapped sRGB PNG")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            return imageFormat(v) == "png" || std::filesystem::is_directory(v)
+                       ? ""
+                       : "'" + v + "' does not end in .png";
+          },
+          "FILE.png"));
   c->add_option("--method", o->method,
-                "Rendering method (overrides render.method): exact, per-voxel, ...");
+                "Rendering method (overrides render.method): exact, per-voxel, gradient, ... "
+                "(scatterlab info --methods lists them)");
   c->add_option("--backend", o->backend, "cpu, gpu or auto (default: auto)")
       ->check(CLI::IsMember({"cpu", "gpu", "auto"}));
   c->add_option("--stats", o->stats, "Write render statistics (JSON)");
@@ -109,10 +122,21 @@ Action addRender(CLI::App& app) {
                 "VALUE parsed as JSON where it parses, else a string)")
       ->take_all()
       ->allow_extra_args(false);
-  c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)");
+  c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            char* end = nullptr;
+            const double x = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && std::abs(x) <= 100.0
+                       ? ""
+                       : "'" + v + "' is not a number of stops in [-100, 100]";
+          },
+          "STOPS in [-100, 100]"));
   c->add_option("--tonemap", o->tonemap,
-                "Tone curve of the PNG previews (--png, a .png -o, --samples-png): linear "
-                "(clamp, the default), filmic (Hable) or aces (Narkowicz); after --exposure")
+                "Tone curve of the PNG previews (--png, a .png -o, --samples-png): aces "
+                "(Narkowicz, the default: highlights roll off), filmic (Hable) or linear "
+                "(clamp at 1, the transform compare's PSNR uses); after --exposure; EXR output "
+                "is always linear")
       ->check(CLI::IsMember({"linear", "filmic", "aces"}));
   c->add_option("--frames", o->frames,
                 "Render frames A..B (inclusive) of an animation at time = frame / fps (light "
@@ -127,7 +151,15 @@ Action addRender(CLI::App& app) {
           },
           "A:B"));
   c->add_option("--fps", o->fps, "Frames per unit of scene time for --frames (default 24)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            char* end = nullptr;
+            const double x = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && x > 0.0 && x <= 1e9
+                       ? ""
+                       : "'" + v + "' is not a frame rate in (0, 1e9]";
+          },
+          "FPS in (0, 1e9]"));
   c->add_option("--samples-png", o->samplesPng,
                 "Also write a PNG of the radiance samples over the dimmed image, coloured by "
                 "level (white initial, green/yellow/red finer); sample-based methods only");
@@ -144,6 +176,18 @@ Action addRender(CLI::App& app) {
               "adaptive)");
   c->add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
   return [o]() {
+    // The tool's own arguments before the scene: a misspelt method or a --set without '='
+    // blames the flag (exit 2), not the scene file.
+    if (!o->method.empty() && !methods().contains(o->method)) {
+      std::string list;
+      for (const std::string& n : methods().names()) list += (list.empty() ? "'" : ", '") + n + "'";
+      throw UsageError("--method: unknown method '" + o->method + "'" +
+                       didYouMean(o->method, methods().names()) + "; allowed: " + list);
+    }
+    for (const std::string& a : o->sets)
+      if (a.find('=') == std::string::npos)
+        throw UsageError("--set '" + a + "': expected KEY=VALUE, e.g. --set " +
+                         (a.empty() ? std::string("camera.width") : a) + "=640");
     if (o->depth && imageFormat(o->out) != "exr")
       throw UsageError("--depth writes a Z channel, which needs an .exr output (-o " + o->out +
                        ")");

@@ -23,15 +23,34 @@ class UsageError : public std::runtime_error {
 };
 
 /// Throws UsageError when two of the named paths (option, path; empty paths skipped) are the
-/// same file, e.g. `-o o.exr --png o.exr`: one would silently overwrite the other. Paths are
-/// compared after resolving "." / ".." and symbolic links of existing directories.
+/// same file, e.g. `-o o.exr --png o.exr`: one would silently overwrite the other. Each path is
+/// compared as the canonical path of its directory (".", "..", symbolic links resolved, made
+/// absolute) plus its file name, and an existing file or symbolic link as its canonical path,
+/// so `o.exr`, `./o.exr`, `$PWD/o.exr`, `sub/../o.exr` and `link-to-dir/o.exr` are one file
+/// whether or not it exists yet.
+inline std::filesystem::path identityOf(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path abs = fs::absolute(path, ec);
+  if (ec) return fs::path(path).lexically_normal();
+  if (fs::exists(fs::symlink_status(abs, ec))) {
+    const fs::path canon = fs::canonical(abs, ec);  // follows a final symbolic link
+    if (!ec) return canon;
+  }
+  const fs::path name = abs.filename();
+  if (name.empty() || name == "." || name == "..") {
+    const fs::path whole = fs::weakly_canonical(abs, ec);
+    return ec ? abs.lexically_normal() : whole;
+  }
+  const fs::path dir = fs::weakly_canonical(abs.parent_path(), ec);
+  return ec ? abs.lexically_normal() : dir / name;
+}
+
 inline void checkDistinctPaths(const std::vector<std::pair<std::string, std::string>>& named) {
   std::vector<std::pair<std::string, std::filesystem::path>> seen;
   for (const auto& [option, path] : named) {
     if (path.empty()) continue;
-    std::error_code ec;
-    std::filesystem::path canon = std::filesystem::weakly_canonical(path, ec);
-    if (ec) canon = std::filesystem::absolute(path, ec).lexically_normal();
+    const std::filesystem::path canon = identityOf(path);
     for (const auto& [otherOption, other] : seen)
       if (other == canon)
         throw UsageError(otherOption + " and " + option + " name the same file '" + path +

@@ -2,8 +2,12 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <string>
+#include <new>
 #include <vector>
 
 #include "api/scatterlab.h"
@@ -11,6 +15,64 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/suggest.h"
+
+namespace {
+
+/// For a misspelt option or subcommand on the command line: " (did you mean '--method'?)"
+/// for the first word that is neither a known option nor a subcommand, else "".
+std::string suggestOption(CLI::App& app, int argc, char** argv) {
+  std::vector<std::string> options, subcommands;
+  const auto addOptions = [&](const CLI::App& a) {
+    for (const CLI::Option* o : a.get_options())
+      for (const std::string& n : o->get_lnames()) options.push_back("--" + n);
+  };
+  addOptions(app);
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    subcommands.push_back(sub->get_name());
+    addOptions(*sub);
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string word = argv[i];
+    if (word.rfind("--", 0) == 0) {
+      word = word.substr(0, word.find('='));
+      if (std::find(options.begin(), options.end(), word) == options.end())
+        return scatterlab::didYouMean(word, options);
+    } else if (i == 1 && word.rfind('-', 0) != 0 &&
+               std::find(subcommands.begin(), subcommands.end(), word) == subcommands.end()) {
+      const std::string m = scatterlab::didYouMean(word, subcommands);
+      return m.empty() ? std::string() : "; '" + word + "' is not a command" + m;
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+namespace {
+
+/// A message as one error on stderr: a value the user gave may be megabytes long or hold line
+/// breaks (`--method $'x\nscatterlab: error: ...'` printed a fake second error line), so
+/// continuation lines are indented and a message beyond 2000 characters keeps its first 1500
+/// and last 300 with the count of what was left out.
+std::string printable(std::string m) {
+  if (m.size() > 2000)
+    m = m.substr(0, 1500) + " [... " + std::to_string(m.size() - 1800) +
+        " characters left out ...] " + m.substr(m.size() - 300);
+  std::string out;
+  for (char c : m) {
+    out += c == '\r' ? ' ' : c;
+    if (c == '\n') out += "  ";
+  }
+  return out;
+}
+
+void printError(const char* kind, const std::string& what, bool usage = false) {
+  std::fprintf(stderr, "scatterlab: %s: %s\n%s", kind, printable(what).c_str(),
+               usage ? "Run with --help for more information.\n" : "");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -54,8 +116,7 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);
     // Usage errors exit with 2 (the project's rule), whatever CLI11's own code (105, 106, 109,
     // ...), with the same prefix as every other error.
-    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
-                 e.what());
+    printError("error", std::string(e.what()) + suggestOption(app, argc, argv), /*usage=*/true);
     return 2;
   }
   std::unique_ptr<tbb::global_control> threadLimit;
@@ -70,14 +131,25 @@ int main(int argc, char** argv) {
     for (auto& [sub, action] : cmds)
       if (sub->parsed()) return action();
   } catch (const scatterlab::cli::UsageError& e) {
-    std::fprintf(stderr, "scatterlab: error: %s\nRun with --help for more information.\n",
-                 e.what());
+    printError("error", e.what(), /*usage=*/true);
     return 2;
   } catch (const scatterlab::Error& e) {
-    std::fprintf(stderr, "scatterlab: error: %s\n", e.what());
+    printError("error", e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    // What the estimates did not foresee (docs/reliability.md: the plan counts what is certain).
+    std::fprintf(stderr,
+                 "scatterlab: error: out of memory: an allocation failed; lower the resolution "
+                 "or image size, or give a --memory-limit below what the machine (or ulimit "
+                 "-v) allows so that it is refused before the work\n");
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A file the library reached without a check of its own: the system's reason, not an
+    // "internal error".
+    printError("error", e.what());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "scatterlab: internal error: %s\n", e.what());
+    printError("internal error", e.what());
     return 1;
   }
   return 1;

@@ -32,10 +32,22 @@ foreach(_m IN LISTS _modules)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_m}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab/${_m}
           FILES_MATCHING PATTERN "*.h" PATTERN "shaders" EXCLUDE)
 endforeach()
+# The top-level header <scatterlab/scatterlab.h> (forwards to api/scatterlab.h).
+install(FILES ${PROJECT_SOURCE_DIR}/scatterlab.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab)
 install(FILES ${PROJECT_SOURCE_DIR}/experiment/plots.py ${PROJECT_SOURCE_DIR}/scripts/results_md.py
         DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR})
+# The demo scenes with the data they read that may ship: the Cornell box mesh (public domain)
+# beside them. Scenes that read the project's shared real data (OpenVDB smoke and cloud, the
+# Stanford bunny: not in the repository; where to get them: docs/library.md, "Scenes not
+# installed") are left out, so every installed scene loads from the prefix (tests/consumer).
+set(SCATTERLAB_SCENES_NOT_INSTALLED bunny_spot cloud shaft_smoke smoke smoke1_sun)
+set(_excluded "")
+foreach(_s IN LISTS SCATTERLAB_SCENES_NOT_INSTALLED)
+  list(APPEND _excluded PATTERN "${_s}.json" EXCLUDE)
+endforeach()
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/scenes DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR}
-        FILES_MATCHING PATTERN "*.json")
+        FILES_MATCHING PATTERN "*.json" ${_excluded})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/meshes DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR})
 
 install(EXPORT scatterlabTargets NAMESPACE scatterlab:: DESTINATION ${SCATTERLAB_CMAKE_INSTALL_DIR})
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/scatterlabConfig.cmake.in
@@ -49,7 +61,8 @@ install(FILES ${PROJECT_BINARY_DIR}/scatterlabConfig.cmake
               ${PROJECT_SOURCE_DIR}/cmake/scatterlab_deps.cmake
         DESTINATION ${SCATTERLAB_CMAKE_INSTALL_DIR})
 
-# pkg-config: static libraries, so every one is listed (dependency order) with what they need.
+# pkg-config: static libraries, so every one is listed (dependency order) with what they need;
+# Cflags carry -std=c++20 (scatterlab.pc.in), the headers' language, as the CMake targets do.
 set(SCATTERLAB_PC_LIBS "")
 foreach(_lib IN LISTS _libs)
   string(APPEND SCATTERLAB_PC_LIBS " -l${_lib}")

@@ -92,8 +92,14 @@ Json sceneAtTime(const Json& doc, double t) {
 double documentTime(const Json& doc) {
   if (doc.is_object() && doc.contains("medium") && doc["medium"].is_object() &&
       doc["medium"].contains("density") && doc["medium"]["density"].is_object() &&
-      doc["medium"]["density"].contains("time") && doc["medium"]["density"]["time"].is_number())
-    return doc["medium"]["density"]["time"].get<double>();
+      doc["medium"]["density"].contains("time")) {
+    // Checked here: sceneAtTime overwrites it for a density that moves, so a string or an
+    // array used to become time 0 without a word.
+    const Json& t = doc["medium"]["density"]["time"];
+    if (!t.is_number())
+      throw ConfigError("'medium.density.time': expected a number, got " + describeValue(t));
+    return t.get<double>();
+  }
   return 0.0;
 }
 

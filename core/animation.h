@@ -35,7 +35,8 @@ bool densityMovesWithTime(const Json& density);
 /// malformed path.
 Json sceneAtTime(const Json& doc, double t);
 
-/// The time a document is at by itself: medium.density.time where it is a number, else 0.
+/// The time a document is at by itself: medium.density.time, else 0. A time that is not a
+/// number is a ConfigError naming the key.
 double documentTime(const Json& doc);
 
 }  // namespace scatterlab

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -54,17 +55,29 @@ extern "C" void removeTempsAndReraise(int sig) {
   ::raise(sig);
 }
 
-std::string tempPathFor(const std::string& path) {
+/// A new name beside `path` (or in `dir` when given): ".NAME.tmpPID_N".
+std::string tempPathFor(const std::string& path, const fs::path& dir = {}) {
   static std::atomic<unsigned> counter{0};
   const fs::path p(path);
+  std::string tail(".tmp");
+  tail += std::to_string(::getpid());
+  tail += "_";
+  tail += std::to_string(counter++);
+  // A valid output name of up to NAME_MAX (255) bytes must not fail for its temporary's ~15
+  // more: the name is shortened to fit (the tail keeps the pattern stale-temporary cleanup
+  // looks for).
+  std::string stem = p.filename().string();
+  if (stem.size() + tail.size() + 1 > 255) stem.resize(255 - tail.size() - 1);
   // Appended piecewise: GCC 12 reports a false -Wrestrict for "." + std::string.
   std::string name(".");
-  name += p.filename().string();
-  name += ".tmp";
-  name += std::to_string(::getpid());
-  name += "_";
-  name += std::to_string(counter++);
-  return (p.parent_path() / name).string();
+  name += stem;
+  name += tail;
+  return ((dir.empty() ? p.parent_path() : dir) / name).string();
+}
+
+/// errno's text; errno itself may have changed since.
+std::string reason(int err) {
+  return std::strerror(err);
 }
 
 /// A write-only, seekable streambuf over a file descriptor that remembers the first failed
@@ -179,6 +192,16 @@ void removeTemporariesOnSignal() {
 void checkWritablePath(const std::string& path) {
   if (path.empty()) throw IoError("output path is empty");
   const fs::path p(path);
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode) && ::stat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    std::error_code ec;
+    const fs::path to = fs::read_symlink(p, ec);
+    if (err == ELOOP) throw IoError("output '" + path + "' is a loop of symbolic links");
+    throw IoError("output '" + path + "' is a symbolic link to '" + to.string() + "', which " +
+                  (err == ENOENT ? std::string("does not exist") : reason(err)) +
+                  "; give the file it should name, or remove the link");
+  }
   std::error_code ec;
   if (fs::is_directory(p, ec)) throw IoError("output '" + path + "' is a directory, not a file");
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
@@ -186,12 +209,29 @@ void checkWritablePath(const std::string& path) {
     throw IoError("output '" + path + "': directory '" + dir.string() + "' does not exist");
 }
 
-void checkReadableFile(const std::string& path, const std::string& what) {
+void createOutputDirectory(const std::string& dir) {
   std::error_code ec;
-  const fs::path p(path);
-  if (!fs::exists(p, ec)) throw IoError(what + " '" + path + "' does not exist");
-  if (fs::is_directory(p, ec)) throw IoError(what + " '" + path + "' is a directory, not a file");
-  if (!fs::is_regular_file(p, ec)) throw IoError(what + " '" + path + "' is not a regular file");
+  const fs::file_status st = fs::status(dir, ec);
+  if (fs::exists(st)) {
+    if (!fs::is_directory(st))
+      throw IoError("output directory '" + dir + "' exists and is not a directory");
+    return;
+  }
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError("cannot create output directory '" + dir + "': " + ec.message());
+}
+
+void checkReadableFile(const std::string& path, const std::string& what) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    if (err == ENOENT) throw IoError(what + " '" + path + "' does not exist");
+    if (err == ELOOP) throw IoError(what + " '" + path + "' is a loop of symbolic links");
+    throw IoError(what + " '" + path + "': " + reason(err));
+  }
+  if (S_ISDIR(st.st_mode)) throw IoError(what + " '" + path + "' is a directory, not a file");
+  if (!S_ISREG(st.st_mode))
+    throw IoError(what + " '" + path + "' is not a regular file (a device, FIFO or socket)");
 }
 
 void writeAtomically(const std::string& path,
@@ -204,7 +244,24 @@ void writeAtomically(const std::string& path,
 void PendingOutputs::stage(const std::string& path,
                            const std::function<void(const std::string&)>& write) {
   checkWritablePath(path);
-  Item item{tempPathFor(path), path, -1};
+  // Where the bytes go: an existing regular file through a symbolic link is replaced where it
+  // is (the link stays a link); an existing device, FIFO or socket (/dev/null, /dev/stdout, a
+  // pipe of the shell's >(...)) is written through at commit, never replaced; anything else is
+  // created or replaced at `path`.
+  Item item{"", path, -1, "", false};
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    item.through = true;
+    item.tmp = tempPathFor(path, fs::temp_directory_path());
+  } else {
+    struct stat lst {};
+    if (::lstat(path.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {
+      std::error_code ec;
+      const fs::path target = fs::canonical(path, ec);
+      if (!ec) item.target = target.string();
+    }
+    item.tmp = tempPathFor(item.destination());
+  }
   item.slot = registerTemp(item.tmp);
   try {
     write(item.tmp);
@@ -227,16 +284,118 @@ void PendingOutputs::stageStream(const std::string& path,
   stage(path, [&](const std::string& tmp) { writeChecked(path, tmp, write); });
 }
 
-void PendingOutputs::commit() {
-  for (std::size_t i = 0; i < items_.size(); ++i) {
-    std::error_code ec;
-    fs::rename(items_[i].tmp, items_[i].path, ec);
-    if (ec) {
-      // Earlier renames already landed; remove them so no partial set of outputs remains.
-      for (std::size_t j = 0; j < i; ++j) fs::remove(items_[j].path, ec);
-      throw IoError("cannot write '" + items_[i].path + "': " + ec.message());
+namespace {
+
+/// Copies the file `from` into the existing non-regular file `to` (a device, FIFO or socket),
+/// opened for writing without creating or replacing it. Returns 0 or the errno of the failure.
+int copyInto(const std::string& from, const std::string& to) {
+  const int in = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
+  if (in < 0) return errno;
+  const int out = ::open(to.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+  if (out < 0) {
+    const int err = errno;
+    ::close(in);
+    return err;
+  }
+  int err = 0;
+  std::vector<char> buf(std::size_t(1) << 16);
+  for (;;) {
+    const ssize_t n = ::read(in, buf.data(), buf.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) err = errno;
+    if (n <= 0) break;
+    for (ssize_t done = 0; done < n && !err;) {
+      const ssize_t w = ::write(out, buf.data() + done, std::size_t(n - done));
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0)
+        err = w < 0 ? errno : EIO;
+      else
+        done += w;
     }
-    unregisterTemp(items_[i].slot);
+    if (err) break;
+  }
+  ::close(in);
+  if (::close(out) != 0 && !err && errno != EINVAL) err = errno;
+  return err;
+}
+
+}  // namespace
+
+void PendingOutputs::commit() {
+  // Every target is checked, and every file about to be replaced gets a backup (a hard link,
+  // else a copy) before anything is renamed, so that a failure at any point puts back every
+  // earlier file as it was: replaced ones from their backups, new ones removed.
+  struct Backup {
+    std::string path;  ///< empty: the target did not exist
+    int slot = -1;
+  };
+  std::vector<Backup> backups(items_.size());
+  const auto dropBackups = [&] {
+    for (Backup& b : backups) {
+      if (!b.path.empty()) ::unlink(b.path.c_str());
+      unregisterTemp(b.slot);
+      b.path.clear();
+    }
+  };
+  const auto fail = [&](const Item& item, const std::string& why) {
+    dropBackups();
+    throw IoError("cannot write '" + item.path + "': " + why);
+  };
+  for (std::size_t i = 0; i < items_.size(); ++i) {
+    const Item& item = items_[i];
+    if (item.through) continue;
+    const std::string dest = item.destination();
+    struct stat st {};
+    if (::lstat(dest.c_str(), &st) != 0) {
+      if (errno == ENOENT) continue;
+      fail(item, reason(errno));
+    }
+    if (S_ISDIR(st.st_mode)) fail(item, "it is a directory now");
+    Backup& b = backups[i];
+    b.path = tempPathFor(dest);
+    b.slot = registerTemp(b.path);
+    if (::link(dest.c_str(), b.path.c_str()) != 0) {
+      std::error_code ec;
+      fs::copy_file(dest, b.path, ec);
+      if (ec) {
+        b.path.clear();
+        fail(item,
+             "cannot keep a copy of the existing file to restore on failure: " + ec.message());
+      }
+    }
+  }
+  // Renames first, then the write-throughs, which cannot be undone.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < items_.size(); ++i)
+    if (!items_[i].through) order.push_back(i);
+  for (std::size_t i = 0; i < items_.size(); ++i)
+    if (items_[i].through) order.push_back(i);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const Item& item = items_[order[k]];
+    int err = 0;
+    if (item.through) {
+      err = copyInto(item.tmp, item.path);
+    } else if (::rename(item.tmp.c_str(), item.destination().c_str()) != 0) {
+      err = errno;
+    }
+    if (err == 0) continue;
+    // Put back what the renames before this one replaced (rename(2) of the backup is atomic)
+    // and remove what they created.
+    for (std::size_t j = k; j-- > 0;) {
+      const Item& done = items_[order[j]];
+      if (done.through) continue;
+      const Backup& b = backups[order[j]];
+      if (!b.path.empty())
+        ::rename(b.path.c_str(), done.destination().c_str());
+      else
+        ::unlink(done.destination().c_str());
+    }
+    fail(item, reason(err));
+  }
+  dropBackups();
+  for (Item& item : items_) {
+    if (item.through) ::unlink(item.tmp.c_str());
+    unregisterTemp(item.slot);
   }
   items_.clear();
 }

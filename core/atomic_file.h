@@ -26,6 +26,12 @@ void writeAtomically(const std::string& path, const std::function<void(const std
 
 /// A set of outputs committed together: stage() writes each to a temporary; commit() renames
 /// them all; the destructor removes any temporaries not committed.
+///
+/// Outputs that exist already: a regular file is replaced (through a symbolic link, the file
+/// it names; the link stays); a device, FIFO or socket (/dev/null, a symbolic link to
+/// /proc/self/fd/1, a pipe) is never replaced: its temporary is made in the system's temporary
+/// directory and commit() writes the bytes through it (blocking, like a shell's `>`, until a
+/// FIFO has a reader). A dangling symbolic link is refused (checkWritablePath).
 class PendingOutputs {
  public:
   PendingOutputs() = default;
@@ -38,12 +44,19 @@ class PendingOutputs {
   void stage(const std::string& path, const std::function<void(const std::string&)>& write);
   /// Writes through the checked stream of writeFileAtomically.
   void stageStream(const std::string& path, const std::function<void(std::ostream&)>& write);
+  /// Puts every staged output in place, or none: each file it replaces is first kept as a
+  /// backup (a hard link beside it, else a copy), so when a rename or write-through fails,
+  /// the outputs already renamed are put back as they were (new ones removed) and the IoError
+  /// names the output that failed and the system's reason.
   void commit();
 
  private:
   struct Item {
     std::string tmp, path;
-    int slot;  ///< registration for removal on a signal (-1: none)
+    int slot;              ///< registration for removal on a signal (-1: none)
+    std::string target;    ///< a symbolic link's resolved regular file (empty: `path` itself)
+    bool through = false;  ///< an existing non-regular file, written through at commit
+    const std::string& destination() const { return target.empty() ? path : target; }
   };
   std::vector<Item> items_;
 };
@@ -54,11 +67,17 @@ class PendingOutputs {
 /// a library user decides about its own signal handlers.
 void removeTemporariesOnSignal();
 
-/// Checks that `path` can be created: its directory exists and `path` is not a directory.
-/// Throws IoError naming the path.
+/// Checks that `path` can be created: its directory exists, `path` is not a directory nor a
+/// dangling symbolic link (or a loop of them). Throws IoError naming the path.
 void checkWritablePath(const std::string& path);
 
-/// Checks that `path` exists and is a regular file. Throws IoError naming it (and `what`).
+/// Creates the directory `dir` (and its parents) unless it exists. Throws IoError naming it
+/// when it exists as something else (a file) or cannot be created, with the system's reason.
+void createOutputDirectory(const std::string& dir);
+
+/// Checks that `path` exists and is a regular file (not a directory, device, FIFO or socket).
+/// Throws IoError naming it (and `what`), with the reason: missing, a loop of symbolic links,
+/// no permission, ...
 void checkReadableFile(const std::string& path, const std::string& what = "file");
 
 }  // namespace scatterlab

@@ -7,6 +7,7 @@
 #include <ImfInputFile.h>
 #include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
 #include <png.h>
 
@@ -62,6 +63,9 @@ void writeExr(const Image& img, const std::string& path, const ExrAttributes& at
       for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
       if (hasAlpha) header.channels().insert("A", Imf::Channel(Imf::FLOAT));
       if (hasDepth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+      // The colour space, for compositors and viewers: scatterlab's RGB is linear with the
+      // Rec. 709 / sRGB primaries and D65 white, which is what Imf::Chromaticities() holds.
+      Imf::addChromaticities(header, Imf::Chromaticities());
       for (const auto& [name, value] : attributes.strings)
         header.insert(name, Imf::StringAttribute(value));
       for (const auto& [name, m] : attributes.matrices)
@@ -234,6 +238,38 @@ Image readExr(const std::string& path) {
   }
 }
 
+NonFiniteValues countNonFinite(const Image& img, bool withAlpha) {
+  NonFiniteValues n;
+  const std::vector<float>& alpha = img.alpha();
+  const std::size_t count = img.pixels().size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec3& p = img.pixels()[i];
+    bool bad = false;
+    for (int c = 0; c < 4; ++c) {
+      if (c == 3 && (!withAlpha || alpha.size() != count)) break;
+      const float v = c < 3 ? p[c] : alpha[i];
+      if (std::isnan(v)) {
+        ++n.nan;
+        bad = true;
+      } else if (std::isinf(v)) {
+        ++n.inf;
+        bad = true;
+      }
+    }
+    if (bad && n.x < 0) {
+      n.x = int(i % std::size_t(img.width()));
+      n.y = int(i / std::size_t(img.width()));
+    }
+  }
+  return n;
+}
+
+std::string NonFiniteValues::describe() const {
+  return std::to_string(nan + inf) + " non-finite channel value" + (nan + inf == 1 ? "" : "s") +
+         " (" + std::to_string(nan) + " NaN, " + std::to_string(inf) +
+         " inf; the first at pixel (" + std::to_string(x) + ", " + std::to_string(y) + "))";
+}
+
 float toneMapSrgb(float linear, float exposure) {
   float v = linear * std::exp2(exposure);
   if (!(v > 0.0f)) return 0.0f;  // also maps NaN to 0
@@ -278,6 +314,10 @@ float toneCurve(float v, ToneCurve curve) {
 
 void writePng(const Image& img, const std::string& path, float exposure, ToneCurve curve) {
   if (img.width() <= 0 || img.height() <= 0) throw IoError("cannot write an empty image");
+  // NaN used to write an all-black PNG; beyond +-100 stops 2^exposure leaves single precision.
+  if (!(std::abs(exposure) <= 100.0f))
+    throw ConfigError("PNG exposure " + std::to_string(exposure) +
+                      " is out of range; allowed: a number of stops in [-100, 100]");
   std::vector<unsigned char> buf(size_t(img.width()) * img.height() * 3);
   const float scale = std::exp2(exposure);
   for (size_t i = 0; i < img.pixels().size(); ++i)

@@ -44,6 +44,17 @@ class Image {
   std::vector<float> depth_;
 };
 
+/// The non-finite values among an image's colour (RGB) and alpha channels; depth, whose +inf
+/// means "nothing along the ray", is not counted.
+struct NonFiniteValues {
+  std::size_t nan = 0, inf = 0;
+  int x = -1, y = -1;  ///< the first such pixel in row-major order (-1 when none)
+  bool any() const { return nan + inf > 0; }
+  /// "18 non-finite channel values (0 NaN, 18 inf; the first at pixel (31, 20))".
+  std::string describe() const;
+};
+NonFiniteValues countNonFinite(const Image& img, bool withAlpha = true);
+
 /// Header attributes of an EXR (render's provenance and camera, for compositing).
 struct ExrAttributes {
   std::vector<std::pair<std::string, std::string>> strings;
@@ -55,7 +66,8 @@ struct ExrAttributes {
 
 /// Writes a 32-bit float RGB OpenEXR file (A and Z channels where alpha() and depth() are
 /// non-empty) atomically (temporary file, then rename); on any
-/// failure no file is left at `path`. Throws IoError.
+/// failure no file is left at `path`. The header's standard `chromaticities` attribute says
+/// the colour space: linear, Rec. 709 primaries, D65 white. Throws IoError.
 void writeExr(const Image& img, const std::string& path, const ExrAttributes& attributes = {});
 
 /// Reads the R, G, B channels (and A into alpha(), Z into depth(), when the file has them) of an
@@ -80,7 +92,8 @@ ToneCurve parseToneCurve(const std::string& name, const std::string& key = "--to
 float toneCurve(float v, ToneCurve curve);
 
 /// Writes an 8-bit sRGB PNG atomically: 2^exposure, then `curve`, then the sRGB encoding
-/// (toneMapSrgb when Linear). Throws IoError.
+/// (toneMapSrgb when Linear). Throws IoError; ConfigError when `exposure` is not within
+/// [-100, 100] stops (NaN included).
 void writePng(const Image& img, const std::string& path, float exposure = 0.0f,
               ToneCurve curve = ToneCurve::Linear);
 
@@ -105,7 +118,9 @@ struct ImageError {
 /// about 13 of 255 PNG levels).
 inline constexpr double kVisibleThreshold = 0.05;
 
-/// Every measure but the masked one. Throws ConfigError when the sizes differ.
+/// Every measure but the masked one. Throws ConfigError when the sizes differ, when the images
+/// are empty (0 pixels), or when either holds a NaN or infinite colour value (no measure means
+/// anything then: NaN used to compare as a perfect match).
 ImageError compareImages(const Image& img, const Image& ref);
 
 }  // namespace scatterlab

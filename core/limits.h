@@ -16,7 +16,9 @@ namespace scatterlab {
 std::uint64_t memoryLimit();
 /// Sets the limit (bytes > 0); 0 restores the default (environment, else 75 % of RAM).
 void setMemoryLimit(std::uint64_t bytes);
-/// 75 % of physical memory (sysconf), the default when SCATTERLAB_MEMORY_LIMIT is unset.
+/// 75 % of physical memory (sysconf), the default when SCATTERLAB_MEMORY_LIMIT is unset; under
+/// an address-space limit (RLIMIT_AS, `ulimit -v`) at most half of what it leaves above the
+/// process's mapped size at the call (at least 1 MiB).
 std::uint64_t defaultMemoryLimit();
 
 /// Parses a size: bytes with an optional unit K, M, G, T (powers of 1024; "KiB", "MB", ...

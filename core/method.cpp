@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/suggest.h"
+
 namespace scatterlab {
 
 Registry<MethodEntry>& methods() {
@@ -51,13 +53,18 @@ Backend chooseBackend(const Scene& scene, const std::string& name, const MethodE
 
 std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& methodOverride,
                                      const std::string& backend) {
+  const std::vector<std::string> backendNames{"cpu", "gpu", "auto"};
+  // Checked first: a misspelt backend ('GPU', 'cuda', '') must not quietly run on auto.
+  if (std::find(backendNames.begin(), backendNames.end(), backend) == backendNames.end())
+    throw ConfigError("backend: unknown backend '" + backend + "'" +
+                      didYouMean(backend, backendNames) + "; allowed: 'cpu', 'gpu', 'auto'");
   Params p(scene.render, "render");
   std::string name = p.string("method", "exact");
   if (!methodOverride.empty()) name = methodOverride;
-  const std::string fromFile = p.choice("backend", {"cpu", "gpu", "auto"}, "auto");
-  const std::string asked = backend.empty() || backend == "auto" ? fromFile : backend;
+  const std::string fromFile = p.choice("backend", backendNames, "auto");
+  const std::string asked = backend == "auto" ? fromFile : backend;
   const MethodEntry& entry =
-      methods().get(name, methodOverride.empty() ? "render.method" : "--method");
+      methods().get(name, methodOverride.empty() ? "render.method" : "method");
   std::string note;
   const Backend b = chooseBackend(scene, name, entry, asked, &note);
   auto method = entry.create(p, scene, b, note);

@@ -42,8 +42,9 @@ class Method {
  public:
   virtual ~Method() = default;
   /// Renders `scene` (whose `render` settings this method was created from). `progress` may be
-  /// null. Throws scatterlab::Error on failure. Needs no current GL context (GPU methods make
-  /// their own).
+  /// null. Throws scatterlab::Error on failure, LimitError when the image would hold a NaN or
+  /// infinite colour or alpha value (docs/reliability.md). Needs no current GL context (GPU
+  /// methods make their own).
   virtual RenderResult render(const Scene& scene, Progress* progress) = 0;
 
   /// Keys of the render object that only other registered methods read, ignored by this one
@@ -88,7 +89,8 @@ Registry<MethodEntry>& methods();
 /// Creates the method the scene's render object names (default "exact"), or `methodOverride`
 /// when non-empty — exactly as if render.method were set to it. backend: "cpu", "gpu" or
 /// "auto" (a hardware GPU when one is there and the method runs on it, else the CPU); the
-/// render object's `backend` applies when this is "auto". Keys that only other registered
+/// render object's `backend` applies when this is "auto". Any other backend string ("GPU",
+/// "cuda", "") is a ConfigError listing the three. Keys that only other registered
 /// methods read are tolerated and listed in Method::ignoredKeys (so a reference can be rendered
 /// from any scene); any other unknown key is a ConfigError naming it, and so is a backend the
 /// method has no variant on.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "core/error.h"
 
@@ -15,6 +16,16 @@ void checkSizes(const Image& img, const Image& ref) {
     throw ConfigError("image sizes differ: " + std::to_string(img.width()) + "x" +
                       std::to_string(img.height()) + " vs reference " +
                       std::to_string(ref.width()) + "x" + std::to_string(ref.height()));
+  if (img.pixels().empty())
+    throw ConfigError("the images are empty (" + std::to_string(img.width()) + "x" +
+                      std::to_string(img.height()) + " pixels): there is nothing to compare");
+  // A NaN difference compares false everywhere (max, > threshold) and an inf reference made
+  // rel. L2 -nan: both used to pass as a perfect match.
+  for (const auto& [what, im] : {std::pair<const char*, const Image*>{"image", &img},
+                                 std::pair<const char*, const Image*>{"reference", &ref}})
+    if (const NonFiniteValues bad = countNonFinite(*im, /*withAlpha=*/false); bad.any())
+      throw ConfigError(std::string("the ") + what + " has " + bad.describe() +
+                        "; the error measures need finite pixels");
 }
 
 /// num/den as a ratio, with 0/0 = 0 (equal black images) and x/0 = inf.

@@ -3,13 +3,17 @@
 #include <embree3/rtcore.h>
 #include <tiny_obj_loader.h>
 
+#include <cerrno>
+#include <climits>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace scatterlab {
 
@@ -18,10 +22,10 @@ const std::vector<KeyDoc>& objectKeyDocs() {
       {"type", "string", "required", "`sphere`, `box`, `mesh`", "what the object is"},
       {"albedo", "number or [r,g,b]", "[0.8,0.8,0.8] (mesh: the .mtl's Kd where present)",
        "[0, 1] per channel", "Lambertian albedo; 0 is a pure (black) occluder"},
-      {"center", "[x,y,z]", "required (sphere)", "finite", "sphere centre"},
+      {"center", "[x,y,z]", "required (sphere)", "center ± radius within ±1e15", "sphere centre"},
       {"radius", "number", "required (sphere)", "> 0", "sphere radius"},
-      {"min", "[x,y,z]", "required (box)", "finite, < max per axis", "box corner"},
-      {"max", "[x,y,z]", "required (box)", "finite, > min per axis", "box corner"},
+      {"min", "[x,y,z]", "required (box)", "within ±1e15, < max per axis", "box corner"},
+      {"max", "[x,y,z]", "required (box)", "within ±1e15, > min per axis", "box corner"},
       {"file", "string", "required (mesh)", "a readable Wavefront OBJ with ≥ 1 triangle",
        "mesh file, relative to the scene file; polygons are triangulated"},
       {"transform", "object", "identity (mesh)", "`translate`, `rotate_deg`, `scale`",
@@ -46,6 +50,42 @@ Vec3 finiteVec3(Params& p, const std::string& key, std::optional<Vec3> def = std
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(v[a])) p.fail(key, "components must be finite numbers");
   return v;
+}
+
+/// "%.6g" of a number, for messages.
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+std::string point(const glm::dvec3& v) {
+  // Appended piecewise: GCC 12 reports a false -Wrestrict for "[" + std::string.
+  std::string s("[");
+  s += num(v.x);
+  s += ", ";
+  s += num(v.y);
+  s += ", ";
+  s += num(v.z);
+  s += "]";
+  return s;
+}
+
+/// Whether every coordinate of `v` lies within +-kMaxCoordinate (false for NaN).
+bool withinBound(const glm::dvec3& v) {
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(v[a]) <= kMaxCoordinate)) return false;
+  return true;
+}
+
+/// Fails `key` when a point of the object (`what`, e.g. "the sphere's extent") lies beyond the
+/// coordinate bound.
+void checkBound(const Params& p, const std::string& key, const glm::dvec3& lo, const glm::dvec3& hi,
+                const std::string& what) {
+  if (!withinBound(lo) || !withinBound(hi))
+    p.fail(key, what + " " + point(lo) + " - " + point(hi) + " reaches beyond +-" +
+                    num(kMaxCoordinate) + "; allowed: every coordinate within +-" +
+                    num(kMaxCoordinate));
 }
 
 struct Mesh {
@@ -78,22 +118,87 @@ glm::mat4 parseTransform(Params t) {
   return glm::scale(m, scale);
 }
 
-/// tinyobjloader reads "nan" as 0 without a word: every vertex line's coordinates are checked
-/// here first, so a NaN or infinite vertex is an error naming its line.
-void checkVertices(const std::filesystem::path& file, const std::string& key) {
+/// Reads every `mtllib` of an OBJ through the same checks as every other file a scene names
+/// (checkReadableFile: a regular file, not /dev/zero or a FIFO; its size against the memory
+/// limit) instead of tinyobjloader's MaterialFileReader, which opens any path unchecked. Names
+/// are relative to the OBJ's directory. A missing .mtl stays what tinyobjloader makes it: a
+/// warning and the default albedo.
+class CheckedMaterialReader : public tinyobj::MaterialReader {
+ public:
+  CheckedMaterialReader(std::filesystem::path dir, std::string key)
+      : dir_(std::move(dir)), key_(std::move(key)) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* matMap, std::string* warn,
+                  std::string* err) override {
+    const std::filesystem::path file =
+        std::filesystem::path(name).is_absolute() ? std::filesystem::path(name) : dir_ / name;
+    std::error_code ec;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(file, ec))) {
+      if (warn) *warn += "material library '" + file.string() + "' not found\n";
+      return false;
+    }
+    try {
+      checkReadableFile(file.string(), "material library (.mtl)");
+    } catch (const IoError& e) {
+      throw IoError("'" + key_ + "': " + e.what());
+    }
+    const std::uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec) throw IoError("'" + key_ + "': cannot read '" + file.string() + "': " + ec.message());
+    // Parsed materials (name, strings, numbers) take a few times the text's bytes.
+    checkMemory(
+        key_,
+        "the material library '" + file.string() + "' (" + formatBytes(double(size)) + ", parsed)",
+        4.0 * double(size));
+    std::ifstream in(file);
+    if (!in) throw IoError("'" + key_ + "': cannot open '" + file.string() + "'");
+    tinyobj::LoadMtl(matMap, materials, &in, warn, err);
+    return true;
+  }
+
+ private:
+  std::filesystem::path dir_;
+  std::string key_;
+};
+
+/// Checks an OBJ's lines before tinyobjloader reads them: it reads "nan" as 0 without a word,
+/// so every vertex coordinate must be a finite number, and it reads indices with atoi, so a face
+/// index beyond int (4294967297 wrapped to 1) is an error here, naming the line.
+void scanObj(const std::filesystem::path& file, const std::string& key) {
   std::ifstream in(file);
   std::string line;
+  const auto where = [&](long long n) {
+    return key + ": line " + std::to_string(n) + " of '" + file.string() + "': ";
+  };
   for (long long n = 1; std::getline(in, line); ++n) {
-    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
-    const char* c = line.c_str() + 1;
-    for (int k = 0; k < 3; ++k) {
-      char* end = nullptr;
-      const double v = std::strtod(c, &end);
-      if (end == c || !std::isfinite(v))
-        throw IoError(key + ": line " + std::to_string(n) + " of '" + file.string() +
-                      "': vertex coordinate " + std::to_string(k + 1) +
-                      " is not a finite number ('" + line + "')");
-      c = end;
+    if (line.size() < 2 || (line[1] != ' ' && line[1] != '\t')) continue;
+    if (line[0] == 'v') {
+      const char* c = line.c_str() + 1;
+      for (int k = 0; k < 3; ++k) {
+        char* end = nullptr;
+        const double v = std::strtod(c, &end);
+        if (end == c || !std::isfinite(v))
+          throw IoError(where(n) + "vertex coordinate " + std::to_string(k + 1) +
+                        " is not a finite number ('" + line + "')");
+        c = end;
+      }
+    } else if (line[0] == 'f') {
+      // Tokens v, v/vt, v//vn, v/vt/vn: every number within int (1-based, or negative for
+      // relative indices); whether the vertex exists is checked after parsing.
+      for (const char* c = line.c_str() + 1; *c;) {
+        if (*c == '-' || *c == '+' || (*c >= '0' && *c <= '9')) {
+          char* end = nullptr;
+          errno = 0;
+          const long long v = std::strtoll(c, &end, 10);
+          if (errno == ERANGE || v > INT_MAX || v < -INT_MAX)
+            throw IoError(where(n) + "face index " + std::string(c, std::size_t(end - c)) +
+                          " is out of range; allowed: 1 ... the number of vertices, or -1 ... "
+                          "-(that number) relative to the last ('" +
+                          line.substr(0, 200) + "')");
+          c = end == c ? c + 1 : end;
+        } else {
+          ++c;
+        }
+      }
     }
   }
 }
@@ -102,7 +207,10 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   const std::string rel = p.string("file");
   const std::filesystem::path file =
       std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : baseDir / rel;
-  const std::string key = p.keyPath("file");
+  // Quoted, as Params::fail does (appended: GCC 12's -Wrestrict misfires on "'" + s + "'").
+  std::string key = "'";
+  key += p.keyPath("file");
+  key += "'";
   try {
     checkReadableFile(file.string(), "OBJ mesh");
   } catch (const IoError& e) {
@@ -114,32 +222,37 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
   else
     p.allow("transform");
 
-  checkVertices(file, key);
-  tinyobj::ObjReaderConfig cfg;
-  cfg.triangulate = true;
-  cfg.vertex_color = false;
-  cfg.mtl_search_path = file.parent_path().string();
-  tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(file.string(), cfg) || !reader.Error().empty())
-    throw IoError(key + ": malformed OBJ '" + file.string() + "': " + reader.Error());
-  const auto& attrib = reader.GetAttrib();
-  const auto& materials = reader.GetMaterials();
+  scanObj(file, key);
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn, err;
+  std::ifstream objIn(file);
+  if (!objIn) throw IoError(key + ": cannot open '" + file.string() + "'");
+  CheckedMaterialReader mtl(file.parent_path(), p.keyPath("file"));
+  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &objIn, &mtl,
+                        /*triangulate=*/true, /*default_vcols_fallback=*/false) ||
+      !err.empty())
+    throw IoError(key + ": malformed OBJ '" + file.string() + "': " + err);
   Mesh mesh;
   const std::size_t nv = attrib.vertices.size() / 3;
   mesh.vertices.reserve(nv);
   for (std::size_t i = 0; i < nv; ++i) {
     const Vec3 v(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
-    const Vec3 w = Vec3(m * glm::vec4(v, 1.0f));
-    if (!std::isfinite(w.x) || !std::isfinite(w.y) || !std::isfinite(w.z))
-      throw IoError(key + ": vertex " + std::to_string(i + 1) + " of '" + file.string() +
-                    "' is not finite (" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " +
-                    std::to_string(v.z) + ")");
-    mesh.vertices.push_back(w);
+    // The transform in double: a far translate or a huge scale must not overflow first.
+    const glm::dvec3 w = glm::dvec3(glm::dmat4(m) * glm::dvec4(glm::dvec3(v), 1.0));
+    if (!withinBound(w))
+      throw IoError(key + ": vertex " + std::to_string(i + 1) + " of '" + file.string() + "' " +
+                    point(glm::dvec3(v)) + " lies at " + point(w) +
+                    (p.has("transform") ? " after the transform" : "") + ", beyond +-" +
+                    num(kMaxCoordinate) + "; allowed: every coordinate within +-" +
+                    num(kMaxCoordinate));
+    mesh.vertices.push_back(Vec3(w));
   }
   bool anyMaterial = false, allNormals = !attrib.normals.empty();
   std::vector<Vec3> perTri;
   const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
-  for (const auto& shape : reader.GetShapes()) {
+  for (const auto& shape : shapes) {
     const auto& idx = shape.mesh.indices;
     std::size_t off = 0;
     for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
@@ -279,6 +392,8 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
       const Vec3 c = finiteVec3(p, "center");
       const double r = p.number("radius", std::nullopt, Interval::above(0));
       if (!std::isfinite(float(r))) p.fail("radius", "must be finite (in single precision)");
+      checkBound(p, withinBound(glm::dvec3(c)) ? "radius" : "center", glm::dvec3(c) - r,
+                 glm::dvec3(c) + r, "the sphere's extent (center +- radius)");
       RTCGeometry g = rtcNewGeometry(impl->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
       auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
           g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
@@ -299,6 +414,7 @@ std::shared_ptr<const SceneObjects> SceneObjects::parse(std::vector<Params> item
       if (!(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z))
         p.fail("max", "must exceed min in every axis (min " + describeValue(p.json()["min"]) +
                           ", max " + describeValue(p.json()["max"]) + ")");
+      checkBound(p, "max", glm::dvec3(lo), glm::dvec3(hi), "the box");
       std::vector<Vec3> v;
       for (int i = 0; i < 8; ++i)
         v.push_back(Vec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
@@ -349,8 +465,22 @@ float SceneObjects::epsilon() const {
   return impl_->eps;
 }
 
+namespace {
+
+/// What Embree's `ray.valid()` asserts (kernels/common/ray.h), checked before every query so
+/// that no ray aborts the process: origin within +-FLT_LARGE (1.844e18), a finite direction,
+/// tnear and tfar not NaN (tfar may be +inf).
+bool traceable(const Vec3& o, const Vec3& d, float tmin, float tmax) {
+  constexpr float kLarge = 1.8e18f;
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(o[a]) <= kLarge) || !(std::abs(d[a]) <= kLarge)) return false;
+  return !std::isnan(tmin) && !std::isnan(tmax);
+}
+
+}  // namespace
+
 bool SceneObjects::intersect(const Ray& r, float tmin, float tmax, SurfaceHit& hit) const {
-  if (impl_->info.empty()) return false;
+  if (impl_->info.empty() || !traceable(r.origin, r.dir, tmin, tmax)) return false;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -390,7 +520,7 @@ bool SceneObjects::intersect(const Ray& r, float tmin, float tmax, SurfaceHit& h
 }
 
 bool SceneObjects::occluded(const Vec3& origin, const Vec3& dir, float tmin, float tmax) const {
-  if (impl_->info.empty() || !(tmax > tmin)) return false;
+  if (impl_->info.empty() || !(tmax > tmin) || !traceable(origin, dir, tmin, tmax)) return false;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;

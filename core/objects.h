@@ -16,6 +16,13 @@
 
 namespace scatterlab {
 
+/// The largest coordinate magnitude of any point a scene places (medium box, camera, lights,
+/// object geometry, Gaussian centres; docs/reliability.md). Embree traces only rays whose
+/// origins lie within +-1.8e18 (its FLT_LARGE; beyond, its `ray.valid()` assertion aborts the
+/// process), and every ray origin is a point of the scene or a hit on an object, so within this
+/// bound with a wide margin; single precision keeps ~1e8 units of resolution there.
+inline constexpr double kMaxCoordinate = 1e15;
+
 /// The first surface along a ray.
 struct SurfaceHit {
   float t = 0.0f;       ///< ray parameter of the hit (world units along the unit direction)
@@ -51,8 +58,10 @@ struct ObjectShape {
 class SceneObjects {
  public:
   /// Parses the `objects` array (each element an object read strictly: an unknown key or a
-  /// bad value is a ConfigError naming `objects[i].key`; an unreadable or malformed OBJ an
-  /// IoError naming it) and builds the BVH. Mesh paths are relative to `baseDir`.
+  /// bad value is a ConfigError naming `objects[i].key`; an unreadable or malformed OBJ or
+  /// .mtl an IoError naming it) and builds the BVH. Mesh paths are relative to `baseDir`.
+  /// Every point of every object (sphere centre ± radius, box corners, mesh vertices after
+  /// the transform) must lie within +-kMaxCoordinate.
   static std::shared_ptr<const SceneObjects> parse(std::vector<Params> items,
                                                    const std::filesystem::path& baseDir);
   ~SceneObjects();
@@ -69,9 +78,12 @@ class SceneObjects {
   float epsilon() const;
 
   /// The first hit along `r` (unit direction) with t in (tmin, tmax); false when none.
+  /// A ray Embree cannot trace (an origin beyond +-1.8e18, a non-finite direction, a NaN
+  /// tmin or tmax) hits nothing instead of aborting; parsed scenes never make one
+  /// (kMaxCoordinate).
   bool intersect(const Ray& r, float tmin, float tmax, SurfaceHit& hit) const;
   /// Whether an object blocks origin + t·dir for t in (tmin, tmax) (dir unit; tmax may be
-  /// infinity for directional lights).
+  /// infinity for directional lights). An untraceable ray (see intersect) is not occluded.
   bool occluded(const Vec3& origin, const Vec3& dir, float tmin, float tmax) const;
 
  private:

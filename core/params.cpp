@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/grid.h"
+#include "core/suggest.h"
 
 namespace scatterlab {
 namespace {
@@ -277,7 +278,7 @@ std::string Params::choice(const std::string& key, const std::vector<std::string
     if (a == v) return v;
   std::string list;
   for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + ("'" + a + "'");
-  fail(key, "unknown value '" + v + "'; allowed: " + list);
+  fail(key, "unknown value '" + v + "'" + didYouMean(v, allowed) + "; allowed: " + list);
 }
 
 Vec3 Params::vec3(const std::string& key, std::optional<Vec3> def, const Interval& range) {
@@ -355,9 +356,11 @@ std::vector<Params> Params::children(const std::string& key, bool required) {
 
 void Params::finish() const {
   std::string unknown;
+  const std::vector<std::string> known(known_.begin(), known_.end());
   for (auto it = j_->begin(); it != j_->end(); ++it)
     if (!known_.count(it.key()))
-      unknown += (unknown.empty() ? "'" : ", '") + keyPath(it.key()) + "'";
+      unknown +=
+          (unknown.empty() ? "'" : ", '") + keyPath(it.key()) + "'" + didYouMean(it.key(), known);
   if (unknown.empty()) return;
   std::string allowed;
   for (const auto& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;

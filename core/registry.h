@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/suggest.h"
 
 namespace scatterlab {
 
@@ -22,13 +23,19 @@ class Registry {
   Factory& entry(const std::string& name) { return entries_[name]; }
   bool contains(const std::string& name) const { return entries_.count(name) != 0; }
 
-  /// Throws ConfigError naming `key` (a dotted path for the message) and the known names.
+  /// Throws ConfigError naming `key` (a dotted path for the message), the known names and the
+  /// likely one for a misspelling; with nothing registered, says to call initialize().
   const Factory& get(const std::string& name, const std::string& key) const {
     auto it = entries_.find(name);
     if (it == entries_.end()) {
+      if (entries_.empty())
+        throw ConfigError("'" + key + "': unknown " + what_ + " '" + name + "': no " + what_ +
+                          " is registered yet; call scatterlab::initialize() once before "
+                          "loading scenes or creating methods");
       std::string list;
       for (const auto& [n, f] : entries_) list += (list.empty() ? "'" : ", '") + n + "'";
-      throw ConfigError("'" + key + "': unknown " + what_ + " '" + name + "'; allowed: " + list);
+      throw ConfigError("'" + key + "': unknown " + what_ + " '" + name + "'" +
+                        didYouMean(name, names()) + "; allowed: " + list);
     }
     return it->second;
   }

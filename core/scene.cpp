@@ -1,14 +1,18 @@
 #include "core/scene.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "core/animation.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/objects.h"
 
 namespace scatterlab {
 
@@ -36,7 +40,15 @@ Phase parsePhase(Params p) {
 /// Beyond that single precision has nothing left of the box (and |x|² overflows near 1e19).
 constexpr double kMaxDistanceInDiagonals = 1e6;
 
-/// Checks that `key` (a point already read) lies within kMaxDistanceInDiagonals of the box.
+/// Largest light intensity (point, spot) or irradiance (directional) per channel. Images scale
+/// with it (glow.json: the brightest pixel is ~3 x I, rbf's ~12 x I) and the intermediate sums
+/// of every method must stay within single precision (3.4e38): 1e36 made 18 pixels of `exact`
+/// infinite and the whole radial-blur image NaN. 1e20 leaves those sums 1e18 of headroom.
+constexpr double kMaxLightIntensity = 1e20;
+
+/// Checks that `key` (a point already read) lies within kMaxDistanceInDiagonals of the box and
+/// within +-kMaxCoordinate (a box near that bound has diagonals of up to 3.5e15, so the first
+/// rule alone allowed 3.5e21, beyond what Embree traces).
 void checkNearMedium(const Params& p, const std::string& key, const Vec3& x, const Box& box) {
   const glm::dvec3 c = 0.5 * (glm::dvec3(box.min) + glm::dvec3(box.max));
   const double diag = glm::length(glm::dvec3(box.max) - glm::dvec3(box.min));
@@ -47,6 +59,13 @@ void checkNearMedium(const Params& p, const std::string& key, const Vec3& x, con
                   d / diag, diag);
     p.fail(key, "point " + describeValue(p.json()[key]) + buf + "; allowed: at most 1e6");
   }
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(double(x[a])) <= kMaxCoordinate)) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "; allowed: every coordinate within +-%g", kMaxCoordinate);
+      p.fail(key,
+             "point " + describeValue(p.json()[key]) + " lies beyond the coordinate bound" + buf);
+    }
 }
 
 /// A non-zero direction, normalised in double so that huge finite components do not overflow.
@@ -60,7 +79,7 @@ Vec3 direction(Params& p, const std::string& key) {
 Light parseLight(Params p, const Box& box) {
   Light l;
   const std::string t = p.choice("type", {"point", "spot", "directional"});
-  const Interval positive = Interval::atLeast(0);
+  const Interval positive = Interval::closed(0, kMaxLightIntensity);
   if (t == "point" || t == "spot") {
     l.type = t == "point" ? Light::Type::Point : Light::Type::Spot;
     l.position = p.vec3("position");
@@ -221,6 +240,32 @@ Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Me
   return s;
 }
 
+namespace {
+
+/// What a file that is not JSON is, by its first bytes or else its extension: for a message
+/// that says what to do instead of where the JSON parser stopped. `densityType` names the
+/// medium.density type that reads such a file ("" when none does); `what` is "" when unknown.
+struct ForeignFile {
+  std::string what, densityType;
+};
+
+ForeignFile foreignFile(const std::string& path, std::string_view head) {
+  const auto starts = [&](std::string_view magic) { return head.substr(0, magic.size()) == magic; };
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower((unsigned char)c));
+  // OpenVDB: the 64-bit magic 0x56444220 ("VDB " little-endian); OpenEXR: 0x762f3101.
+  if (starts(std::string_view("\x20\x42\x44\x56", 4)) || ext == ".vdb")
+    return {"an OpenVDB volume", "vdb"};
+  if (starts(std::string_view("\x76\x2f\x31\x01", 4)) || ext == ".exr")
+    return {"an OpenEXR image", ""};
+  if (starts("\x89PNG") || ext == ".png") return {"a PNG image", ""};
+  if (ext == ".sog") return {"a sum-of-Gaussians model (scatterlab fit)", "sog"};
+  if (ext == ".obj") return {"an OBJ mesh", ""};
+  return {};
+}
+
+}  // namespace
+
 Json readJsonFile(const std::string& path) {
   checkReadableFile(path, "JSON file");
   std::ifstream in(path, std::ios::binary);
@@ -228,7 +273,19 @@ Json readJsonFile(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (!in) throw IoError("cannot read '" + path + "'");
-  return parseJson(text.str(), "'" + path + "'");
+  const std::string t = text.str();
+  try {
+    return parseJson(t, "'" + path + "'");
+  } catch (const IoError&) {
+    const ForeignFile f = foreignFile(path, t);
+    if (f.what.empty()) throw;
+    std::string msg = "'" + path + "' is " + f.what + ", not a scene (a JSON file)";
+    if (!f.densityType.empty())
+      msg += "; render it from a scene whose medium.density is {\"type\": \"" + f.densityType +
+             "\", \"file\": \"" + std::filesystem::path(path).filename().string() +
+             "\"} (docs/scene-format.md; data/scenes/smoke.json is one)";
+    throw IoError(msg + "; `scatterlab info " + path + "` describes it");
+  }
 }
 
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides) {

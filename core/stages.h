@@ -28,6 +28,7 @@
 #include "core/registry.h"
 #include "core/scene.h"
 #include "core/stats.h"
+#include "core/work_limits.h"
 
 namespace scatterlab {
 
@@ -360,6 +361,21 @@ enum class LightWork {
   EveryVoxel,     ///< ... every voxel of the radiance volume (per-voxel)
 };
 
+/// The work and host memory a stage's own keys imply (StageDecl::work), which
+/// checkRenderPlan bounds (core/work_limits.h). Keys are relative to the render object.
+struct StageWork {
+  /// View-ray terms the stage sums by its own steps (0: none), against kMaxViewSteps; the key
+  /// named when there are too many, and how they arise ("320x240 pixels x 32 steps").
+  double viewTerms = 0;
+  std::string termsKey, termsHow;
+  /// Points that each march to every light by delta1 (0: none), and which ("at every one of
+  /// 1e+06 froxels").
+  double lightPoints = 0;
+  std::string lightWhat;
+  /// The host arrays of the stage's CPU variant.
+  std::vector<MemoryPlan::Item> cpuArrays;
+};
+
 /// What a stage family declares, the same for each of its backends' variants (Mitsuba's plugin
 /// properties): the render keys it reads and the facts the method layer plans with. Declared
 /// once per family, in the family's own file (with its settings struct, in shading/, where both
@@ -379,6 +395,10 @@ struct StageDecl {
   /// and their grids agree (one more volume in the memory plan).
   bool fusedVolumeOnCpu = false;
   LightWork lightWork = LightWork::None;
+  /// Integrators with their own steps or host arrays (the competitors): what they do and
+  /// allocate by their own keys, which the render plan checks before a render. Null: nothing
+  /// beyond the view march and lightWork.
+  StageWork (*work)(const Scene& scene, const PipelineSettings& settings) = nullptr;
 };
 
 /// A registered stage: its declaration and one maker per backend, empty where that backend has

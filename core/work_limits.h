@@ -44,4 +44,7 @@ class MemoryPlan {
 inline constexpr double kMaxViewSteps = 1e10;
 inline constexpr double kMaxLightSteps = 1e12;
 
+/// A count or size in messages, three significant digits ("1.02e+10", "320").
+std::string formatCount(double v);
+
 }  // namespace scatterlab

@@ -25,6 +25,12 @@ std::string fmt(double v, const char* format = "%.4g");
 /// The whole file; "" when it cannot be read (callers have checked it is readable).
 std::string readText(const std::string& path);
 
+/// The hash of a scene file and of every file it names (medium.density.file and .frames,
+/// objects[i].file and each OBJ's `mtllib`s, resolved from the scene's directory): a run or
+/// reference keyed by it is redone when a mesh, volume or model changes, not only the JSON.
+/// A file that cannot be read hashes as "missing" (the run itself then reports it).
+std::string sceneHash(const std::string& sceneFile);
+
 /// Writes atomically, so that an interrupted run never leaves a truncated table or record.
 void writeText(const std::string& path, const std::string& text);
 

@@ -186,8 +186,9 @@ std::vector<int> shardOf(const ExperimentPlan& plan, int count);
 
 /// Facts about this machine and build for results.json and every run record: cpu_model,
 /// logical_cpus, cores_used (the process's CPU affinity), load_avg_start (1, 5, 15 min from
-/// /proc/loadavg), hostname, os, commit (git in the source tree, "+dirty" with uncommitted
-/// changes; "unknown" outside a checkout). The GPU renderer is per run (its stats' `device`).
+/// /proc/loadavg), hostname, os, commit (the git commit the binary was built from, recorded at
+/// build time: "+dirty" with uncommitted changes, "unknown" when built outside a checkout). The GPU
+/// renderer is per run (its stats' `device`).
 Json machineFacts();
 
 /// `scatterlab experiment merge DIR... -o OUT`: checks that the shard directories hold every

@@ -394,7 +394,7 @@ void expandRuns(ExperimentPlan& plan, const std::vector<std::string>& globalSets
       if (!sw.scenes.empty() &&
           std::find(sw.scenes.begin(), sw.scenes.end(), sc.name) == sw.scenes.end())
         continue;
-      const std::string sceneHash = stableHash(readText(sc.file));
+      const std::string sceneHash = detail::sceneHash(sc.file);
       for (std::size_t pt = 0; pt < points; ++pt) {
         std::vector<const AxisValue*> vals(sw.axes.size());
         std::size_t rest = pt;

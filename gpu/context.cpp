@@ -188,9 +188,14 @@ Context::Context() {
   std::string why;
   if (const char* off = std::getenv("SCATTERLAB_NO_GPU"); off && *off && std::strcmp(off, "0"))
     throw GpuError("no OpenGL context: the GPU backend is disabled by SCATTERLAB_NO_GPU=" +
-                   std::string(off));
+                   std::string(off) + "; use --backend cpu");
   auto egl = createEgl(why);
-  if (!egl) throw GpuError("no OpenGL 4.5 core context through EGL: " + why);
+  if (!egl) {
+    // `why` lists each EGL platform's failure as "platform: reason; ".
+    while (!why.empty() && (why.back() == ' ' || why.back() == ';')) why.pop_back();
+    throw GpuError("no GPU found: no OpenGL 4.5 core context through EGL (" + why +
+                   "); use --backend cpu");
+  }
   gEgl = *egl;
   info_.platform = egl->platform;
   const char* ev = eglQueryString(egl->display, EGL_VENDOR);
@@ -201,7 +206,7 @@ Context::Context() {
   info_.glsl = glString(GL_SHADING_LANGUAGE_VERSION);
   if (epoxy_gl_version() < 45)
     throw GpuError("OpenGL " + info_.version + " on '" + info_.renderer +
-                   "' is older than the 4.5 core the GPU backend needs");
+                   "' is older than the 4.5 core the GPU backend needs; use --backend cpu");
   const std::string& r = info_.renderer;
   info_.hardware = r.find("llvmpipe") == std::string::npos &&
                    r.find("softpipe") == std::string::npos &&

@@ -1,5 +1,6 @@
 #include "gpu/gl.h"
 
+#include <algorithm>
 #include <cstring>
 #include <deque>
 #include <string>
@@ -183,8 +184,58 @@ void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   if (n) glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
+namespace {
+
+std::size_t bytesPerTexel(GLenum format) {
+  switch (format) {
+    case GL_RGBA32F:
+      return 16;
+    case GL_RG32F:
+      return 8;
+    case GL_R16F:
+      return 2;
+    case GL_RGBA16F:
+      return 8;
+    default:
+      return 4;  // R32F, R32UI, DEPTH_COMPONENT32F, ...
+  }
+}
+
+/// The texture `name` (w × h × d texels of `format`) as a GpuError: what was asked and what the
+/// device allows, before anything is allocated.
+[[noreturn]] void textureTooLarge(std::string_view name, int w, int h, int d, GLenum format,
+                                  const std::string& why) {
+  const std::size_t bytes =
+      std::size_t(w) * std::size_t(h) * std::size_t(d) * bytesPerTexel(format);
+  throw GpuError("'" + std::string(name) + "': a " + std::to_string(w) + " x " + std::to_string(h) +
+                 (d > 1 ? " x " + std::to_string(d) : std::string()) + " texture (" +
+                 std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB) " + why);
+}
+
+/// Throws when a texture of that size cannot exist on this device (GL's per-target limits).
+void checkTextureSize(GLenum target, GLenum format, int w, int h, int d, std::string_view name) {
+  GLint maxSize = 0, maxLayers = 0;
+  const GLenum limit = target == GL_TEXTURE_3D ? GL_MAX_3D_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE;
+  glGetIntegerv(limit, &maxSize);
+  if (target == GL_TEXTURE_2D_ARRAY) glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &maxLayers);
+  const int largest = std::max(w, std::max(h, target == GL_TEXTURE_3D ? d : 1));
+  if (maxSize > 0 && largest > maxSize)
+    textureTooLarge(name, w, h, target == GL_TEXTURE_2D ? 1 : d, format,
+                    "exceeds the device's " +
+                        std::string(target == GL_TEXTURE_3D ? "GL_MAX_3D_TEXTURE_SIZE"
+                                                            : "GL_MAX_TEXTURE_SIZE") +
+                        " of " + std::to_string(maxSize) + " per side");
+  if (maxLayers > 0 && d > maxLayers)
+    textureTooLarge(
+        name, w, h, d, format,
+        "exceeds the device's GL_MAX_ARRAY_TEXTURE_LAYERS of " + std::to_string(maxLayers));
+}
+
+}  // namespace
+
 Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view name)
     : target_(target), key_{detail::ObjectKind::Texture, target, format, w, h, d} {
+  checkTextureSize(target, format, w, h, d, name);
   id_ = detail::takeRecycled(key_);
   if (id_) {
     // A new texture's contents are undefined in GL (zeros in practice): a recycled one is zeroed.
@@ -196,6 +247,7 @@ Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_
       glTextureStorage2D(id_, 1, format, w, h);
     else
       glTextureStorage3D(id_, 1, format, w, h, d);
+    // A GL_OUT_OF_MEMORY here is reported by the pass's checkGl, naming the pass.
   }
   label(GL_TEXTURE, id_, name);
 }

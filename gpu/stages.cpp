@@ -204,9 +204,8 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     const Vec3 dd = Vec3(density.dims), ds = density.indexScale(), dof = density.indexOffset();
     setVec3(normalize, "uDensityLookupScale", cell * ds / dd);
     setVec3(normalize, "uDensityLookupOffset", ((bounds.min + 0.5f * cell) * ds + dof + 0.5f) / dd);
-    glUniform1i(normalize.uniform("uSameGrid"), density.dims == dims &&
-                                                    density.bounds.min == bounds.min &&
-                                                    density.bounds.max == bounds.max);
+    glUniform1i(normalize.uniform("uSameGrid"), sameGrid(density, bounds, dims));
+    out.densityInAlpha = sameGrid(density, bounds, dims);
     glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
@@ -251,6 +250,8 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
                        GL_RGBA32F);
     counters.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     setIVec3(program, "uRadDims", dims);
+    glUniform1i(program.uniform("uSameGrid"), sameGrid(density, bounds, dims));
+    out.densityInAlpha = sameGrid(density, bounds, dims);
     setVec3(program, "uRadMin", bounds.min);
     setVec3(program, "uRadCell", bounds.extent() / Vec3(dims));
     glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));

@@ -6,6 +6,7 @@
 #include "gpu/dispatch.h"
 #include "gpu/frame.h"
 #include "gpu/screen_pass.h"
+#include "gpu/volume.h"
 
 namespace scatterlab::gpu {
 
@@ -37,6 +38,10 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   if (factor_) {
     defines.push_back("SL_FACTOR_LIGHTS");
     key += " x A";
+  }
+  if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims)) {
+    defines.push_back("SL_FUSED");
+    key += " fused";
   }
   const Program& march =
       pass.program(key, {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"}, defines);

@@ -1,8 +1,11 @@
 #include "media/register.h"
 
+#include <cfloat>
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.h"
+#include "core/objects.h"
 #include "media/dense_grid.h"
 #include "media/procedural.h"
 #include "media/sog.h"
@@ -30,8 +33,21 @@ std::unique_ptr<DensityModel> makeGaussians(Params& p, const LoadContext&) {
   const float time = readTime(p);
   for (Params b : p.children("blobs", /*required=*/true)) {
     GaussianBlob g;
-    // Blobs drift with their velocity (world units per unit time).
-    g.center = b.vec3("center") + b.vec3("velocity", Vec3(0.0f)) * time;
+    // Blobs drift with their velocity (world units per unit time), in double: the centre is a
+    // point of the scene (a sample point of gaussian-centres, the origin of shadow rays), so it
+    // stays within the coordinate bound Embree traces (kMaxCoordinate).
+    const glm::dvec3 c =
+        glm::dvec3(b.vec3("center")) + glm::dvec3(b.vec3("velocity", Vec3(0.0f))) * double(time);
+    for (int a = 0; a < 3; ++a)
+      if (!(std::abs(c[a]) <= kMaxCoordinate)) {
+        char buf[192];
+        std::snprintf(buf, sizeof buf,
+                      "the centre at time %g is [%g, %g, %g], beyond the coordinate bound; "
+                      "allowed: every coordinate within +-%g",
+                      double(time), c.x, c.y, c.z, kMaxCoordinate);
+        b.fail(b.has("velocity") ? "velocity" : "center", buf);
+      }
+    g.center = Vec3(c);
     g.radius = b.real("radius", std::nullopt, Interval::above(0));
     g.weight = b.real("weight", 1.0, kNonNegative);
     b.finish();
@@ -86,9 +102,11 @@ std::unique_ptr<DensityModel> makeGrid(Params& p, const LoadContext& ctx) {
                            std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
                            std::to_string(dims.z) + "), got " + describeValue(v));
     for (size_t i = 0; i < n; ++i) {
-      if (!v[i].is_number() || !(v[i].get<double>() >= 0) || !std::isfinite(v[i].get<double>()))
+      // Stored as float: a larger double (1e300) would become inf.
+      if (!v[i].is_number() || !(v[i].get<double>() >= 0) || !(v[i].get<double>() <= FLT_MAX))
         p.fail("values", "element " + std::to_string(i) + " = " + describeValue(v[i]) +
-                             " is not a finite number >= 0");
+                             " is out of range; allowed: a number in [0, 3.40282e+38] (single "
+                             "precision)");
       g.data()[i] = v[i].get<float>();
     }
     source = "inline values";

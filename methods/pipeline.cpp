@@ -168,6 +168,16 @@ class PipelineMethod : public Method {
     RenderStats& st = r.stats;
     runStage("march", *frame, st, progress,
              [&] { r.image = integrator->integrate(*frame, scene, progress); });
+    // The last guard of docs/reliability.md: whatever the parse-time bounds miss (products of
+    // large but allowed values: intensity, sigma_t, densities, weights), no image with a
+    // non-finite pixel leaves a method. (An image left on the GPU, Method::imageOnDevice, is
+    // not read back to be checked.)
+    if (const NonFiniteValues bad = countNonFinite(r.image); bad.any())
+      throw LimitError("method '" + desc_.name + "' (" + backendName(backend_) + ") produced " +
+                       bad.describe() +
+                       ": the scene's values overflow single precision (3.4e38) somewhere; lower "
+                       "the largest of them (light intensity, sigma_t, density, weights); no "
+                       "image was written");
     if (reconstruction) {
       const IVec3 res = settings_.radianceResolution;
       st.extra["radiance_resolution"] = {res.x, res.y, res.z};
@@ -266,7 +276,8 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
       m->refiner ? &settings.refinerKeys.get<DynamicSamplingSettings>() : nullptr;
   checkRenderPlan(p, scene, d, settings, plannedSamples,
                   m->reconstruction && m->reconstruction->needsGradients(), dynamic,
-                  b == Backend::Cpu && integrators().get(integratorName, "").decl.fusedVolumeOnCpu);
+                  b == Backend::Cpu && integrators().get(integratorName, "").decl.fusedVolumeOnCpu,
+                  b == Backend::Cpu);
   return m;
 }
 

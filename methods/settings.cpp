@@ -210,9 +210,7 @@ std::vector<const std::vector<KeyDoc>*> keyTables(const MethodDesc& d) {
 // Bounds on marching work (kMaxViewSteps, kMaxLightSteps): core/limits.h.
 
 std::string sci(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
+  return formatCount(v);
 }
 
 void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s) {
@@ -235,6 +233,18 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
   double light = 0;
   std::string what;
   for (const StageDecl* st : stageDecls(d)) {
+    if (st->work) {
+      // The competitors: their own steps and the points that trace the lights.
+      const StageWork w = st->work(scene, s);
+      if (w.viewTerms > kMaxViewSteps)
+        throw LimitError("'" + p.keyPath(w.termsKey) + "': " + w.termsHow + " make " +
+                         sci(w.viewTerms) + " view-ray terms, above the bound of " +
+                         sci(kMaxViewSteps) + "; use fewer steps or a smaller image");
+      if (w.lightPoints > 0) {
+        light = w.lightPoints * perLight;
+        what = w.lightWhat;
+      }
+    }
     if (st->lightWork == LightWork::EveryViewStep) {
       light = view * perLight;
       what = "at every one of " + sci(view) + " view steps";
@@ -312,7 +322,7 @@ std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string&
 
 void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s,
                      long long samples, bool gradients, const DynamicSamplingSettings* dynamic,
-                     bool fusedVolume) {
+                     bool fusedVolume, bool cpu) {
   const auto voxels = [](IVec3 r) { return double(r.x) * double(r.y) * double(r.z); };
   const auto dims = [](IVec3 r) {
     return std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z);
@@ -359,6 +369,16 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const P
              "the grid buffer of level " + std::to_string(dynamic->levels.back()) + "^3",
              n * (sizeof(std::uint8_t) + sizeof(std::int32_t)));
   }
+  // The competitors' own host arrays (CPU variants): froxel volumes, transmittance maps,
+  // light-space-march's shadow maps (StageDecl::work).
+  if (cpu)
+    for (const StageDecl* st : stageDecls(d)) {
+      if (!st->work) continue;
+      for (MemoryPlan::Item& item : st->work(scene, s).cpuArrays) {
+        for (std::string& k : item.keys) k = p.keyPath(k);
+        plan.add(std::move(item.keys), item.what, item.bytes);
+      }
+    }
   plan.check();
 
   // The samples' tracing: every traced point marches ⌈diagonal / delta1⌉ steps to each light.

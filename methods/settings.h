@@ -88,9 +88,10 @@ struct DynamicSamplingSettings;
 /// `samples`: the planned count (Sampler::plannedCount), 0 without a sampler; `dynamic`: null
 /// without dynamic sampling; `fusedVolume`: the image is marched by a CPU integrator that fuses
 /// density and radiance into one volume when fast_march is on and their grids agree
-/// (StageDecl::fusedVolumeOnCpu).
+/// (StageDecl::fusedVolumeOnCpu); `cpu`: the method runs on the CPU, whose competitors' host
+/// arrays (StageDecl::work: froxel volume, transmittance maps, shadow maps) are in the plan.
 void checkRenderPlan(Params& render, const Scene& scene, const MethodDesc& desc,
                      const PipelineSettings& settings, long long samples, bool gradients,
-                     const DynamicSamplingSettings* dynamic, bool fusedVolume);
+                     const DynamicSamplingSettings* dynamic, bool fusedVolume, bool cpu = true);
 
 }  // namespace scatterlab

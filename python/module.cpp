@@ -7,9 +7,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 
 #include "api/scatterlab.h"
@@ -20,9 +22,30 @@ using namespace scatterlab;
 
 namespace {
 
+/// json.dumps with numpy scalars and arrays (anything with tolist(): np.float32(0.5),
+/// np.array([1, 2, 3])) taken as the plain numbers and lists they hold, and without NaN or inf
+/// (not JSON: they used to reach nlohmann's parser and surface as a bare RuntimeError
+/// "[json.exception.parse_error.101]"); `what` names the value.
+std::string dumps(const py::handle& obj, const std::string& what) {
+  // Made per call: a static py::object would be released after the interpreter finalised.
+  const py::object toList = py::cpp_function([](const py::object& o) -> py::object {
+    if (py::hasattr(o, "tolist")) return o.attr("tolist")();
+    throw py::type_error("Object of type " +
+                         py::str(py::type::of(o).attr("__name__")).cast<std::string>() +
+                         " is not JSON serializable");
+  });
+  try {
+    return py::str(py::module_::import("json").attr("dumps")(obj, py::arg("default") = toList,
+                                                            py::arg("allow_nan") = false));
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_ValueError)) throw;
+    throw ConfigError(what + ": " + std::string(py::str(e.value())) +
+                      " (NaN and infinity are not JSON numbers; scene values must be finite)");
+  }
+}
+
 Json toJson(const py::handle& obj) {
-  const std::string text = py::str(py::module_::import("json").attr("dumps")(obj));
-  return Json::parse(text);
+  return parseJson(dumps(obj, "scene"), "the scene dict");
 }
 
 py::object fromJson(const Json& j) {
@@ -35,9 +58,10 @@ std::vector<std::string> assignments(const py::object& overrides) {
   std::vector<std::string> out;
   if (overrides.is_none()) return out;
   if (py::isinstance<py::dict>(overrides)) {
-    const py::object dumps = py::module_::import("json").attr("dumps");
-    for (auto [k, v] : overrides.cast<py::dict>())
-      out.push_back(py::str(k).cast<std::string>() + "=" + py::str(dumps(v)).cast<std::string>());
+    for (auto [k, v] : overrides.cast<py::dict>()) {
+      const std::string key = py::str(k).cast<std::string>();
+      out.push_back(key + "=" + dumps(v, "overrides['" + key + "']"));
+    }
     return out;
   }
   if (py::isinstance<py::str>(overrides))
@@ -63,6 +87,16 @@ PyScene makeScene(Json doc, std::filesystem::path baseDir, const std::string& na
   return s;
 }
 
+/// A Renderer that Python threads may share. Every call takes `lock` after releasing the GIL
+/// (so a thread waiting for the lock never holds up the one rendering, which needs no GIL), and
+/// gives it back before taking the GIL again: set() or `time =` during render() waits for the
+/// render instead of replacing the scene and method under it (which crashed the interpreter).
+struct PyRenderer {
+  explicit PyRenderer(Renderer r) : renderer(std::move(r)) {}
+  Renderer renderer;
+  std::mutex lock;
+};
+
 /// (H, W, 3), or (H, W, 4) with the alpha (1 − view transmittance) as the 4th channel.
 py::array_t<float> imageArray(const Image& img, bool rgba = false) {
   if (!rgba) {
@@ -81,13 +115,41 @@ py::array_t<float> imageArray(const Image& img, bool rgba = false) {
   return a;
 }
 
-Image arrayImage(const py::array& any, const char* what) {
+/// A float (H, W, 3) array, or (H, W, 4) with the alpha when `rgba` is allowed. Integer
+/// arrays are refused: 8-bit images are display-referred (sRGB-encoded, 0..255), and comparing
+/// or writing them as linear radiance would be silently wrong.
+Image arrayImage(const py::array& any, const char* what, bool rgba = false) {
+  const char kind = any.dtype().kind();
+  const std::string shapes = rgba ? "(H, W, 3) or (H, W, 4)" : "(H, W, 3)";
+  if (kind != 'f')
+    throw ConfigError(std::string(what) + ": expected a float array (linear radiance) of shape " +
+                      shapes + ", got dtype " + py::str(any.dtype()).cast<std::string>() +
+                      "; convert an 8-bit image to linear floats first");
   const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(any);
-  if (!a || a.ndim() != 3 || a.shape(2) != 3)
-    throw ConfigError(std::string(what) + ": expected a float array of shape (H, W, 3)");
+  std::string shape;
+  for (py::ssize_t d = 0; d < any.ndim(); ++d)
+    shape += (d ? ", " : "") + std::to_string(any.shape(d));
+  if (!a || a.ndim() != 3 || (a.shape(2) != 3 && !(rgba && a.shape(2) == 4)) || a.shape(0) < 1 ||
+      a.shape(1) < 1)
+    throw ConfigError(std::string(what) + ": expected a float array of shape " + shapes +
+                      ", got shape (" + shape + ")");
   Image img(int(a.shape(1)), int(a.shape(0)));
-  std::memcpy(img.pixels().data(), a.data(), img.pixels().size() * sizeof(Vec3));
+  const float* in = a.data();
+  const size_t channels = size_t(a.shape(2)), n = img.pixels().size();
+  if (channels == 4) img.alpha().resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    img.pixels()[i] = Vec3(in[channels * i], in[channels * i + 1], in[channels * i + 2]);
+    if (channels == 4) img.alpha()[i] = in[channels * i + 3];
+  }
   return img;
+}
+
+/// The extension `path` must have for write_exr / write_png (case-insensitive), else
+/// ConfigError: a file named x.png holding EXR bytes misleads every viewer.
+void requireExtension(const std::string& path, const std::string& ext, const char* what) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (char& c : e) c = char(std::tolower((unsigned char)c));
+  if (e != ext) throw ConfigError(std::string(what) + ": '" + path + "' does not end in " + ext);
 }
 
 py::array_t<float> densityArray(const DensityGrid& g) {
@@ -221,40 +283,63 @@ PYBIND11_MODULE(_core, m) {
       "Renders the scene: (image float32 (H,W,3), stats dict), plus a dict of the method's "
       "density and radiance volumes with volumes=True");
 
-  py::class_<Renderer>(m, "Renderer",
-                       "Re-renders one scene as lights, camera or time change, keeping the "
-                       "density volume, fitted model and GL context (docs/python.md)")
+  py::class_<PyRenderer>(m, "Renderer",
+                         "Re-renders one scene as lights, camera or time change, keeping the "
+                         "density volume, fitted model and GL context (docs/python.md). Safe to "
+                         "share between threads: calls take a lock, so set() or time= during "
+                         "render() waits for that render to finish")
       .def(py::init([](const PyScene& s, const std::string& method, const std::string& backend) {
              py::gil_scoped_release unlocked;
-             return Renderer(s.doc, s.baseDir, method, backend);
+             return std::make_unique<PyRenderer>(Renderer(s.doc, s.baseDir, method, backend));
            }),
            py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto")
       .def(
           "set",
-          [](Renderer& r, const std::string& key, const py::object& value) {
-            const std::string a =
-                key + "=" +
-                py::str(py::module_::import("json").attr("dumps")(value)).cast<std::string>();
+          [](PyRenderer& r, const std::string& key, const py::object& value) {
+            const std::string a = key + "=" + dumps(value, "Renderer.set('" + key + "')");
             py::gil_scoped_release unlocked;
-            r.set(a);
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.set(a);
           },
-          py::arg("key"), py::arg("value"), "Sets a scene key by dotted path (lights.0.position)")
-      .def_property(
-          "time", &Renderer::time,
-          [](Renderer& r, double t) {
+          py::arg("key"), py::arg("value"),
+          "Sets a scene key by dotted path (lights.0.position) to a JSON-able value (numbers, "
+          "lists, dicts, numpy scalars and arrays)")
+      .def(
+          "set",
+          [](PyRenderer& r, const std::string& assignment) {
+            if (assignment.find('=') == std::string::npos)
+              throw ConfigError("Renderer.set('" + assignment +
+                                "'): expected set(key, value) or set('key=VALUE')");
             py::gil_scoped_release unlocked;
-            r.setTime(t);
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.set(assignment);
+          },
+          py::arg("assignment"), "Sets a scene key from 'key=VALUE', as --set and C++ set()")
+      .def_property(
+          "time",
+          [](PyRenderer& r) {
+            py::gil_scoped_release unlocked;
+            const std::lock_guard<std::mutex> hold(r.lock);
+            return r.renderer.time();
+          },
+          [](PyRenderer& r, double t) {
+            py::gil_scoped_release unlocked;
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.setTime(t);
           },
           "Animation time: light paths and a medium that moves with time")
       .def(
           "render",
-          [](Renderer& r, bool volumes, bool rgba) {
+          [](PyRenderer& r, bool volumes, bool rgba) {
             RenderResult res;
+            Box bounds;
             {
               py::gil_scoped_release unlocked;
-              res = r.render(nullptr);
+              const std::lock_guard<std::mutex> hold(r.lock);
+              res = r.renderer.render(nullptr);
+              bounds = r.renderer.scene().medium.bounds;
             }
-            return resultTuple(res, volumes, r.scene().medium.bounds, rgba);
+            return resultTuple(res, volumes, bounds, rgba);
           },
           py::arg("volumes") = false, py::arg("rgba") = false,
           "(image, stats[, volumes]) as scatterlab.render");
@@ -296,14 +381,43 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "write_exr",
       [](const py::array& img, const std::string& path) {
-        writeExr(arrayImage(img, "write_exr: image"), path);
+        requireExtension(path, ".exr", "write_exr");
+        writeExr(arrayImage(img, "write_exr: image", true), path);
       },
-      py::arg("image"), py::arg("path"), "Writes a float32 (H, W, 3) array as OpenEXR");
+      py::arg("image"), py::arg("path"),
+      "Writes a float (H, W, 3) array, or (H, W, 4) with A, as OpenEXR (path: *.exr)");
   m.def(
       "write_png",
-      [](const py::array& img, const std::string& path, float exposure) {
-        writePng(arrayImage(img, "write_png: image"), path, exposure);
+      [](const py::array& img, const std::string& path, float exposure,
+         const std::string& tonemap) {
+        requireExtension(path, ".png", "write_png");
+        const ToneCurve curve = parseToneCurve(tonemap, "tonemap");
+        Image rgb = arrayImage(img, "write_png: image", true);
+        rgb.alpha().clear();  // the PNG is the RGB (premultiplied: the fog over black)
+        writePng(rgb, path, exposure, curve);
       },
-      py::arg("image"), py::arg("path"), py::arg("exposure") = 0.0f,
-      "Writes an sRGB PNG (exposure in stops, clamp, sRGB curve)");
+      py::arg("image"), py::arg("path"), py::arg("exposure") = 0.0f, py::arg("tonemap") = "aces",
+      "Writes an sRGB PNG of a float (H, W, 3) or (H, W, 4) array (path: *.png): 2^exposure, "
+      "then the tone curve ('aces' as the tool's default, 'filmic' or 'linear': clamp), then "
+      "the sRGB encoding");
+
+  m.def(
+      "list_methods",
+      []() {
+        py::dict out;
+        for (const std::string& name : methods().names()) {
+          const MethodEntry& e = methods().get(name, "method");
+          py::list backends;
+          if (e.runsOn(Backend::Cpu)) backends.append("cpu");
+          if (e.runsOn(Backend::Gpu)) backends.append("gpu");
+          py::dict d;
+          d["summary"] = e.summary;
+          d["backends"] = backends;
+          d["keys"] = e.keys;
+          out[py::str(name)] = d;
+        }
+        return out;
+      },
+      "The methods of this build: {name: {'summary', 'backends' (of 'cpu', 'gpu'), 'keys' "
+      "(the render keys it reads)}}, sorted by name");
 }

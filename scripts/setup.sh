@@ -31,5 +31,9 @@ JOBS=${SCATTERLAB_JOBS:-2}
 # python3 first on PATH (pyenv, conda, a venv) has none of them.
 PYTHON_ARGS=()
 [ -x /usr/bin/python3 ] && PYTHON_ARGS=(-DPython3_EXECUTABLE=/usr/bin/python3)
-cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release "${PYTHON_ARGS[@]}" >/dev/null
+# ccache where installed (as scripts/test-sanitize.sh): a rebuild after a branch switch or in a
+# second checkout takes the unchanged objects from the cache.
+LAUNCHER=()
+command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release "${PYTHON_ARGS[@]}" "${LAUNCHER[@]}" >/dev/null
 cmake --build "$BUILD_DIR" -j "$JOBS"

@@ -1,5 +1,7 @@
 #include "shading/post_process.h"
 
+#include <cmath>
+
 namespace scatterlab {
 
 namespace {
@@ -45,9 +47,9 @@ const std::vector<KeyDoc>& radialBlurKeys() {
        "8"},
       {"density", "number", "1", "(0, 1]",
        "fraction of the pixel→light segment the n samples span (Mitchell's density)", "0.5"},
-      {"weight", "number", "1", ">= 0", "scale of every sample", "2"},
+      {"weight", "number", "1", "[0, 1e6]", "scale of every sample", "2"},
       {"decay", "number", "1", "[0, 1]", "sample i is scaled by decay^i", "0.5"},
-      {"exposure", "number", "1", ">= 0", "scale of the sum", "2"},
+      {"exposure", "number", "1", "[0, 1e6]", "scale of the sum", "2"},
       {"downsample", "int", "1", "1, 2, 4", "the pre-pass has 1/downsample of the pixels per side",
        "2"},
       {"guard_band", "number", "0.5", "[0, 10]",
@@ -60,9 +62,9 @@ void parseRadialBlur(Params& p, const Scene&, PipelineSettings& settings) {
   RadialBlurSettings s;
   s.samples = int(p.integer("samples", s.samples, Interval::closed(1, 4096)));
   s.density = p.real("density", s.density, Interval{0.0, 1.0, true, false});
-  s.weight = p.real("weight", s.weight, Interval::atLeast(0));
+  s.weight = p.real("weight", s.weight, Interval::closed(0, 1e6));
   s.decay = p.real("decay", s.decay, Interval::closed(0, 1));
-  s.exposure = p.real("exposure", s.exposure, Interval::atLeast(0));
+  s.exposure = p.real("exposure", s.exposure, Interval::closed(0, 1e6));
   s.downsample = int(p.integer("downsample", s.downsample, Interval::closed(1, 4)));
   if (s.downsample == 3) p.fail("downsample", "is 3; allowed: 1, 2, 4");
   s.guardBand = p.real("guard_band", s.guardBand, Interval::closed(0, 10));
@@ -88,8 +90,45 @@ void describeRadialBlur(RenderStats& st, const RadialBlurSettings& s, const Json
   st.extra["light_screen_positions"] = positions;
 }
 
+namespace {
+
+/// Its own steps (rays x steps / interleave^2 terms, each tracing the lights when
+/// light_transmittance is traced) and, with scene objects, the CPU's shadow maps: up to 6
+/// layers (a cube) per point or wide spot light, 1 per directional light.
+StageWork lightSpaceMarchWork(const Scene& scene, const PipelineSettings& settings) {
+  const auto& l = settings.integratorKeys.get<LightSpaceMarchSettings>();
+  const Camera& c = scene.camera;
+  const double rays = double(c.width) * c.height * c.spp;
+  const double terms =
+      rays * std::ceil(double(l.steps) / (double(l.interleave) * double(l.interleave)));
+  StageWork w{.viewTerms = terms,
+              .termsKey = "steps",
+              .termsHow = std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels x " +
+                          std::to_string(c.spp) + " spp x " + std::to_string(l.steps) +
+                          " steps / interleave " + std::to_string(l.interleave) + "^2"};
+  if (l.light == LightTransmittance::Traced) {
+    w.lightPoints = terms;
+    w.lightWhat =
+        "at every one of " + formatCount(terms) + " view-ray terms (light_transmittance traced)";
+  }
+  if (scene.objects) {
+    double layers = 0;
+    for (const Light& light : scene.lights)
+      layers += light.type == Light::Type::Directional ? 1 : 6;
+    const double r = settings.shadowMap.resolution;
+    w.cpuArrays.push_back(
+        {{"shadow_map.resolution"},
+         "the shadow maps (" + formatCount(layers) + " layers of " + formatCount(r) + "^2 texels)",
+         layers * r * r * sizeof(float)});
+  }
+  return w;
+}
+
+}  // namespace
+
 const StageDecl& lightSpaceMarchStage() {
-  static const StageDecl d{.keys = {{lightSpaceMarchKeys, parseLightSpaceMarch}}};
+  static const StageDecl d{.keys = {{lightSpaceMarchKeys, parseLightSpaceMarch}},
+                           .work = lightSpaceMarchWork};
   return d;
 }
 

@@ -1,6 +1,7 @@
 #include "shading/screen_march.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -193,15 +194,69 @@ FroxelSlicing froxelSlicing(const Scene& scene, const FroxelSettings& s) {
   return f;
 }
 
+namespace {
+
+std::string imageSize(const Camera& c) {
+  return std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels";
+}
+
+// The competitors step a fixed count per ray and trace the lights at each step (issue 26:
+// renders of hours or days were accepted): their work and host arrays for the render plan.
+
+StageWork jitteredMarchWork(const Scene& scene, const PipelineSettings& settings) {
+  const auto& s = settings.integratorKeys.get<JitteredMarchSettings>();
+  const Camera& c = scene.camera;
+  const int ds = s.downsample;
+  const double low = std::ceil(double(c.width) / ds) * std::ceil(double(c.height) / ds);
+  const double terms = low * s.steps;
+  return {.viewTerms = terms,
+          .termsKey = "steps",
+          .termsHow = formatCount(low) + " rays (1/" + std::to_string(ds) + " of " + imageSize(c) +
+                      ") x " + std::to_string(s.steps) + " steps",
+          .lightPoints = terms,
+          .lightWhat = "at every one of " + formatCount(terms) + " view steps"};
+}
+
+StageWork froxelWork(const Scene& scene, const PipelineSettings& settings) {
+  const auto& s = settings.integratorKeys.get<FroxelSettings>();
+  const IVec3 g = s.grid;
+  const double froxels = double(g.x) * g.y * g.z;
+  StageWork w;
+  // The froxel volume (in-scattered RGB + transmittance) and the per-light transmittance maps.
+  w.cpuArrays.push_back({{"froxel_grid"},
+                         "the froxel volume of " + std::to_string(g.x) + "x" + std::to_string(g.y) +
+                             "x" + std::to_string(g.z) + " froxels",
+                         froxels * (sizeof(Vec3) + sizeof(float))});
+  if (s.transmittanceMap) {
+    const double n = std::pow(double(s.mapResolution), 3.0);
+    w.lightPoints = n;
+    w.lightWhat = "at every one of " + formatCount(n) + " voxels of the transmittance maps";
+    w.cpuArrays.push_back({{"transmittance_map_resolution"},
+                           std::to_string(scene.lights.size()) + " transmittance maps of " +
+                               std::to_string(s.mapResolution) + "^3",
+                           double(scene.lights.size()) * n * sizeof(float)});
+  } else {
+    w.lightPoints = froxels;
+    w.lightWhat = "at every one of " + formatCount(froxels) + " froxels";
+  }
+  return w;
+}
+
+}  // namespace
+
 const StageDecl& jitteredMarchStage() {
-  static const StageDecl d{
-      .keys = {{jitteredMarchKeys, parseJitteredMarch}}, .viewMarch = true, .onePerPixel = true};
+  static const StageDecl d{.keys = {{jitteredMarchKeys, parseJitteredMarch}},
+                           .viewMarch = true,
+                           .onePerPixel = true,
+                           .work = jitteredMarchWork};
   return d;
 }
 
 const StageDecl& froxelStage() {
-  static const StageDecl d{
-      .keys = {{froxelKeys, parseFroxel}}, .viewMarch = true, .onePerPixel = true};
+  static const StageDecl d{.keys = {{froxelKeys, parseFroxel}},
+                           .viewMarch = true,
+                           .onePerPixel = true,
+                           .work = froxelWork};
   return d;
 }
 

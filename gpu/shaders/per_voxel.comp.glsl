@@ -9,6 +9,7 @@ layout(std430, binding = BINDING_COUNTERS) buffer Counters { uint traced; uint s
 uniform ivec3 uRadDims;
 uniform vec3 uRadMin;
 uniform vec3 uRadCell;
+uniform bool uSameGrid;  // the density's grid: alpha carries the voxel's density
 
 void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
@@ -26,11 +27,12 @@ void main() {
           occupied = true;
           break;
         }
+  float own = uSameGrid ? texelFetch(uDensity, v, 0).r : 0.0;
   if (!occupied) {
-    imageStore(uRadiance, v, vec4(0.0));
+    imageStore(uRadiance, v, vec4(0.0, 0.0, 0.0, own));
     atomicAdd(skipped, 1u);
     return;
   }
-  imageStore(uRadiance, v, vec4(sourceTowardsEye(c), 0.0));
+  imageStore(uRadiance, v, vec4(sourceTowardsEye(c), own));
   atomicAdd(traced, 1u);
 }

@@ -14,16 +14,18 @@ void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(v, uGridDims))) return;
   vec4 s = imageLoad(uSums, v);
+  // On the density's grid, alpha carries the voxel's density (gpu::Volume::densityInAlpha).
+  float own = uSameGrid ? texelFetch(uDensity, v, 0).r : 0.0;
   if (s.a > 0.0) {
     // clampNonNegative of the CPU twin: Taylor extrapolation can go below zero at a shaft edge.
 #ifdef SL_LOG_SPACE
-    imageStore(uRadiance, v, vec4(exp(s.rgb / s.a), 0.0));  // the samples held ln V
+    imageStore(uRadiance, v, vec4(exp(s.rgb / s.a), own));  // the samples held ln V
 #else
-    imageStore(uRadiance, v, vec4(max(s.rgb / s.a, vec3(0.0)), 0.0));
+    imageStore(uRadiance, v, vec4(max(s.rgb / s.a, vec3(0.0)), own));
 #endif
   } else {
-    imageStore(uRadiance, v, vec4(0.0));
-    float D = uSameGrid ? texelFetch(uDensity, v, 0).r
+    imageStore(uRadiance, v, vec4(0.0, 0.0, 0.0, own));
+    float D = uSameGrid ? own
                         : textureLod(uDensity, vec3(v) * uDensityLookupScale + uDensityLookupOffset, 0.0).r;
     if (D > 0.0) atomicAdd(uncovered, 1u);
   }

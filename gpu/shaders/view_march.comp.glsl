@@ -18,27 +18,28 @@ uniform float uMinT;
 uniform int uStrata;  // k: k × k rays per pixel
 uniform vec3 uBackground;
 
-// Grid3::sampleIndex of the RGB radiance volume: the eight neighbours interpolated in float, in
-// the CPU's order (densityAtIndex's twin).
-vec3 radianceAtIndex(vec3 u) {
+// Grid3::sampleIndex of the RGBA radiance volume at index u: the eight neighbours interpolated
+// in float, in the CPU's order (densityAtIndex's twin, per channel). Its rgb is S; with SL_FUSED
+// (gpu::Volume::densityInAlpha, the density's grid) its alpha is D: both in one lookup.
+vec4 radianceAtIndex(vec3 u) {
   u = clamp(u, vec3(0.0), vec3(uRadDims - 1));
   ivec3 i0 = min(ivec3(u), uRadDims - 1);
   ivec3 i1 = min(i0 + 1, uRadDims - 1);
   vec3 f = u - vec3(i0);
-  vec3 c000 = texelFetch(uRadiance, i0, 0).rgb;
-  vec3 c100 = texelFetch(uRadiance, ivec3(i1.x, i0.y, i0.z), 0).rgb;
-  vec3 c010 = texelFetch(uRadiance, ivec3(i0.x, i1.y, i0.z), 0).rgb;
-  vec3 c110 = texelFetch(uRadiance, ivec3(i1.x, i1.y, i0.z), 0).rgb;
-  vec3 c001 = texelFetch(uRadiance, ivec3(i0.x, i0.y, i1.z), 0).rgb;
-  vec3 c101 = texelFetch(uRadiance, ivec3(i1.x, i0.y, i1.z), 0).rgb;
-  vec3 c011 = texelFetch(uRadiance, ivec3(i0.x, i1.y, i1.z), 0).rgb;
-  vec3 c111 = texelFetch(uRadiance, i1, 0).rgb;
-  vec3 c00 = c000 + (c100 - c000) * f.x;
-  vec3 c10 = c010 + (c110 - c010) * f.x;
-  vec3 c01 = c001 + (c101 - c001) * f.x;
-  vec3 c11 = c011 + (c111 - c011) * f.x;
-  vec3 c0 = c00 + (c10 - c00) * f.y;
-  vec3 c1 = c01 + (c11 - c01) * f.y;
+  vec4 c000 = texelFetch(uRadiance, i0, 0);
+  vec4 c100 = texelFetch(uRadiance, ivec3(i1.x, i0.y, i0.z), 0);
+  vec4 c010 = texelFetch(uRadiance, ivec3(i0.x, i1.y, i0.z), 0);
+  vec4 c110 = texelFetch(uRadiance, ivec3(i1.x, i1.y, i0.z), 0);
+  vec4 c001 = texelFetch(uRadiance, ivec3(i0.x, i0.y, i1.z), 0);
+  vec4 c101 = texelFetch(uRadiance, ivec3(i1.x, i0.y, i1.z), 0);
+  vec4 c011 = texelFetch(uRadiance, ivec3(i0.x, i1.y, i1.z), 0);
+  vec4 c111 = texelFetch(uRadiance, i1, 0);
+  vec4 c00 = c000 + (c100 - c000) * f.x;
+  vec4 c10 = c010 + (c110 - c010) * f.x;
+  vec4 c01 = c001 + (c101 - c001) * f.x;
+  vec4 c11 = c011 + (c111 - c011) * f.x;
+  vec4 c0 = c00 + (c10 - c00) * f.y;
+  vec4 c1 = c01 + (c11 - c01) * f.y;
   return c0 + (c1 - c0) * f.z;
 }
 
@@ -57,10 +58,18 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
       vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
       vec3 du = dir * dt * uDensityScale;
       for (int i = 0; i < n && T > uMinT; ++i) {
+#ifdef SL_FUSED
+        vec4 DS = radianceAtIndex(u0 + float(i) * du);
+        float D = DS.a;
+        if (!(D > 0.0)) continue;
+        vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+        vec3 S = DS.rgb;
+#else
         float D = densityAtIndex(u0 + float(i) * du);
         if (!(D > 0.0)) continue;
         vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
-        vec3 S = radianceAtIndex(x * uRadScale + uRadOffset);
+        vec3 S = radianceAtIndex(x * uRadScale + uRadOffset).rgb;
+#endif
 #ifdef SL_FACTOR_LIGHTS
         S *= lightFactor(x, -dir);  // the volume holds V = S / A
 #endif

@@ -3,6 +3,9 @@
 // of the plate; the EXR carries A and the render's provenance.
 #include <gtest/gtest.h>
 
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -124,6 +127,14 @@ TEST(Compositing, ExrCarriesAlphaAndAttributes) {
   EXPECT_NE(bytes.find("scatterlab:method"), std::string::npos);
   EXPECT_NE(bytes.find("worldToCamera"), std::string::npos);
   EXPECT_NE(bytes.find("m44f"), std::string::npos);
+  // The colour space (issue 25): linear Rec. 709 primaries, D65 white, as OpenEXR reads it.
+  Imf::InputFile in(path.c_str());
+  ASSERT_TRUE(Imf::hasChromaticities(in.header()));
+  const Imf::Chromaticities c = Imf::chromaticities(in.header());
+  EXPECT_EQ(c.red, Imath::V2f(0.64f, 0.33f));
+  EXPECT_EQ(c.green, Imath::V2f(0.30f, 0.60f));
+  EXPECT_EQ(c.blue, Imath::V2f(0.15f, 0.06f));
+  EXPECT_EQ(c.white, Imath::V2f(0.3127f, 0.3290f));
   std::filesystem::remove(path);
 }
 

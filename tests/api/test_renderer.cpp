@@ -146,9 +146,10 @@ void radianceReuse(const char* backend) {
     const RenderResult moved = r.render();
     const bool refines = std::string(method) == "adaptive";
     EXPECT_EQ(moved.stats.extra.at("radiance_reused").get<bool>(), !refines);
-    if (!refines)
+    if (!refines) {
       for (const auto& [stage, ms] : moved.stats.timingsMs)
         EXPECT_TRUE(stage == "march" || stage == "total") << stage;
+    }
     Json doc = blobDoc();
     applyOverride(doc, "camera.position=[0.6,0.55,-1.4]");
     EXPECT_EQ(maxAbsDiff(moved.image, freshRender(doc, method, backend)), 0.0);

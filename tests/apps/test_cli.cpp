@@ -276,7 +276,7 @@ TEST_F(Cli, OutOfRangeValues) {
   expectRenderFails(scene, {"medium.resolution", "[1, 4096]"}, "--set medium.resolution=0");
   expectRenderFails(scene, {"medium.resolution", "memory bound"},
                     "--set medium.resolution=[4096,4096,4096]");
-  expectRenderFails(scene, {"--method", "'exact'"}, "--method nonsense");
+  expectRenderFails(scene, {"--method", "'exact'"}, "--method nonsense");  // exit 2: below
 }
 
 TEST_F(Cli, OutputIntoMissingDirectoryOrOntoDirectory) {
@@ -309,7 +309,12 @@ TEST_F(Cli, ExperimentShardAndMergeBadInputs) {
   }
   RunResult r = run("experiment -o " + out("o"));
   EXPECT_EQ(r.code, 2) << r.output;
-  EXPECT_NE(r.output.find("give CONFIG and -o DIR"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.rfind("scatterlab: error: experiment: give CONFIG and -o DIR", 0), 0u)
+      << r.output;
+  r = run("experiment " + cfg);  // no -o: the same prefix as every other error
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_EQ(r.output.rfind("scatterlab: error: experiment: give CONFIG and -o DIR", 0), 0u)
+      << r.output;
   r = run("experiment merge " + out("s1") + " -o " + out("m") + " --shard 1/2");
   EXPECT_EQ(r.code, 2) << r.output;
   // Bad input: exit 1, one message naming it, no merged output.
@@ -359,11 +364,12 @@ TEST_F(Cli, UsageErrorsExit2WithThePrefix) {
 
 TEST_F(Cli, DuplicateOutputPathsAreAUsageError) {
   const std::string scene = writeScene(tinyScene());
+  // (-o o.exr --png ./o.exr is refused before this check: --png must end in .png.)
   RunResult r =
-      run("render " + scene + " -o " + out("o.exr") + " --png " + dir_.string() + "/./o.exr");
+      run("render " + scene + " -o " + out("o.png") + " --png " + dir_.string() + "/./o.png");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--output and --png name the same file"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(out("o.exr")));
+  EXPECT_FALSE(fs::exists(out("o.png")));
   r = run("render " + scene + " -o " + out("o.exr") + " --stats " + scene);
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("scene and --stats"), std::string::npos) << r.output;
@@ -482,4 +488,86 @@ TEST_F(Cli, InfoCountsNonFinitePixelsInsteadOfPrintingNanMeans) {
   EXPECT_NE(r.output.find("mean [1 2 4]"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("1 NaN and 1 inf"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("nan ]"), std::string::npos) << r.output;
+}
+
+// Issue 25: the tool's own arguments are blamed as such (exit 2, the flag named, the likely
+// spelling suggested), before the scene is read and with nothing written.
+TEST_F(Cli, BadArgumentsAreUsageErrorsNamingTheFlag) {
+  const std::string scene = writeScene(tinyScene());
+  const auto usage = [&](const std::string& extra, std::initializer_list<std::string> fragments) {
+    const RunResult r = run("render " + scene + " -o " + out("o.exr") + " " + extra);
+    EXPECT_EQ(r.code, 2) << extra << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("scatterlab: error: ", 0), 0u) << r.output;
+    for (const auto& f : fragments)
+      EXPECT_NE(r.output.find(f), std::string::npos) << "'" << r.output << "' lacks '" << f << "'";
+    EXPECT_FALSE(fs::exists(out("o.exr"))) << extra;
+    return r.output;
+  };
+  std::string o = usage("--method per-voxle",
+                        {"--method: unknown method 'per-voxle' (did you mean 'per-voxel'?)",
+                         "allowed: 'adaptive', 'exact', "});
+  EXPECT_EQ(o.find(scene), std::string::npos) << "blames the scene file: " << o;
+  usage("--method nonsense", {"--method: unknown method 'nonsense'; allowed: "});
+  usage("--set camera.width", {"--set 'camera.width': expected KEY=VALUE", "camera.width=640"});
+  // --fps: a clear range, not CLI11's upper bound DBL_MAX in 309 digits.
+  for (const std::string fps : {"-3", "0", "nan", "inf", "x"}) {
+    o = usage("--frames 0:1 --fps " + fps, {"--fps", "'" + fps + "' is not a frame rate in (0, 1e9]"});
+    EXPECT_LT(o.size(), 200u) << o;
+  }
+  usage("--png " + out("o.exr2"), {"--png", "does not end in .png"});
+  usage("--png " + out("o.exr"), {"does not end in .png"});
+  usage("--metod exact", {"(did you mean '--method'?)"});
+  usage("--backend GPU", {"--backend"});
+  // Outside the render command: a misspelt command.
+  const RunResult r = run("rendr " + scene);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("'rendr' is not a command (did you mean 'render'?)"), std::string::npos)
+      << r.output;
+}
+
+// Issue 25: `scatterlab render smoke.vdb` says what the file is and what to do, not where the
+// JSON parser stopped.
+TEST_F(Cli, RenderingAVolumeFileSaysItIsNotAScene) {
+  const std::string vdb = out("smoke.vdb");
+  std::ofstream(vdb, std::ios::binary) << std::string("\x20\x42\x44\x56\0\0\0\0\xdc\0\0\0", 12);
+  const RunResult r = run("render " + vdb + " -o " + out("o.exr"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("scatterlab: error: '" + vdb +
+                          "' is an OpenVDB volume, not a scene (a JSON file); render it from a "
+                          "scene whose medium.density is {\"type\": \"vdb\", \"file\": "
+                          "\"smoke.vdb\"}"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("malformed JSON"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out("o.exr")));
+}
+
+// Issue 25: the methods are discoverable without provoking an error.
+TEST_F(Cli, InfoListsTheMethods) {
+  RunResult r = run("info --methods");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const std::string m : {"adaptive ", "exact ", "gradient ", "per-voxel "})
+    EXPECT_NE(("\n" + r.output).find("\n" + m), std::string::npos) << m << ": " << r.output;
+  EXPECT_EQ(r.output.rfind("adaptive ", 0), 0u) << r.output;  // sorted by name
+  r = run("info --methods --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Json j = Json::parse(r.output);
+  EXPECT_EQ(j["exact"]["backends"][0], "cpu");
+  EXPECT_FALSE(j["per-voxel"]["summary"].get<std::string>().empty());
+  scatterlab::initialize();
+  EXPECT_EQ(j.size(), scatterlab::methods().names().size());
+}
+
+// Issue 25: the shipped fig3 config runs without a terminal warning (its scene's render.sampler
+// is ignored by the references by design; log.txt notes it).
+TEST_F(Cli, ShippedFig3ConfigPrintsNoWarning) {
+  const std::string cfg = std::string(SCATTERLAB_SOURCE_DIR) + "/data/experiments/fig3.json";
+  const RunResult r = run("experiment " + cfg + " -o " + out("fig3") +
+                          " --set camera.width=24 --set camera.height=18 --set "
+                          "medium.resolution=16 --no-plots -q");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+  std::ifstream log(out("fig3/log.txt"));
+  const std::string text((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(text.find("reference exact ignores render.sampler"), std::string::npos) << text;
 }

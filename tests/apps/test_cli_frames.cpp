@@ -125,10 +125,12 @@ TEST_F(CliFrames, InfoReadsPngAndPrintsJson) {
   ASSERT_EQ(run("render " + scene + " -o " + out("i.exr") + " --png " + out("i.png") + " -q").code,
             0);
   const scatterlab::Image exr = scatterlab::readExr(out("i.exr"));
-  // The PNG's mean red as writePng quantises it: floor(toneMapSrgb(v)·255 + 0.5) / 255.
+  // The PNG's mean red as writePng quantises it with the default curve, ACES (issue 25):
+  // floor(sRGB(aces(v))·255 + 0.5) / 255.
   double pngRed = 0.0, exrRed = 0.0;
   for (const scatterlab::Vec3& p : exr.pixels()) {
-    pngRed += std::floor(scatterlab::toneMapSrgb(p.x) * 255.0f + 0.5f) / 255.0;
+    const float aces = scatterlab::toneCurve(p.x, scatterlab::ToneCurve::Aces);
+    pngRed += std::floor(scatterlab::toneMapSrgb(aces) * 255.0f + 0.5f) / 255.0;
     exrRed += p.x;
   }
   pngRed /= double(exr.pixels().size());

@@ -1,7 +1,7 @@
 // A consumer of the installed package: builds a scene in code, renders it with the Renderer
 // while a light moves, and checks the result against the exact reference and against a fresh
 // render. Exit status 0 on success.
-#include <scatterlab/api/scatterlab.h>
+#include <scatterlab/scatterlab.h>
 
 #include <cstdio>
 

@@ -162,7 +162,7 @@ TEST(Scene, BadInputsNameKeyValueAndAllowed) {
   expectConfigError(d, {"lights[0].position", "3 numbers"});
   d = validDoc();
   d["lights"][0]["intensity"] = -2;
-  expectConfigError(d, {"lights[0].intensity", ">= 0"});
+  expectConfigError(d, {"lights[0].intensity", "-2", "allowed: [0, 1e+20]"});
   d = validDoc();
   d["medium"]["phase"] = {{"type", "hg"}, {"g", 1.0}};
   expectConfigError(d, {"medium.phase.g", "(-1, 1)"});

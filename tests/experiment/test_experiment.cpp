@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -550,4 +551,81 @@ TEST_F(ExperimentTest, StaleTemporariesAreRemovedOnResume) {
   EXPECT_TRUE(fs::exists(live));
 }
 
+// Issue 26: the run hash covered the scene JSON but not the files it names; after a mesh edit
+// an experiment "resumed" the old result (60 % off) and reused the cached reference.
+TEST_F(ExperimentTest, EditingAFileTheSceneNamesRedoesTheRunsAndTheReference) {
+  Json scene = Json::parse(std::ifstream(dir / "scene.json"));
+  scene["objects"] = Json::array({{{"type", "mesh"}, {"file", "tri.obj"}}});
+  writeJson(dir / "scene.json", scene);
+  const auto mesh = [&](double y) {
+    std::ofstream(dir / "tri.obj") << "mtllib tri.mtl\nv 0 " << y << " 0\nv 1 " << y << " 0\nv 0.5 "
+                                   << y << " 1\nusemtl m\nf 1 2 3\n";
+  };
+  mesh(0.3);
+  std::ofstream(dir / "tri.mtl") << "newmtl m\nKd 0.8 0.8 0.8\n";
+  Json c = tinyConfig();
+  c.erase("sweeps");
+  c["methods"] = {"per-voxel"};
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const auto runIt = [&] {
+    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  };
+  const ExperimentResult first = runIt();
+  ASSERT_EQ(first.runs.size(), 1u);
+  ASSERT_EQ(first.runs[0].status, "ok") << first.runs[0].error;
+  EXPECT_EQ(runIt().resumed, 1);  // nothing changed: resumed
+  mesh(0.7);                      // the mesh moves
+  const ExperimentResult moved = runIt();
+  EXPECT_EQ(moved.resumed, 0);
+  ASSERT_EQ(moved.runs[0].status, "ok") << moved.runs[0].error;
+  EXPECT_NE(moved.runs[0].hash, first.runs[0].hash);
+  std::ofstream(dir / "tri.mtl") << "newmtl m\nKd 0.1 0.1 0.1\n";  // and its material changes
+  EXPECT_EQ(runIt().resumed, 0);
+  // Two reference files: the first mesh's and the moved one's (the material change a third).
+  int references = 0;
+  for (const auto& e : fs::directory_iterator(dir / "out" / "references"))
+    references += e.path().extension() == ".exr";
+  EXPECT_EQ(references, 3);
+}
+
+}  // namespace scatterlab
+
+namespace scatterlab {
+namespace {
+
+std::string commandOutput(const std::string& cmd) {
+  std::FILE* p = ::popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[256];
+  while (p && std::fgets(buf, sizeof buf, p)) out += buf;
+  if (p) ::pclose(p);
+  while (!out.empty() && out.back() == '\n') out.pop_back();
+  return out;
+}
+
+// Issue 25: the commit in every record is the one the binary was built from, recorded at build
+// time, wherever the tool runs (it used to run git in the working directory: "unknown" outside
+// the checkout).
+TEST(Experiment, CommitIsRecordedAtBuildTimeWhereverItRuns) {
+  const std::string head =
+      commandOutput("git -C '" SCATTERLAB_SOURCE_DIR "' rev-parse --short=12 HEAD 2>/dev/null");
+  if (head.empty()) GTEST_SKIP() << "the source tree is not a git checkout";
+  const fs::path before = fs::current_path();
+  fs::current_path(fs::temp_directory_path());  // outside any checkout
+  const std::string commit = machineFacts()["commit"].get<std::string>();
+  fs::current_path(before);
+  // A commit of this repository, HEAD or (when commits were made since the build) one of its
+  // ancestors; "+dirty" when the build had uncommitted changes.
+  ASSERT_GE(commit.size(), 12u) << commit;
+  EXPECT_TRUE(commit.size() == 12 || commit.substr(12) == "+dirty") << commit;
+  EXPECT_EQ(commandOutput("git -C '" SCATTERLAB_SOURCE_DIR "' merge-base --is-ancestor " +
+                          commit.substr(0, 12) + " HEAD && echo yes"),
+            "yes")
+      << commit << " vs HEAD " << head;
+}
+
+}  // namespace
 }  // namespace scatterlab

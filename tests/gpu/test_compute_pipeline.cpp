@@ -75,21 +75,57 @@ double viewMarchVsCpu(const MarchCase& c) {
   return err;
 }
 
-// Tolerances: measured on llvmpipe (Mesa 22.3.6) 2026-11-26, and to be measured on an NVIDIA
-// H200 (hardware exp/fma): see each test.
+// Tolerances: 1.5x the larger of what llvmpipe (Mesa 22.3.6, 2026-11-26) measured and what an
+// NVIDIA H200 measured for the same arithmetic (issue 23; the compute pipeline itself has not
+// run on hardware yet). The view march on uploaded volumes: llvmpipe 1.93e-6 / 1.99e-6 /
+// 1.02e-6; on the H200 a per-pixel march with the same per-step exp (jittered-march) differed
+// from the CPU by up to 3.3e-6. Limit 5e-6.
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightInsideTheMedium) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({}), 1e-5);
+  EXPECT_LT(viewMarchVsCpu({}), 5e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithFactoredLightsStrataAndEarlyExit) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 1e-5);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 5e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightOutside) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = false}), 1e-5);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = false}), 5e-6);
+}
+
+// A radiance volume built on the density's grid carries the density in alpha, and the march then
+// reads both in one lookup (SL_FUSED): the same image as two lookups, to rounding (the radiance
+// is looked up at the density's index instead of one computed from the world point).
+TEST(GpuViewMarch, OneFusedLookupPerStepEqualsTwoLookups) {
+  SCATTERLAB_REQUIRE_GPU();
+  Json doc = blobSceneDoc(24, 32, 24);
+  const Scene scene = sceneFromJson(doc);
+  DensityGrid density(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(density);
+  const gpu::Volume d = gpu::uploadDensity(density);
+  gpu::Volume r = gpu::PerVoxelGpu(1.0f / 24).build(scene, d, scene.medium.bounds,
+                                                    scene.medium.resolution, nullptr, nullptr);
+  ASSERT_TRUE(r.densityInAlpha);
+  // The alpha is the density voxel by voxel.
+  std::vector<float> rgba(std::size_t(24 * 24 * 24) * 4);
+  glGetTextureImage(r.texture.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                    rgba.data());
+  for (std::size_t i = 0; i < density.size(); i += 37)
+    ASSERT_EQ(rgba[4 * i + 3], density.data()[i]) << i;
+  MarchSettings ms;
+  ms.step = 0.5f / 24;
+  ms.minTransmittance = 0.0f;
+  gpu::ViewMarchGpu march(ms, false, ms.step, ShadowMapSettings{});
+  const Image fused = march.integrate(scene, d, r, nullptr);
+  r.densityInAlpha = false;
+  const Image twoLookups = march.integrate(scene, d, r, nullptr);
+  const double err = relL2(fused, twoLookups);
+  std::printf("fused vs two lookups per step: relative L2 %.3g\n", err);
+  // Measured on llvmpipe 2026-11-26: 1.42e-6 (rounding of the index, a few ulps of u, times
+  // the volume's gradient: the same on any device); ×1.5.
+  EXPECT_LT(err, 2.2e-6);
 }
 
 std::vector<RadianceSample> randomSamples(int n, unsigned seed) {
@@ -147,6 +183,9 @@ void gatherVsSplat(bool occlusion) {
   std::printf("radiance gather vs raster splat (occlusion %d): relative L2 %.3g, max rel %.3g\n",
               int(occlusion), err, maxRel);
   EXPECT_GT(den, 0.0);
+  // Measured 0 and 0 on llvmpipe (bit-identical). The bounds leave room for a hardware
+  // compiler contracting the fragment's and the compute shader's Taylor sums into fma
+  // differently (a few ulps per voxel), nothing more.
   EXPECT_LT(err, 1e-6);
   EXPECT_LT(maxRel, 1e-5);
 }
@@ -181,8 +220,11 @@ TEST(GpuDensityGather, EqualsTheCpuBuildAndTheRasterSplat) {
   std::printf("density gather: max abs vs CPU %.3g, vs raster %.3g (max density %.3g)\n",
               double(errCpu), double(errRaster), double(maxD));
   EXPECT_GT(maxD, 0.5f);
-  EXPECT_LT(errCpu, 1e-6f * maxD);
-  EXPECT_LT(errRaster, 1e-6f * maxD);
+  // vs CPU: llvmpipe 1.79e-7 at max D 1.13 (the exp); the H200's raster splat of a .sog's
+  // Gaussians 2.98e-7 at max D 0.96: 1.5x of the larger, 4.5e-7. vs raster: 0 on llvmpipe (the
+  // same sums in the same order); the bound is the same.
+  EXPECT_LT(errCpu, 4.5e-7f);
+  EXPECT_LT(errRaster, 4.5e-7f);
 }
 
 TEST(GpuSphereBins, ListsEverySphereThatReachesABinInAscendingOrder) {
@@ -229,6 +271,30 @@ TEST(GpuSphereBins, ListsLargerThanTheDeviceAllowsAreAGpuErrorBeforeAnyWork) {
   }
 }
 
+// A volume larger than the device allows is a GpuError naming the volume and the bytes asked,
+// before anything is allocated (not a GL error later, a driver crash or a black image).
+TEST(GpuComputePipeline, AVolumeLargerThanTheDeviceAllowsIsAGpuError) {
+  SCATTERLAB_REQUIRE_GPU();
+  GLint max3d = 0;
+  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
+  ASSERT_GT(max3d, 0);
+  initialize();
+  Json doc = blobSceneDoc(16, 16, 12);
+  doc["render"] = {{"method", "per-voxel"}, {"radiance_resolution", {max3d + 1, 2, 2}}};
+  const Scene s = parseScene(doc, ".");
+  try {
+    createMethod(s, "", "gpu")->render(s, nullptr);
+    FAIL() << "no error";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("source radiance"), std::string::npos) << m;
+    EXPECT_NE(m.find(std::to_string(max3d + 1) + " x 2 x 2"), std::string::npos) << m;
+    EXPECT_NE(m.find("MiB"), std::string::npos) << m;
+    EXPECT_NE(m.find("GL_MAX_3D_TEXTURE_SIZE"), std::string::npos) << m;
+  }
+  EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+}
+
 /// A method on the CPU and on the GPU under both pipelines, end to end through createMethod.
 void endToEnd(const char* method, double computeTol, double rasterTol) {
   initialize();
@@ -237,6 +303,7 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
   doc["render"]["march_step"] = 0.5 / 20;
   if (std::string(method) != "per-voxel")
     doc["render"]["sampler"] = {{"type", "jittered"}, {"count", 96}};
+  if (std::string(method) == "adaptive") doc["render"]["levels"] = {4, 8};
   const Scene scene = parseScene(doc, ".");
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const RenderResult compute = createMethod(scene, "", "gpu")->render(scene, nullptr);
@@ -255,20 +322,24 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
   EXPECT_EQ(cpuR.stats.extra["unused_keys"], Json::array({"render.gpu_pipeline"}));
 }
 
-// The issue's target: compute ≡ CPU within 1e-4 relative L2 on llvmpipe (1e-3 on hardware).
+// The issue's target: compute ≡ CPU within 1e-4 relative L2 on llvmpipe, 1e-3 on hardware.
+// Measured on llvmpipe 2026-11-26: compute 1.22e-6 / 1.43e-6 / 1.2e-6, raster 9.56e-7 /
+// 8.33e-7 / 1.01e-6 (gradient / per-voxel / adaptive with levels 4, 8). On the H200 (raster
+// pipeline, the same tracing): gradient 9.1e-5, per-voxel (a .sog smoke) 4.1e-4, adaptive 3.3e-5.
+// Limits 1.5x the larger, for both pipelines.
 TEST(GpuComputePipeline, GradientEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("gradient", 1e-4, 0.005);
+  endToEnd("gradient", 1.4e-4, 1.4e-4);
 }
 
 TEST(GpuComputePipeline, PerVoxelEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("per-voxel", 1e-4, 0.005);
+  endToEnd("per-voxel", 6.2e-4, 6.2e-4);
 }
 
 TEST(GpuComputePipeline, AdaptiveEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("adaptive", 1e-3, 0.005);
+  endToEnd("adaptive", 5e-5, 5e-5);
 }
 
 TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {

@@ -215,3 +215,36 @@ TEST(MethodLayer, EveryMethodRunsItsStageSequence) {
 
 }  // namespace
 }  // namespace scatterlab
+
+namespace scatterlab {
+namespace {
+
+// Issue 25: a backend string other than cpu, gpu, auto ("GPU", "cuda", "") used to run on
+// auto without a word; now it is an error listing the three, before any work.
+TEST(MethodLayer, UnknownBackendsAreErrorsListingTheAllowedOnes) {
+  initialize();
+  const Scene s = loadScene(kGlow, with({}));
+  for (const std::string b : {"GPU", "cuda", "", "cpu ", "Auto"}) {
+    const std::string e = errorOf([&] { createMethod(s, "per-voxel", b); });
+    EXPECT_NE(e.find("backend: unknown backend '" + b + "'"), std::string::npos) << e;
+    EXPECT_NE(e.find("allowed: 'cpu', 'gpu', 'auto'"), std::string::npos) << e;
+  }
+  EXPECT_NE(errorOf([&] { createMethod(s, "per-voxel", "GPU"); }).find("(did you mean 'gpu'?)"),
+            std::string::npos);
+  EXPECT_EQ(errorOf([&] { createMethod(s, "per-voxel", "cuda"); }).find("did you mean"),
+            std::string::npos);
+  // Through the Renderer too (the Python module's path).
+  const std::string r =
+      errorOf([&] { Renderer::fromFile(kGlow, kSmall, "per-voxel", "cuda").render(); });
+  EXPECT_NE(r.find("unknown backend 'cuda'"), std::string::npos) << r;
+  // The three allowed ones are accepted.
+  for (const std::string b : {"cpu", "auto"}) EXPECT_NO_THROW(createMethod(s, "per-voxel", b)) << b;
+  // A misspelt method names the argument ('method'), not a tool flag, and the likely one.
+  const std::string m = errorOf([&] { createMethod(s, "per-voxle", "cpu"); });
+  EXPECT_EQ(
+      m.rfind("'method': unknown method 'per-voxle' (did you mean 'per-voxel'?); allowed: ", 0), 0u)
+      << m;
+}
+
+}  // namespace
+}  // namespace scatterlab

@@ -2,6 +2,7 @@
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -113,6 +114,163 @@ class Compare(unittest.TestCase):
             sl.compare(np.ones((4, 5, 3)), np.ones((5, 4, 3)))
 
 
+    def test_non_finite_and_empty_images_are_errors(self):
+        # Issue 26: a NaN reference scored rel_l2 0, psnr inf, max_abs 0.
+        a = np.ones((4, 5, 3), np.float32)
+        b = a.copy()
+        b[1, 2, 0] = np.nan
+        with self.assertRaisesRegex(sl.ConfigError, r"the reference has 1 non-finite .*\(1 NaN, 0 inf; "
+                                    r"the first at pixel \(2, 1\)\)"):
+            sl.compare(a, b)
+        b[1, 2, 0] = np.inf
+        with self.assertRaisesRegex(sl.ConfigError, "the image has 1 non-finite"):
+            sl.compare(b, a)
+        # An empty array is refused by the shape check (no pixels), before any measure.
+        with self.assertRaisesRegex(sl.ConfigError, r"got shape \(0, 0, 3\)|empty"):
+            sl.compare(np.zeros((0, 0, 3), np.float32), np.zeros((0, 0, 3), np.float32))
+
+class Usability(unittest.TestCase):
+    """Issue 25: what a new user types first."""
+
+    def test_unknown_backends_are_errors_listing_the_allowed_ones(self):
+        scene = sl.load_scene(box_scene())
+        for backend in ("GPU", "cuda", ""):
+            with self.assertRaisesRegex(sl.ConfigError,
+                                        "unknown backend '%s'.*allowed: 'cpu', 'gpu', 'auto'" % backend):
+                sl.render(scene, method="per-voxel", backend=backend)
+            with self.assertRaisesRegex(sl.ConfigError, "unknown backend"):
+                sl.Renderer(scene, method="per-voxel", backend=backend)
+        with self.assertRaisesRegex(sl.ConfigError, r"\(did you mean 'gpu'\?\)"):
+            sl.render(scene, backend="GPU")
+
+    def test_errors_name_the_argument_not_a_cli_flag(self):
+        with self.assertRaisesRegex(sl.ConfigError,
+                                    r"^'method': unknown method 'per-voxle' \(did you mean 'per-voxel'\?\)"):
+            sl.render(sl.load_scene(box_scene()), method="per-voxle")
+
+    def test_numpy_values_in_overrides_and_set(self):
+        pos = np.array([0.2, 1.1, 0.4], np.float32)
+        a = sl.load_scene(box_scene(), overrides={"lights.0.position": pos,
+                                                  "camera.width": np.int64(20)})
+        self.assertEqual(a.width, 20)
+        self.assertEqual(a.document["lights"][0]["position"], pos.tolist())
+        r = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        r.set("lights.0.position", pos)
+        img, _ = r.render()
+        r.set("lights.0.intensity", np.float64(3.0))  # a scalar: broadcast to RGB as in JSON
+        img2, _ = r.render()
+        # The same values as plain lists: bit-identical renders.
+        ref = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        ref.set("lights.0.position", pos.tolist())
+        self.assertEqual(np.abs(img - ref.render()[0]).max(), 0.0)
+        ref.set("lights.0.intensity", 3.0)
+        self.assertEqual(np.abs(img2 - ref.render()[0]).max(), 0.0)
+        with self.assertRaisesRegex(TypeError, "object is not JSON serializable|not JSON serializable"):
+            r.set("lights.0.position", object())
+
+    def test_set_takes_the_cpp_form(self):
+        r = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        r.set("lights.0.position=[0.2,1.1,0.4]")
+        a, _ = r.render()
+        r2 = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        r2.set("lights.0.position", [0.2, 1.1, 0.4])
+        self.assertEqual(np.abs(a - r2.render()[0]).max(), 0.0)
+        with self.assertRaisesRegex(sl.ConfigError, "expected set\\(key, value\\) or set\\('key=VALUE'\\)"):
+            r.set("camera.width")
+
+    def test_list_methods(self):
+        m = sl.list_methods()
+        for name in ("exact", "per-voxel", "gradient", "adaptive"):
+            self.assertIn(name, m)
+        self.assertEqual(list(m), sorted(m))
+        self.assertIn("cpu", m["exact"]["backends"])
+        self.assertIn("sampler", m["gradient"]["keys"])
+        self.assertTrue(m["per-voxel"]["summary"])
+        # Every listed method renders under its name.
+        img, stats = sl.render(sl.load_scene(box_scene(width=8, height=6)), method="nearest",
+                               backend="cpu")
+        self.assertEqual(stats["method"], "nearest")
+
+    def test_write_exr_takes_rgba_and_refuses_other_extensions(self):
+        scene = sl.load_scene(box_scene())
+        rgba, _ = sl.render(scene, method="exact", backend="cpu", rgba=True)
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "a.exr")
+            sl.write_exr(rgba, path)
+            back = sl.read_exr(path, rgba=True)
+            self.assertEqual(back.shape, rgba.shape)
+            self.assertEqual(np.abs(back - rgba).max(), 0.0)  # float32 EXR: lossless
+            self.assertGreater(back[..., 3].max(), 0.1)
+            for bad in ("a.png", "a.exr2", "a"):
+                with self.assertRaisesRegex(sl.ConfigError, "does not end in .exr"):
+                    sl.write_exr(rgba, os.path.join(d, bad))
+                self.assertFalse(os.path.exists(os.path.join(d, bad)))
+            with self.assertRaisesRegex(sl.ConfigError, "does not end in .png"):
+                sl.write_png(rgba, os.path.join(d, "b.exr"))
+            with self.assertRaisesRegex(sl.ConfigError, "'tonemap': unknown tone curve 'reinhard'"):
+                sl.write_png(rgba, os.path.join(d, "c.png"), tonemap="reinhard")
+            self.assertFalse(os.path.exists(os.path.join(d, "c.png")))
+            sl.write_png(rgba, os.path.join(d, "b.png"))
+            self.assertTrue(os.path.getsize(os.path.join(d, "b.png")) > 0)
+
+    def test_compare_refuses_integer_images(self):
+        a = np.full((4, 5, 3), 200, np.uint8)
+        with self.assertRaisesRegex(sl.ConfigError, "expected a float array.*got dtype uint8"):
+            sl.compare(a, a)
+        with self.assertRaisesRegex(sl.ConfigError, "got shape \\(4, 5, 4\\)"):
+            sl.compare(np.ones((4, 5, 4), np.float32), np.ones((4, 5, 4), np.float32))
+        # float64 and float16 are floats: converted.
+        self.assertEqual(sl.compare(np.ones((4, 5, 3)), np.ones((4, 5, 3), np.float16))["rel_l2"], 0.0)
+
+    def test_another_interpreter_is_told_which_one_to_use(self):
+        # An interpreter other than the one the module was built for, without numpy (what a
+        # pyenv or virtualenv python first on the PATH is): the built one under another name,
+        # without its site packages (-S: no dist-packages, so no numpy).
+        self.assertTrue(os.path.isabs(sl.BUILT_FOR), sl.BUILT_FOR)
+        with tempfile.TemporaryDirectory() as d:
+            other = os.path.join(d, "python3")
+            os.symlink(sl.BUILT_FOR, other)
+            env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(sl.__file__)))
+            r = subprocess.run([other, "-S", "-c", "import scatterlab"], env=env,
+                               capture_output=True, text=True)
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn("ImportError: scatterlab was built for %s" % sl.BUILT_FOR, r.stderr)
+            self.assertIn("not for this interpreter %s" % other, r.stderr)
+            self.assertIn("numpy cannot be imported here", r.stderr)
+            self.assertIn("run it with %s" % sl.BUILT_FOR, r.stderr)
+            # The built interpreter itself, with its packages, imports it.
+            r = subprocess.run([sl.BUILT_FOR, "-c", "import scatterlab; print(scatterlab.BUILT_FOR)"],
+                               env=env, capture_output=True, text=True)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertEqual(r.stdout.strip(), sl.BUILT_FOR)
+
+
+class TypeStubs(unittest.TestCase):
+    def test_stubs_name_every_function_with_its_arguments(self):
+        # _core.pyi (beside the module) against the module itself: every public name, and each
+        # function's argument names as pybind11's signature line gives them.
+        import ast
+        import re
+        stub = os.path.join(os.path.dirname(sl.__file__), "_core.pyi")
+        with open(stub) as f:
+            tree = ast.parse(f.read())
+        stubbed = {}
+        for node in tree.body:
+            if isinstance(node, ast.FunctionDef):
+                stubbed[node.name] = [a.arg for a in node.args.args]
+            elif isinstance(node, ast.ClassDef):
+                stubbed[node.name] = None
+            elif isinstance(node, ast.AnnAssign):
+                stubbed[node.target.id] = None
+        public = [n for n in dir(sl._core) if not n.startswith("_") or n == "__version__"]
+        self.assertEqual(sorted(set(public) - set(stubbed)), [])
+        for name, args in stubbed.items():
+            if args is None or not hasattr(sl._core, name):
+                continue
+            first = getattr(sl._core, name).__doc__.splitlines()[0]
+            self.assertEqual(re.findall(r"(\w+): ", first.split("->")[0]), args, first)
+
+
 class Errors(unittest.TestCase):
     def test_same_messages_as_the_tool(self):
         doc = box_scene()
@@ -123,7 +281,7 @@ class Errors(unittest.TestCase):
             sl.load_scene("no_such_scene.json")
         with self.assertRaisesRegex(sl.ConfigError, "index 3 out of range: 'lights' has 1 element"):
             sl.load_scene(box_scene(), overrides={"lights.3.position": [0, 0, 0]})
-        with self.assertRaisesRegex(sl.ConfigError, "unknown method .nonsense.; allowed: .adaptive."):
+        with self.assertRaisesRegex(sl.ConfigError, "'method': unknown method .nonsense.; allowed: .adaptive."):
             sl.render(sl.load_scene(box_scene()), method="nonsense")
         self.assertTrue(issubclass(sl.ConfigError, sl.Error))
         self.assertTrue(issubclass(sl.Error, RuntimeError))
@@ -161,6 +319,50 @@ class RendererObject(unittest.TestCase):
         doc["lights"][0]["path"][1]["t"] = 0
         with self.assertRaisesRegex(sl.ConfigError, r"lights\[0\]\.path\[1\]\.t.*strictly increase"):
             sl.load_scene(doc)
+
+    def test_shared_between_threads(self):
+        # Issue 26: set() or time= from one thread while render() ran in another killed the
+        # interpreter (10 of 12 runs). Run in a child interpreter so a crash fails this test
+        # instead of ending the suite.
+        code = """
+import json, sys, threading
+import numpy as np
+import scatterlab as sl
+doc = json.loads(sys.argv[1])
+doc["medium"]["density"] = {"type": "gaussians",
+                            "blobs": [{"center": [0.5, 0.5, 0.5], "radius": 0.3,
+                                       "velocity": [0.1, 0, 0]}]}
+r = sl.Renderer(sl.load_scene(doc), method="per-voxel", backend="cpu")
+images, errors = [], []
+stop = threading.Event()
+def render():
+    try:
+        for _ in range(20):
+            images.append(r.render()[0])
+    except Exception as e:
+        errors.append(e)
+    stop.set()
+def change():
+    i = 0
+    while not stop.is_set():
+        i += 1
+        r.set("lights.0.position", [0.5, 1.2 + 0.01 * (i % 10), 0.5])
+        r.time = 0.1 * (i % 5)
+        r.set("medium.resolution", 12 + i % 3)
+        _ = r.time
+threads = [threading.Thread(target=render), threading.Thread(target=change)]
+for t in threads: t.start()
+for t in threads: t.join()
+assert not errors, errors
+assert len(images) == 20
+for img in images:
+    assert img.shape == (18, 24, 3) and np.isfinite(img).all() and img.max() > 0
+print("ok", len(images))
+"""
+        p = subprocess.run([sys.executable, "-c", code, json.dumps(box_scene())],
+                           capture_output=True, text=True, timeout=300)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("ok 20", p.stdout)
 
     def test_gil_released_while_rendering(self):
         scene = sl.load_scene(box_scene(width=160, height=120, resolution=48))

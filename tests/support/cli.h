@@ -2,15 +2,19 @@
 /// What the tool's end-to-end tests share: running `scatterlab` (SCATTERLAB_CLI) with its exit
 /// code and output, and a fixture owning a fresh directory per test.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 
 namespace scatterlab::testing {
 
@@ -59,5 +63,31 @@ class TempDirTest : public ::testing::Test {
  private:
   std::string prefix_;
 };
+
+/// Reads a FIFO without blocking the test forever: opened non-blocking (so the open succeeds
+/// before a writer exists), polled until a writer has written and closed, or `timeout`.
+inline std::string drainFifo(const std::string& path, std::chrono::seconds timeout) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK);
+  if (fd < 0) return "(cannot open)";
+  std::string got;
+  bool wrote = false;
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    pollfd p{fd, POLLIN, 0};
+    ::poll(&p, 1, 100);
+    char buf[4096];
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n > 0) {
+      got.append(buf, std::size_t(n));
+      wrote = true;
+    } else if (n == 0 && wrote) {
+      break;  // the writer closed its end after writing
+    } else if (n == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // no writer yet
+    }
+  }
+  ::close(fd);
+  return got;
+}
 
 }  // namespace scatterlab::testing
