@@ -67,11 +67,20 @@ std::string htmlEscape(const std::string& s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -111,7 +120,8 @@ std::string fillTemplate(std::string_view text, const std::map<std::string, std:
 
 std::string asset(const char* name) {
   const std::string_view s = embeddedFile(name);
-  if (s.empty()) throw Error(std::string("report.html: the embedded asset ") + name + " is missing");
+  if (s.empty())
+    throw Error(std::string("report.html: the embedded asset ") + name + " is missing");
   return std::string(s);
 }
 
@@ -209,7 +219,7 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
 
   // Viewers: the successful runs grouped by the reference images they were measured against.
   std::vector<Group> groups;
-  std::map<std::string, std::size_t> groupOf;  // references' EXRs joined -> index
+  std::map<std::string, std::size_t> groupOf;          // references' EXRs joined -> index
   std::map<std::string, std::pair<int, int>> runItem;  // run id -> (group, item)
   for (const RunRecord& rec : facts.runs) {
     if (rec.status != "ok") continue;
@@ -271,19 +281,21 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
   // The metrics table: the numbers of report.md's sweep tables, one row per run.
   const std::string& head = plan.references[0].name;
   Json columns = Json::array({"run", "sweep", "scene", "method", "backend"});
-  for (const std::string& a : facts.axisNames) columns.push_back(a == "samples" ? "sample budget" : a);
+  for (const std::string& a : facts.axisNames)
+    columns.push_back(a == "samples" ? "sample budget" : a);
   for (const char* c : {"samples used", "time (ms)", "fps"}) columns.push_back(c);
   columns.push_back("rel L2 vs " + head);
   for (const char* c : {"masked rel L2 (K px)", "rel L1", "visibly wrong"}) columns.push_back(c);
   Json rows = Json::array();
   for (const RunRecord& rec : facts.runs) {
-    Json cells = Json::array({tableCell(rec.id, rec.id), tableCell(rec.sweep, rec.sweep),
-                              tableCell(rec.scene, rec.scene),
-                              tableCell(rec.methodName, rec.methodName),
-                              tableCell(rec.backend, rec.backend)});
+    Json cells =
+        Json::array({tableCell(rec.id, rec.id), tableCell(rec.sweep, rec.sweep),
+                     tableCell(rec.scene, rec.scene), tableCell(rec.methodName, rec.methodName),
+                     tableCell(rec.backend, rec.backend)});
     for (const std::string& a : facts.axisNames) {
       const Json v = rec.axes.value(a, Json());
-      cells.push_back(tableCell(v.is_null() ? "" : valueLabel(v), v.is_number() ? v : Json(valueLabel(v))));
+      cells.push_back(
+          tableCell(v.is_null() ? "" : valueLabel(v), v.is_number() ? v : Json(valueLabel(v))));
     }
     const bool ok = rec.status == "ok";
     Json row = {{"run", rec.id}, {"ok", ok}};
@@ -327,11 +339,11 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
         plots.push_back({{"caption", p.value("caption", "")}, {"missing", file}});
         continue;
       }
-      plots.push_back({{"caption", p.value("caption", "")},
-                       {"src", "data:image/png;base64," +
-                                   base64(reinterpret_cast<const unsigned char*>(png.data()),
-                                          png.size())},
-                       {"svg", "plots/" + p.value("svg", "")}});
+      plots.push_back(
+          {{"caption", p.value("caption", "")},
+           {"src", "data:image/png;base64," +
+                       base64(reinterpret_cast<const unsigned char*>(png.data()), png.size())},
+           {"svg", "plots/" + p.value("svg", "")}});
     }
   } else if (plotsNote.empty()) {
     plotsNote = "no plots/index.json";
@@ -342,33 +354,31 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
   Json failures = Json::array();
   for (const RunRecord& rec : res.runs)
     if (rec.status != "ok") failures.push_back({{"run", rec.id}, {"error", rec.error}});
-  const Json data = {
-      {"title", plan.title},
-      {"description", plan.description},
-      {"config", configPath},
-      {"written", nowIso()},
-      {"runs", res.runs.size()},
-      {"rendered", res.rendered},
-      {"resumed", res.resumed},
-      {"failed", res.failed},
-      {"reference", head},
-      {"memory_method", memoryMethod},
-      {"machines", machines},
-      {"max_side", plan.htmlMaxSide},
-      {"images", images.meta()},
-      {"groups", jgroups},
-      {"table", {{"columns", columns}, {"rows", rows}}},
-      {"plots", plots},
-      {"plots_note", plotsNote},
-      {"missing", images.missing()},
-      {"failures", failures}};
+  const Json data = {{"title", plan.title},
+                     {"description", plan.description},
+                     {"config", configPath},
+                     {"written", nowIso()},
+                     {"runs", res.runs.size()},
+                     {"rendered", res.rendered},
+                     {"resumed", res.resumed},
+                     {"failed", res.failed},
+                     {"reference", head},
+                     {"memory_method", memoryMethod},
+                     {"machines", machines},
+                     {"max_side", plan.htmlMaxSide},
+                     {"images", images.meta()},
+                     {"groups", jgroups},
+                     {"table", {{"columns", columns}, {"rows", rows}}},
+                     {"plots", plots},
+                     {"plots_note", plotsNote},
+                     {"missing", images.missing()},
+                     {"failures", failures}};
   for (const std::string& m : images.missing()) out.log("report.html: image left out: " + m);
-  const std::string page = fillTemplate(asset("template.html"),
-                                        {{"title", htmlEscape(plan.title)},
-                                         {"style", asset("viewer.css")},
-                                         {"script", asset("viewer.js")},
-                                         {"data", scriptSafe(data.dump())},
-                                         {"images", images.data()}});
+  const std::string page = fillTemplate(asset("template.html"), {{"title", htmlEscape(plan.title)},
+                                                                 {"style", asset("viewer.css")},
+                                                                 {"script", asset("viewer.js")},
+                                                                 {"data", scriptSafe(data.dump())},
+                                                                 {"images", images.data()}});
   writeText(out.path("report.html"), page);
   out.log("report.html: " + std::to_string(images.meta().size()) + " images, " +
           fmt(double(page.size()) / (1024.0 * 1024.0), "%.2f") + " MiB");

@@ -203,11 +203,11 @@
       this.draw();
     }
 
-    /// Canvas size: the stage's width, the first image's aspect, at most 75 % of the window.
+    /// Canvas size: the stage's width, the first image's aspect, at most 60 % of the window.
     resize() {
       const m = this.meta(0);
       const w = Math.max(64, Math.round(this.stage.clientWidth || 800));
-      const h = Math.max(48, Math.min(Math.round(window.innerHeight * 0.75), Math.round((w * m.h) / m.w)));
+      const h = Math.max(48, Math.min(Math.round(window.innerHeight * 0.6), Math.round((w * m.h) / m.w)));
       if (this.canvas.width !== w || this.canvas.height !== h) {
         this.canvas.width = w;
         this.canvas.height = h;

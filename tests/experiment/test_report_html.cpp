@@ -45,12 +45,18 @@ std::vector<unsigned char> unbase64(const std::string& s) {
   int bits = 0;
   for (char c : s) {
     int d;
-    if (c >= 'A' && c <= 'Z') d = c - 'A';
-    else if (c >= 'a' && c <= 'z') d = c - 'a' + 26;
-    else if (c >= '0' && c <= '9') d = c - '0' + 52;
-    else if (c == '+') d = 62;
-    else if (c == '/') d = 63;
-    else continue;  // '=' and white space
+    if (c >= 'A' && c <= 'Z')
+      d = c - 'A';
+    else if (c >= 'a' && c <= 'z')
+      d = c - 'a' + 26;
+    else if (c >= '0' && c <= '9')
+      d = c - '0' + 52;
+    else if (c == '+')
+      d = 62;
+    else if (c == '/')
+      d = 63;
+    else
+      continue;  // '=' and white space
     v = v << 6 | unsigned(d);
     bits += 6;
     if (bits >= 8) {
@@ -206,8 +212,7 @@ TEST_F(ReportHtmlTest, PageHoldsTheExrsAsHalfFloatsAndReportMdsNumbers) {
   ASSERT_EQ(page.data["images"].size(), 3u);
   double rel = 0, abs = 0;
   expectImagesMatchExrs(page, out, rel, abs);
-  std::printf("half precision: max relative error %.3g, max absolute (subnormal) %.3g\n", rel,
-              abs);
+  std::printf("half precision: max relative error %.3g, max absolute (subnormal) %.3g\n", rel, abs);
   EXPECT_LE(rel, kHalfRelTol);
   EXPECT_LE(abs, kHalfAbsTol);
   for (const Json& img : page.data["images"]) {
@@ -256,8 +261,7 @@ TEST_F(ReportHtmlTest, PageHoldsTheExrsAsHalfFloatsAndReportMdsNumbers) {
   }
   double rel2 = 0, abs2 = 0;
   expectImagesMatchExrs(small, out, rel2, abs2);
-  std::printf("box-filtered: max relative error %.3g, max absolute (subnormal) %.3g\n", rel2,
-              abs2);
+  std::printf("box-filtered: max relative error %.3g, max absolute (subnormal) %.3g\n", rel2, abs2);
   EXPECT_LE(rel2, kHalfRelTol);
   EXPECT_LE(abs2, kHalfAbsTol);
   EXPECT_LT(small.bytes, page.bytes);

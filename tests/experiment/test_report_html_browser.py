@@ -283,11 +283,17 @@ def test_page(driver, page, args):
         rows[-1].click()
         wait_idle(driver)
         shown = driver.execute_script(
-            "const v = window.scatterlabReport.viewers[0]; return v.items[v.a].run")
+            "const r = window.scatterlabReport.data.table.rows.find(r => r.run === arguments[0]);"
+            "const v = window.scatterlabReport.viewers[r.group]; return v.items[v.a].run", run)
         check(shown == run, "clicking row %s shows its image (%s)" % (run, shown))
 
-    driver.execute_script("window.scrollTo(0, 0)")
+    # The screenshot: the first viewer, its first run split against the reference, the values
+    # under the pointer.
+    driver.execute_script("window.scatterlabReport.viewers[0].root.scrollIntoView()")
+    driver.execute_script("window.scatterlabReport.viewers[0].activate()")
     press("2")
+    press(Keys.SHIFT + "1")
+    ActionChains(driver).move_to_element_with_offset(canvas, 40, 20).perform()
     shot = os.path.join(args.artefacts, "report_html.png")
     driver.save_screenshot(shot)
     print("screenshot: " + shot)
