@@ -86,13 +86,16 @@ std::string htmlEscape(const std::string& s) {
   return o;
 }
 
-/// JSON that may stand inside a <script> element: "</" becomes "<\/" (the same string to JSON).
+/// JSON that may stand inside a <script> element: every '<' (which JSON has only inside strings)
+/// becomes \u003c, so that neither "</script>" nor "<!--" can occur.
 std::string scriptSafe(const std::string& json) {
   std::string o;
   o.reserve(json.size());
-  for (std::size_t i = 0; i < json.size(); ++i) {
-    o += json[i];
-    if (json[i] == '<' && i + 1 < json.size() && json[i + 1] == '/') o += '\\';
+  for (char c : json) {
+    if (c == '<')
+      o += "\\u003c";
+    else
+      o += c;
   }
   return o;
 }
@@ -374,11 +377,13 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
                      {"missing", images.missing()},
                      {"failures", failures}};
   for (const std::string& m : images.missing()) out.log("report.html: image left out: " + m);
-  const std::string page = fillTemplate(asset("template.html"), {{"title", htmlEscape(plan.title)},
-                                                                 {"style", asset("viewer.css")},
-                                                                 {"script", asset("viewer.js")},
-                                                                 {"data", scriptSafe(data.dump())},
-                                                                 {"images", images.data()}});
+  const std::string page =
+      fillTemplate(asset("template.html"),
+                   {{"title", htmlEscape(plan.title)},
+                    {"style", asset("viewer.css")},
+                    {"script", asset("viewer.js")},
+                    {"data", scriptSafe(data.dump(-1, ' ', false, Json::error_handler_t::replace))},
+                    {"images", images.data()}});
   writeText(out.path("report.html"), page);
   out.log("report.html: " + std::to_string(images.meta().size()) + " images, " +
           fmt(double(page.size()) / (1024.0 * 1024.0), "%.2f") + " MiB");

@@ -196,12 +196,19 @@ class ReportHtmlTest : public ::testing::Test {
 };
 
 TEST_F(ReportHtmlTest, PageHoldsTheExrsAsHalfFloatsAndReportMdsNumbers) {
-  const fs::path cfg = config();
+  // A title that would end the data element or open a comment if it were not escaped.
+  const std::string title = "page </script><!-- & \"quoted\" <b>";
+  const fs::path cfg = config({{"title", title}});
   const fs::path out = dir / "out";
   const ExperimentResult r = runExperiment(cfg.string(), out.string(), options());
   ASSERT_EQ(r.failed, 0);
   ASSERT_TRUE(fs::exists(out / "report.html"));
   const Page page(out / "report.html");
+  EXPECT_EQ(page.data["title"], title);
+  EXPECT_NE(
+      readAll(out / "report.html")
+          .find("<title>page &lt;/script&gt;&lt;!-- &amp; &quot;quoted&quot; &lt;b&gt;</title>"),
+      std::string::npos);
   // One viewer: the reference then the two runs.
   ASSERT_EQ(page.data["groups"].size(), 1u);
   const Json& items = page.data["groups"][0]["items"];
@@ -251,7 +258,7 @@ TEST_F(ReportHtmlTest, PageHoldsTheExrsAsHalfFloatsAndReportMdsNumbers) {
   EXPECT_NE(page.data["machines"][0].get<std::string>().find("commit"), std::string::npos);
 
   // Larger than html_max_side: box-filtered (64×48 -> 32×24), the EXR linked at full size.
-  config({{"html_max_side", 32}});
+  config({{"title", title}, {"html_max_side", 32}});
   runExperiment(cfg.string(), out.string(), options());
   const Page small(out / "report.html");
   for (const Json& img : small.data["images"]) {

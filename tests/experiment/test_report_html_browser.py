@@ -59,6 +59,8 @@ if not (HAVE_SELENIUM and CHROMIUM and DRIVER):
 # (2026-11-26, Chromium 156, 56160 channels of the tiny experiment); allowed: 0.023 (x1.5).
 EXPOSURE_LO, EXPOSURE_HI, EXPOSURE_TOL = 0.1, 0.45, 0.023
 
+# Escaped by the page writer: in the data element and in <title>.
+TITLE = "report.html browser test </script><!-- & <b>"
 failures = []
 
 
@@ -75,7 +77,7 @@ def srgb_to_linear(v):
 
 def run_experiment(cli, work):
     cfg = {
-        "title": "report.html browser test",
+        "title": TITLE,
         "scene": os.path.join(ROOT, "data", "scenes", "glow.json"),
         "set": ["camera.width=64", "camera.height=48", "medium.resolution=16"],
         "references": ["exact"],
@@ -164,6 +166,9 @@ def test_page(driver, page, args):
     while not driver.execute_script("return !!window.scatterlabReport") and time.time() < t0 + 30:
         time.sleep(0.1)
     check(driver.execute_script("return !!window.scatterlabReport"), "the page's script ran")
+    if not args.page:
+        check(driver.title == TITLE and
+              driver.find_element(By.TAG_NAME, "h1").text == TITLE, "the title, escaped")
     wait_idle(driver)
     viewers = driver.execute_script("return window.scatterlabReport.viewers.length")
     check(viewers >= 1, "at least one viewer (%d)" % viewers)
