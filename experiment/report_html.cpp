@@ -295,10 +295,14 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
         Json::array({tableCell(rec.id, rec.id), tableCell(rec.sweep, rec.sweep),
                      tableCell(rec.scene, rec.scene), tableCell(rec.methodName, rec.methodName),
                      tableCell(rec.backend, rec.backend)});
+    // An axis value sorts as a number where it is one ([w, h] image sizes as text); a run
+    // without the axis last.
     for (const std::string& a : facts.axisNames) {
       const Json v = rec.axes.value(a, Json());
-      cells.push_back(
-          tableCell(v.is_null() ? "" : valueLabel(v), v.is_number() ? v : Json(valueLabel(v))));
+      if (v.is_null())
+        cells.push_back(tableCell("", nullptr));
+      else
+        cells.push_back(tableCell(valueLabel(v), v.is_number() ? v : Json(valueLabel(v))));
     }
     const bool ok = rec.status == "ok";
     Json row = {{"run", rec.id}, {"ok", ok}};
