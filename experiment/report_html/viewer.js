@@ -442,7 +442,7 @@
     main.append(el("h2", { text: "Images" }));
     main.append(el("p", { class: "note", text:
       `Per reference scene: the references and every run measured against them, as linear half floats (images whose longer side exceeds ${DATA.max_side} px box-filtered, the EXR linked). ` +
-      "Keys 1–9 (or a click) show an image, shift+1–9 (or shift-click) split against one; drag to pan, wheel to zoom (shared by all images of a viewer); " +
+      "Keys act on the outlined viewer (the last one clicked). Keys 1–9 (or a click) show an image, shift+1–9 (or shift-click) split against one; drag to pan, wheel to zoom (shared by all images of a viewer); " +
       "+/− exposure, e toggles the relative error map ((mean(image) − mean(reference)) / (mean(reference) + 1 % of the reference's mean); red: brighter, blue: darker), f fits." }));
     if (!DATA.groups.length) main.append(el("p", { text: "No successful run has an image." }));
     DATA.groups.forEach((g, k) => {
