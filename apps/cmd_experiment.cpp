@@ -31,7 +31,8 @@ int printSummary(const ExperimentResult& r, const std::string& out, bool shard) 
         r.runs.size(), r.rendered, r.resumed, r.failed, out.c_str());
   else
     std::printf(
-        "%zu runs: %d rendered, %d resumed, %d failed; wrote %s/report.md, results.csv, "
+        "%zu runs: %d rendered, %d resumed, %d failed; wrote %s/report.html, report.md, "
+        "results.csv, "
         "results.json, images/, log.txt%s\n",
         r.runs.size(), r.rendered, r.resumed, r.failed, out.c_str(),
         r.plotsNote.empty() ? ", plots/" : "");
@@ -54,7 +55,7 @@ Action addExperiment(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "experiment",
       "Run an experiment config (scenes x methods x sweeps, docs/harness.md): images, "
-      "results.csv, results.json, report.md, plots; resumes an interrupted sweep. "
+      "results.csv, results.json, report.md, report.html, plots; resumes an interrupted sweep. "
       "`experiment merge DIR... -o OUT` joins the outputs of --shard runs");
   c->add_option("config", o->config, "Experiment config (JSON), e.g. data/experiments/fig3.json");
   c->add_option("-o,--output", o->out, "Output directory (created if missing; reused to resume)");
@@ -74,7 +75,7 @@ Action addExperiment(CLI::App& app) {
   CLI::App* m = c->add_subcommand(
       "merge",
       "Join the output directories of `experiment CONFIG -o DIR --shard K/N` runs into "
-      "one results.csv/json, report.md, gallery and plots");
+      "one results.csv/json, report.md, report.html, gallery and plots");
   m->add_option("dirs", o->mergeDirs, "Shard output directories (all N shards between them)")
       ->required();
   m->add_option("-o,--output", o->mergeOut, "Output directory of the merged experiment")

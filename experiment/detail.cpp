@@ -26,6 +26,10 @@ std::string fmt(double v, const char* format) {
   return b;
 }
 
+std::string percent(double v, const char* format) {
+  return std::isfinite(v) ? fmt(100 * v, format) + "%" : std::string("—");
+}
+
 std::string readText(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::ostringstream s;

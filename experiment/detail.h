@@ -11,6 +11,7 @@
 #include <ostream>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "experiment/experiment.h"
@@ -39,6 +40,10 @@ std::string fileSafe(std::string s);
 
 /// An axis value as tables and ids show it: "128", "800x600", "0.5".
 std::string valueLabel(const Json& v);
+
+/// `100 * v` through `format` with a "%", "—" when `v` is not finite (report.md's and
+/// report.html's error columns).
+std::string percent(double v, const char* format);
 
 /// Local time as "YYYY-MM-DD HH:MM:SS".
 std::string nowIso();
@@ -185,6 +190,28 @@ void reportReferenceChecks(std::ostream& md, const ResultFacts& facts);
 void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out);
 /// The failed runs with their configurations; nothing when none failed.
 void reportFailures(std::ostream& md, const ExperimentResult& res);
+
+// ---- report.html (report_html.cpp) -----------------------------------------------------------
+
+/// The bytes of experiment/report_html/<name> (template.html, viewer.css, viewer.js), compiled in
+/// by cmake/embed_files.cmake; empty for another name.
+std::string_view embeddedFile(std::string_view name);
+
+/// The integer box-filter factor that brings the longer side of a width × height image to at
+/// most `maxSide` pixels (1: no downscaling).
+int boxFactor(int width, int height, int maxSide);
+/// `img` box-filtered by `factor`: each pixel the mean of a factor × factor block (the blocks
+/// at the right and bottom edges average the pixels they cover).
+Image boxDownscale(const Image& img, int factor);
+
+/// DIR/report.html: one page with no outside references — a viewer per reference scene (the
+/// references and every run measured against them, as deflated half-float RGB, downscaled by
+/// boxFactor(plan.htmlMaxSide) with the EXR linked), the metrics table with report.md's numbers,
+/// the plots (inline PNGs with captions), the machines and commits. An image that cannot be read
+/// is left out and named in the page and log.txt.
+void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
+                     const std::string& configPath, const std::string& memoryMethod,
+                     OutputDir& out);
 
 // ---- Gallery and plots (gallery.cpp) ---------------------------------------------------------
 

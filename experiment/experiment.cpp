@@ -1,6 +1,7 @@
 // runExperiment: the order in which the harness parses the config, renders (or resumes) the
-// runs and writes the tables, the gallery, the plots and the report. The pieces are in plan.cpp,
-// references.cpp, run.cpp, tables.cpp, report.cpp and gallery.cpp (shared helpers: detail.h).
+// runs and writes the tables, the gallery, the plots and the reports (report.md, report.html).
+// The pieces are in plan.cpp, references.cpp, run.cpp, tables.cpp, report.cpp, report_html.cpp
+// and gallery.cpp (shared helpers: detail.h).
 
 #include "experiment/experiment.h"
 
@@ -36,6 +37,7 @@ void writeOutputs(ExperimentResult& res, const std::string& configPath, detail::
   detail::reportPlots(md, res.plotsNote, out);
   detail::reportFailures(md, res);
   detail::writeText(out.path("report.md"), md.str());
+  detail::writeReportHtml(res, facts, configPath, memoryMethod, out);
   out.log("done: " + std::to_string(res.rendered) + " rendered, " + std::to_string(res.resumed) +
           " resumed, " + std::to_string(res.failed) + " failed");
 }

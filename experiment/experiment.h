@@ -2,8 +2,8 @@
 /// The experiment harness behind `scatterlab experiment CONFIG.json -o DIR` (issue 7): scenes ×
 /// methods (with backend) × parameter sweeps, errors against a cached reference, per-stage
 /// times as the median of K repetitions after a warm-up, peak host memory, sample counts;
-/// results.csv, results.json, report.md, images, plots. Resumable: every finished run leaves
-/// DIR/runs/<id>.json (written atomically, keyed by a hash of its configuration) and is not
+/// results.csv, results.json, report.md, report.html, images, plots. Resumable: every finished run
+/// leaves DIR/runs/<id>.json (written atomically, keyed by a hash of its configuration) and is not
 /// rendered again while that record exists and its hash matches.
 ///
 /// The config format is documented key by key in docs/harness.md. Strict: unknown keys are
@@ -98,6 +98,9 @@ struct ExperimentPlan {
   /// Gallery strips: "images" (references, then runs), "image+error" (a second row with each
   /// image's signed error map against the headline reference) or "off".
   std::string gallery = "images";
+  /// report.html shows images whose longer side exceeds this box-filtered by the smallest
+  /// integer factor that brings it within (the EXRs linked at full size).
+  int htmlMaxSide = 512;
   std::vector<RunSpec> runs;
 };
 

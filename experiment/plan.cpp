@@ -492,6 +492,7 @@ ExperimentPlan parseExperiment(const std::string& configPath,
   else
     p.allow("mask_radius");
   plan.gallery = p.choice("gallery", {"images", "image+error", "off"}, std::string("images"));
+  plan.htmlMaxSide = int(p.integer("html_max_side", 512, Interval::closed(16, 16384)));
   const int defReps = int(p.integer("repetitions", 3, Interval::closed(1, 1000)));
   const int defWarm = int(p.integer("warmup", 1, Interval::closed(0, 100)));
   parseMethods(p, defBackend, plan);

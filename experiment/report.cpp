@@ -122,19 +122,16 @@ void sweepTableRow(std::ostream& md, const ResultFacts& facts, const SweepSpec& 
     md << " " << (b ? fmt(b->totalMs() / std::max(rec.totalMs(), 1e-9), "%.2f") + "×" : "—")
        << " |";
   }
-  const auto pct = [](double v, const char* format) {
-    return std::isfinite(v) ? fmt(100 * v, format) + "%" : std::string("—");
-  };
   if (!rec.errors.empty()) {
     const ImageError& e = rec.errors[0];
-    md << " " << pct(e.relL2, "%.2f") << " | " << pct(e.maskedRelL2, "%.2f")
+    md << " " << percent(e.relL2, "%.2f") << " | " << percent(e.maskedRelL2, "%.2f")
        << (std::isfinite(e.maskRadius) ? " (" + fmt(e.maskRadius, "%.3g") + ")" : "") << " | "
-       << pct(e.relL1, "%.2f") << " | " << pct(e.visiblyWrong, "%.3f") << " |";
+       << percent(e.relL1, "%.2f") << " | " << percent(e.visiblyWrong, "%.3f") << " |";
   } else {
     md << " — | — | — | — |";
   }
   for (std::size_t k = 1; k < facts.plan.references.size(); ++k)
-    md << " " << (k < rec.errors.size() ? pct(rec.errors[k].relL2, "%.2f") : "—") << " |";
+    md << " " << (k < rec.errors.size() ? percent(rec.errors[k].relL2, "%.2f") : "—") << " |";
   md << " "
      << (rec.paper.contains("rel_error")
              ? fmt(100 * rec.paper["rel_error"].get<double>(), "%.1f") + "%"
