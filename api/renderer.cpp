@@ -4,6 +4,7 @@
 
 #include "api/scatterlab.h"
 #include "core/error.h"
+#include "core/quick_look.h"
 
 namespace scatterlab {
 
@@ -17,7 +18,7 @@ Renderer::Renderer(Json doc, std::filesystem::path baseDir, std::string method, 
 Renderer Renderer::fromFile(const std::string& path, const std::vector<std::string>& overrides,
                             std::string method, std::string backend) {
   initialize();
-  Json doc = readJsonFile(path);
+  Json doc = readSceneDocument(path);
   for (const auto& o : overrides) applyOverride(doc, o);
   try {
     return Renderer(std::move(doc), std::filesystem::path(path).parent_path(), std::move(method),

@@ -12,6 +12,7 @@
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "core/quick_look.h"
 #include "core/suggest.h"
 #include "cpu/sample_view.h"
 #include "media/vdb.h"
@@ -201,16 +202,23 @@ Action addRender(CLI::App& app) {
     const ToneCurve curve = parseToneCurve(o->tonemap);
     Renderer renderer = Renderer::fromFile(o->scene, o->sets, o->method, o->backend);
     const Scene& scene = renderer.scene();
+    if (!o->quiet && !volumeFileType(o->scene).empty())
+      std::fprintf(stderr,
+                   "scatterlab: note: '%s' is a volume without a scene: framed automatically "
+                   "(camera on the -z side, one directional light, medium.sigma_t = %.3g for an "
+                   "optical depth of 3 through its thick parts); change any key with --set "
+                   "(docs/scene-format.md, \"Rendering a volume file without a scene\")\n",
+                   o->scene.c_str(), double(scene.medium.sigmaT));
     const Method& method = renderer.method();
     if (!method.ignoredKeys.empty()) {
       std::string list;
       for (const std::string& k : method.ignoredKeys)
         list += (list.empty() ? "'" : ", '") + k + "'";
-      std::fprintf(
-          stderr, "scatterlab: warning: ignoring %s (read by other methods, not '%s')\n",
-          list.c_str(),
-          (o->method.empty() ? scene.render.value("method", std::string("exact")) : o->method)
-              .c_str());
+      std::fprintf(stderr, "scatterlab: warning: ignoring %s (read by other methods, not '%s')\n",
+                   list.c_str(),
+                   (o->method.empty() ? scene.render.value("method", std::string(kDefaultMethod))
+                                      : o->method)
+                       .c_str());
     }
     // The frames: one unnumbered render, or A..B of a sequence. Every frame's scene is checked
     // (light paths) before the first render, so a bad key fails before anything is written.

@@ -59,7 +59,7 @@ std::unique_ptr<Method> createMethod(const Scene& scene, const std::string& meth
     throw ConfigError("backend: unknown backend '" + backend + "'" +
                       didYouMean(backend, backendNames) + "; allowed: 'cpu', 'gpu', 'auto'");
   Params p(scene.render, "render");
-  std::string name = p.string("method", "exact");
+  std::string name = p.string("method", std::string(kDefaultMethod));
   if (!methodOverride.empty()) name = methodOverride;
   const std::string fromFile = p.choice("backend", backendNames, "auto");
   const std::string asked = backend == "auto" ? fromFile : backend;

@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "core/image.h"
 #include "core/progress.h"
@@ -86,7 +87,12 @@ struct MethodEntry {
 
 Registry<MethodEntry>& methods();
 
-/// Creates the method the scene's render object names (default "exact"), or `methodOverride`
+/// The method of a scene whose render object names none: the paper's (gradient-based
+/// interpolation with dynamic sampling), on the CPU and the GPU. `exact` is the reference, at
+/// many times its cost (docs/RESULTS.md).
+inline constexpr std::string_view kDefaultMethod = "adaptive";
+
+/// Creates the method the scene's render object names (default kDefaultMethod), or `methodOverride`
 /// when non-empty — exactly as if render.method were set to it. backend: "cpu", "gpu" or
 /// "auto" (a hardware GPU when one is there and the method runs on it, else the CPU); the
 /// render object's `backend` applies when this is "auto". Any other backend string ("GPU",

@@ -1,5 +1,6 @@
 #include "core/scene.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/objects.h"
+#include "core/quick_look.h"
 
 namespace scatterlab {
 
@@ -209,6 +211,12 @@ Medium parseMedium(Params p, LoadContext ctx) {
 
 }  // namespace
 
+Medium parseMediumDocument(const Json& medium, const std::filesystem::path& baseDir) {
+  LoadContext ctx;
+  ctx.baseDir = baseDir;
+  return parseMedium(Params(medium, "medium"), ctx);
+}
+
 Scene parseScene(const Json& doc, const std::filesystem::path& baseDir, const Medium* keepMedium) {
   Params root(doc, "");
   Scene s;
@@ -288,8 +296,24 @@ Json readJsonFile(const std::string& path) {
   }
 }
 
+std::string volumeFileType(const std::string& path) {
+  // Only a regular file is looked into (a FIFO or device is readJsonFile's to refuse).
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return "";
+  std::string head(8, '\0');
+  std::ifstream in(path, std::ios::binary);
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(std::size_t(std::max<std::streamsize>(0, in.gcount())));
+  return foreignFile(path, head).densityType;
+}
+
+Json readSceneDocument(const std::string& path) {
+  const std::string type = volumeFileType(path);
+  return type.empty() ? readJsonFile(path) : quickLookScene(path, type);
+}
+
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides) {
-  Json doc = readJsonFile(path);
+  Json doc = readSceneDocument(path);
   for (const auto& o : overrides) applyOverride(doc, o);
   try {
     // Light paths are evaluated at the document's own time (core/animation.h).

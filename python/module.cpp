@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "api/scatterlab.h"
+#include "core/quick_look.h"
 #include "core/stages.h"
 
 namespace py = pybind11;
@@ -36,7 +37,7 @@ std::string dumps(const py::handle& obj, const std::string& what) {
   });
   try {
     return py::str(py::module_::import("json").attr("dumps")(obj, py::arg("default") = toList,
-                                                            py::arg("allow_nan") = false));
+                                                             py::arg("allow_nan") = false));
   } catch (py::error_already_set& e) {
     if (!e.matches(PyExc_ValueError)) throw;
     throw ConfigError(what + ": " + std::string(py::str(e.value())) +
@@ -257,12 +258,13 @@ PYBIND11_MODULE(_core, m) {
         }
         const std::string path = py::str(source);
         py::gil_scoped_release unlocked;
-        Json doc = readJsonFile(path);
+        Json doc = readSceneDocument(path);
         for (const auto& a : sets) applyOverride(doc, a);
         return makeScene(std::move(doc), std::filesystem::path(path).parent_path(), path);
       },
       py::arg("source"), py::arg("overrides") = py::none(), py::arg("base_dir") = py::none(),
-      "Scene from a JSON file path or a dict; overrides: {'camera.width': 64} or ['k=v'] as "
+      "Scene from a JSON file path, a volume file (.vdb, .sog: framed automatically, as "
+      "`scatterlab render smoke.vdb`) or a dict; overrides: {'camera.width': 64} or ['k=v'] as "
       "--set; base_dir: where a dict's relative file names resolve (default: the working "
       "directory)");
 

@@ -89,9 +89,15 @@ TEST(Suggest, ASceneThatIsAVolumeOrAnImageSaysSo) {
   // The first bytes of an OpenVDB file (its magic number 0x56444220, then the version).
   const std::string vdb = (dir / "smoke.vdb").string();
   std::ofstream(vdb, std::ios::binary) << std::string("\x20\x42\x44\x56\0\0\0\0\xdc\0\0\0", 12);
-  std::string e = configErrorOf([&] { loadScene(vdb); });
+  // Read as JSON (an experiment's config, a sweep file) it is named for what it is ...
+  std::string e = configErrorOf([&] { readJsonFile(vdb); });
   EXPECT_NE(e.find("is an OpenVDB volume, not a scene (a JSON file)"), std::string::npos) << e;
   EXPECT_NE(e.find("{\"type\": \"vdb\", \"file\": \"smoke.vdb\"}"), std::string::npos) << e;
+  EXPECT_EQ(e.find("malformed JSON"), std::string::npos) << e;
+  // ... and as a scene it is a quick look (core/quick_look.h), whose reader names what is wrong
+  // with this truncated file.
+  e = configErrorOf([&] { loadScene(vdb); });
+  EXPECT_NE(e.find("'" + vdb + "' is not a valid VDB file"), std::string::npos) << e;
   EXPECT_EQ(e.find("malformed JSON"), std::string::npos) << e;
   // By content whatever the name: an EXR named .json.
   const std::string exr = (dir / "image.json").string();
