@@ -156,7 +156,7 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
   ds.relative = true;
   ds.epsilon = 0.05;
   ds.probes = 40;
-  for (long long cap : {0LL, 200LL}) {
+  for (long long cap : {0LL, 200LL, kAutoBudget}) {
     ds.maxSamples = cap;
     const DynamicSamplingResult cpu =
         dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
@@ -169,22 +169,26 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
     for (const auto& level : errors)
       for (float e : level)
         closest = std::min(closest, std::abs(double(e) / cpu.levels[0].threshold - 1.0));
-    std::printf("cap %lld: %zu samples, threshold %.4g (scale %.4g), %d passes, closest E %.3g\n",
-                cap, cpu.samples.size(), cpu.levels[0].threshold, cpu.levels[0].errorScale,
-                cpu.levels[0].budgetRuns, closest);
+    std::printf("cap %lld: %zu samples, threshold %.4g (scale %.4g), closest E %.3g\n", cap,
+                cpu.samples.size(), cpu.levels[0].threshold, cpu.levels[0].errorScale, closest);
     EXPECT_GT(closest, 1e-3);
     EXPECT_NEAR(g.levels[0].errorScale, cpu.levels[0].errorScale, 1e-4 * cpu.levels[0].errorScale);
     EXPECT_NEAR(g.levels[0].threshold, cpu.levels[0].threshold, 1e-4 * cpu.levels[0].threshold);
-    EXPECT_EQ(g.levels[0].budgetRuns, cpu.levels[0].budgetRuns);
+    EXPECT_EQ(g.levels[0].budget, cpu.levels[0].budget);
     EXPECT_GT(cpu.levels[0].split, 0);
+    long long capped = 0;
     if (cap > 0) {
+      // One pass within the budget, split worst first on the host (budgetedSplit) on both.
       EXPECT_LE((long long)cpu.samples.size(), cap);
-      EXPECT_GT(cpu.levels[0].budgetRuns, 1);
+      EXPECT_EQ(cpu.levels[0].budget, cap);
+      for (const LevelStats& l : cpu.levels) capped += l.capped;
+      EXPECT_GT(capped, 0);
     }
     ASSERT_EQ(g.levels.size(), cpu.levels.size());
     for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
       EXPECT_EQ(g.levels[l].samples, cpu.levels[l].samples) << "level " << l;
       EXPECT_EQ(g.levels[l].split, cpu.levels[l].split) << "level " << l;
+      EXPECT_EQ(g.levels[l].capped, cpu.levels[l].capped) << "level " << l;
     }
     ASSERT_EQ(g.samples.size(), cpu.samples.size());
     int bad = 0;
