@@ -336,11 +336,10 @@ struct LevelReadBack {
 /// level is read back, and the next level's samples and ancestors are uploaded with its count and
 /// dispatch size. `points`/`anc`: the level's samples as the host holds them (level 0: the
 /// initial ones; later: those uploaded here), replaced by the next level's.
-SplitDecision budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, std::size_t k,
-                               std::size_t L, const DynamicSamplingSettings& settings,
-                               double threshold, long long kept, long long budget,
-                               std::vector<GpuSamplePoint>& points,
-                               std::vector<std::int32_t>& anc) {
+BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, std::size_t k,
+                             std::size_t L, const DynamicSamplingSettings& settings,
+                             double threshold, long long kept, long long budget,
+                             std::vector<GpuSamplePoint>& points, std::vector<std::int32_t>& anc) {
   const std::size_t n = points.size();
   std::vector<float> errors(n);
   if (n) w.levels[k].errors.read(errors.data(), n * sizeof(float));
@@ -350,8 +349,15 @@ SplitDecision budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, 
     centres[j] = points[j].position;
     radii[j] = points[j].radius;
   }
-  SplitDecision d = budgetedSplit(scene.medium.bounds, settings.levels[k], centres, radii, anc,
-                                  errors, threshold, kept + (long long)n, budget, L - k);
+  BudgetLevel bl;
+  bl.decision = budgetedSplit(scene.medium.bounds, settings.levels[k], centres, radii, anc, errors,
+                              threshold, kept + (long long)n, budget, L - k);
+  bl.resolution = settings.levels[k];
+  bl.centres = std::move(centres);
+  bl.radii = std::move(radii);
+  bl.anc = anc;
+  bl.errors = std::move(errors);
+  const SplitDecision& d = bl.decision;
   const GridInfoBuffer grid(scene.medium.bounds, settings.levels[k]);
   const std::size_t m = d.vertices.size();
   DynamicSamplingWorkspace::Level& next = w.levels[k + 1];
@@ -376,7 +382,35 @@ SplitDecision budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, 
   glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * (k + 1)) * sizeof(GLuint)),
                        sizeof dispatch, dispatch);
   checkGl("dynamic sampling: budgeted split of level " + std::to_string(k));
-  return d;
+  return bl;
+}
+
+/// S and ∇S of the top-up's children (budgetTopUp) on the GPU: uploaded into the last level's
+/// buffers in chunks of its capacity and evaluated there as a final level (no probes).
+void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
+                      const Volume& density, const TracerSteps& steps,
+                      const DynamicSamplingSettings& settings, TopUp& t, StageTimer* timer) {
+  const std::size_t L = settings.levels.size();
+  DynamicSamplingWorkspace::Level& l = w.levels[L];
+  for (std::size_t first = 0; first < t.children.size(); first += l.capacity) {
+    const std::size_t m = std::min(l.capacity, t.children.size() - first);
+    std::vector<GpuSamplePoint> points(m);
+    for (std::size_t i = 0; i < m; ++i)
+      points[i] = {t.children[first + i].position, t.children[first + i].radius};
+    glNamedBufferSubData(l.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)), points.data());
+    glNamedBufferSubData(l.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)),
+                         t.ancestors.data() + first);
+    const GLuint count = GLuint(m);
+    glNamedBufferSubData(w.counts.id(), GLintptr(L * sizeof(GLuint)), sizeof(GLuint), &count);
+    const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
+    glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * L) * sizeof(GLuint)),
+                         sizeof dispatch, dispatch);
+    evaluateLevel(w, inputs, density, L, /*final=*/true, steps, settings, timer);
+    std::vector<GpuRadianceRecord> radiance(m);
+    l.radiance.read(radiance.data(), m * sizeof(GpuRadianceRecord));
+    for (std::size_t i = 0; i < m; ++i) unpackRadiance(radiance[i], t.children[first + i]);
+  }
+  checkGl("dynamic sampling: top-up");
 }
 
 /// One splitting pass on the GPU. Without a budget every level is enqueued without a read-back;
@@ -393,7 +427,7 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
   DynamicSamplingResult result;
   std::vector<double> enqueueMs(L + 1, 0.0);
   const long long budget = sampleBudget(settings, initial.size());
-  std::vector<SplitDecision> decisions(budget > 0 ? L : 0);
+  std::vector<BudgetLevel> decisions;  // the budget's split levels (empty without one)
   if (!initial.empty()) {
     prepareWorkspace(w, initial, settings);
     std::vector<GpuSamplePoint> points;  // the budget's host copy of the level's samples
@@ -418,9 +452,9 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
             hostThreshold = thr[1];
           }
           const long long n = (long long)points.size();
-          decisions[k] =
-              budgetedSplitGpu(w, scene, k, L, settings, hostThreshold, kept, budget, points, anc);
-          kept += n - decisions[k].splits;
+          decisions.push_back(
+              budgetedSplitGpu(w, scene, k, L, settings, hostThreshold, kept, budget, points, anc));
+          kept += n - decisions.back().decision.splits;
         } else {
           const GridGeometry grid(scene.medium.bounds, settings.levels[k]);
           splitLevel(w, grid, k, L, timer);
@@ -469,9 +503,10 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
         l.errors.read(rb.errors.data(), n * sizeof(float));
         ls.threshold = threshold;
         ls.errorScale = errorScale;
-        if (!decisions.empty()) {
-          split = decisions[k].split;  // the budget's host decisions
-          ls.capped = decisions[k].capped;
+        if (k < decisions.size()) {
+          split = decisions[k].decision.split;  // the budget's host decisions
+          ls.capped = decisions[k].decision.capped;
+          decisions[k].offset = result.samples.size();
         } else {
           // In double against the double threshold, as the CPU variant and the split pass
           // compare.
@@ -502,6 +537,12 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
         result.levels.push_back(LevelStats{settings.levels[l - 1]});
       break;
     }
+  }
+  if (!decisions.empty()) {
+    // The top-up, decided on the host as on the CPU; the children evaluated on the GPU.
+    TopUp t = budgetTopUp(scene.medium.bounds, decisions, (long long)result.samples.size(), budget);
+    if (!t.children.empty()) evaluateTopUpGpu(w, inputs, density, steps, settings, t, timer);
+    applyTopUp(result, decisions, std::move(t));
   }
   if (!result.levels.empty()) result.levels[0].budget = budget;
   return result;

@@ -180,12 +180,114 @@ SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector
     });
   }
   d.capped = (long long)(order.size() - stop);
-  for (std::size_t j = 0; j < n; ++j)
+  d.cappedOrder.assign(order.begin() + std::ptrdiff_t(stop), order.end());
+  for (std::size_t j = 0; j < n; ++j) {
     if (!d.split[j]) d.maxLeft = std::max(d.maxLeft, errors[j]);
+    if (!(double(errors[j]) > threshold)) d.maxBelow = std::max(d.maxBelow, errors[j]);
+  }
   d.vertices = compactFlags(next.inSet);
   d.ancestors.resize(d.vertices.size());
   for (std::size_t i = 0; i < d.vertices.size(); ++i) d.ancestors[i] = next.ancestor[d.vertices[i]];
+  d.marked = std::move(next.inSet);
   return d;
+}
+
+TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long count,
+                  long long budget) {
+  TopUp t;
+  t.toppedUp.assign(levels.size(), 0);
+  if (budget <= 0 || count >= budget) return t;
+  struct Candidate {
+    float e;
+    std::size_t level;
+    std::uint32_t j;
+  };
+  std::vector<Candidate> cands;
+  for (std::size_t k = 0; k < levels.size(); ++k)
+    for (std::uint32_t j : levels[k].decision.cappedOrder)
+      cands.push_back({levels[k].errors[j], k, j});
+  if (cands.empty()) return t;
+  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.e != b.e) return a.e > b.e;
+    if (a.level != b.level) return a.level < b.level;
+    return a.j < b.j;
+  });
+  // Per level: its grid G_{k+1} with the membership of the pass, and each sample's rank among
+  // the level's kept samples (its place in the result) before the top-up.
+  std::vector<GridInfoBuffer> grids;
+  std::vector<std::vector<std::size_t>> rank(levels.size());
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    grids.emplace_back(bounds, levels[k].resolution);
+    grids.back().inSet.swap(levels[k].decision.marked);
+    const std::vector<std::uint8_t>& split = levels[k].decision.split;
+    rank[k].resize(split.size());
+    std::size_t r = 0;
+    for (std::size_t j = 0; j < split.size(); ++j) {
+      rank[k][j] = r;
+      r += split[j] ? 0 : 1;
+    }
+  }
+  for (const Candidate& c : cands) {
+    BudgetLevel& L = levels[c.level];
+    GridInfoBuffer& g = grids[c.level];
+    const Vec3 centre = L.centres[c.j];
+    const float radius = L.radii[c.j];
+    long long fresh = 0;
+    g.forEachInSphere(centre, radius, [&](std::size_t v) { fresh += !g.inSet[v]; });
+    if (count + fresh - 1 > budget) break;  // worst first across the levels
+    count += fresh - 1;
+    const float R = g.radius();
+    g.forEachInSphere(centre, radius, [&](std::size_t v) {
+      if (g.inSet[v]) return;
+      g.inSet[v] = 1;
+      RadianceSample child;
+      child.position = g.vertex(v);
+      child.radius = R;
+      child.level = int(c.level) + 1;
+      t.children.push_back(child);
+      t.ancestors.push_back(L.anc[c.j]);
+    });
+    t.removed.push_back(L.offset + rank[c.level][c.j]);
+    L.decision.split[c.j] = 1;
+    ++L.decision.splits;
+    --L.decision.capped;
+    ++t.toppedUp[c.level];
+  }
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    SplitDecision& d = levels[k].decision;
+    std::vector<std::uint32_t> left;
+    d.maxLeft = d.maxBelow;
+    for (std::uint32_t j : d.cappedOrder)
+      if (!d.split[j]) {
+        left.push_back(j);
+        d.maxLeft = std::max(d.maxLeft, levels[k].errors[j]);
+      }
+    d.cappedOrder = std::move(left);
+    d.marked.swap(grids[k].inSet);
+  }
+  return t;
+}
+
+void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& levels, TopUp&& t) {
+  std::vector<std::uint8_t> drop(result.samples.size(), 0);
+  for (std::size_t i : t.removed) drop[i] = 1;
+  std::vector<RadianceSample> kept;
+  kept.reserve(result.samples.size() - t.removed.size() + t.children.size());
+  for (std::size_t i = 0; i < result.samples.size(); ++i)
+    if (!drop[i]) kept.push_back(result.samples[i]);
+  for (const RadianceSample& c : t.children) {
+    kept.push_back(c);
+    if (std::size_t(c.level) < result.levels.size()) ++result.levels[std::size_t(c.level)].samples;
+  }
+  result.samples = std::move(kept);
+  for (std::size_t k = 0; k < levels.size() && k < result.levels.size(); ++k) {
+    const SplitDecision& d = levels[k].decision;
+    LevelStats& ls = result.levels[k];
+    ls.split = d.splits;
+    ls.capped = d.capped;
+    ls.maxLeft = d.maxLeft;
+    ls.toppedUp = t.toppedUp[k];
+  }
 }
 
 namespace {
@@ -198,6 +300,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
   using Clock = std::chrono::steady_clock;
   const DensityGrid& density = frame.hostDensity();
   const long long budget = sampleBudget(settings, current.size());
+  std::vector<BudgetLevel> budgetLevels;  // the split levels, for the top-up
   DynamicSamplingResult result;
   // τ of every level-0 sample; descendants index it through their ancestor.
   std::vector<float> rootTau(current.size());
@@ -271,13 +374,18 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
       // Budgeted: the level's splits worst first within its allotment (budgetedSplit()).
       std::vector<Vec3> centres(current.size());
       std::vector<float> radii(current.size());
+      std::vector<std::int32_t> levelAnc = anc;
       for (std::size_t j = 0; j < current.size(); ++j) {
         centres[j] = current[j].position;
         radii[j] = current[j].radius;
       }
-      const SplitDecision d = budgetedSplit(
+      BudgetLevel& bl = budgetLevels.emplace_back();
+      bl.decision = budgetedSplit(
           scene.medium.bounds, settings.levels[level], centres, radii, anc, errors, threshold,
           (long long)(result.samples.size() + current.size()), budget, nLevels - level);
+      const SplitDecision& d = bl.decision;
+      bl.offset = result.samples.size();
+      bl.resolution = settings.levels[level];
       for (std::size_t j = 0; j < current.size(); ++j)
         if (!d.split[j]) result.samples.push_back(current[j]);
       ls.split = d.splits;
@@ -292,6 +400,10 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
       }
       current = std::move(nextSamples);
       anc = d.ancestors;
+      bl.centres = std::move(centres);
+      bl.radii = std::move(radii);
+      bl.anc = std::move(levelAnc);
+      bl.errors = std::move(errors);
       ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       result.levels.push_back(ls);
       continue;
@@ -327,6 +439,15 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     anc = std::move(nextAnc);
     ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     result.levels.push_back(ls);
+  }
+  if (budget > 0 && !budgetLevels.empty()) {
+    // The top-up: the budget the shares left unused, to the capped candidates, worst first.
+    const auto t0 = Clock::now();
+    TopUp t =
+        budgetTopUp(scene.medium.bounds, budgetLevels, (long long)result.samples.size(), budget);
+    if (!t.children.empty()) evaluator.evaluate(frame, scene, t.children, /*gradients=*/true);
+    applyTopUp(result, budgetLevels, std::move(t));
+    result.levels.back().ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
   if (!result.levels.empty()) result.levels[0].budget = budget;
   return result;
@@ -365,6 +486,7 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
                       {"max_error", ls.maxError},
                       {"p90_error", ls.p90Error},
                       {"capped", ls.capped},
+                      {"topped_up", ls.toppedUp},
                       {"max_left", ls.maxLeft},
                       {"ms", ls.ms}});
   }

@@ -120,6 +120,7 @@ struct LevelStats {
   double errorScale = 0.0;  ///< relativeErrorScale() of the initial set (relative ε; else 0)
   int budgetRuns = 1;       ///< level 0: splitting passes run (always 1: the budget is one pass)
   long long capped = 0;     ///< candidates (E > threshold) left unsplit by the sample budget
+  long long toppedUp = 0;   ///< of the splits, those made by the budget's top-up (budgetTopUp)
   float maxLeft = 0.0f;     ///< largest E of a sample of this level left unsplit (0: final level)
   long long budget = 0;     ///< level 0: the sample budget applied (0: none)
   double ms = 0.0;          ///< wall time of the level (evaluation, error, split, scan)
@@ -181,13 +182,51 @@ long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t init
 /// split, and the vertices of G_{k+1} they mark (ascending, as the scan compaction orders them)
 /// with their level-0 ancestors (the smallest among the marking spheres, as markSphere()).
 struct SplitDecision {
-  std::vector<std::uint8_t> split;      ///< per sample of level k
-  std::vector<std::uint32_t> vertices;  ///< linear indices of G_{k+1}, ascending
-  std::vector<std::int32_t> ancestors;  ///< per vertex
-  long long count = 0;                  ///< final count after these splits (see countBefore)
-  long long splits = 0, capped = 0;     ///< split; candidates left unsplit by the allotment
-  float maxLeft = 0.0f;                 ///< largest E of a sample left unsplit
+  std::vector<std::uint8_t> split;         ///< per sample of level k
+  std::vector<std::uint32_t> vertices;     ///< linear indices of G_{k+1}, ascending
+  std::vector<std::int32_t> ancestors;     ///< per vertex
+  long long count = 0;                     ///< final count after these splits (see countBefore)
+  long long splits = 0, capped = 0;        ///< split; candidates left unsplit by the allotment
+  float maxLeft = 0.0f;                    ///< largest E of a sample left unsplit
+  float maxBelow = 0.0f;                   ///< largest E of a non-candidate (E <= threshold)
+  std::vector<std::uint32_t> cappedOrder;  ///< the capped candidates, worst first
+  std::vector<std::uint8_t> marked;        ///< G_{k+1}'s membership after the splits
 };
+
+/// One split level as the top-up reads it: its decision, its samples, and where its unsplit
+/// samples start in the result (levels are appended in order, each in index order).
+struct BudgetLevel {
+  SplitDecision decision;
+  std::vector<Vec3> centres;
+  std::vector<float> radii;
+  std::vector<std::int32_t> anc;
+  std::vector<float> errors;
+  int resolution = 0;      ///< of G_{k+1}
+  std::size_t offset = 0;  ///< index in DynamicSamplingResult::samples of its first kept sample
+};
+
+/// The top-up of a budgeted pass: the budget a level's share left unused (a finer level needed
+/// fewer splits than its share) goes, after the last level, to the capped candidates of every
+/// split level, worst first across the levels (ties: coarser level, then index), each while the
+/// count fits the budget, stopping at the first that does not. Their children (fresh vertices
+/// of G_{k+1}) are evaluated once, with ∇S and no probes (they are final), and appended.
+struct TopUp {
+  std::vector<std::size_t> removed;      ///< indices into the result of the split parents
+  std::vector<RadianceSample> children;  ///< position, radius, level; S to be evaluated
+  std::vector<std::int32_t> ancestors;   ///< per child: its parent's level-0 ancestor
+  std::vector<long long> toppedUp;       ///< per split level: its splits made here
+};
+
+/// Decides the top-up (updates each level's decision: split, splits, capped, maxLeft).
+/// `count`: the final count of the pass.
+TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long count,
+                  long long budget);
+
+/// Applies an evaluated top-up to the result: removes the parents, appends the children (in
+/// the top-up's order), and updates the level stats (split, capped, toppedUp, maxLeft, and
+/// the children's level's evaluated count).
+void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& levels,
+                TopUp&& topUp);
 
 /// The budgeted split of level k, shared by the CPU and GPU variants (the GPU reads E back and
 /// uploads the next level). centres/radii/anc/errors: the level's samples; `threshold`: the

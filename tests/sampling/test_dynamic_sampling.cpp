@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
 #include <random>
+#include <sstream>
 
 #include "cpu/radiance_evaluator.h"
 #include "sampling/dynamic_sampling.h"
@@ -426,13 +428,15 @@ TEST(DynamicSampling, SampleBudgetHoldsInOnePass) {
     EXPECT_EQ(r.samples[i].level, free.samples[i].level);
   }
   for (const LevelStats& l : r.levels) EXPECT_EQ(l.capped, 0);
-  // A third of it: the set fits, in one pass (the evaluator ran 2 × 3 + 1 times, not 7–11
-  // passes), with the same threshold, and the budget left candidates unsplit (the error left,
-  // max_left / threshold, is above 1).
+  // A third of it: the set fits, in one pass (the evaluator ran 2 × 3 + 1 times, + 1 for a
+  // top-up, not 7–11 passes), with the same threshold, and the budget left candidates unsplit (the
+  // error left, max_left / threshold, is above 1).
   st.maxSamples = unbudgeted / 3;
   ev.calls = 0;
   r = dynamicSampling(scene, density, init, ev, st);
-  EXPECT_EQ(ev.calls, onePass);
+  long long toppedUp = 0;
+  for (const LevelStats& l : r.levels) toppedUp += l.toppedUp;
+  EXPECT_EQ(ev.calls, onePass + (toppedUp > 0 ? 1 : 0));  // + the top-up's children, if any
   EXPECT_EQ(r.levels[0].budgetRuns, 1);
   EXPECT_LE((long long)r.samples.size(), st.maxSamples);
   EXPECT_GT((long long)r.samples.size(), (long long)init.size());
@@ -482,10 +486,62 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   // The same budget with two split levels left: this level may use half the headroom: one.
   d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 2);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
+  // The top-up: that share left the budget of one split unused (no finer level here); after
+  // the pass it goes to the next worst capped candidate (E = 3, the second kept sample in the
+  // result: index 1), not to E = 2.
+  std::vector<BudgetLevel> levels(1);
+  levels[0].decision = d;
+  levels[0].centres = centres;
+  levels[0].radii = radii;
+  levels[0].anc = anc;
+  levels[0].errors = errors;
+  levels[0].resolution = 10;
+  TopUp t = budgetTopUp(box, levels, d.count, 3 + 2 * (fresh - 1));
+  EXPECT_EQ(t.removed, (std::vector<std::size_t>{1}));
+  EXPECT_EQ((long long)t.children.size(), fresh);
+  for (const RadianceSample& c : t.children) {
+    EXPECT_EQ(c.level, 1);
+    EXPECT_LT(glm::length(c.position - centres[2]), radii[2]);
+  }
+  EXPECT_EQ(t.toppedUp, (std::vector<long long>{1}));
+  EXPECT_EQ(levels[0].decision.split, (std::vector<std::uint8_t>{0, 1, 1}));
+  EXPECT_EQ(levels[0].decision.capped, 1);
+  EXPECT_FLOAT_EQ(levels[0].decision.maxLeft, 2.0f);
   // The threshold still rules: E = 2 is not a candidate at a threshold of 2.5.
   d = budgetedSplit(box, 10, centres, radii, anc, errors, 2.5, 3, 1000, 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_EQ(d.capped, 0);
+}
+
+TEST(DynamicSampling, BudgetStatKeysAreDocumented) {
+  // The stats of a budgeted pass: every key (top level and per level) is named, backticked, in
+  // docs/dynamic-sampling.md, and error_left is the largest E left unsplit / threshold.
+  std::vector<LevelStats> levels(3);
+  levels[0].threshold = 2.0;
+  levels[0].budget = 100;
+  levels[0].maxLeft = 3.0f;
+  levels[1].maxLeft = 5.0f;
+  levels[1].capped = 7;
+  levels[2].capped = 1;
+  DynamicSamplingSettings st;
+  st.relative = true;
+  st.maxSamples = kAutoBudget;
+  RenderStats rs;
+  addDynamicSamplingStats(rs, levels, {}, st);
+  EXPECT_EQ(rs.extra["budget"], 100);
+  EXPECT_EQ(rs.extra["capped"], 8);
+  EXPECT_DOUBLE_EQ(rs.extra["error_left"].get<double>(), 2.5);
+  EXPECT_EQ(rs.extra["budget_runs"], 1);
+  EXPECT_EQ(rs.extra["max_samples"], "auto");
+  std::ifstream f(std::string(SCATTERLAB_SOURCE_DIR) + "/docs/dynamic-sampling.md");
+  std::stringstream doc;
+  doc << f.rdbuf();
+  std::vector<std::string> keys;
+  for (const auto& [k, v] : rs.extra.items()) keys.push_back(k);
+  for (const auto& [k, v] : rs.extra["levels"][0].items()) keys.push_back(k);
+  for (const std::string& k : keys)
+    EXPECT_NE(doc.str().find("`" + k + "`"), std::string::npos)
+        << "stat " << k << " is not in docs/dynamic-sampling.md";
 }
 
 namespace scatterlab {
