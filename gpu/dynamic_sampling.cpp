@@ -466,76 +466,78 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
     }
   }
   // The one read-back of the pass: the counts (this waits for the GPU), then the levels.
-  ScopedGpuTimer readTime(timer, "ds read-back");
-  std::vector<GLuint> counts(dispatchSlot(L), 0u);
-  double thr[2] = {0.0, 0.0};
-  if (!initial.empty()) {
-    w.counts.read(counts.data(), counts.size() * sizeof(GLuint));
-    if (counts[overflowSlot(L)] > 0) {
-      const std::size_t k = counts[overflowSlot(L) + 1];
-      throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
-                     std::to_string(settings.levels[k - 1]) + "^3) has " +
-                     std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
-                     std::to_string(w.levels[k].capacity) +
-                     " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
-                     "larger epsilon");
+  {  // the read-back's GPU time ends before the top-up's evaluation begins
+    ScopedGpuTimer readTime(timer, "ds read-back");
+    std::vector<GLuint> counts(dispatchSlot(L), 0u);
+    double thr[2] = {0.0, 0.0};
+    if (!initial.empty()) {
+      w.counts.read(counts.data(), counts.size() * sizeof(GLuint));
+      if (counts[overflowSlot(L)] > 0) {
+        const std::size_t k = counts[overflowSlot(L) + 1];
+        throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
+                       std::to_string(settings.levels[k - 1]) + "^3) has " +
+                       std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
+                       std::to_string(w.levels[k].capacity) +
+                       " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
+                       "larger epsilon");
+      }
+      if (L > 0) w.threshold.read(thr, sizeof thr);
     }
-    if (L > 0) w.threshold.read(thr, sizeof thr);
-  }
-  const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
-  for (std::size_t k = 0; k <= L; ++k) {
-    LevelStats ls;
-    ls.resolution = k == 0 ? 0 : settings.levels[k - 1];
-    const std::size_t n = counts[k];
-    ls.samples = (long long)n;
-    ls.ms = enqueueMs[k];
-    const bool final = k == L || n == 0;
-    if (n > 0) {
-      const DynamicSamplingWorkspace::Level& l = w.levels[k];
-      LevelReadBack rb;
-      rb.samples.resize(n);
-      rb.radiance.resize(n);
-      l.samples.read(rb.samples.data(), n * sizeof(GpuSamplePoint));
-      l.radiance.read(rb.radiance.data(), n * sizeof(GpuRadianceRecord));
-      std::vector<std::uint8_t> split(n, 0);
-      if (!final) {
-        rb.errors.resize(n);
-        l.errors.read(rb.errors.data(), n * sizeof(float));
-        ls.threshold = threshold;
-        ls.errorScale = errorScale;
-        if (k < decisions.size()) {
-          split = decisions[k].decision.split;  // the budget's host decisions
-          ls.capped = decisions[k].decision.capped;
-          decisions[k].offset = result.samples.size();
-        } else {
-          // In double against the double threshold, as the CPU variant and the split pass
-          // compare.
-          for (std::size_t j = 0; j < n; ++j) split[j] = double(rb.errors[j]) > threshold;
+    const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
+    for (std::size_t k = 0; k <= L; ++k) {
+      LevelStats ls;
+      ls.resolution = k == 0 ? 0 : settings.levels[k - 1];
+      const std::size_t n = counts[k];
+      ls.samples = (long long)n;
+      ls.ms = enqueueMs[k];
+      const bool final = k == L || n == 0;
+      if (n > 0) {
+        const DynamicSamplingWorkspace::Level& l = w.levels[k];
+        LevelReadBack rb;
+        rb.samples.resize(n);
+        rb.radiance.resize(n);
+        l.samples.read(rb.samples.data(), n * sizeof(GpuSamplePoint));
+        l.radiance.read(rb.radiance.data(), n * sizeof(GpuRadianceRecord));
+        std::vector<std::uint8_t> split(n, 0);
+        if (!final) {
+          rb.errors.resize(n);
+          l.errors.read(rb.errors.data(), n * sizeof(float));
+          ls.threshold = threshold;
+          ls.errorScale = errorScale;
+          if (k < decisions.size()) {
+            split = decisions[k].decision.split;  // the budget's host decisions
+            ls.capped = decisions[k].decision.capped;
+            decisions[k].offset = result.samples.size();
+          } else {
+            // In double against the double threshold, as the CPU variant and the split pass
+            // compare.
+            for (std::size_t j = 0; j < n; ++j) split[j] = double(rb.errors[j]) > threshold;
+          }
+          for (std::size_t j = 0; j < n; ++j) {
+            ls.split += split[j];
+            if (!split[j]) ls.maxLeft = std::max(ls.maxLeft, rb.errors[j]);
+          }
+          ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
+          ls.p90Error = quantile(rb.errors, 0.9);
         }
+        // The samples that stay (all of them on the final level), in evaluation order: the CPU's.
         for (std::size_t j = 0; j < n; ++j) {
-          ls.split += split[j];
-          if (!split[j]) ls.maxLeft = std::max(ls.maxLeft, rb.errors[j]);
+          if (split[j]) continue;
+          RadianceSample s;
+          s.position = rb.samples[j].position;
+          s.radius = rb.samples[j].radius;
+          s.level = int(k);
+          unpackRadiance(rb.radiance[j], s);
+          result.samples.push_back(s);
         }
-        ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
-        ls.p90Error = quantile(rb.errors, 0.9);
+        if (!final && errorsOut) errorsOut->push_back(std::move(rb.errors));
       }
-      // The samples that stay (all of them on the final level), in evaluation order: the CPU's.
-      for (std::size_t j = 0; j < n; ++j) {
-        if (split[j]) continue;
-        RadianceSample s;
-        s.position = rb.samples[j].position;
-        s.radius = rb.samples[j].radius;
-        s.level = int(k);
-        unpackRadiance(rb.radiance[j], s);
-        result.samples.push_back(s);
+      result.levels.push_back(ls);
+      if (n == 0) {
+        for (std::size_t l = k + 1; l <= L; ++l)
+          result.levels.push_back(LevelStats{settings.levels[l - 1]});
+        break;
       }
-      if (!final && errorsOut) errorsOut->push_back(std::move(rb.errors));
-    }
-    result.levels.push_back(ls);
-    if (n == 0) {
-      for (std::size_t l = k + 1; l <= L; ++l)
-        result.levels.push_back(LevelStats{settings.levels[l - 1]});
-      break;
     }
   }
   if (!decisions.empty()) {
