@@ -33,11 +33,17 @@
 /// budget on the coarsest level, whose errors are the largest because E ∝ R³, and leaves
 /// nothing for the edges that only the finer levels resolve (docs/dynamic-sampling.md measured
 /// it 3× worse than a uniform threshold); equal shares keep room for them without guessing
-/// the errors not yet seen. Default budget (render.max_samples absent): kBudgetPerInitial × the
-/// initial count, at most kBudgetCap (sampleBudget()); scale-free like the relative ε. The
-/// error left is reported: per level the candidates left unsplit (LevelStats::capped) and the
-/// largest E of a sample left unsplit (LevelStats::maxLeft; / threshold > 1: the budget stopped
-/// the refinement there). The finest level is not probed, so its errors are not known.
+/// the errors not yet seen. A finer level may need less than its share (lamps32: 8 candidates
+/// on the last split level); what the pass leaves unused then goes to the top-up
+/// (budgetTopUp()): after the last level the capped candidates of every split level, worst
+/// first across the levels, split while the count fits, their children evaluated in one batch
+/// without probes (they stay final). So the pass evaluates each level once, plus at most one
+/// batch of top-up children: never a re-run. Default budget (render.max_samples absent):
+/// kBudgetPerInitial × the initial count, at most kBudgetCap (sampleBudget()); scale-free like the
+/// relative ε. The error left is reported: per level the candidates left unsplit
+/// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft; /
+/// threshold > 1: the budget stopped the refinement there). The finest level is not probed, so its
+/// errors are not known.
 
 #include <cstdint>
 #include <functional>
