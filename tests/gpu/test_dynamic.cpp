@@ -338,7 +338,10 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
   const Json j = gpu.stats.toJson();
   for (const char* stage : {"density", "sampling", "dynamic_sampling", "reconstruction", "march"})
     EXPECT_TRUE(j["timings_ms"].contains(stage)) << stage;
-  EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains("ds scan"));
+  // The paper splits and scans on the GPU; the extensions' sample budget (on by default) splits
+  // on the host (budgetedSplit), after the GPU's evaluation.
+  EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains(GetParam() ? "ds scan" : "ds evaluate+error"));
+  EXPECT_EQ(gpu.stats.extra.contains("budget"), !GetParam());
   const double err = relL2(gpu.image, cpu.image);
   std::printf("adaptive (paper %d) gpu vs cpu: %lld samples, relative L2 %.3g\n", int(GetParam()),
               *gpu.stats.samples, err);
