@@ -332,8 +332,90 @@ struct LevelReadBack {
   std::vector<float> errors;
 };
 
-/// One splitting pass on the GPU (no budget): dynamicSamplingGpu() without max_samples. Every
-/// level is enqueued without a read-back; the result is read once at the end.
+/// A level's budgeted split decided on the host (budgetedSplit(), the CPU's function): E of the
+/// level is read back, and the next level's samples and ancestors are uploaded with its count and
+/// dispatch size. `points`/`anc`: the level's samples as the host holds them (level 0: the
+/// initial ones; later: those uploaded here), replaced by the next level's.
+BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, std::size_t k,
+                             std::size_t L, const DynamicSamplingSettings& settings,
+                             double threshold, long long kept, long long budget,
+                             std::vector<GpuSamplePoint>& points, std::vector<std::int32_t>& anc) {
+  const std::size_t n = points.size();
+  std::vector<float> errors(n);
+  if (n) w.levels[k].errors.read(errors.data(), n * sizeof(float));
+  std::vector<Vec3> centres(n);
+  std::vector<float> radii(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    centres[j] = points[j].position;
+    radii[j] = points[j].radius;
+  }
+  BudgetLevel bl;
+  bl.decision = budgetedSplit(scene.medium.bounds, settings.levels[k], centres, radii, anc, errors,
+                              threshold, kept + (long long)n, budget, L - k);
+  bl.resolution = settings.levels[k];
+  bl.centres = std::move(centres);
+  bl.radii = std::move(radii);
+  bl.anc = anc;
+  bl.errors = std::move(errors);
+  const SplitDecision& d = bl.decision;
+  const GridInfoBuffer grid(scene.medium.bounds, settings.levels[k]);
+  const std::size_t m = d.vertices.size();
+  DynamicSamplingWorkspace::Level& next = w.levels[k + 1];
+  if (m > next.capacity)
+    throw GpuError("dynamic sampling: level " + std::to_string(k + 1) + " (grid " +
+                   std::to_string(settings.levels[k]) + "^3) has " + std::to_string(m) +
+                   " samples, more than the " + std::to_string(next.capacity) +
+                   " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
+                   "larger epsilon");
+  points.resize(m);
+  const float R = grid.radius();
+  for (std::size_t i = 0; i < m; ++i) points[i] = {grid.vertex(d.vertices[i]), R};
+  anc = d.ancestors;
+  if (m) {
+    glNamedBufferSubData(next.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)),
+                         points.data());
+    glNamedBufferSubData(next.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)), anc.data());
+  }
+  const GLuint count = GLuint(m);
+  glNamedBufferSubData(w.counts.id(), GLintptr((k + 1) * sizeof(GLuint)), sizeof(GLuint), &count);
+  const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
+  glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * (k + 1)) * sizeof(GLuint)),
+                       sizeof dispatch, dispatch);
+  checkGl("dynamic sampling: budgeted split of level " + std::to_string(k));
+  return bl;
+}
+
+/// S and ∇S of the top-up's children (budgetTopUp) on the GPU: uploaded into the last level's
+/// buffers in chunks of its capacity and evaluated there as a final level (no probes).
+void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
+                      const Volume& density, const TracerSteps& steps,
+                      const DynamicSamplingSettings& settings, TopUp& t, StageTimer* timer) {
+  const std::size_t L = settings.levels.size();
+  DynamicSamplingWorkspace::Level& l = w.levels[L];
+  for (std::size_t first = 0; first < t.children.size(); first += l.capacity) {
+    const std::size_t m = std::min(l.capacity, t.children.size() - first);
+    std::vector<GpuSamplePoint> points(m);
+    for (std::size_t i = 0; i < m; ++i)
+      points[i] = {t.children[first + i].position, t.children[first + i].radius};
+    glNamedBufferSubData(l.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)), points.data());
+    glNamedBufferSubData(l.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)),
+                         t.ancestors.data() + first);
+    const GLuint count = GLuint(m);
+    glNamedBufferSubData(w.counts.id(), GLintptr(L * sizeof(GLuint)), sizeof(GLuint), &count);
+    const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
+    glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * L) * sizeof(GLuint)),
+                         sizeof dispatch, dispatch);
+    evaluateLevel(w, inputs, density, L, /*final=*/true, steps, settings, timer);
+    std::vector<GpuRadianceRecord> radiance(m);
+    l.radiance.read(radiance.data(), m * sizeof(GpuRadianceRecord));
+    for (std::size_t i = 0; i < m; ++i) unpackRadiance(radiance[i], t.children[first + i]);
+  }
+  checkGl("dynamic sampling: top-up");
+}
+
+/// One splitting pass on the GPU. Without a budget every level is enqueued without a read-back;
+/// the result is read once at the end. With one, each split level's E is read back and the
+/// split decided on the host (budgetedSplitGpu), as on the CPU.
 DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
                                    const TracingInputs& inputs,
                                    const std::vector<RadianceSample>& initial, TracerSteps steps,
@@ -344,87 +426,127 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
   const std::size_t L = settings.levels.size();
   DynamicSamplingResult result;
   std::vector<double> enqueueMs(L + 1, 0.0);
+  const long long budget = sampleBudget(settings, initial.size());
+  std::vector<BudgetLevel> decisions;  // the budget's split levels (empty without one)
   if (!initial.empty()) {
     prepareWorkspace(w, initial, settings);
+    std::vector<GpuSamplePoint> points;  // the budget's host copy of the level's samples
+    std::vector<std::int32_t> anc;
+    long long kept = 0;  // samples of the coarser levels that stay
+    double hostThreshold = 0.0;
+    if (budget > 0)
+      for (std::size_t i = 0; i < initial.size(); ++i) {
+        points.push_back({initial[i].position, initial[i].radius});
+        anc.push_back(std::int32_t(i));
+      }
     for (std::size_t k = 0; k <= L; ++k) {
       const auto t0 = Clock::now();
       const bool final = k == L;
       evaluateLevel(w, inputs, density, k, final, steps, settings, timer);
       if (!final) {
         if (k == 0) computeThreshold(w, settings, timer);
-        const GridGeometry grid(scene.medium.bounds, settings.levels[k]);
-        splitLevel(w, grid, k, L, timer);
-        compactLevel(w, grid, k + 1, L, timer);
+        if (budget > 0) {
+          if (k == 0) {
+            double thr[2] = {0.0, 0.0};
+            w.threshold.read(thr, sizeof thr);
+            hostThreshold = thr[1];
+          }
+          const long long n = (long long)points.size();
+          decisions.push_back(
+              budgetedSplitGpu(w, scene, k, L, settings, hostThreshold, kept, budget, points, anc));
+          kept += n - decisions.back().decision.splits;
+        } else {
+          const GridGeometry grid(scene.medium.bounds, settings.levels[k]);
+          splitLevel(w, grid, k, L, timer);
+          compactLevel(w, grid, k + 1, L, timer);
+        }
       }
       checkGl("dynamic sampling: level " + std::to_string(k));
       enqueueMs[k] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     }
   }
   // The one read-back of the pass: the counts (this waits for the GPU), then the levels.
-  ScopedGpuTimer readTime(timer, "ds read-back");
-  std::vector<GLuint> counts(dispatchSlot(L), 0u);
-  double thr[2] = {0.0, 0.0};
-  if (!initial.empty()) {
-    w.counts.read(counts.data(), counts.size() * sizeof(GLuint));
-    if (counts[overflowSlot(L)] > 0) {
-      const std::size_t k = counts[overflowSlot(L) + 1];
-      throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
-                     std::to_string(settings.levels[k - 1]) + "^3) has " +
-                     std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
-                     std::to_string(w.levels[k].capacity) +
-                     " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
-                     "larger epsilon");
+  {  // the read-back's GPU time ends before the top-up's evaluation begins
+    ScopedGpuTimer readTime(timer, "ds read-back");
+    std::vector<GLuint> counts(dispatchSlot(L), 0u);
+    double thr[2] = {0.0, 0.0};
+    if (!initial.empty()) {
+      w.counts.read(counts.data(), counts.size() * sizeof(GLuint));
+      if (counts[overflowSlot(L)] > 0) {
+        const std::size_t k = counts[overflowSlot(L) + 1];
+        throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
+                       std::to_string(settings.levels[k - 1]) + "^3) has " +
+                       std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
+                       std::to_string(w.levels[k].capacity) +
+                       " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
+                       "larger epsilon");
+      }
+      if (L > 0) w.threshold.read(thr, sizeof thr);
     }
-    if (L > 0) w.threshold.read(thr, sizeof thr);
-  }
-  const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
-  for (std::size_t k = 0; k <= L; ++k) {
-    LevelStats ls;
-    ls.resolution = k == 0 ? 0 : settings.levels[k - 1];
-    const std::size_t n = counts[k];
-    ls.samples = (long long)n;
-    ls.ms = enqueueMs[k];
-    const bool final = k == L || n == 0;
-    if (n > 0) {
-      const DynamicSamplingWorkspace::Level& l = w.levels[k];
-      LevelReadBack rb;
-      rb.samples.resize(n);
-      rb.radiance.resize(n);
-      l.samples.read(rb.samples.data(), n * sizeof(GpuSamplePoint));
-      l.radiance.read(rb.radiance.data(), n * sizeof(GpuRadianceRecord));
-      std::vector<std::uint8_t> split(n, 0);
-      if (!final) {
-        rb.errors.resize(n);
-        l.errors.read(rb.errors.data(), n * sizeof(float));
-        ls.threshold = threshold;
-        ls.errorScale = errorScale;
-        // In double against the double threshold, as the CPU variant and the split pass compare.
-        for (std::size_t j = 0; j < n; ++j) {
-          split[j] = double(rb.errors[j]) > threshold;
-          ls.split += split[j];
+    const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
+    for (std::size_t k = 0; k <= L; ++k) {
+      LevelStats ls;
+      ls.resolution = k == 0 ? 0 : settings.levels[k - 1];
+      const std::size_t n = counts[k];
+      ls.samples = (long long)n;
+      ls.ms = enqueueMs[k];
+      const bool final = k == L || n == 0;
+      if (n > 0) {
+        const DynamicSamplingWorkspace::Level& l = w.levels[k];
+        LevelReadBack rb;
+        rb.samples.resize(n);
+        rb.radiance.resize(n);
+        l.samples.read(rb.samples.data(), n * sizeof(GpuSamplePoint));
+        l.radiance.read(rb.radiance.data(), n * sizeof(GpuRadianceRecord));
+        std::vector<std::uint8_t> split(n, 0);
+        if (!final) {
+          rb.errors.resize(n);
+          l.errors.read(rb.errors.data(), n * sizeof(float));
+          ls.threshold = threshold;
+          ls.errorScale = errorScale;
+          if (k < decisions.size()) {
+            split = decisions[k].decision.split;  // the budget's host decisions
+            ls.capped = decisions[k].decision.capped;
+            decisions[k].offset = result.samples.size();
+          } else {
+            // In double against the double threshold, as the CPU variant and the split pass
+            // compare.
+            for (std::size_t j = 0; j < n; ++j) split[j] = double(rb.errors[j]) > threshold;
+          }
+          for (std::size_t j = 0; j < n; ++j) {
+            ls.split += split[j];
+            if (!split[j]) ls.maxLeft = std::max(ls.maxLeft, rb.errors[j]);
+          }
+          ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
+          ls.p90Error = quantile(rb.errors, 0.9);
         }
-        ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
-        ls.p90Error = quantile(rb.errors, 0.9);
+        // The samples that stay (all of them on the final level), in evaluation order: the CPU's.
+        for (std::size_t j = 0; j < n; ++j) {
+          if (split[j]) continue;
+          RadianceSample s;
+          s.position = rb.samples[j].position;
+          s.radius = rb.samples[j].radius;
+          s.level = int(k);
+          unpackRadiance(rb.radiance[j], s);
+          result.samples.push_back(s);
+        }
+        if (!final && errorsOut) errorsOut->push_back(std::move(rb.errors));
       }
-      // The samples that stay (all of them on the final level), in evaluation order: the CPU's.
-      for (std::size_t j = 0; j < n; ++j) {
-        if (split[j]) continue;
-        RadianceSample s;
-        s.position = rb.samples[j].position;
-        s.radius = rb.samples[j].radius;
-        s.level = int(k);
-        unpackRadiance(rb.radiance[j], s);
-        result.samples.push_back(s);
+      result.levels.push_back(ls);
+      if (n == 0) {
+        for (std::size_t l = k + 1; l <= L; ++l)
+          result.levels.push_back(LevelStats{settings.levels[l - 1]});
+        break;
       }
-      if (!final && errorsOut) errorsOut->push_back(std::move(rb.errors));
-    }
-    result.levels.push_back(ls);
-    if (n == 0) {
-      for (std::size_t l = k + 1; l <= L; ++l)
-        result.levels.push_back(LevelStats{settings.levels[l - 1]});
-      break;
     }
   }
+  if (!decisions.empty()) {
+    // The top-up, decided on the host as on the CPU; the children evaluated on the GPU.
+    TopUp t = budgetTopUp(scene.medium.bounds, decisions, (long long)result.samples.size(), budget);
+    if (!t.children.empty()) evaluateTopUpGpu(w, inputs, density, steps, settings, t, timer);
+    applyTopUp(result, decisions, std::move(t));
+  }
+  if (!result.levels.empty()) result.levels[0].budget = budget;
   return result;
 }
 
@@ -456,10 +578,8 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
   const TracingInputs inputs(scene, density, steps.delta1, shadows);
   DynamicSamplingWorkspace local;
   DynamicSamplingWorkspace& w = workspace ? *workspace : local;
-  return withSampleBudget(settings, [&](const DynamicSamplingSettings& s) {
-    if (errorsOut) errorsOut->clear();  // the errors of the pass returned
-    return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut, w);
-  });
+  if (errorsOut) errorsOut->clear();
+  return splitOnceGpu(scene, density, inputs, initial, steps, settings, timer, errorsOut, w);
 }
 
 }  // namespace scatterlab::gpu

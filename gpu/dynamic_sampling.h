@@ -55,9 +55,10 @@ struct DynamicSamplingWorkspace {
 };
 
 /// Runs recursive splitting from `initial` (positions and radii) entirely with GL compute
-/// passes, reading back once at the end of the pass; with settings.maxSamples, the passes are
-/// repeated by withSampleBudget() exactly as on the CPU (one read-back per pass). Same result as
-/// dynamicSampling() with the CPU volume tracer up to floating-point differences of S (1e-3);
+/// passes, reading back once at the end of the pass; with a sample budget (sampleBudget() > 0)
+/// each split level's E is read back and its splits are decided on the host by the CPU's
+/// budgetedSplit(), which uploads the next level (one pass, one read-back per level). Same result
+/// as dynamicSampling() with the CPU volume tracer up to floating-point differences of S (1e-3);
 /// the split decisions agree unless some E_j is within rounding of the threshold (compared in
 /// double, as on the CPU). `errors`, when given, receives E of every evaluated sample per split
 /// level (in evaluation order) of the pass returned. GPU times per pass go to `timer` (stages

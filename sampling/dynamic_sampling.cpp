@@ -137,14 +137,170 @@ float viewTransmittance(const Scene& scene, const DensityGrid& density, const Ve
 
 }  // namespace
 
+long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount) {
+  if (settings.maxSamples == kAutoBudget)
+    return std::min(kBudgetPerInitial * (long long)initialCount, kBudgetCap);
+  return std::max(settings.maxSamples, 0LL);
+}
+
+SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector<Vec3>& centres,
+                            const std::vector<float>& radii, const std::vector<std::int32_t>& anc,
+                            const std::vector<float>& errors, double threshold,
+                            long long countBefore, long long budget, std::size_t splitLevelsLeft) {
+  const std::size_t n = centres.size();
+  SplitDecision d;
+  d.split.assign(n, 0);
+  d.count = countBefore;
+  // Candidates worst first; ties (and so the whole order) by index: deterministic.
+  std::vector<std::uint32_t> order;
+  for (std::size_t j = 0; j < n; ++j)
+    if (double(errors[j]) > threshold) order.push_back(std::uint32_t(j));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return errors[a] > errors[b]; });
+  // This level's allotment: an equal share of the headroom among the split levels left.
+  const long long headroom = std::max(0LL, budget - countBefore);
+  const long long limit =
+      countBefore + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
+  GridInfoBuffer next(bounds, resolution);
+  std::size_t stop = order.size();
+  for (std::size_t r = 0; r < order.size(); ++r) {
+    const std::uint32_t j = order[r];
+    long long fresh = 0;
+    next.forEachInSphere(centres[j], radii[j], [&](std::size_t v) { fresh += !next.inSet[v]; });
+    if (d.count + fresh - 1 > limit) {
+      stop = r;  // worst first: no smaller error splits once a larger one did not fit
+      break;
+    }
+    d.count += fresh - 1;
+    d.split[j] = 1;
+    ++d.splits;
+    next.forEachInSphere(centres[j], radii[j], [&](std::size_t v) {
+      next.inSet[v] = 1;
+      if (next.ancestor[v] < 0 || anc[j] < next.ancestor[v]) next.ancestor[v] = anc[j];
+    });
+  }
+  d.capped = (long long)(order.size() - stop);
+  d.cappedOrder.assign(order.begin() + std::ptrdiff_t(stop), order.end());
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!d.split[j]) d.maxLeft = std::max(d.maxLeft, errors[j]);
+    if (!(double(errors[j]) > threshold)) d.maxBelow = std::max(d.maxBelow, errors[j]);
+  }
+  d.vertices = compactFlags(next.inSet);
+  d.ancestors.resize(d.vertices.size());
+  for (std::size_t i = 0; i < d.vertices.size(); ++i) d.ancestors[i] = next.ancestor[d.vertices[i]];
+  d.marked = std::move(next.inSet);
+  return d;
+}
+
+TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long count,
+                  long long budget) {
+  TopUp t;
+  t.toppedUp.assign(levels.size(), 0);
+  if (budget <= 0 || count >= budget) return t;
+  struct Candidate {
+    float e;
+    std::size_t level;
+    std::uint32_t j;
+  };
+  std::vector<Candidate> cands;
+  for (std::size_t k = 0; k < levels.size(); ++k)
+    for (std::uint32_t j : levels[k].decision.cappedOrder)
+      cands.push_back({levels[k].errors[j], k, j});
+  if (cands.empty()) return t;
+  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.e != b.e) return a.e > b.e;
+    if (a.level != b.level) return a.level < b.level;
+    return a.j < b.j;
+  });
+  // Per level: its grid G_{k+1} with the membership of the pass, and each sample's rank among
+  // the level's kept samples (its place in the result) before the top-up.
+  std::vector<GridInfoBuffer> grids;
+  std::vector<std::vector<std::size_t>> rank(levels.size());
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    grids.emplace_back(bounds, levels[k].resolution);
+    grids.back().inSet.swap(levels[k].decision.marked);
+    const std::vector<std::uint8_t>& split = levels[k].decision.split;
+    rank[k].resize(split.size());
+    std::size_t r = 0;
+    for (std::size_t j = 0; j < split.size(); ++j) {
+      rank[k][j] = r;
+      r += split[j] ? 0 : 1;
+    }
+  }
+  for (const Candidate& c : cands) {
+    BudgetLevel& L = levels[c.level];
+    GridInfoBuffer& g = grids[c.level];
+    const Vec3 centre = L.centres[c.j];
+    const float radius = L.radii[c.j];
+    long long fresh = 0;
+    g.forEachInSphere(centre, radius, [&](std::size_t v) { fresh += !g.inSet[v]; });
+    if (count + fresh - 1 > budget) break;  // worst first across the levels
+    count += fresh - 1;
+    const float R = g.radius();
+    g.forEachInSphere(centre, radius, [&](std::size_t v) {
+      if (g.inSet[v]) return;
+      g.inSet[v] = 1;
+      RadianceSample child;
+      child.position = g.vertex(v);
+      child.radius = R;
+      child.level = int(c.level) + 1;
+      t.children.push_back(child);
+      t.ancestors.push_back(L.anc[c.j]);
+    });
+    t.removed.push_back(L.offset + rank[c.level][c.j]);
+    L.decision.split[c.j] = 1;
+    ++L.decision.splits;
+    --L.decision.capped;
+    ++t.toppedUp[c.level];
+  }
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    SplitDecision& d = levels[k].decision;
+    std::vector<std::uint32_t> left;
+    d.maxLeft = d.maxBelow;
+    for (std::uint32_t j : d.cappedOrder)
+      if (!d.split[j]) {
+        left.push_back(j);
+        d.maxLeft = std::max(d.maxLeft, levels[k].errors[j]);
+      }
+    d.cappedOrder = std::move(left);
+    d.marked.swap(grids[k].inSet);
+  }
+  return t;
+}
+
+void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& levels, TopUp&& t) {
+  std::vector<std::uint8_t> drop(result.samples.size(), 0);
+  for (std::size_t i : t.removed) drop[i] = 1;
+  std::vector<RadianceSample> kept;
+  kept.reserve(result.samples.size() - t.removed.size() + t.children.size());
+  for (std::size_t i = 0; i < result.samples.size(); ++i)
+    if (!drop[i]) kept.push_back(result.samples[i]);
+  for (const RadianceSample& c : t.children) {
+    kept.push_back(c);
+    if (std::size_t(c.level) < result.levels.size()) ++result.levels[std::size_t(c.level)].samples;
+  }
+  result.samples = std::move(kept);
+  for (std::size_t k = 0; k < levels.size() && k < result.levels.size(); ++k) {
+    const SplitDecision& d = levels[k].decision;
+    LevelStats& ls = result.levels[k];
+    ls.split = d.splits;
+    ls.capped = d.capped;
+    ls.maxLeft = d.maxLeft;
+    ls.toppedUp = t.toppedUp[k];
+  }
+}
+
 namespace {
 
-/// One pass of recursive splitting (no budget): dynamicSampling() without max_samples.
+/// One pass of recursive splitting: dynamicSampling(). With a budget (budget > 0) the splits
+/// of each level are budgetedSplit()'s; without one every E > threshold splits (the paper).
 DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
                                 std::vector<RadianceSample> current, RadianceEvaluator& evaluator,
                                 const DynamicSamplingSettings& settings) {
   using Clock = std::chrono::steady_clock;
   const DensityGrid& density = frame.hostDensity();
+  const long long budget = sampleBudget(settings, current.size());
+  std::vector<BudgetLevel> budgetLevels;  // the split levels, for the top-up
   DynamicSamplingResult result;
   // τ of every level-0 sample; descendants index it through their ancestor.
   std::vector<float> rootTau(current.size());
@@ -214,6 +370,45 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     ls.threshold = threshold;
     ls.errorScale = errorScale;
 
+    if (budget > 0) {
+      // Budgeted: the level's splits worst first within its allotment (budgetedSplit()).
+      std::vector<Vec3> centres(current.size());
+      std::vector<float> radii(current.size());
+      std::vector<std::int32_t> levelAnc = anc;
+      for (std::size_t j = 0; j < current.size(); ++j) {
+        centres[j] = current[j].position;
+        radii[j] = current[j].radius;
+      }
+      BudgetLevel& bl = budgetLevels.emplace_back();
+      bl.decision = budgetedSplit(
+          scene.medium.bounds, settings.levels[level], centres, radii, anc, errors, threshold,
+          (long long)(result.samples.size() + current.size()), budget, nLevels - level);
+      const SplitDecision& d = bl.decision;
+      bl.offset = result.samples.size();
+      bl.resolution = settings.levels[level];
+      for (std::size_t j = 0; j < current.size(); ++j)
+        if (!d.split[j]) result.samples.push_back(current[j]);
+      ls.split = d.splits;
+      ls.capped = d.capped;
+      ls.maxLeft = d.maxLeft;
+      const GridInfoBuffer grid(scene.medium.bounds, settings.levels[level]);
+      std::vector<RadianceSample> nextSamples(d.vertices.size());
+      const float R = grid.radius();
+      for (std::size_t i = 0; i < d.vertices.size(); ++i) {
+        nextSamples[i].position = grid.vertex(d.vertices[i]);
+        nextSamples[i].radius = R;
+      }
+      current = std::move(nextSamples);
+      anc = d.ancestors;
+      bl.centres = std::move(centres);
+      bl.radii = std::move(radii);
+      bl.anc = std::move(levelAnc);
+      bl.errors = std::move(errors);
+      ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      result.levels.push_back(ls);
+      continue;
+    }
+
     // Split: mark the vertices of G_{k+1} inside every sphere with E > threshold.
     GridInfoBuffer next(scene.medium.bounds, settings.levels[level]);
     std::vector<std::uint8_t> split(current.size());
@@ -226,6 +421,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         ++ls.split;
       } else {
         result.samples.push_back(current[j]);
+        ls.maxLeft = std::max(ls.maxLeft, errors[j]);
       }
     }
 
@@ -244,72 +440,26 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     result.levels.push_back(ls);
   }
+  if (budget > 0 && !budgetLevels.empty()) {
+    // The top-up: the budget the shares left unused, to the capped candidates, worst first.
+    const auto t0 = Clock::now();
+    TopUp t =
+        budgetTopUp(scene.medium.bounds, budgetLevels, (long long)result.samples.size(), budget);
+    if (!t.children.empty()) evaluator.evaluate(frame, scene, t.children, /*gradients=*/true);
+    applyTopUp(result, budgetLevels, std::move(t));
+    result.levels.back().ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  }
+  if (!result.levels.empty()) result.levels[0].budget = budget;
   return result;
 }
 
 }  // namespace
 
-DynamicSamplingResult withSampleBudget(
-    const DynamicSamplingSettings& settings,
-    const std::function<DynamicSamplingResult(const DynamicSamplingSettings&)>& run) {
-  DynamicSamplingResult first = run(settings);
-  const auto fits = [&](const DynamicSamplingResult& r) {
-    return (long long)r.samples.size() <= settings.maxSamples;
-  };
-  if (settings.maxSamples <= 0 || fits(first) || first.levels.empty()) return first;
-  const auto splitNothing = [](const DynamicSamplingResult& r) {
-    for (const LevelStats& l : r.levels)
-      if (l.split > 0) return false;
-    return true;
-  };
-  if (splitNothing(first)) return first;  // the initial set alone exceeds the budget
-  float maxError = 0.0f;
-  for (const LevelStats& l : first.levels) maxError = std::max(maxError, l.maxError);
-  DynamicSamplingSettings s = settings;
-  s.relative = false;  // the searched thresholds are absolute
-  int runs = 1;
-  const auto runAt = [&](double threshold) {
-    s.epsilon = threshold;
-    ++runs;
-    return run(s);
-  };
-  // Grow the threshold by 4× until the result fits (lo: too many samples, hi: fits) ...
-  double lo = first.levels[0].threshold, hi = 0.0;
-  DynamicSamplingResult best;
-  for (;;) {
-    hi = lo > 0.0 ? 4.0 * lo : 1e-6 * double(maxError);
-    best = runAt(hi);
-    if (fits(best)) break;
-    if (splitNothing(best)) {
-      best.levels[0].budgetRuns = runs;
-      return best;
-    }
-    lo = hi;
-  }
-  // ... then narrow it geometrically: the smallest fitting threshold found keeps the most
-  // splits, and they are those of the largest errors, on every level alike.
-  for (int i = 0; i < 5; ++i) {
-    const double mid = std::sqrt(lo * hi);
-    DynamicSamplingResult r = runAt(mid);
-    if (fits(r)) {
-      hi = mid;
-      best = std::move(r);
-    } else {
-      lo = mid;
-    }
-  }
-  best.levels[0].errorScale = first.levels[0].errorScale;
-  best.levels[0].budgetRuns = runs;
-  return best;
-}
-
 DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
                                       std::vector<RadianceSample> initial,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings) {
-  return withSampleBudget(settings, [&](const DynamicSamplingSettings& s) {
-    return splitOnce(frame, scene, initial, evaluator, s);
-  });
+  return splitOnce(frame, scene, std::move(initial), evaluator, settings);
 }
 
 DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
@@ -335,6 +485,9 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
                       {"kept", perLevel[l]},
                       {"max_error", ls.maxError},
                       {"p90_error", ls.p90Error},
+                      {"capped", ls.capped},
+                      {"topped_up", ls.toppedUp},
+                      {"max_left", ls.maxLeft},
                       {"ms", ls.ms}});
   }
   st.extra["samples_per_level"] = perLevel;
@@ -344,9 +497,24 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
   st.extra["error"] = settings.relative ? "relative" : "absolute";
   st.extra["threshold"] = levelStats.empty() ? settings.epsilon : levelStats[0].threshold;
   if (settings.relative && !levelStats.empty()) st.extra["error_scale"] = levelStats[0].errorScale;
-  st.extra["max_samples"] = settings.maxSamples;
-  if (settings.maxSamples > 0 && !levelStats.empty())
+  if (settings.maxSamples == kAutoBudget)
+    st.extra["max_samples"] = "auto";
+  else
+    st.extra["max_samples"] = settings.maxSamples;
+  const long long budget = levelStats.empty() ? 0 : levelStats[0].budget;
+  if (budget > 0) {
+    st.extra["budget"] = budget;
     st.extra["budget_runs"] = levelStats[0].budgetRuns;
+    long long capped = 0;
+    float maxLeft = 0.0f;
+    for (const LevelStats& ls : levelStats) {
+      capped += ls.capped;
+      maxLeft = std::max(maxLeft, ls.maxLeft);
+    }
+    st.extra["capped"] = capped;
+    const double threshold = levelStats[0].threshold;
+    st.extra["error_left"] = threshold > 0.0 ? double(maxLeft) / threshold : 0.0;
+  }
   st.extra["tau"] = settings.perSampleTau ? "sample" : "ancestor";
   st.extra["probes"] = settings.probes;
 }
@@ -372,8 +540,11 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
        "R/2",
        "6"},
-      {"max_samples", "int", "0 (no cap; not with paper)", ">= 0 (non-integers rounded down)",
-       "most samples in the final set: the threshold is raised until the set fits", "100"},
+      {"max_samples", "int", "auto: 4 × the initial count, at most 8000 (no cap with paper)",
+       ">= 0 (non-integers rounded down; 0: no cap; not with paper)",
+       "most samples in the final set: each level splits its largest errors first within an "
+       "equal share of the budget left (one pass)",
+       "100"},
   };
   return keys;
 }
@@ -386,8 +557,13 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   if (paper && p.has("max_samples"))
     p.fail("max_samples", "is an extension; it cannot be set with render.paper = true");
   // A number rather than an integer so that any non-negative value is valid (0: no cap).
-  s.maxSamples =
-      (long long)std::floor(std::min(p.number("max_samples", 0.0, Interval::atLeast(0)), 9e15));
+  if (p.has("max_samples"))
+    s.maxSamples =
+        (long long)std::floor(std::min(p.number("max_samples", 0.0, Interval::atLeast(0)), 9e15));
+  else {
+    p.allow("max_samples");
+    s.maxSamples = paper ? 0 : kAutoBudget;
+  }
   const IVec3 res = scene.medium.resolution;
   const int finestAllowed = std::max(2, std::max(res.x, std::max(res.y, res.z)) / 2);
   if (p.has("levels")) {

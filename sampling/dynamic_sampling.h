@@ -15,9 +15,35 @@
 /// Scale of ε: E is (length³) × (source radiance) × (density), so an absolute ε (the paper's)
 /// depends on the scene's units and light intensity. The default (extension) is a relative ε:
 /// the threshold is ε × relativeErrorScale(), the mean R³·|S|·D·τ of the initial samples, so one
-/// ε works on every scene. A sample budget (max_samples) raises the threshold until the final
-/// set fits (withSampleBudget). The stats report the largest E and the 90th percentile per
-/// level, and the threshold used.
+/// ε works on every scene. The stats report the largest E and the 90th percentile per level, and
+/// the threshold used.
+///
+/// Sample budget (extension, issue 24): a most final count B, met in the one splitting pass
+/// (budgetedSplit(); never a re-run). Splitting level k reveals the errors of level k + 1 only
+/// once they are evaluated, but what a split costs is known before: the vertices of G_{k+1}
+/// strictly inside its sphere that no earlier split of the level marked (shared vertices count
+/// once), minus the sample itself. So each split level (1) orders its candidates (E_j >
+/// threshold) by E_j, worst first (ties: lower index first), (2) accepts them in that order
+/// while the final count (kept samples of the coarser levels + this level's unsplit samples + the
+/// next level's marked vertices) stays within the level's allotment, and stops at the first
+/// that does not fit, so a split never goes to a smaller error while a larger one waits. The
+/// allotment: the headroom left, B − count, shared equally by the split levels still to come
+/// (level k of L split levels may use 1/(L − k) of it); what a level does not use passes to
+/// the finer ones. A plain worst-first greedy (allotment 1 on every level) spends the whole
+/// budget on the coarsest level, whose errors are the largest because E ∝ R³, and leaves
+/// nothing for the edges that only the finer levels resolve (docs/dynamic-sampling.md measured
+/// it 3× worse than a uniform threshold); equal shares keep room for them without guessing
+/// the errors not yet seen. A finer level may need less than its share (lamps32: 8 candidates
+/// on the last split level); what the pass leaves unused then goes to the top-up
+/// (budgetTopUp()): after the last level the capped candidates of every split level, worst
+/// first across the levels, split while the count fits, their children evaluated in one batch
+/// without probes (they stay final). So the pass evaluates each level once, plus at most one
+/// batch of top-up children: never a re-run. Default budget (render.max_samples absent):
+/// kBudgetPerInitial × the initial count, at most kBudgetCap (sampleBudget()); scale-free like the
+/// relative ε. The error left is reported: per level the candidates left unsplit
+/// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft; /
+/// threshold > 1: the budget stopped the refinement there). The finest level is not probed, so its
+/// errors are not known.
 
 #include <cstdint>
 #include <functional>
@@ -42,7 +68,8 @@ struct DynamicSamplingSettings {
   /// for shading boundaries that pass between the axis probes (a light shaft beside a large
   /// initial sphere, or through its inside), which Eq. 5 can miss.
   int probes = 6;
-  /// Most samples in the final set (0: no cap): see withSampleBudget().
+  /// Most samples in the final set (0: no cap; kAutoBudget: sampleBudget() of the initial
+  /// count): see budgetedSplit().
   long long maxSamples = 0;
   /// How the error compares values (set from the pipeline, not a key): see ErrorSpace.
   struct ErrorSpace {
@@ -72,6 +99,22 @@ struct GridInfoBuffer {
   /// Marks every vertex strictly inside the sphere (c, R) as in the set, with ancestor
   /// min(existing, anc). Thread-safe.
   void markSphere(const Vec3& c, float R, std::int32_t anc);
+  /// Calls f(linear vertex index) for every vertex strictly inside the sphere (c, R), the
+  /// vertices markSphere() marks, in ascending k, j, i.
+  template <class F>
+  void forEachInSphere(const Vec3& c, float R, F&& f) const {
+    const IVec3 lo = glm::max(IVec3(glm::ceil((c - R - bounds.min) / interval - 0.5f)), IVec3(0));
+    const IVec3 hi = glm::min(IVec3(glm::floor((c + R - bounds.min) / interval - 0.5f)), dims - 1);
+    const float R2 = R * R;
+    for (int k = lo.z; k <= hi.z; ++k)
+      for (int j = lo.y; j <= hi.y; ++j)
+        for (int i = lo.x; i <= hi.x; ++i) {
+          const Vec3 q = bounds.min + (Vec3(i, j, k) + 0.5f) * interval;
+          const Vec3 d = q - c;
+          if (glm::dot(d, d) >= R2) continue;
+          f((std::size_t(k) * dims.y + j) * dims.x + i);
+        }
+  }
 };
 
 struct LevelStats {
@@ -81,7 +124,11 @@ struct LevelStats {
   float maxError = 0.0f, p90Error = 0.0f;
   double threshold = 0.0;   ///< the absolute threshold E_j was compared with (0: final level)
   double errorScale = 0.0;  ///< relativeErrorScale() of the initial set (relative ε; else 0)
-  int budgetRuns = 1;       ///< level 0: splitting passes run to meet max_samples
+  int budgetRuns = 1;       ///< level 0: splitting passes run (always 1: the budget is one pass)
+  long long capped = 0;     ///< candidates (E > threshold) left unsplit by the sample budget
+  long long toppedUp = 0;   ///< of the splits, those made by the budget's top-up (budgetTopUp)
+  float maxLeft = 0.0f;     ///< largest E of a sample of this level left unsplit (0: final level)
+  long long budget = 0;     ///< level 0: the sample budget applied (0: none)
   double ms = 0.0;          ///< wall time of the level (evaluation, error, split, scan)
 };
 
@@ -126,17 +173,75 @@ float localShadingError(const RadianceSample& s, const Vec3* probeS, const float
 /// R/2. count is 6, 14, 26 or 40.
 void probePoints(const RadianceSample& s, Vec3* out, int count = 6);
 
-/// The sample budget (max_samples) around one splitting pass `run` (of either backend): runs it
-/// with `settings`; if the final set exceeds settings.maxSamples, raises the (absolute)
-/// threshold by 4× per pass until it fits, then narrows it by 5 geometric bisection passes and
-/// returns the result of the smallest fitting threshold. Raising one threshold for every level
-/// drops the splits of the smallest errors first, on every level alike (a level-by-level
-/// greedy cap would spend the whole budget on the coarse levels, where E ∝ R³ is largest).
-/// When nothing splits and the initial set still exceeds the budget, that set is returned.
-/// Deterministic; LevelStats::budgetRuns of level 0 counts the passes.
-DynamicSamplingResult withSampleBudget(
-    const DynamicSamplingSettings& settings,
-    const std::function<DynamicSamplingResult(const DynamicSamplingSettings&)>& run);
+/// max_samples absent (extended defaults): the budget is sampleBudget() of the initial count.
+inline constexpr long long kAutoBudget = -1;
+/// Default budget: this many final samples per initial sample ...
+inline constexpr long long kBudgetPerInitial = 4;
+/// ... and at most this many (issue 24: ≤ 8000 samples on every scene at defaults).
+inline constexpr long long kBudgetCap = 8000;
+
+/// The budget applied to `initialCount` initial samples: 0 (none) for maxSamples 0,
+/// min(kBudgetPerInitial · initialCount, kBudgetCap) for kAutoBudget, else maxSamples.
+long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount);
+
+/// The split decisions of one level under a budget (see the header comment): which samples
+/// split, and the vertices of G_{k+1} they mark (ascending, as the scan compaction orders them)
+/// with their level-0 ancestors (the smallest among the marking spheres, as markSphere()).
+struct SplitDecision {
+  std::vector<std::uint8_t> split;         ///< per sample of level k
+  std::vector<std::uint32_t> vertices;     ///< linear indices of G_{k+1}, ascending
+  std::vector<std::int32_t> ancestors;     ///< per vertex
+  long long count = 0;                     ///< final count after these splits (see countBefore)
+  long long splits = 0, capped = 0;        ///< split; candidates left unsplit by the allotment
+  float maxLeft = 0.0f;                    ///< largest E of a sample left unsplit
+  float maxBelow = 0.0f;                   ///< largest E of a non-candidate (E <= threshold)
+  std::vector<std::uint32_t> cappedOrder;  ///< the capped candidates, worst first
+  std::vector<std::uint8_t> marked;        ///< G_{k+1}'s membership after the splits
+};
+
+/// One split level as the top-up reads it: its decision, its samples, and where its unsplit
+/// samples start in the result (levels are appended in order, each in index order).
+struct BudgetLevel {
+  SplitDecision decision;
+  std::vector<Vec3> centres;
+  std::vector<float> radii;
+  std::vector<std::int32_t> anc;
+  std::vector<float> errors;
+  int resolution = 0;      ///< of G_{k+1}
+  std::size_t offset = 0;  ///< index in DynamicSamplingResult::samples of its first kept sample
+};
+
+/// The top-up of a budgeted pass: the budget a level's share left unused (a finer level needed
+/// fewer splits than its share) goes, after the last level, to the capped candidates of every
+/// split level, worst first across the levels (ties: coarser level, then index), each while the
+/// count fits the budget, stopping at the first that does not. Their children (fresh vertices
+/// of G_{k+1}) are evaluated once, with ∇S and no probes (they are final), and appended.
+struct TopUp {
+  std::vector<std::size_t> removed;      ///< indices into the result of the split parents
+  std::vector<RadianceSample> children;  ///< position, radius, level; S to be evaluated
+  std::vector<std::int32_t> ancestors;   ///< per child: its parent's level-0 ancestor
+  std::vector<long long> toppedUp;       ///< per split level: its splits made here
+};
+
+/// Decides the top-up (updates each level's decision: split, splits, capped, maxLeft).
+/// `count`: the final count of the pass.
+TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long count,
+                  long long budget);
+
+/// Applies an evaluated top-up to the result: removes the parents, appends the children (in
+/// the top-up's order), and updates the level stats (split, capped, toppedUp, maxLeft, and
+/// the children's level's evaluated count).
+void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& levels,
+                TopUp&& topUp);
+
+/// The budgeted split of level k, shared by the CPU and GPU variants (the GPU reads E back and
+/// uploads the next level). centres/radii/anc/errors: the level's samples; `threshold`: the
+/// absolute one; countBefore: kept samples of the coarser levels + this level's count; budget;
+/// splitLevelsLeft: L − k (this level included). Deterministic.
+SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector<Vec3>& centres,
+                            const std::vector<float>& radii, const std::vector<std::int32_t>& anc,
+                            const std::vector<float>& errors, double threshold,
+                            long long countBefore, long long budget, std::size_t splitLevelsLeft);
 
 /// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's
 /// density. `evaluator` (of the frame's backend) computes S and ∇S of the samples and S at the
@@ -177,15 +282,19 @@ DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineS
 
 /// Adds the dynamic-sampling facts to render stats (shared by the CPU and GPU `adaptive`):
 /// samples_per_level (final samples per level), initial_samples, levels (per level: grid,
-/// evaluated, split, capped, kept, max_error, p90_error, ms), epsilon, error ("relative" or
-/// "absolute"), threshold (the absolute one used), error_scale, max_samples, tau, probes.
+/// evaluated, split, capped, kept, max_error, p90_error, max_left, ms), epsilon, error
+/// ("relative" or "absolute"), threshold (the absolute one used), error_scale, max_samples
+/// (the key: "auto" or a number), and with a budget: budget (the one applied), budget_runs (1),
+/// capped (candidates left unsplit, all levels), error_left (largest E left unsplit / threshold;
+/// above 1 where the budget stopped the refinement); tau, probes.
 void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& levels,
                              const std::vector<RadianceSample>& samples,
                              const DynamicSamplingSettings& settings);
 
 /// Reads the dynamic-sampling keys of the render object (table in dynamic_sampling.cpp):
 /// epsilon, levels, tau, probes, max_samples. With `paper` the paper's algorithm: epsilon is the
-/// absolute ε (default 1e-4), probes default to Eq. 5's six, max_samples is an error. Otherwise
+/// absolute ε (default 1e-4), probes default to Eq. 5's six, max_samples is an error (no
+/// budget). Otherwise max_samples defaults to kAutoBudget. Otherwise
 /// epsilon is relative (a fraction of relativeErrorScale(), default 0.05) and the defaults are
 /// the measured best (docs/dynamic-sampling.md). delta1 is not read here (the pipeline's Δ1 is
 /// used, withPipeline(); this sets it to one voxel edge for callers without a pipeline).

@@ -156,8 +156,14 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
   ds.relative = true;
   ds.epsilon = 0.05;
   ds.probes = 40;
-  for (long long cap : {0LL, 200LL}) {
-    ds.maxSamples = cap;
+  for (long long cap : {0LL, 200LL, 600LL, kAutoBudget, -250LL}) {
+    // -250: a budget of 250 on three split levels at ε = 8, where the finest level splits less
+    // than its share and the top-up (budgetTopUp) spends the rest on the capped coarser
+    // candidates (measured: 3 top-up splits, 239 samples).
+    const bool topUp = cap == -250;
+    ds.levels = topUp ? std::vector<int>{8, 12, 16} : std::vector<int>{8, 12};
+    ds.epsilon = topUp ? 8.0 : 0.05;
+    ds.maxSamples = topUp ? 250 : cap;
     const DynamicSamplingResult cpu =
         dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
     std::vector<std::vector<float>> errors;
@@ -169,29 +175,51 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
     for (const auto& level : errors)
       for (float e : level)
         closest = std::min(closest, std::abs(double(e) / cpu.levels[0].threshold - 1.0));
-    std::printf("cap %lld: %zu samples, threshold %.4g (scale %.4g), %d passes, closest E %.3g\n",
-                cap, cpu.samples.size(), cpu.levels[0].threshold, cpu.levels[0].errorScale,
-                cpu.levels[0].budgetRuns, closest);
+    std::printf("cap %lld: %zu samples, threshold %.4g (scale %.4g), closest E %.3g\n", cap,
+                cpu.samples.size(), cpu.levels[0].threshold, cpu.levels[0].errorScale, closest);
     EXPECT_GT(closest, 1e-3);
     EXPECT_NEAR(g.levels[0].errorScale, cpu.levels[0].errorScale, 1e-4 * cpu.levels[0].errorScale);
     EXPECT_NEAR(g.levels[0].threshold, cpu.levels[0].threshold, 1e-4 * cpu.levels[0].threshold);
-    EXPECT_EQ(g.levels[0].budgetRuns, cpu.levels[0].budgetRuns);
+    EXPECT_EQ(g.levels[0].budget, cpu.levels[0].budget);
     EXPECT_GT(cpu.levels[0].split, 0);
-    if (cap > 0) {
-      EXPECT_LE((long long)cpu.samples.size(), cap);
-      EXPECT_GT(cpu.levels[0].budgetRuns, 1);
+    long long capped = 0, toppedUp = 0;
+    if (ds.maxSamples > 0) {
+      // One pass within the budget, split worst first on the host (budgetedSplit) on both.
+      EXPECT_LE((long long)cpu.samples.size(), ds.maxSamples);
+      EXPECT_EQ(cpu.levels[0].budget, ds.maxSamples);
+      for (const LevelStats& l : cpu.levels) {
+        capped += l.capped;
+        toppedUp += l.toppedUp;
+      }
+      EXPECT_GT(capped, 0);
+      if (topUp) EXPECT_GT(toppedUp, 0);
     }
     ASSERT_EQ(g.levels.size(), cpu.levels.size());
     for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
       EXPECT_EQ(g.levels[l].samples, cpu.levels[l].samples) << "level " << l;
       EXPECT_EQ(g.levels[l].split, cpu.levels[l].split) << "level " << l;
+      EXPECT_EQ(g.levels[l].capped, cpu.levels[l].capped) << "level " << l;
+      EXPECT_EQ(g.levels[l].toppedUp, cpu.levels[l].toppedUp) << "level " << l;
+      std::printf("  level %zu: evaluated %lld, split %lld (topped up %lld), capped %lld\n", l,
+                  cpu.levels[l].samples, cpu.levels[l].split, cpu.levels[l].toppedUp,
+                  cpu.levels[l].capped);
     }
     ASSERT_EQ(g.samples.size(), cpu.samples.size());
-    int bad = 0;
-    for (std::size_t i = 0; i < cpu.samples.size(); ++i)
+    int bad = 0, badS = 0;
+    float sMax = 0.0f;
+    for (const RadianceSample& c : cpu.samples)
+      sMax = std::max(sMax, std::max(c.S.x, std::max(c.S.y, c.S.z)));
+    for (std::size_t i = 0; i < cpu.samples.size(); ++i) {
       bad += g.samples[i].position != cpu.samples[i].position ||
              g.samples[i].level != cpu.samples[i].level;
+      // S as SameSampleSetAsCpu checks it (the top-up's children, evaluated in their own GPU
+      // pass, are the last samples).
+      for (int c = 0; c < 3; ++c)
+        badS += std::abs(g.samples[i].S[c] - cpu.samples[i].S[c]) >
+                1e-3f * (std::abs(cpu.samples[i].S[c]) + 1e-2f * sMax);
+    }
     EXPECT_EQ(bad, 0);
+    EXPECT_EQ(badS, 0);
   }
 }
 
@@ -310,7 +338,10 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
   const Json j = gpu.stats.toJson();
   for (const char* stage : {"density", "sampling", "dynamic_sampling", "reconstruction", "march"})
     EXPECT_TRUE(j["timings_ms"].contains(stage)) << stage;
-  EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains("ds scan"));
+  // The paper splits and scans on the GPU; the extensions' sample budget (on by default) splits
+  // on the host (budgetedSplit), after the GPU's evaluation.
+  EXPECT_TRUE(gpu.stats.extra["gpu_ms"].contains(GetParam() ? "ds scan" : "ds evaluate+error"));
+  EXPECT_EQ(gpu.stats.extra.contains("budget"), !GetParam());
   const double err = relL2(gpu.image, cpu.image);
   std::printf("adaptive (paper %d) gpu vs cpu: %lld samples, relative L2 %.3g\n", int(GetParam()),
               *gpu.stats.samples, err);

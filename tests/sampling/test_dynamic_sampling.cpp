@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
 #include <random>
+#include <sstream>
 
 #include "cpu/radiance_evaluator.h"
 #include "sampling/dynamic_sampling.h"
@@ -275,7 +277,14 @@ TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   EXPECT_TRUE(ext.relative);
   EXPECT_EQ(ext.epsilon, 0.05);
   EXPECT_EQ(ext.probes, 40);
-  EXPECT_EQ(ext.maxSamples, 0);
+  EXPECT_EQ(ext.maxSamples, kAutoBudget);
+  // The default budget: 4 × the initial count, at most 8000; none with paper or max_samples 0.
+  EXPECT_EQ(sampleBudget(ext, 2000), 8000);
+  EXPECT_EQ(sampleBudget(ext, 541), 2164);
+  EXPECT_EQ(sampleBudget(ext, 100000), 8000);
+  EXPECT_EQ(sampleBudget(paper, 2000), 0);
+  EXPECT_EQ(sampleBudget(parse({{"max_samples", 0}}, false), 2000), 0);
+  EXPECT_EQ(sampleBudget(parse({{"max_samples", 123.7}}, false), 2000), 123);
   EXPECT_EQ(parse({{"max_samples", 4000}}, false).maxSamples, 4000);
   EXPECT_THROW(parse({{"max_samples", -1}}, false), ConfigError);
   EXPECT_THROW(parse({{"probes", 32}}, false), ConfigError);
@@ -373,10 +382,25 @@ TEST(DynamicSampling, ErrorScaleIsTheMeanContributionOfTheInitialSamples) {
   EXPECT_NEAR(r.levels[0].threshold, 0.5 * expected, 1e-6 * expected);
 }
 
-TEST(DynamicSampling, SampleBudgetRaisesTheThresholdUntilTheSetFits) {
+namespace {
+
+/// TracingEvaluator that counts its calls (one pass: 2 per split level + 1 for the final one).
+class CountingEvaluator : public TracingEvaluator {
+ public:
+  int calls = 0;
+  void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
+                bool gradients) override {
+    ++calls;
+    TracingEvaluator::evaluate(frame, scene, samples, gradients);
+  }
+};
+
+}  // namespace
+
+TEST(DynamicSampling, SampleBudgetHoldsInOnePass) {
   const Scene scene = spotScene();
   const DensityGrid density = densityOf(scene);
-  TracingEvaluator ev;
+  CountingEvaluator ev;
   DynamicSamplingSettings st;
   st.delta1 = scene.medium.voxelSize();
   st.levels = {8, 16, 32};
@@ -387,34 +411,137 @@ TEST(DynamicSampling, SampleBudgetRaisesTheThresholdUntilTheSetFits) {
   for (float x : {0.2f, 0.5f, 0.8f})
     for (float y : {0.2f, 0.5f, 0.8f})
       for (float z : {0.2f, 0.5f, 0.8f}) init.push_back(sampleAt(Vec3(x, y, z), 0.2f));
+  const int onePass = 2 * int(st.levels.size()) + 1;
   const DynamicSamplingResult free = dynamicSampling(scene, density, init, ev, st);
+  EXPECT_EQ(ev.calls, onePass);
+  EXPECT_EQ(free.levels[0].budget, 0);
   const long long unbudgeted = (long long)free.samples.size();
-  // A cap above the unbudgeted count changes nothing (one pass).
+  // A budget above the unbudgeted count changes nothing: the same samples in the same order.
   st.maxSamples = unbudgeted;
+  ev.calls = 0;
   DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
-  EXPECT_EQ((long long)r.samples.size(), unbudgeted);
-  EXPECT_EQ(r.levels[0].budgetRuns, 1);
-  // A third of it: the set fits, the threshold went up, and the result is exactly the
-  // unbudgeted run at that (absolute) threshold.
+  EXPECT_EQ(ev.calls, onePass);
+  EXPECT_EQ(r.levels[0].budget, unbudgeted);
+  ASSERT_EQ(r.samples.size(), free.samples.size());
+  for (std::size_t i = 0; i < r.samples.size(); ++i) {
+    EXPECT_EQ(r.samples[i].position, free.samples[i].position);
+    EXPECT_EQ(r.samples[i].level, free.samples[i].level);
+  }
+  for (const LevelStats& l : r.levels) EXPECT_EQ(l.capped, 0);
+  // A third of it: the set fits, in one pass (the evaluator ran 2 × 3 + 1 times, + 1 for a
+  // top-up, not 7–11 passes), with the same threshold, and the budget left candidates unsplit (the
+  // error left, max_left / threshold, is above 1).
   st.maxSamples = unbudgeted / 3;
+  ev.calls = 0;
   r = dynamicSampling(scene, density, init, ev, st);
+  long long toppedUp = 0;
+  for (const LevelStats& l : r.levels) toppedUp += l.toppedUp;
+  EXPECT_EQ(ev.calls, onePass + (toppedUp > 0 ? 1 : 0));  // + the top-up's children, if any
+  EXPECT_EQ(r.levels[0].budgetRuns, 1);
   EXPECT_LE((long long)r.samples.size(), st.maxSamples);
-  EXPECT_GT((long long)r.samples.size(), init.size());
-  EXPECT_GT(r.levels[0].threshold, free.levels[0].threshold);
-  EXPECT_GT(r.levels[0].budgetRuns, 2);
-  EXPECT_EQ(r.levels[0].errorScale, free.levels[0].errorScale);
-  DynamicSamplingSettings at = st;
-  at.maxSamples = 0;
-  at.relative = false;
-  at.epsilon = r.levels[0].threshold;
-  const DynamicSamplingResult same = dynamicSampling(scene, density, init, ev, at);
-  ASSERT_EQ(same.samples.size(), r.samples.size());
-  for (std::size_t i = 0; i < r.samples.size(); ++i)
-    EXPECT_EQ(same.samples[i].position, r.samples[i].position);
-  // Fewer than the initial samples: nothing can split, the initial set is returned.
+  EXPECT_GT((long long)r.samples.size(), (long long)init.size());
+  EXPECT_EQ(r.levels[0].threshold, free.levels[0].threshold);
+  long long capped = 0;
+  float maxLeft = 0.0f;
+  for (const LevelStats& l : r.levels) {
+    capped += l.capped;
+    maxLeft = std::max(maxLeft, l.maxLeft);
+  }
+  EXPECT_GT(capped, 0);
+  EXPECT_GT(double(maxLeft), r.levels[0].threshold);
+  // Every level below the finest still got part of the budget (the equal shares): some samples
+  // were split on level 1, not only on level 0.
+  EXPECT_GT(r.levels[1].split, 0);
+  // Fewer than the initial samples: the set never grows.
   st.maxSamples = 5;
   r = dynamicSampling(scene, density, init, ev, st);
-  EXPECT_EQ(r.samples.size(), init.size());
+  EXPECT_LE(r.samples.size(), init.size());
+}
+
+TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
+  // Three samples far apart on a 10³ grid of the unit box (interval 0.1), each sphere (R = 0.12,
+  // centred between vertices) holding the same 8 vertices; E = 2, 5, 3 against a threshold of 1.
+  const Box box{Vec3(0.0f), Vec3(1.0f)};
+  const std::vector<Vec3> centres = {Vec3(0.2f), Vec3(0.5f), Vec3(0.8f)};
+  const std::vector<float> radii(3, 0.12f), errors = {2.0f, 5.0f, 3.0f};
+  const std::vector<std::int32_t> anc = {0, 1, 2};
+  GridInfoBuffer g(box, 10);
+  long long fresh = 0;
+  g.forEachInSphere(centres[1], radii[1], [&](std::size_t) { ++fresh; });
+  ASSERT_EQ(fresh, 8);
+  // Room for exactly one split (count 3 → 3 + fresh − 1): the worst (E = 5) splits, the others
+  // are capped.
+  SplitDecision d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + fresh - 1, 1);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
+  EXPECT_EQ(d.splits, 1);
+  EXPECT_EQ(d.capped, 2);
+  EXPECT_EQ(d.count, 3 + fresh - 1);
+  EXPECT_EQ((long long)d.vertices.size(), fresh);
+  for (std::int32_t a : d.ancestors) EXPECT_EQ(a, 1);
+  EXPECT_FLOAT_EQ(d.maxLeft, 3.0f);
+  // Room for two: E = 5 and 3, not 2.
+  d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 1);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
+  EXPECT_FLOAT_EQ(d.maxLeft, 2.0f);
+  // The same budget with two split levels left: this level may use half the headroom: one.
+  d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 2);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
+  // The top-up: that share left the budget of one split unused (no finer level here); after
+  // the pass it goes to the next worst capped candidate (E = 3, the second kept sample in the
+  // result: index 1), not to E = 2.
+  std::vector<BudgetLevel> levels(1);
+  levels[0].decision = d;
+  levels[0].centres = centres;
+  levels[0].radii = radii;
+  levels[0].anc = anc;
+  levels[0].errors = errors;
+  levels[0].resolution = 10;
+  TopUp t = budgetTopUp(box, levels, d.count, 3 + 2 * (fresh - 1));
+  EXPECT_EQ(t.removed, (std::vector<std::size_t>{1}));
+  EXPECT_EQ((long long)t.children.size(), fresh);
+  for (const RadianceSample& c : t.children) {
+    EXPECT_EQ(c.level, 1);
+    EXPECT_LT(glm::length(c.position - centres[2]), radii[2]);
+  }
+  EXPECT_EQ(t.toppedUp, (std::vector<long long>{1}));
+  EXPECT_EQ(levels[0].decision.split, (std::vector<std::uint8_t>{0, 1, 1}));
+  EXPECT_EQ(levels[0].decision.capped, 1);
+  EXPECT_FLOAT_EQ(levels[0].decision.maxLeft, 2.0f);
+  // The threshold still rules: E = 2 is not a candidate at a threshold of 2.5.
+  d = budgetedSplit(box, 10, centres, radii, anc, errors, 2.5, 3, 1000, 1);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
+  EXPECT_EQ(d.capped, 0);
+}
+
+TEST(DynamicSampling, BudgetStatKeysAreDocumented) {
+  // The stats of a budgeted pass: every key (top level and per level) is named, backticked, in
+  // docs/dynamic-sampling.md, and error_left is the largest E left unsplit / threshold.
+  std::vector<LevelStats> levels(3);
+  levels[0].threshold = 2.0;
+  levels[0].budget = 100;
+  levels[0].maxLeft = 3.0f;
+  levels[1].maxLeft = 5.0f;
+  levels[1].capped = 7;
+  levels[2].capped = 1;
+  DynamicSamplingSettings st;
+  st.relative = true;
+  st.maxSamples = kAutoBudget;
+  RenderStats rs;
+  addDynamicSamplingStats(rs, levels, {}, st);
+  EXPECT_EQ(rs.extra["budget"], 100);
+  EXPECT_EQ(rs.extra["capped"], 8);
+  EXPECT_DOUBLE_EQ(rs.extra["error_left"].get<double>(), 2.5);
+  EXPECT_EQ(rs.extra["budget_runs"], 1);
+  EXPECT_EQ(rs.extra["max_samples"], "auto");
+  std::ifstream f(std::string(SCATTERLAB_SOURCE_DIR) + "/docs/dynamic-sampling.md");
+  std::stringstream doc;
+  doc << f.rdbuf();
+  std::vector<std::string> keys;
+  for (const auto& [k, v] : rs.extra.items()) keys.push_back(k);
+  for (const auto& [k, v] : rs.extra["levels"][0].items()) keys.push_back(k);
+  for (const std::string& k : keys)
+    EXPECT_NE(doc.str().find("`" + k + "`"), std::string::npos)
+        << "stat " << k << " is not in docs/dynamic-sampling.md";
 }
 
 namespace scatterlab {
