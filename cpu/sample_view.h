@@ -16,7 +16,7 @@ Vec3 levelColour(int level);
 
 /// Largest share of the area a level's samples project to (the 4×4-pixel blocks they fall in)
 /// that its dots may cover.
-inline constexpr double kSampleCover = 0.3;
+inline constexpr double kSampleCover = 0.5;
 
 /// How one level's dots are drawn: a disc of `radius` pixels (2, 1 or 0 = one pixel), blended
 /// over the image with `opacity`.

@@ -265,7 +265,7 @@ AXIS_SHORT = {"epsilon": "ε", "samples": "n", "resolution": "res", "lights": "l
 
 def point_label(r, vary):
     """What tells run `r` apart from the others of its method in a sweep: the values of the axes
-    in `vary` ("ε=1e-4", "n=2000", "res=64"), else the samples it used ("2748 smp")."""
+    in `vary` ("ε=1e-4", "n=2000", "res=64"), else the samples it used ("2748 samples")."""
     parts = []
     for a in vary:
         v = r.get("axes", {}).get(a)
@@ -275,7 +275,7 @@ def point_label(r, vary):
             v, float) else str(v)
         parts.append(f"{AXIS_SHORT.get(a, a)}={text}")
     if not parts and isinstance(r.get("samples"), (int, float)):
-        parts.append(f"{r['samples']:g} smp")
+        parts.append(f"{r['samples']:g} samples")
     return ", ".join(parts)
 
 
@@ -283,17 +283,25 @@ def _overlap(a, b, pad=1.0):
     return not (a.x1 + pad <= b.x0 or b.x1 + pad <= a.x0 or a.y1 + pad <= b.y0 or b.y1 + pad <= a.y0)
 
 
-def place_labels(ax, items, fontsize=6.5):
+def place_labels(ax, items, fontsize=6.5, lines=()):
     """Labels `items` = [(x, y, text, colour)] beside their points, each at the first of eight
     offsets (right, left, above, below, diagonals) that overlaps no label placed before it, no
-    other point and stays inside the axes; the least-overlapping offset where none is free.
-    Returns the Text objects. Call it once the axes have their final size."""
+    other point, none of the polylines `lines` ([(x, y), ...] in data units) and stays inside the
+    axes; the least-overlapping offset where none is free. Returns the Text objects. Call it once
+    the axes have their final size."""
     fig = ax.figure
     renderer = fig.canvas.get_renderer()
     frame = ax.get_window_extent(renderer)
     dpi = fig.dpi / 72.0
     pts = [ax.transData.transform((x, y)) for x, y, _, _ in items]
     dot = 4.0 * dpi  # the marker's radius in pixels, and a little room
+    # The lines as points every few pixels.
+    along = []
+    for line in lines:
+        disp = [ax.transData.transform(p) for p in line]
+        for (x0, y0), (x1, y1) in zip(disp, disp[1:]):
+            n = max(1, int(math.hypot(x1 - x0, y1 - y0) / 3))
+            along += [(x0 + (x1 - x0) * k / n, y0 + (y1 - y0) * k / n) for k in range(n + 1)]
     offsets = [(5, 0, "left", "center"), (-5, 0, "right", "center"), (0, 5, "center", "bottom"),
                (0, -5, "center", "top"), (4, 4, "left", "bottom"), (-4, 4, "right", "bottom"),
                (4, -4, "left", "top"), (-4, -4, "right", "top")]
@@ -312,6 +320,8 @@ def place_labels(ax, items, fontsize=6.5):
             cost = sum(_overlap(bb, p) for p in placed) * 10
             cost += sum(1 for j, (px, py) in enumerate(pts) if j != i and
                         bb.x0 - dot < px < bb.x1 + dot and bb.y0 - dot < py < bb.y1 + dot) * 3
+            cost += 2 * any(bb.x0 - 1 < px < bb.x1 + 1 and bb.y0 - 1 < py < bb.y1 + 1
+                            for px, py in along)
             if bb.x0 < frame.x0 or bb.x1 > frame.x1 or bb.y0 < frame.y0 or bb.y1 > frame.y1:
                 cost += 5
             if best is None or cost < best[0]:
@@ -338,7 +348,7 @@ def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
                if r["scene"] == scene and rel_l2_pct(r, ref) is not None]
         pts = [p for p in pts if p[0] > 0 and p[1] > 0]
         labels.append((ax, [(t, e, point_label(r, vary), style.method_colour[r["method"]])
-                            for t, e, r in pts]))
+                            for t, e, r in pts], []))
         for t, e, r in pts:
             if r["method"] not in methods_seen:
                 methods_seen.append(r["method"])
@@ -351,6 +361,11 @@ def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
         if len(front) > 1:
             ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="0.4",
                     lw=1, zorder=2)
+            # The step line's corners, for place_labels to keep the labels off it.
+            steps = [front[0]]
+            for (t0, e0), (t1, e1) in zip(front, front[1:]):
+                steps += [(t1, e0), (t1, e1)]
+            labels[-1] = (ax, labels[-1][1], [steps])
         ax.set_title(scene, fontsize=9)
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -375,7 +390,8 @@ def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
            "line joins the runs no other run beats in both. Each point is labelled with "
            + (f"its value of {', '.join('`' + a + '`' for a in vary)}" if vary
               else "the samples it used (where the method reports them)"),
-           after_layout=lambda: [place_labels(ax, items) for ax, items in labels])
+           after_layout=lambda: [place_labels(ax, items, lines=lines)
+                                 for ax, items, lines in labels])
 
 
 def run_label(r, axis_names):

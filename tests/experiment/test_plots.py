@@ -66,7 +66,7 @@ def main():
     # Labels: what varies, and none overlapping for a cluster of nearby points.
     if plots.point_label(run(0, 1e-4, 20.0, 0.1), ["epsilon"]) != "ε=0.0001":
         fail(plots.point_label(run(0, 1e-4, 20.0, 0.1), ["epsilon"]))
-    if plots.point_label({"samples": 2748, "axes": {}}, []) != "2748 smp":
+    if plots.point_label({"samples": 2748, "axes": {}}, []) != "2748 samples":
         fail("no axis: samples used")
     fig, ax = plots.plt.subplots(figsize=(5, 3.5))
     pts = [(28, 0.47, "ε=0.01"), (44, 0.47, "ε=0.0001"), (52, 0.471, "ε=0.001"),
