@@ -10,13 +10,16 @@ matplotlib (Agg backend):
     error_vs_samples   rel. L2 vs samples used (sweeps with a `samples` or `epsilon` axis)
     time_vs_<axis>     frame time vs `resolution`, `lights` or `image_size` (with the paper's
                        frame times, dashed, where the config gives `paper_fps`)
-    pareto             error against frame time, every run a point, the Pareto front as a line
+    pareto             error against frame time, every run a point labelled with what the sweep
+                       varies (ε=…, n=…, or the samples used), the Pareto front as a line
     stages             each run's frame split into its stages (share of the frame, linear
-                       axis), the total time at the end of each bar
+                       axis): the stages of its median repetition (median_run_ms), so that the
+                       bar adds up to 100 %; that frame time at the end of each bar
   plots/index.json     the figures in order with a one-line caption each (report.md uses it)
   gallery/page-NN.png  every successful run as a labelled tile (method, samples, error, time)
-                       beside its signed difference from the headline reference; N tiles a page
-  gallery/index.json   the pages and how many runs they hold
+                       beside its signed difference from the headline reference, each reference
+                       as a tile beside the colour scale of those differences; N tiles a page
+  gallery/index.json   the pages, how many runs they hold and what each difference slot shows
 
 One colour per method (its config name) in every figure of the experiment; stages have their own
 palette. Every figure's title names the experiment, its sweep and the machine and backends.
