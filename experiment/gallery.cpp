@@ -211,7 +211,7 @@ Image errorScale(int w, int h, float exposure) {
   const Vec3 white(unexpose, unexpose, unexpose);
   for (int x = 0; x < w; ++x)
     out.at(x, std::max(0, y0 - 1)) = out.at(x, std::min(h - 1, y1)) = white;
-  const std::string lo = fmt(-kErrorMapFull, "%g"), hi = "+" + fmt(kErrorMapFull, "%g");
+  const std::string lo = fmt(-kErrorMapFull, "%g"), hi = fmt(kErrorMapFull, "%+g");
   const int ty = y1 + 2 + scale;
   if (textWidth(lo, scale) + textWidth("0", scale) + textWidth(hi, scale) + 4 * scale <= w &&
       ty + 7 * scale <= h) {
@@ -265,6 +265,21 @@ std::vector<Image> labelled(const std::vector<StripPanel>& panels, float exposur
   return out;
 }
 
+/// ", 379 ms": the render time of reference `rc` from the stats cached beside it (one render,
+/// not a median); "" where they are missing.
+std::string referenceTime(const OutputDir& out, const Reference& rc) {
+  if (rc.file.empty()) return "";
+  const fs::path stats = fs::path(out.path(rc.file)).replace_extension(".json");
+  try {
+    if (!fs::exists(stats)) return "";
+    const Json t = readJsonFile(stats.string()).value("timings_ms", Json::object());
+    if (t.contains("total") && t["total"].is_number())
+      return ", " + fmt(t["total"].get<double>(), "%.0f") + " ms";
+  } catch (const std::exception&) {
+  }
+  return "";
+}
+
 /// The runs grouped by (sweep, scene, point) ignoring the render.* axes (sample budget, ε),
 /// which share a reference; groups in first-seen order.
 struct Groups {
@@ -301,11 +316,12 @@ void writeStrip(std::ostream& md, const ExperimentPlan& plan, const std::string&
     for (const MethodSpec& ref : plan.references) {
       Reference& rc = refs.get(*spec, ref);
       if (!rc.ok) continue;
-      StripPanel p{rc.image, {ref.name, "reference"}};
-      if (&ref != &plan.references.front()) {
+      const bool headline = &ref == &plan.references.front();
+      StripPanel p{rc.image, {ref.name, headline ? "reference" : "reference 2"}};
+      p.label[1] += referenceTime(out, rc);
+      if (!headline) {
         // A second reference (per-voxel beside exact): a baseline, with its error against the
         // headline one when that rendered.
-        p.label[1] = "reference 2";
         if (!panels.empty() && names.front() == head + " (reference)" &&
             panels.front().image.width() == rc.image.width() &&
             panels.front().image.height() == rc.image.height())
@@ -368,8 +384,8 @@ void writeGallery(std::ostream& md, const ExperimentPlan& plan, const std::vecto
      << "), each labelled above in the image: a run with its method, samples used, median "
         "frame time, relative L2 against `"
      << plan.references.front().name
-     << "` and its sweep point; a reference with its name (a second reference with its relative "
-        "L2 against the first).";
+     << "` and its sweep point; a reference with its name and render time (one render; a second "
+        "reference with its relative L2 against the first).";
   if (plan.gallery == "image+error")
     md << " Below each image its signed error against `" << plan.references.front().name
        << "` after the PNG transform (exposure 0): red = brighter than the reference, blue = "
