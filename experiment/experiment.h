@@ -124,6 +124,10 @@ struct RunRecord {
   bool resumed = false;  ///< loaded from DIR/runs/ instead of rendered
   Json stats;            ///< RenderStats::toJson() of the last repetition, timings = medians
   std::vector<std::pair<std::string, double>> medianMs;  ///< per stage, plus "total"
+  /// The stages and total of one repetition, the one whose total is closest to the median
+  /// total: its stages add up to at most its total (the medians of the stages need not add up
+  /// to the median total); plots.py draws its stage bars from them.
+  std::vector<std::pair<std::string, double>> medianRunMs;
   int repetitions = 0, warmup = 0;
   std::vector<std::string> references;  ///< names, in order
   std::vector<ImageError> errors;       ///< one per reference
@@ -204,6 +208,18 @@ ExperimentResult mergeShards(const std::vector<std::string>& shardDirs, const st
 /// The python interpreter the plots use: the first of $SCATTERLAB_PYTHON, `python3` on the PATH
 /// and /usr/bin/python3 that can import matplotlib; "" when none can.
 std::string findPlotPython();
+
+/// One panel of a gallery strip: an image and the label lines drawn above it.
+struct StripPanel {
+  Image image;
+  std::vector<std::string> label;
+};
+
+/// report.md's gallery strip (without plots): the panels left to right with 4-pixel gaps, each
+/// under its label (white 5×7 capitals on black, wrapped to its width); with `errors`, a second
+/// row of signed error maps against the first panel (the headline reference), whose own slot
+/// shows the colour scale of those maps. Linear values that show so after `exposure` stops.
+Image galleryStrip(const std::vector<StripPanel>& panels, bool errors, float exposure);
 
 /// FNV-1a 64-bit hash of `text`, as 16 hex digits (stable across runs and machines).
 std::string stableHash(const std::string& text);

@@ -10,13 +10,16 @@ matplotlib (Agg backend):
     error_vs_samples   rel. L2 vs samples used (sweeps with a `samples` or `epsilon` axis)
     time_vs_<axis>     frame time vs `resolution`, `lights` or `image_size` (with the paper's
                        frame times, dashed, where the config gives `paper_fps`)
-    pareto             error against frame time, every run a point, the Pareto front as a line
+    pareto             error against frame time, every run a point labelled with what the sweep
+                       varies (ε=…, n=…, or the samples used), the Pareto front as a line
     stages             each run's frame split into its stages (share of the frame, linear
-                       axis), the total time at the end of each bar
+                       axis): the stages of its median repetition (median_run_ms), so that the
+                       bar adds up to 100 %; that frame time at the end of each bar
   plots/index.json     the figures in order with a one-line caption each (report.md uses it)
   gallery/page-NN.png  every successful run as a labelled tile (method, samples, error, time)
-                       beside its signed difference from the headline reference; N tiles a page
-  gallery/index.json   the pages and how many runs they hold
+                       beside its signed difference from the headline reference, each reference
+                       as a tile beside the colour scale of those differences; N tiles a page
+  gallery/index.json   the pages, how many runs they hold and what each difference slot shows
 
 One colour per method (its config name) in every figure of the experiment; stages have their own
 palette. Every figure's title names the experiment, its sweep and the machine and backends.
@@ -32,6 +35,8 @@ from collections import OrderedDict
 import matplotlib
 
 matplotlib.use("Agg")
+import matplotlib.cm  # noqa: E402
+import matplotlib.colors  # noqa: E402
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.patches  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
@@ -116,8 +121,9 @@ def panel_grid(n, width=4.2, height=3.3, max_cols=4):
     return fig, list(axes.flat[:n])
 
 
-def finish(fig, path_base, title, subtitle, handles=None, made=None, caption=""):
-    """Suptitle, one legend below the panels, PNG + SVG; records the figure in `made`."""
+def finish(fig, path_base, title, subtitle, handles=None, made=None, caption="", after_layout=None):
+    """Suptitle, one legend below the panels, PNG + SVG; records the figure in `made`.
+    `after_layout()` runs once the panels have their final size (point labels are placed then)."""
     wrap = max(40, int(fig.get_figwidth() * 11))
     lines = textwrap.wrap(title, wrap) + textwrap.wrap(subtitle, wrap)
     fig.suptitle("\n".join(lines), fontsize=10)
@@ -130,6 +136,8 @@ def finish(fig, path_base, title, subtitle, handles=None, made=None, caption="")
         fig.tight_layout(rect=(0, (0.1 + 0.2 * rows) / h, 1, top))
     else:
         fig.tight_layout(rect=(0, 0, 1, top))
+    if after_layout:
+        after_layout()
     for ext in ("png", "svg"):
         fig.savefig(f"{path_base}.{ext}", dpi=100)
     plt.close(fig)
@@ -253,14 +261,97 @@ class XKey:
         return self.fn(r)
 
 
+# Short names of the swept axes in point labels.
+AXIS_SHORT = {"epsilon": "ε", "samples": "n", "resolution": "res", "lights": "lights",
+              "image_size": "px"}
+
+
+def point_label(r, vary):
+    """What tells run `r` apart from the others of its method in a sweep: the values of the axes
+    in `vary` ("ε=1e-4", "n=2000", "res=64"), else the samples it used ("2748 samples")."""
+    parts = []
+    for a in vary:
+        v = r.get("axes", {}).get(a)
+        if v is None:
+            continue
+        text = "x".join(map(str, v)) if isinstance(v, list) else f"{v:g}" if isinstance(
+            v, float) else str(v)
+        parts.append(f"{AXIS_SHORT.get(a, a)}={text}")
+    if not parts and isinstance(r.get("samples"), (int, float)):
+        parts.append(f"{r['samples']:g} samples")
+    return ", ".join(parts)
+
+
+def _overlap(a, b, pad=1.0):
+    return not (a.x1 + pad <= b.x0 or b.x1 + pad <= a.x0 or a.y1 + pad <= b.y0 or b.y1 + pad <= a.y0)
+
+
+def place_labels(ax, items, fontsize=6.5, lines=()):
+    """Labels `items` = [(x, y, text, colour)] beside their points, each at the first of eight
+    offsets (right, left, above, below, diagonals) that overlaps no label placed before it, no
+    other point, none of the polylines `lines` ([(x, y), ...] in data units) and stays inside the
+    axes; the least-overlapping offset where none is free. Returns the Text objects. Call it once
+    the axes have their final size."""
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    dpi = fig.dpi / 72.0
+    pts = [ax.transData.transform((x, y)) for x, y, _, _ in items]
+    dot = 4.0 * dpi  # the marker's radius in pixels, and a little room
+    # The lines as points every few pixels.
+    along = []
+    for line in lines:
+        disp = [ax.transData.transform(p) for p in line]
+        for (x0, y0), (x1, y1) in zip(disp, disp[1:]):
+            n = max(1, int(math.hypot(x1 - x0, y1 - y0) / 3))
+            along += [(x0 + (x1 - x0) * k / n, y0 + (y1 - y0) * k / n) for k in range(n + 1)]
+    offsets = [(5, 0, "left", "center"), (-5, 0, "right", "center"), (0, 5, "center", "bottom"),
+               (0, -5, "center", "top"), (4, 4, "left", "bottom"), (-4, 4, "right", "bottom"),
+               (4, -4, "left", "top"), (-4, -4, "right", "top")]
+    placed, texts = [], []
+    order = sorted(range(len(items)), key=lambda i: (pts[i][0], pts[i][1]))
+    for i in order:
+        x, y, text, colour = items[i]
+        if not text:
+            continue
+        best = None
+        for dx, dy, ha, va in offsets:
+            t = ax.annotate(text, (x, y), xytext=(dx, dy), textcoords="offset points", ha=ha,
+                            va=va, fontsize=fontsize, color=colour, zorder=4,
+                            annotation_clip=False)
+            bb = t.get_window_extent(renderer)
+            cost = sum(_overlap(bb, p) for p in placed) * 10
+            cost += sum(1 for j, (px, py) in enumerate(pts) if j != i and
+                        bb.x0 - dot < px < bb.x1 + dot and bb.y0 - dot < py < bb.y1 + dot) * 3
+            cost += 2 * any(bb.x0 - 1 < px < bb.x1 + 1 and bb.y0 - 1 < py < bb.y1 + 1
+                            for px, py in along)
+            if bb.x0 < frame.x0 or bb.x1 > frame.x1 or bb.y0 < frame.y0 or bb.y1 > frame.y1:
+                cost += 5
+            if best is None or cost < best[0]:
+                if best is not None:
+                    best[1].remove()
+                best = (cost, t, bb)
+            else:
+                t.remove()
+            if cost == 0:
+                break
+        placed.append(best[2])
+        texts.append(best[1])
+    return texts
+
+
 def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
     """Error against frame time, one point per run; the non-dominated runs joined by a line."""
     fig, axes = panel_grid(len(scenes))
     methods_seen = []
+    vary = list(OrderedDict.fromkeys(a for r in runs for a in r.get("axes", {})))
+    labels = []  # (axes, [(x, y, text, colour)]), placed after the layout
     for ax, scene in zip(axes, scenes):
         pts = [(r["median_ms"]["total"], rel_l2_pct(r, ref), r) for r in runs
                if r["scene"] == scene and rel_l2_pct(r, ref) is not None]
         pts = [p for p in pts if p[0] > 0 and p[1] > 0]
+        labels.append((ax, [(t, e, point_label(r, vary), style.method_colour[r["method"]])
+                            for t, e, r in pts], []))
         for t, e, r in pts:
             if r["method"] not in methods_seen:
                 methods_seen.append(r["method"])
@@ -273,9 +364,18 @@ def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
         if len(front) > 1:
             ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="0.4",
                     lw=1, zorder=2)
+            # The step line's corners, for place_labels to keep the labels off it.
+            steps = [front[0]]
+            for (t0, e0), (t1, e1) in zip(front, front[1:]):
+                steps += [(t1, e0), (t1, e1)]
+            labels[-1] = (ax, labels[-1][1], [steps])
         ax.set_title(scene, fontsize=9)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        if pts:  # room for the labels beside the outermost points
+            ts, es = [p[0] for p in pts], [p[1] for p in pts]
+            ax.set_xlim(min(ts) / 1.6, max(ts) * 1.6)
+            ax.set_ylim(min(es) / 1.4, max(es) * 1.4)
         ax.set_xlabel("frame time (ms, median)", fontsize=8)
         ax.set_ylabel(f"relative L2 vs {ref} (%)", fontsize=8)
         plain_log_ticks(ax)
@@ -290,7 +390,11 @@ def pareto_figure(res, style, runs, sweep, scenes, ref, d, made):
            f"{short_title(res)} — sweep '{sweep}': which runs are fast and accurate?",
            machine_text(res, runs), handles, made,
            f"Sweep `{sweep}`: error against frame time per scene; lower left is better, the grey "
-           "line joins the runs no other run beats in both")
+           "line joins the runs no other run beats in both. Each point is labelled with "
+           + (f"its value of {', '.join('`' + a + '`' for a in vary)}" if vary
+              else "the samples it used (where the method reports them)"),
+           after_layout=lambda: [place_labels(ax, items, lines=lines)
+                                 for ax, items, lines in labels])
 
 
 def run_label(r, axis_names):
@@ -300,8 +404,27 @@ def run_label(r, axis_names):
     return s + (" " + ", ".join(ax) if ax else "")
 
 
+def stage_times(r, stages):
+    """(per-stage ms, total ms, how) of run `r` for its stage bar, the stages adding up to at most
+    the total. From `median_run_ms` (the one repetition whose frame time is the median) where the
+    results have it: how = "median run". Older results only have per-stage medians, which need not
+    add up to the median total: they are scaled down to it where they pass it (how = "scaled")."""
+    run = r.get("median_run_ms")
+    if run and run.get("total"):
+        return {s: run.get(s, 0.0) for s in stages}, run["total"], "median run"
+    med = r.get("median_ms", {})
+    tot = med.get("total") or 0.0
+    times = {s: med.get(s, 0.0) for s in stages}
+    summed = sum(times.values())
+    if tot > 0 and summed > tot:
+        times = {s: v * tot / summed for s, v in times.items()}
+        return times, tot, "scaled"
+    return times, tot, "medians"
+
+
 def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
-    """Each run's frame as 100% split into its stages (linear axis), total time at the bar end."""
+    """Each run's frame as 100% split into its stages (linear axis), total time at the bar end:
+    the stages of its median repetition (stage_times)."""
     rows = [len([r for r in runs if r["scene"] == s]) for s in scenes]
     cols = min(len(scenes), 2)
     nrow = math.ceil(len(scenes) / cols)
@@ -311,15 +434,17 @@ def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
     for ax in axes.flat[len(scenes):]:
         ax.set_visible(False)
     used = []
+    hows = set()
     for ax, scene in zip(axes.flat, scenes):
         srun = [r for r in runs if r["scene"] == scene]
         labels = [run_label(r, None) for r in srun]
+        timed = [stage_times(r, stages) for r in srun]
+        hows.update(t[2] for t in timed)
         left = [0.0] * len(srun)
         for s in stages:
             share = []
-            for r in srun:
-                tot = r["median_ms"].get("total") or 0.0
-                share.append(100.0 * r["median_ms"].get(s, 0.0) / tot if tot > 0 else 0.0)
+            for times, tot, _ in timed:
+                share.append(100.0 * times[s] / tot if tot > 0 else 0.0)
             if any(v > 0 for v in share):
                 if s not in used:
                     used.append(s)
@@ -331,14 +456,15 @@ def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
             if "other (untimed)" not in used:
                 used.append("other (untimed)")
             ax.barh(range(len(srun)), rest, left=left, color="0.85", height=0.7)
-        for i, r in enumerate(srun):
-            ax.text(101, i, f"{r['median_ms'].get('total', 0):.0f} ms", va="center", fontsize=7)
+        for i, (_, tot, _) in enumerate(timed):
+            ax.text(101, i, f"{tot:.0f} ms", va="center", fontsize=7)
         ax.set_yticks(range(len(srun)))
         ax.set_yticklabels(labels, fontsize=7)
         ax.invert_yaxis()
         ax.set_xlim(0, 118)
         ax.set_xticks([0, 25, 50, 75, 100])
-        ax.set_xlabel("share of the frame time (%, median per stage); total at the right", fontsize=8)
+        ax.set_xlabel("share of the frame time (%, the median repetition's stages); its frame time "
+                      "at the right", fontsize=8)
         ax.set_title(scene, fontsize=9)
         ax.tick_params(axis="x", labelsize=7)
     handles = [matplotlib.patches.Patch(color=style.stage_colour.get(s, "0.85"), label=s)
@@ -346,9 +472,24 @@ def stage_figure(res, style, runs, sweep, scenes, stages, d, made):
     finish(fig, os.path.join(d, "plots", f"stages__{sweep}"),
            f"{short_title(res)} — sweep '{sweep}': where does the frame time go?",
            machine_text(res, runs), handles, made,
-           f"Sweep `{sweep}`: each run's frame split into its stages (each stage's median as a "
-           "share of the median frame time, linear axis; grey: time no stage timer covers), the "
-           "frame time at the right")
+           f"Sweep `{sweep}`: each run's frame split into its stages, linear axis: "
+           + stage_caption(hows) + "; grey: time no stage timer covers; that frame time at the "
+           "right. The bars add up to 100 %")
+
+
+def stage_caption(hows):
+    """What the stage bars show, for the caption (`hows` from stage_times)."""
+    parts = []
+    if "median run" in hows:
+        parts.append("the stage times of one repetition, the one whose frame time is the median "
+                     "(medians of stages need not add up to the median frame)")
+    if "scaled" in hows:
+        parts.append("where only per-stage medians were recorded and they add up to more than the "
+                     "median frame time, those medians scaled down to it")
+    if "medians" in hows:
+        parts.append("where only per-stage medians were recorded and they fit in the median frame "
+                     "time, those medians")
+    return "; ".join(parts) or "no stage times"
 
 
 def sweep_figures(res, style, d, made):
@@ -398,6 +539,27 @@ def axes_text(r):
                      for a, v in r.get("axes", {}).items())
 
 
+def reference_scale(ax, ref):
+    """The difference slot of a reference tile: the colour scale of the difference images that
+    follow (the reference's own difference is 0 everywhere, a blank map), with what its ends
+    mean."""
+    ax.axis("off")
+    ax.set_title(f"{ref} is the reference: colour scale of the differences", fontsize=8)
+    cax = ax.inset_axes([0.08, 0.42, 0.84, 0.14])
+    sm = matplotlib.cm.ScalarMappable(norm=matplotlib.colors.Normalize(-DIFF_FULL, DIFF_FULL),
+                                      cmap="RdBu_r")
+    cb = ax.figure.colorbar(sm, cax=cax, orientation="horizontal")
+    cb.set_ticks([-DIFF_FULL, -DIFF_FULL / 2, 0, DIFF_FULL / 2, DIFF_FULL])
+    cb.ax.tick_params(labelsize=7)
+    cax.set_xlabel(f"image − {ref} (mean over channels of the PNGs)", fontsize=7)
+    ax.text(0.08, 0.66, "darker than the reference", ha="left", va="bottom", fontsize=7,
+            color=matplotlib.cm.RdBu_r(0.0), transform=ax.transAxes)
+    ax.text(0.92, 0.66, "brighter", ha="right", va="bottom", fontsize=7,
+            color=matplotlib.cm.RdBu_r(1.0), transform=ax.transAxes)
+    ax.text(0.5, 0.08, f"its own difference is 0 everywhere; full colour at ±{DIFF_FULL:g}",
+            ha="center", va="bottom", fontsize=7, transform=ax.transAxes)
+
+
 def gallery(res, d, per_page):
     """Labelled tiles (image + signed difference from the headline reference), `per_page` a
     page; each run's reference image as a tile of its own before the first run that uses it."""
@@ -418,7 +580,7 @@ def gallery(res, d, per_page):
         tiles.append({"run": r, "n": n + 1, "ref_image": rp})
     pages = [tiles[i:i + per_page] for i in range(0, len(tiles), per_page)]
     cols = 2  # tiles per row, each an image and its difference
-    files = []
+    files, tiles_of = [], []
     for p, page in enumerate(pages):
         nrow = math.ceil(len(page) / cols)
         first = load_rgb(os.path.join(d, page[0]["run"]["image"]))
@@ -428,6 +590,7 @@ def gallery(res, d, per_page):
                                  figsize=(4 * 2 * cols, (4 * aspect + 0.6) * nrow + 2.0),
                                  squeeze=False)
         diff_im = None
+        slots = []  # what each tile's difference slot shows, for gallery/index.json
         for i, ax in enumerate(axes.flat):
             ax.set_xticks([])
             ax.set_yticks([])
@@ -442,9 +605,9 @@ def gallery(res, d, per_page):
                     ax.set_title(f"{r['scene']}: reference {ref}"
                                  f"{' · ' + axes_text(r) if axes_text(r) else ''}", fontsize=8)
                 else:
-                    ax.axis("off")
-                    ax.text(0.5, 0.5, f"the reference ({ref}) of the runs that follow",
-                            ha="center", va="center", fontsize=8, transform=ax.transAxes)
+                    reference_scale(ax, ref)
+                    slots.append({"tile": "reference", "image": t["ref"],
+                                  "difference": "colour scale"})
                 continue
             img = load_rgb(os.path.join(d, r["image"]))
             if i % 2 == 0:
@@ -463,9 +626,11 @@ def gallery(res, d, per_page):
                     diff = (img - refimg).mean(axis=2) if img.ndim == 3 else img - refimg
                     diff_im = ax.imshow(diff, cmap="RdBu_r", vmin=-DIFF_FULL, vmax=DIFF_FULL)
                     ax.set_title(f"minus {ref} (signed)", fontsize=8)
+                    slots.append({"tile": r.get("id", ""), "difference": "signed"})
                     continue
             ax.text(0.5, 0.5, "no reference image", ha="center", va="center", fontsize=8,
                     transform=ax.transAxes)
+            slots.append({"tile": r.get("id", ""), "difference": "none"})
         numbers = [t["n"] for t in page if "n" in t]
         span = f"runs {numbers[0]}–{numbers[-1]} of {len(shown)}" if numbers else "references"
         title = f"{short_title(res)} — gallery page {p + 1}/{len(pages)} ({span})"
@@ -483,8 +648,9 @@ def gallery(res, d, per_page):
         fig.savefig(os.path.join(d, "gallery", name), dpi=90)
         plt.close(fig)
         files.append(name)
+        tiles_of.append(slots)
     index = {"pages": files, "runs": len(shown), "per_page": per_page, "reference": ref,
-             "diff_full": DIFF_FULL}
+             "diff_full": DIFF_FULL, "difference_slots": tiles_of}
     with open(os.path.join(d, "gallery", "index.json"), "w") as f:
         json.dump(index, f, indent=2)
     return index

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -193,9 +194,12 @@ class Runner {
     for (int i = 0; i < warm; ++i) method->render(scene, nullptr);
     std::map<std::string, std::vector<double>> times;
     std::vector<std::string> order;
+    std::vector<std::vector<std::pair<std::string, double>>> perRep;
     RenderResult last;
     for (int i = 0; i < reps; ++i) {
       last = method->render(scene, nullptr);
+      perRep.push_back(last.stats.timingsMs);
+      perRep.back().emplace_back("total", last.stats.totalMs());
       for (const auto& [s, ms] : last.stats.timingsMs) {
         if (!times.count(s)) order.push_back(s);
         times[s].push_back(ms);
@@ -206,6 +210,14 @@ class Runner {
     rec.memoryMethod = mem_.method;
     order.push_back("total");
     for (const std::string& s : order) rec.medianMs.emplace_back(s, median(times[s]));
+    // The repetition whose total is nearest the median total (the first of ties).
+    const double medTotal = rec.medianMs.back().second;
+    std::size_t mid = 0;
+    for (std::size_t i = 1; i < perRep.size(); ++i)
+      if (std::abs(perRep[i].back().second - medTotal) <
+          std::abs(perRep[mid].back().second - medTotal))
+        mid = i;
+    if (!perRep.empty()) rec.medianRunMs = perRep[mid];
     RenderStats st = last.stats;
     st.timingsMs.clear();
     for (const auto& [s, ms] : rec.medianMs)

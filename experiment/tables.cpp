@@ -74,6 +74,11 @@ Json RunRecord::toJson() const {
   Json t = Json::object();
   for (const auto& [s, ms] : medianMs) t[s] = ms;
   j["median_ms"] = t;
+  if (!medianRunMs.empty()) {
+    Json m = Json::object();
+    for (const auto& [s, ms] : medianRunMs) m[s] = ms;
+    j["median_run_ms"] = m;
+  }
   j["repetitions"] = repetitions;
   j["warmup"] = warmup;
   Json e = Json::object();
@@ -112,6 +117,9 @@ RunRecord RunRecord::fromJson(const Json& j) {
   const Json median = j.value("median_ms", Json::object());  // a named copy: items() of a
   for (const auto& [s, ms] : median.items())                 // temporary dangles
     r.medianMs.emplace_back(s, ms.is_number() ? ms.get<double>() : NAN);
+  const Json medianRun = j.value("median_run_ms", Json::object());
+  for (const auto& [s, ms] : medianRun.items())
+    r.medianRunMs.emplace_back(s, ms.is_number() ? ms.get<double>() : NAN);
   r.repetitions = j.value("repetitions", 0);
   r.warmup = j.value("warmup", 0);
   r.references = j.value("references", std::vector<std::string>{});
