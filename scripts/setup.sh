@@ -8,7 +8,7 @@ BUILD_DIR=${1:-build}
 PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libglm-dev libeigen3-dev libtbb-dev nlohmann-json3-dev libcli11-dev
-  libopenexr-dev libpng-dev libopenvdb-dev libboost-iostreams-dev
+  libopenexr-dev libpng-dev zlib1g-dev libopenvdb-dev libboost-iostreams-dev
   libembree-dev libtinyobjloader-dev libxsimd-dev
   libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev
