@@ -24,6 +24,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/sanitizers.h"
 
 namespace scatterlab {
 
@@ -182,18 +183,6 @@ std::uint64_t addressSpaceInUse() {
   statm >> pages;
   return pages * std::uint64_t(::sysconf(_SC_PAGE_SIZE));
 }
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
 
 /// OpenVDB's reader trusts the file: a bit flip in a compressed block made it overflow a heap
 /// buffer (blosc), others make it allocate gigabytes. So a forked child parses the file,

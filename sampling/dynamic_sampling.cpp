@@ -28,22 +28,13 @@ Vec3 GridInfoBuffer::vertex(std::size_t linear) const {
 }
 
 void GridInfoBuffer::markSphere(const Vec3& c, float R, std::int32_t anc) {
-  const IVec3 lo = glm::max(IVec3(glm::ceil((c - R - bounds.min) / interval - 0.5f)), IVec3(0));
-  const IVec3 hi = glm::min(IVec3(glm::floor((c + R - bounds.min) / interval - 0.5f)), dims - 1);
-  const float R2 = R * R;
-  for (int k = lo.z; k <= hi.z; ++k)
-    for (int j = lo.y; j <= hi.y; ++j)
-      for (int i = lo.x; i <= hi.x; ++i) {
-        const Vec3 q = bounds.min + (Vec3(i, j, k) + 0.5f) * interval;
-        const Vec3 d = q - c;
-        if (glm::dot(d, d) >= R2) continue;
-        const std::size_t v = (std::size_t(k) * dims.y + j) * dims.x + i;
-        std::atomic_ref<std::uint8_t>(inSet[v]).store(1, std::memory_order_relaxed);
-        std::atomic_ref<std::int32_t> a(ancestor[v]);
-        std::int32_t cur = a.load(std::memory_order_relaxed);
-        while ((cur < 0 || anc < cur) && !a.compare_exchange_weak(cur, anc)) {
-        }
-      }
+  forEachInSphere(c, R, [&](std::size_t v) {
+    std::atomic_ref<std::uint8_t>(inSet[v]).store(1, std::memory_order_relaxed);
+    std::atomic_ref<std::int32_t> a(ancestor[v]);
+    std::int32_t cur = a.load(std::memory_order_relaxed);
+    while ((cur < 0 || anc < cur) && !a.compare_exchange_weak(cur, anc)) {
+    }
+  });
 }
 
 namespace {

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "api/scatterlab.h"
+#include "core/sanitizers.h"
 #include "support/cli.h"
 
 namespace fs = std::filesystem;
@@ -25,20 +26,10 @@ namespace {
 
 using scatterlab::testing::RunResult;
 
-/// Whether this test (and so the tool it runs: one build tree, one set of flags) is built with
-/// AddressSanitizer, which reserves some 15 TiB of shadow address space at start-up: under any
-/// `ulimit -v` the tool aborts before main ("ReserveShadowMemoryRange failed", exit 134).
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
+// kAddressSanitizer (core/sanitizers.h): this test and the tool it runs are one build tree
+// with one set of flags; under ASan the tool aborts before main under any `ulimit -v`
+// ("ReserveShadowMemoryRange failed", exit 134).
+using scatterlab::kAddressSanitizer;
 
 /// `scatterlab ARGS` under `timeout` and a 2 GiB address-space limit, so that a regression
 /// (a FIFO read forever, /dev/zero read into memory) fails the test instead of hanging it. Under
