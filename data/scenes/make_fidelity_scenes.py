@@ -3,10 +3,12 @@
 method fails: a lamp inside a puff, 32 lamps in a fog bank, a perforated dense sheet with a
 light behind it, a spot shaft through OpenVDB smoke1, and a chimney trail of ~600 Gaussians lit
 from outside. Deterministic (fixed seeds). Run from anywhere: python3 make_fidelity_scenes.py"""
+import array
 import json
 import math
 import os
 import random
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CAMERA = {"position": [0.5, 0.5, -2], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0],
@@ -108,3 +110,63 @@ write("chimney.json", {
     "lights": [{"type": "point", "position": [1.6, 1.3, 0.2], "intensity": [12, 10, 8]}],
     "camera": CAMERA, "background": [0.0, 0.0, 0.0],
     "render": {"method": "gradient", "sampler": {"type": "gaussian-centres"}}})
+
+# Issue 24's held-out kinds, made here so they can be measured.
+#
+# A thin dense sheet lit from behind, fog in front: 128^3 over the unit box, a sheet 3 voxels
+# thick (optical depth 9 across it) covering x, y in [0.12, 0.88], with 2x2-voxel holes every 16
+# voxels and a vertical slit 1 voxel wide and 48 long; thin fog everywhere (optical depth 0.6
+# across the box). Hard edges: a raw float32 grid (x fastest), written beside the scene.
+N = 128
+SHEET_Z = range(76, 79)
+SIGMA_T = 4.0
+SHEET_D = 9.0 / (SIGMA_T * len(SHEET_Z) / N)  # optical depth 9 across the 3 voxels
+FOG_D = 0.15
+
+
+def sheet_value(i, j, k):
+    if k not in SHEET_Z or not (15 <= i < 113 and 15 <= j < 113):
+        return FOG_D
+    if i % 16 in (7, 8) and j % 16 in (7, 8) and not 88 <= i < 100:
+        return FOG_D  # a small hole
+    if i == 92 and 40 <= j < 88:
+        return FOG_D  # the slit
+    return SHEET_D
+
+
+plane = {}
+for k in set(SHEET_Z):
+    plane[k] = array.array("f", [sheet_value(i, j, k) for j in range(N) for i in range(N)])
+fog_plane = array.array("f", [FOG_D] * (N * N))
+with open(os.path.join(HERE, "thin_sheet.f32"), "wb") as f:
+    for k in range(N):
+        p = plane.get(k, fog_plane)
+        if sys.byteorder != "little":
+            p = array.array("f", p)
+            p.byteswap()
+        p.tofile(f)
+write("thin_sheet.json", {
+    "medium": {"bounds": {"min": [0, 0, 0], "max": [1, 1, 1]},
+               "density": {"type": "grid", "dims": [N, N, N], "file": "thin_sheet.f32"},
+               "resolution": N, "sigma_t": SIGMA_T, "albedo": 0.8,
+               "phase": {"type": "isotropic"}},
+    "lights": [{"type": "point", "position": [0.56, 0.62, 0.97], "intensity": [1.6, 1.5, 1.3]}],
+    "camera": {"position": [0.85, 0.58, -1.5], "look_at": [0.5, 0.5, 0.55], "up": [0, 1, 0],
+               "fov_y_deg": 40, "width": 320, "height": 240},
+    "background": [0, 0, 0], "render": {"method": "exact"}})
+
+# Optically thick clouds (the Disney cloud at 128^3, twice the density of cloud.json): an HG
+# cloud lit from behind-left and an isotropic one, where the linear Taylor step of `gradient`
+# undershoots the convex transmittance.
+for name, phase in (("thick_cloud", {"type": "henyey-greenstein", "g": 0.5}),
+                    ("thick_cloud_iso", {"type": "isotropic"})):
+    write(name + ".json", {
+        "medium": {"density": {"type": "vdb",
+                               "file": "../../../shared/data/vdb/wdas_cloud_sixteenth.vdb",
+                               "grid": "density"},
+                   "resolution": 128, "sigma_t": 0.06, "albedo": 0.95, "phase": phase},
+        "lights": [{"type": "directional", "direction": [0.5, -0.6, 0.6],
+                    "irradiance": [24, 23, 21]}],
+        "camera": {"position": [0, 20, -620], "look_at": [-10, 70, 0], "up": [0, 1, 0],
+                   "fov_y_deg": 45, "width": 320, "height": 240},
+        "background": [0.16, 0.28, 0.52], "render": {"method": "exact"}})
