@@ -48,6 +48,9 @@ inline constexpr GLuint kOffsets = 9;
 inline constexpr GLuint kNextSamples = 10;
 /// int32 ancestors of the next level (compaction output).
 inline constexpr GLuint kNextAncestors = 11;
+/// float sums of mean_RGB|L̃ − L|·D per sample and group of kProbeGroup probes (dynamic sampling's
+/// probe pass; never in one program with the grid information buffer).
+inline constexpr GLuint kProbeSums = 7;
 /// Scan (scan.comp.glsl): input, output, per-block totals, and the scanned block totals.
 inline constexpr GLuint kScanIn = 0;
 inline constexpr GLuint kScanOut = 1;
@@ -142,6 +145,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_OFFSETS", binding::kOffsets},
     {"BINDING_NEXT_SAMPLES", binding::kNextSamples},
     {"BINDING_NEXT_ANCESTORS", binding::kNextAncestors},
+    {"BINDING_PROBE_SUMS", binding::kProbeSums},
     {"BINDING_SCAN_IN", binding::kScanIn},
     {"BINDING_SCAN_OUT", binding::kScanOut},
     {"BINDING_SCAN_BLOCK_SUMS", binding::kScanBlockSums},

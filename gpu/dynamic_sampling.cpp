@@ -106,17 +106,37 @@ std::string levelLabel(const char* what, std::size_t level) {
 
 /// Layout of DynamicSamplingWorkspace::counts for L split levels: [0, L] the levels' sample
 /// counts, [L + 1] the largest count a level asked for beyond its capacity, [L + 2] that level,
-/// then from dispatchSlot(L) three uints (x, 1, 1) per level: its evaluate/split dispatch.
+/// then from dispatchSlot(L) three uints (x, 1, 1) per level: its evaluate/split dispatch, and
+/// from probeDispatchSlot(L) three (x, probe groups, 1) per level: its probe pass's (written by
+/// its evaluation pass).
 std::size_t overflowSlot(std::size_t L) {
   return L + 1;
 }
 std::size_t dispatchSlot(std::size_t L) {
   return L + 3;
 }
+std::size_t probeDispatchSlot(std::size_t L) {
+  return dispatchSlot(L) + 3 * (L + 1);
+}
+
+/// Sums per sample of the probe pass: the groups of kProbeGroup probes.
+int probeGroups(const DynamicSamplingSettings& settings) {
+  return (settings.probes + kProbeGroup - 1) / kProbeGroup;
+}
+
+/// The three passes of a level (gpu/shaders/dynamic_error.comp.glsl): evaluation, probes,
+/// combination.
+enum class ErrorPass { Evaluate, Probes, Combine };
 
 const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& steps,
-                            const DynamicSamplingSettings& settings) {
-  std::string key = "dynamic sampling error";
+                            const DynamicSamplingSettings& settings, ErrorPass pass) {
+  if (pass == ErrorPass::Combine)
+    return cachedProgram("dynamic sampling error (combine)", [] {
+      return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {"SL_COMBINE"},
+                            "dynamic sampling error (combine)");
+    });
+  std::string key =
+      pass == ErrorPass::Probes ? "dynamic sampling probes" : "dynamic sampling evaluate";
   std::vector<std::string> defines;
   if (steps.factorLights) {
     defines.push_back("SL_FACTOR_LIGHTS");
@@ -130,7 +150,9 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
     defines.push_back("SL_BOUNDED");
     key += " bounded";
   }
-  std::vector<std::string> files = {"common.glsl", "dynamic_error.comp.glsl"};
+  std::vector<std::string> files = {"common.glsl", pass == ErrorPass::Probes
+                                                       ? "dynamic_probes.comp.glsl"
+                                                       : "dynamic_error.comp.glsl"};
   addShadowVariant(inputs.shadows(), key, files, defines);
   return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
 }
@@ -167,7 +189,11 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
   }
   ensure(w.threshold, 2 * sizeof(double), "dynamic sampling threshold");
   ensure(w.rootTau, n0 * sizeof(float), "dynamic sampling root tau");
-  const std::size_t words = dispatchSlot(L) + 3 * (L + 1);
+  std::size_t probed = 0;  // the largest level that is probed (all but the last)
+  for (std::size_t k = 0; k < L; ++k) probed = std::max(probed, w.levels[k].capacity);
+  ensure(w.probeSums, probed * std::size_t(probeGroups(settings)) * sizeof(float),
+         "dynamic sampling probe sums");
+  const std::size_t words = probeDispatchSlot(L) + 3 * (L + 1);
   ensure(w.counts, words * sizeof(GLuint), "dynamic sampling counts");
   std::vector<GLuint> counts(words, 0u);
   counts[0] = GLuint(n0);
@@ -205,32 +231,70 @@ void dispatchOverLevel(const DynamicSamplingWorkspace& w, std::size_t k, std::si
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
                    std::size_t k, bool final, const TracerSteps& steps,
                    const DynamicSamplingSettings& settings, StageTimer* timer) {
-  const Program& program = errorProgram(inputs, steps, settings);
-  const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
   const DynamicSamplingWorkspace::Level& l = w.levels[k];
   const std::size_t L = settings.levels.size();
+  const GLint groupsPerSample = probeGroups(settings);
   ScopedGpuTimer t(timer, "ds evaluate+error");
-  program.use();
-  inputs.apply(program);
-  glUniform1ui(program.uniform("uLevel"), GLuint(k));
-  glUniform1f(program.uniform("uDelta2"), steps.delta2);
-  glUniform1i(program.uniform("uProbes"), settings.probes);
-  glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
-  glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
-  glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
-  glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
-  if (settings.space.bounds)
-    glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
-                settings.space.bounds->hi);
-  setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
-  l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-  l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
-  w.rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRootTau);
-  l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
-  l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
-  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-  dispatchOverLevel(w, k, L);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  {  // pass 1: S, ∇S, τ, the contributions; pass 2's dispatch
+    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Evaluate);
+    program.use();
+    inputs.apply(program);
+    glUniform1ui(program.uniform("uLevel"), GLuint(k));
+    glUniform1f(program.uniform("uDelta2"), steps.delta2);
+    glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
+    glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
+    glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
+    glUniform1ui(program.uniform("uProbeDispatchSlot"), GLuint(probeDispatchSlot(L)));
+    glUniform1i(program.uniform("uProbeGroups"), groupsPerSample);
+    setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
+    l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
+    w.rootTau.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRootTau);
+    l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+    l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    dispatchOverLevel(w, k, L);
+  }
+  if (final) {
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    return;
+  }
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+  {  // pass 2: one invocation per sample and group of probes
+    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Probes);
+    const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
+    program.use();
+    inputs.apply(program);
+    glUniform1ui(program.uniform("uLevel"), GLuint(k));
+    glUniform1i(program.uniform("uProbes"), settings.probes);
+    glUniform1i(program.uniform("uProbeGroup"), kProbeGroup);
+    glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
+    if (settings.space.bounds)
+      glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
+                  settings.space.bounds->hi);
+    setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
+    l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    w.probeSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kProbeSums);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
+    glDispatchComputeIndirect(GLintptr((probeDispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+  {  // pass 3: E_j from the groups' sums
+    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Combine);
+    program.use();
+    glUniform1ui(program.uniform("uLevel"), GLuint(k));
+    glUniform1i(program.uniform("uProbes"), settings.probes);
+    glUniform1i(program.uniform("uProbeGroups"), groupsPerSample);
+    l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    w.probeSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kProbeSums);
+    dispatchOverLevel(w, k, L);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
 }
 
 /// Level 0: the error scale (mean contribution, in double) and the absolute threshold, left in

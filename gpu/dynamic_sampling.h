@@ -47,6 +47,7 @@ struct DynamicSamplingWorkspace {
   Buffer counts;     ///< uint: counts per level, overflow record, indirect dispatch sizes
   Buffer threshold;  ///< double error scale, double threshold
   Buffer rootTau;    ///< float τ per level-0 sample
+  Buffer probeSums;  ///< float per sample and group of kProbeGroup probes (the probe pass)
   Buffer inSet, vertexAncestors, offsets;  ///< grid information buffer of G_{k+1}, its scan
   std::vector<Buffer> scanSums;            ///< block sums per recursion depth of the scan
   std::size_t vertices = 0;                ///< capacity of inSet / vertexAncestors / offsets

@@ -85,15 +85,19 @@ float localShadingError(const RadianceSample& s, const Vec3* probeS, const float
   Vec3 p[kMaxProbes];
   probePoints(s, p, count);
   float sum = 0.0f;
-  for (int i = 0; i < count; ++i) {
-    Vec3 est = s.taylor(p[i]), truth = probeS[i];
-    if (space.bounds) est = space.bounds->clamp(est);
-    if (space.log) {
-      est = glm::exp(est);
-      truth = glm::exp(truth);
+  for (int g = 0; g < count; g += kProbeGroup) {
+    float group = 0.0f;
+    for (int i = g; i < std::min(count, g + kProbeGroup); ++i) {
+      Vec3 est = s.taylor(p[i]), truth = probeS[i];
+      if (space.bounds) est = space.bounds->clamp(est);
+      if (space.log) {
+        est = glm::exp(est);
+        truth = glm::exp(truth);
+      }
+      const Vec3 diff = glm::abs(est - truth);
+      group += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
     }
-    const Vec3 diff = glm::abs(est - truth);
-    sum += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
+    sum += group;
   }
   return s.radius * s.radius * s.radius * sum / float(count) * tau;
 }

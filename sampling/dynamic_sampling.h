@@ -154,6 +154,10 @@ double relativeErrorScale(const std::vector<float>& contributions);
 
 /// Most probe points a sample can have.
 inline constexpr int kMaxProbes = 40;
+/// Probes summed together before the groups' sums are added (localShadingError): the GPU traces
+/// one group per invocation (gpu/shaders/dynamic_probes.comp.glsl), and both sum in this order
+/// so that they agree to rounding. Eq. 5's six probes are one group, summed as the paper's sum.
+inline constexpr int kProbeGroup = 8;
 
 /// The probe offsets of a unit sphere at the origin, in probePoints() order: the 6 axis
 /// directions (Eq. 5), 8 cube diagonals, 12 edge diagonals (unit length), then the 6 axis and 8
@@ -162,9 +166,9 @@ const Vec3* probeOffsets();
 
 /// E_j of Eq. 5 from the evaluated sample, the traced S at its `count` probes (in the order of
 /// probePoints), the density there, and τ. count = 6 is the paper's Eq. 5. The mean is over
-/// the probes (Eq. 5's Σ/n). `space`: the Taylor estimate is clamped to its bounds, and in log
-/// space both sides are exponentiated before they are compared (extensions; the default is the
-/// paper's Eq. 5).
+/// the probes (Eq. 5's Σ/n), summed in groups of kProbeGroup. `space`: the Taylor estimate is
+/// clamped to its bounds, and in log space both sides are exponentiated before they are compared
+/// (extensions; the default is the paper's Eq. 5).
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
                         int count = 6, const DynamicSamplingSettings::ErrorSpace& space = {});
 

@@ -1,32 +1,54 @@
-// Dynamic sampling (paper Sec. 5), one invocation per sample of the current level: S and ∇S
-// (as volume_tracer.comp.glsl), the traced S and the density at the probes x_j + R_j·d_i,
-// τ to the viewer, the local shading error E_j of Eq. 5 and, on level 0, the sample's
-// contribution R³·mean|S|·D·τ (the scale of a relative ε). The level's sample count is read
-// from the GPU (counts[uLevel], written by the count pass of dynamic_level.comp.glsl; the
-// dispatch is indirect); the threshold and the split decisions are left to the next passes.
-// Mirrors sampling/dynamic_sampling.cpp (localShadingError, sampleContribution,
-// viewTransmittance) operation for operation.
+// Dynamic sampling (paper Sec. 5) in three passes per level, so that no invocation traces more
+// than kProbeGroup probes (an invocation per sample traced up to 47 points: 2000 invocations on
+// level 0 could fill a few of a large GPU's SMs, and llvmpipe ends every loop of an invocation
+// after 65535 iterations in all, which 40 probes × 16 lights reached):
+// 1. this file without SL_COMBINE, one invocation per sample of the current level: S and ∇S (as
+//    volume_tracer.comp.glsl); unless final, τ to the viewer (kept in errors[j] until pass 3) and
+//    on level 0 the sample's contribution R³·mean|S|·D·τ (the scale of a relative ε), and the
+//    indirect dispatch of pass 2 (x: the level's groups, y: its probe groups);
+// 2. dynamic_probes.comp.glsl, one invocation per sample and group of kProbeGroup probes: the
+//    group's sum of mean_RGB|L̃ − L|·D;
+// 3. this file with SL_COMBINE, one invocation per sample: E_j = R³·(Σ of the groups' sums in
+//    group order)/n·τ, Eq. 5.
+// The level's sample count is read from the GPU (counts[uLevel], written by the count pass of
+// dynamic_level.comp.glsl; the dispatch is indirect); the threshold and the split decisions are
+// left to the next passes. Mirrors sampling/dynamic_sampling.cpp (localShadingError, which sums
+// the probes in the same groups, sampleContribution, viewTransmittance) operation for operation.
 layout(local_size_x = 64) in;
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
 layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
 layout(std430, binding = BINDING_ROOT_TAU) buffer RootTau { float rootTau[]; };  // τ of every level-0 sample
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
-// E_j at [j]; on level 0 also the contribution at [count + j]
-layout(std430, binding = BINDING_ERRORS) writeonly buffer Errors { float errors[]; };
-layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
+// Pass 1 leaves τ at [j] and on level 0 the contribution at [count + j]; pass 3 replaces τ by E_j.
+layout(std430, binding = BINDING_ERRORS) buffer Errors { float errors[]; };
+// The level counts; pass 1 writes pass 2's indirect dispatch.
+layout(std430, binding = BINDING_LEVEL_COUNTS) buffer LevelCounts { uint counts[]; };
 
 uniform uint uLevel;            // k: the level's sample count is counts[k]
-uniform float uDelta2;
+
+#ifdef SL_COMBINE
+layout(std430, binding = BINDING_PROBE_SUMS) readonly buffer ProbeSums { float probeSums[]; };
 uniform int uProbes;            // 6, 14, 26 or 40
-uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
+uniform int uProbeGroups;       // ceil(uProbes / kProbeGroup): sums per sample
+
+void main() {
+  uint j = gl_GlobalInvocationID.x;
+  if (j >= counts[uLevel]) return;
+  float R = samples[j].w;
+  precise float sum = 0.0;
+  for (int g = 0; g < uProbeGroups; ++g) sum += probeSums[j * uint(uProbeGroups) + uint(g)];
+  precise float E = R * R * R * sum / float(uProbes) * errors[j];  // errors[j]: τ of pass 1
+  errors[j] = E;
+}
+#else
+uniform float uDelta2;
 uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
 uniform float uTauDelta1;       // step of the τ trace
 uniform int uFinal;             // 1: finest level, S and ∇S only
+uniform uint uProbeDispatchSlot;  // counts[slot + 3·level ...]: pass 2's (x, groups, 1)
+uniform int uProbeGroups;       // ceil(uProbes / kProbeGroup)
 uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
-#ifdef SL_BOUNDED
-uniform vec2 uTaylorBounds;     // TaylorBounds (lo, hi): the Taylor estimate is clamped to it
-#endif
 
 // DensityGrid::sample: 0 outside the (closed) box.
 float densityAt(vec3 p) {
@@ -41,6 +63,12 @@ void main() {
   uint j = gl_GlobalInvocationID.x;
   uint count = counts[uLevel];
   if (j >= count) return;
+  if (j == 0u && uFinal == 0) {
+    uint d = uProbeDispatchSlot + 3u * uLevel;
+    counts[d] = (count + 63u) / 64u;
+    counts[d + 1u] = uint(uProbeGroups);
+    counts[d + 2u] = 1u;
+  }
   vec4 pr = samples[j];
   vec3 x = pr.xyz;
   float R = pr.w;
@@ -66,26 +94,7 @@ void main() {
   } else {
     tau = viewTransmittance(x);
   }
-  precise float sum = 0.0;
-  for (int i = 0; i < uProbes; ++i) {
-    precise vec3 p = x + R * uProbeDirs[i];
-    vec3 Sp = sourceTowardsEye(p);
-    float D = densityAt(p);
-    precise vec3 d = p - x;
-    precise vec3 taylor = S + d.x * dS[0] + d.y * dS[1] + d.z * dS[2];
-#ifdef SL_BOUNDED
-    taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(uTaylorBounds.y));
-#endif
-#ifdef SL_LOG_SPACE
-    // ln V held: compared on V, what the image sees (localShadingError's ErrorSpace::log).
-    precise vec3 diff = abs(exp(taylor) - exp(Sp));
-#else
-    precise vec3 diff = abs(taylor - Sp);
-#endif
-    sum += (diff.x + diff.y + diff.z) / 3.0 * D;
-  }
-  precise float E = R * R * R * sum / float(uProbes) * tau;
-  errors[j] = E;
+  errors[j] = tau;  // E_j once pass 3 has combined the probe groups
   if (uTauMode == 0) {
 #ifdef SL_LOG_SPACE
     precise vec3 a = exp(S);
@@ -96,3 +105,4 @@ void main() {
     errors[count + j] = c;
   }
 }
+#endif
