@@ -71,6 +71,24 @@ struct DynamicSamplingSettings {
   /// Most samples in the final set (0: no cap; kAutoBudget: sampleBudget() of the initial
   /// count): see budgetedSplit().
   long long maxSamples = 0;
+  /// Per-voxel fallback (extension, issue 24; key `fallback`): after `levels` one more split
+  /// grid, the voxels of the radiance volume (voxelDims per axis). The finest of `levels` is then
+  /// probed like the others, and a cell of it that fails the error test is replaced by S
+  /// evaluated directly at the voxel centres inside its sphere: final samples of radius ½ the
+  /// smallest voxel edge, so each reaches only its own voxel centre, where its weight R/‖x − x_j‖
+  /// (clamped at a tiny ‖·‖) outweighs every other sample's and the reconstruction returns that
+  /// S, the per-voxel value. They carry no ∇S (never used there; saves the six central
+  /// differences per sample).
+  bool voxelFallback = false;
+  IVec3 voxelDims{0};  ///< the fallback grid (the radiance volume's dims; withPipeline())
+  /// Split into the cell (extension, key `split`: "cell"): a split sample is replaced by the
+  /// vertices of G_{k+1} in its cell, the cube of edge R_j centred on it (for a cubic grid the
+  /// cell of the partition: 8 children when the next grid is twice as fine), instead of every
+  /// vertex inside its sphere (the paper: about 33). The cells of the children tile the
+  /// parent's, and each child's sphere (R = h_{k+1}) covers its own cell; the rest of the
+  /// parent's sphere is its neighbours'. A split costs 4× fewer samples, so a budget splits 4×
+  /// more of them (docs/fidelity.md §8).
+  bool splitCells = false;
   /// How the error compares values (set from the pipeline, not a key): see ErrorSpace.
   struct ErrorSpace {
     /// Taylor estimates clamped as the reconstruction clamps them (boundedTaylor).
@@ -85,19 +103,40 @@ struct DynamicSamplingSettings {
 /// N³ partition of the medium box (vertex (i,j,k) at min + (i + ½, j + ½, k + ½)·h), each with
 /// its membership in Q^k and the level-0 sample whose τ it inherits. (The local shading errors
 /// stay with the sample list of the level, which the scan compaction orders by vertex.)
+/// A split grid: `dims` vertices per axis; `voxels`: the per-voxel fallback's grid (see
+/// DynamicSamplingSettings::voxelFallback), whose samples are final, without ∇S, and reach only
+/// their own voxel centre.
+struct LevelGrid {
+  IVec3 dims{0};
+  bool voxels = false;
+  bool cells = false;  ///< a split marks the vertices in the cell, not the sphere (splitCells)
+};
+
+/// The split grids G1, G2, … of `s`: one cubic grid per entry of `levels`, then with
+/// voxelFallback the voxel grid.
+std::vector<LevelGrid> levelGrids(const DynamicSamplingSettings& s);
+
 struct GridInfoBuffer {
   Box bounds;
   IVec3 dims{0};
   Vec3 interval{0.0f};                 ///< h per axis
+  bool voxels = false;                 ///< the per-voxel fallback's grid (LevelGrid::voxels)
+  bool cells = false;                  ///< splits mark cells (LevelGrid::cells)
   std::vector<std::uint8_t> inSet;     ///< 1 when the vertex is in Q^k
   std::vector<std::int32_t> ancestor;  ///< index of the level-0 ancestor, or -1
 
   GridInfoBuffer(const Box& b, int resolution);
+  GridInfoBuffer(const Box& b, const LevelGrid& grid);
   Vec3 vertex(std::size_t linear) const;
-  /// Valid radius of the level's samples: the grid interval (largest component of h).
-  float radius() const { return std::max(interval.x, std::max(interval.y, interval.z)); }
-  /// Marks every vertex strictly inside the sphere (c, R) as in the set, with ancestor
-  /// min(existing, anc). Thread-safe.
+  /// Valid radius of the level's samples: the grid interval (largest component of h); on the
+  /// voxel grid ½ the smallest voxel edge (a sample reaches its own voxel centre only).
+  float radius() const {
+    if (voxels) return 0.5f * std::min(interval.x, std::min(interval.y, interval.z));
+    return std::max(interval.x, std::max(interval.y, interval.z));
+  }
+  std::size_t vertexCount() const { return std::size_t(dims.x) * dims.y * dims.z; }
+  /// Marks every vertex strictly inside the sphere (c, R) (on the voxel grid: inside the cell,
+  /// forEachChild) as in the set, with ancestor min(existing, anc). Thread-safe.
   void markSphere(const Vec3& c, float R, std::int32_t anc);
   /// Calls f(linear vertex index) for every vertex strictly inside the sphere (c, R), the
   /// vertices markSphere() marks, in ascending k, j, i.
@@ -115,10 +154,38 @@ struct GridInfoBuffer {
           f((std::size_t(k) * dims.y + j) * dims.x + i);
         }
   }
+  /// Calls f(linear vertex index) for every vertex in the cube of edge R centred on c, half
+  /// open per axis ([c − R/2, c + R/2)): the cell of a sample of a cubic grid (R = its interval),
+  /// which the cells of the level tile. The voxels the per-voxel fallback evaluates.
+  template <class F>
+  void forEachInCell(const Vec3& c, float R, F&& f) const {
+    const Vec3 a = c - 0.5f * R, b = c + 0.5f * R;
+    const IVec3 lo = glm::max(IVec3(glm::floor((a - bounds.min) / interval - 0.5f)), IVec3(0));
+    const IVec3 hi = glm::min(IVec3(glm::ceil((b - bounds.min) / interval - 0.5f)), dims - 1);
+    for (int k = lo.z; k <= hi.z; ++k)
+      for (int j = lo.y; j <= hi.y; ++j)
+        for (int i = lo.x; i <= hi.x; ++i) {
+          const Vec3 q = bounds.min + (Vec3(i, j, k) + 0.5f) * interval;
+          if (q.x < a.x || q.y < a.y || q.z < a.z || !(q.x < b.x) || !(q.y < b.y) || !(q.z < b.z))
+            continue;
+          f((std::size_t(k) * dims.y + j) * dims.x + i);
+        }
+  }
+  /// The vertices a split of the sample (c, R) marks: inside its sphere (forEachInSphere, the
+  /// paper), or inside its cell (forEachInCell: with `cells`, and always on the voxel grid, where
+  /// the sample stays and the voxels are added).
+  template <class F>
+  void forEachChild(const Vec3& c, float R, F&& f) const {
+    if (voxels || cells)
+      forEachInCell(c, R, std::forward<F>(f));
+    else
+      forEachInSphere(c, R, std::forward<F>(f));
+  }
 };
 
 struct LevelStats {
-  int resolution = 0;     ///< 0 for the initial set
+  int resolution = 0;     ///< 0 for the initial set (the voxel grid: its x dims)
+  bool voxels = false;    ///< the per-voxel fallback's level
   long long samples = 0;  ///< |Q^k| evaluated at this level
   long long split = 0;    ///< of which split (E > threshold)
   float maxError = 0.0f, p90Error = 0.0f;
@@ -207,7 +274,7 @@ struct BudgetLevel {
   std::vector<float> radii;
   std::vector<std::int32_t> anc;
   std::vector<float> errors;
-  int resolution = 0;      ///< of G_{k+1}
+  LevelGrid grid;          ///< G_{k+1}
   std::size_t offset = 0;  ///< index in DynamicSamplingResult::samples of its first kept sample
 };
 
@@ -238,10 +305,11 @@ void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& l
 /// uploads the next level). centres/radii/anc/errors: the level's samples; `threshold`: the
 /// absolute one; countBefore: kept samples of the coarser levels + this level's count; budget;
 /// splitLevelsLeft: L − k (this level included). Deterministic.
-SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector<Vec3>& centres,
-                            const std::vector<float>& radii, const std::vector<std::int32_t>& anc,
-                            const std::vector<float>& errors, double threshold,
-                            long long countBefore, long long budget, std::size_t splitLevelsLeft);
+SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
+                            const std::vector<Vec3>& centres, const std::vector<float>& radii,
+                            const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
+                            double threshold, long long countBefore, long long budget,
+                            std::size_t splitLevelsLeft);
 
 /// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's
 /// density. `evaluator` (of the frame's backend) computes S and ∇S of the samples and S at the

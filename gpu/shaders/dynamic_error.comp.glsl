@@ -22,7 +22,7 @@ uniform int uProbes;            // 6, 14, 26 or 40
 uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
 uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
 uniform float uTauDelta1;       // step of the τ trace
-uniform int uFinal;             // 1: finest level, S and ∇S only
+uniform int uFinal;             // 1: finest level, S and ∇S only; 2: S only (∇S = 0)
 uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
 #ifdef SL_BOUNDED
 uniform vec2 uTaylorBounds;     // TaylorBounds (lo, hi): the Taylor estimate is clamped to it
@@ -49,7 +49,9 @@ void main() {
   for (int a = 0; a < 3; ++a) {
     vec3 e = vec3(0.0);
     e[a] = uDelta2;
-    dS[a] = (sourceTowardsEye(x + e) - sourceTowardsEye(x - e)) / (2.0 * uDelta2);
+    // uFinal 2: the per-voxel fallback's voxels, S only (the CPU's gradients = false).
+    dS[a] = uFinal == 2 ? vec3(0.0)
+                        : (sourceTowardsEye(x + e) - sourceTowardsEye(x - e)) / (2.0 * uDelta2);
   }
   results[j].S = vec4(S, 0.0);
   for (int a = 0; a < 3; ++a) results[j].dS[a] = vec4(dS[a], 0.0);

@@ -471,7 +471,8 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   ASSERT_EQ(fresh, 8);
   // Room for exactly one split (count 3 → 3 + fresh − 1): the worst (E = 5) splits, the others
   // are capped.
-  SplitDecision d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + fresh - 1, 1);
+  SplitDecision d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
+                                  3 + fresh - 1, 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
   EXPECT_EQ(d.splits, 1);
   EXPECT_EQ(d.capped, 2);
@@ -480,11 +481,13 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   for (std::int32_t a : d.ancestors) EXPECT_EQ(a, 1);
   EXPECT_FLOAT_EQ(d.maxLeft, 3.0f);
   // Room for two: E = 5 and 3, not 2.
-  d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 1);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
+                    3 + 2 * (fresh - 1), 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_FLOAT_EQ(d.maxLeft, 2.0f);
   // The same budget with two split levels left: this level may use half the headroom: one.
-  d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 2);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
+                    3 + 2 * (fresh - 1), 2);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
   // The top-up: that share left the budget of one split unused (no finer level here); after
   // the pass it goes to the next worst capped candidate (E = 3, the second kept sample in the
@@ -508,7 +511,7 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   EXPECT_EQ(levels[0].decision.capped, 1);
   EXPECT_FLOAT_EQ(levels[0].decision.maxLeft, 2.0f);
   // The threshold still rules: E = 2 is not a candidate at a threshold of 2.5.
-  d = budgetedSplit(box, 10, centres, radii, anc, errors, 2.5, 3, 1000, 1);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 2.5, 3, 1000, 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_EQ(d.capped, 0);
 }
