@@ -555,6 +555,7 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
     st.extra["error_left"] = threshold > 0.0 ? double(maxLeft) / threshold : 0.0;
   }
   st.extra["fallback"] = settings.voxelFallback;
+  st.extra["split_rule"] = settings.splitCells ? "cell" : "sphere";
   st.extra["tau"] = settings.perSampleTau ? "sample" : "ancestor";
   st.extra["probes"] = settings.probes;
 }
