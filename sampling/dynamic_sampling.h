@@ -21,12 +21,13 @@
 /// Sample budget (extension, issue 24): a most final count B, met in the one splitting pass
 /// (budgetedSplit(); never a re-run). Splitting level k reveals the errors of level k + 1 only
 /// once they are evaluated, but what a split costs is known before: the vertices of G_{k+1}
-/// strictly inside its sphere that no earlier split of the level marked (shared vertices count
-/// once), minus the sample itself. So each split level (1) orders its candidates (E_j >
-/// threshold) by E_j, worst first (ties: lower index first), (2) accepts them in that order
-/// while the final count (kept samples of the coarser levels + this level's unsplit samples + the
-/// next level's marked vertices) stays within the level's allotment, and stops at the first
-/// that does not fit, so a split never goes to a smaller error while a larger one waits. The
+/// it marks (strictly inside its sphere, or with splitCells in its cell: forEachChild) that no
+/// earlier split of the level marked (shared vertices count once), minus the sample itself
+/// (not on the per-voxel fallback's grid, where the sample stays). So each split level (1) orders
+/// its candidates (E_j > threshold) by E_j, worst first (ties: lower index first), (2) accepts them
+/// in that order while the final count (kept samples of the coarser levels + this level's unsplit
+/// samples + the next level's marked vertices) stays within the level's allotment, and stops at the
+/// first that does not fit, so a split never goes to a smaller error while a larger one waits. The
 /// allotment: the headroom left, B − count, shared equally by the split levels still to come
 /// (level k of L split levels may use 1/(L − k) of it); what a level does not use passes to
 /// the finer ones. A plain worst-first greedy (allotment 1 on every level) spends the whole
@@ -43,7 +44,12 @@
 /// relative ε. The error left is reported: per level the candidates left unsplit
 /// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft; /
 /// threshold > 1: the budget stopped the refinement there). The finest level is not probed, so its
-/// errors are not known.
+/// errors are not known (with voxelFallback the finest of `levels` is probed, and the voxel
+/// level, exact at its voxels, is the one not probed).
+///
+/// Issue 24 (docs/fidelity.md §8): the allocation between levels was measured against other
+/// shares (top-up as a share, shares growing per level, greedy) and kept; what bound the budget
+/// on the smokes was the price of a split, which splitCells cuts from ~33 children to 8.
 
 #include <cstdint>
 #include <functional>
