@@ -232,6 +232,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
   glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
   glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
   glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
+  glUniform1i(program.uniform("uVisibleTau"), settings.visibleTau ? 1 : 0);
   glUniform1i(program.uniform("uFinal"), int(mode));
   if (settings.space.bounds)
     glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,

@@ -387,10 +387,16 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         S[i] = probes[np * j + i].S;
         D[i] = density.sample(probes[np * j + i].position);
       }
-      const float tau =
-          settings.perSampleTau && level > 0
-              ? viewTransmittance(scene, density, current[j].position, settings.delta1)
-              : rootTau[anc[j]];
+      float tau = settings.perSampleTau && level > 0
+                      ? viewTransmittance(scene, density, current[j].position, settings.delta1)
+                      : rootTau[anc[j]];
+      if (settings.visibleTau) {
+        // τ of the most visible of the sample and its six axis probes (tau "visible").
+        Vec3 pp[6];
+        probePoints(current[j], pp, 6);
+        for (int i = 0; i < 6; ++i)
+          tau = std::max(tau, viewTransmittance(scene, density, pp[i], settings.delta1));
+      }
       errors[j] = localShadingError(current[j], S, D, tau, np, settings.space);
       if (!contributions.empty())
         contributions[j] = sampleContribution(current[j], density.sample(current[j].position), tau,
@@ -556,7 +562,8 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
   }
   st.extra["fallback"] = settings.voxelFallback;
   st.extra["split_rule"] = settings.splitCells ? "cell" : "sphere";
-  st.extra["tau"] = settings.perSampleTau ? "sample" : "ancestor";
+  st.extra["tau"] =
+      settings.visibleTau ? "visible" : (settings.perSampleTau ? "sample" : "ancestor");
   st.extra["probes"] = settings.probes;
 }
 
@@ -574,8 +581,11 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
       {"levels", "array of int", "[16, 32, 64] (those <= half the medium resolution)",
        "increasing, each 2…1024, finest <= half the medium resolution",
        "vertices per axis of the split grids G1, G2, …", "[2]"},
-      {"tau", "string", "ancestor", "ancestor, sample",
-       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper) or the sample itself",
+      {"tau", "string", "visible (ancestor with paper)",
+       "ancestor, sample, visible (not with paper)",
+       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper), the sample itself, or the "
+       "most visible of the ancestor's and the sample's six axis probes (a sample hidden behind "
+       "an occluder whose sphere reaches the visible side)",
        R"("sample")"},
       {"probes", "int", "40 (6 with paper)", "6, 14, 26, 40",
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
@@ -647,7 +657,12 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   if (paper && p.has("split"))
     p.fail("split", "is an extension; it cannot be set with render.paper = true");
   s.splitCells = p.choice("split", {"sphere", "cell"}, paper ? "sphere" : "cell") == "cell";
-  s.perSampleTau = p.choice("tau", {"ancestor", "sample"}, "ancestor") == "sample";
+  const std::string tau =
+      p.choice("tau", {"ancestor", "sample", "visible"}, paper ? "ancestor" : "visible");
+  if (paper && tau == "visible")
+    p.fail("tau", "\"visible\" is an extension; it cannot be set with render.paper = true");
+  s.perSampleTau = tau == "sample";
+  s.visibleTau = tau == "visible";
   const long long probes = p.integer("probes", paper ? 6 : kExtendedProbes);
   if (probes != 6 && probes != 14 && probes != 26 && probes != 40)
     p.fail("probes", "value " + std::to_string(probes) +

@@ -68,7 +68,13 @@ struct DynamicSamplingSettings {
   bool relative = false;
   std::vector<int> levels{16, 32, 64};  ///< vertices per axis of G1, G2, ... (increasing)
   bool perSampleTau = false;            ///< τ from each sample instead of its level-0 ancestor
-  float delta1 = 0.0f;                  ///< step for tracing τ to the viewer (world units)
+  /// τ in Eq. 5 raised to the most visible of the six axis probes x_j ± R_j·(X, Y, Z) (tau
+  /// "visible", extension, issue 24): a sample behind a thin dense occluder (τ ≈ 0) whose
+  /// sphere reaches through it to the visible side is weighted by what its sphere shows, not by
+  /// its hidden centre, so its error there gets it split. Also used for the contribution of the
+  /// relative ε's scale. Six view-transmittance traces per probed sample.
+  bool visibleTau = false;
+  float delta1 = 0.0f;  ///< step for tracing τ to the viewer (world units)
   /// Probe points per sample: 6 is Eq. 5 (x ± R along X, Y, Z). 14 and 26 add diagonal
   /// directions at distance R, 40 also the 6 axis and 8 diagonal directions at R/2: extensions
   /// for shading boundaries that pass between the axis probes (a light shaft beside a large

@@ -22,6 +22,7 @@ uniform int uProbes;            // 6, 14, 26 or 40
 uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
 uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
 uniform float uTauDelta1;       // step of the τ trace
+uniform int uVisibleTau;        // 1: τ = max(τ, τ at the six axis probes) (tau "visible")
 uniform int uFinal;             // 1: finest level, S and ∇S only; 2: S only (∇S = 0)
 uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
 #ifdef SL_BOUNDED
@@ -67,6 +68,14 @@ void main() {
     tau = rootTau[ancestors[j]];
   } else {
     tau = viewTransmittance(x);
+  }
+  if (uVisibleTau != 0) {
+    // tau "visible": the most visible of the sample and its six axis probes (the CPU's
+    // probePoints order; rootTau keeps the centre's τ).
+    for (int i = 0; i < 6; ++i) {
+      precise vec3 p = x + R * uProbeDirs[i];
+      tau = max(tau, viewTransmittance(p));
+    }
   }
   precise float sum = 0.0;
   for (int i = 0; i < uProbes; ++i) {

@@ -223,8 +223,8 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
   }
 }
 
-/// Issue 24: split "cell" and the per-voxel fallback give the CPU's samples, without a budget
-/// (the GPU's split pass in cell mode, its S-only final level) and with one (the host's
+/// Issue 24: split "cell", the per-voxel fallback and tau "visible" give the CPU's samples, without
+/// a budget (the GPU's split pass in cell mode, its S-only final level) and with one (the host's
 /// budgetedSplit, the top-up's voxel children evaluated without ∇S).
 TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
   SCATTERLAB_REQUIRE_GPU();
@@ -246,6 +246,7 @@ TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
   ds.splitCells = true;
   ds.voxelFallback = true;
   ds.voxelDims = IVec3(24);
+  ds.visibleTau = true;  // tau "visible" (the default without paper): six more τ traces
   for (long long cap : {0LL, 400LL, kAutoBudget}) {
     ds.maxSamples = cap;
     const DynamicSamplingResult cpu =

@@ -661,7 +661,7 @@ TEST(DynamicSampling, FallbackVoxelsReconstructToTheirOwnS) {
   }
   EXPECT_EQ(voxelSamples, r.levels[2].samples);
   EXPECT_EQ(voxelSamples, 64 * r.levels[1].split);  // 4×4×4 voxels of 16³ per cell of G4
-  EXPECT_EQ(keptSplit, r.levels[1].samples);       // the split samples stay
+  EXPECT_EQ(keptSplit, r.levels[1].samples);        // the split samples stay
   RadianceGrid out(scene.medium.bounds, scene.medium.resolution);
   interpolateSamples(Interpolation::Gradient, density, r.samples, out);
   int checked = 0;
@@ -687,7 +687,11 @@ TEST(DynamicSampling, CellSplitAndFallbackKeysParsed) {
   EXPECT_TRUE(levelGrids(paper).size() == paper.levels.size());
   EXPECT_THROW(parse({{"split", "cell"}}, true), ConfigError);
   EXPECT_THROW(parse({{"fallback", true}}, true), ConfigError);
+  EXPECT_FALSE(paper.visibleTau);
+  EXPECT_THROW(parse({{"tau", "visible"}}, true), ConfigError);
   const DynamicSamplingSettings ext = parse(Json::object(), false);
+  EXPECT_TRUE(ext.visibleTau);
+  EXPECT_FALSE(parse({{"tau", "ancestor"}}, false).visibleTau);
   EXPECT_TRUE(ext.splitCells);
   EXPECT_FALSE(ext.voxelFallback);
   EXPECT_FALSE(parse({{"split", "sphere"}}, false).splitCells);
