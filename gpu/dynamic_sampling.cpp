@@ -87,10 +87,21 @@ struct GridGeometry {
   Box bounds;
   IVec3 dims;
   Vec3 interval;
-  GridGeometry(const Box& b, int resolution)
-      : bounds(b), dims(resolution), interval(b.extent() / float(resolution)) {}
+  float R;
+  bool voxels, cells;
+  GridGeometry(const Box& b, const LevelGrid& g) {
+    bounds = b;
+    voxels = g.voxels;
+    cells = g.cells;
+    dims = g.dims;
+    interval = g.voxels || g.dims.x != g.dims.y || g.dims.y != g.dims.z
+                   ? b.extent() / Vec3(g.dims)
+                   : b.extent() / float(g.dims.x);
+    R = g.voxels ? 0.5f * std::min(interval.x, std::min(interval.y, interval.z))
+                 : std::max(interval.x, std::max(interval.y, interval.z));
+  }
   std::size_t vertices() const { return std::size_t(dims.x) * dims.y * dims.z; }
-  float radius() const { return std::max(interval.x, std::max(interval.y, interval.z)); }
+  float radius() const { return R; }
 };
 
 /// The grid of G_{k+1} as split and compact read it (GridInfoBuffer::vertex's convention).
@@ -161,14 +172,16 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
 /// radii, each sample its own ancestor) and the counts (n0, zeros).
 void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSample>& initial,
                       const DynamicSamplingSettings& settings) {
-  const std::size_t L = settings.levels.size(), n0 = initial.size();
+  const std::vector<LevelGrid> grids = levelGrids(settings);
+  const auto gridVertices = [&](std::size_t k) {
+    const IVec3 d = grids[k].dims;
+    return std::size_t(d.x) * std::size_t(d.y) * std::size_t(d.z);
+  };
+  const std::size_t L = grids.size(), n0 = initial.size();
   if (w.levels.size() < L + 1) w.levels.resize(L + 1);
   for (std::size_t k = 0; k <= L; ++k) {
     std::size_t cap = n0;
-    if (k > 0) {
-      const std::size_t r = std::size_t(settings.levels[k - 1]);
-      cap = std::min(r * r * r, w.maxLevelSamples);
-    }
+    if (k > 0) cap = std::min(gridVertices(k - 1), w.maxLevelSamples);
     DynamicSamplingWorkspace::Level& l = w.levels[k];
     l.capacity = cap;
     ensure(l.samples, cap * sizeof(GpuSamplePoint), levelLabel("samples", k));
@@ -177,10 +190,7 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
     ensure(l.errors, (k == 0 ? 2 : 1) * cap * sizeof(float), levelLabel("E", k));
   }
   std::size_t vertices = 0;
-  for (std::size_t k = 0; k < L; ++k) {
-    const std::size_t r = std::size_t(settings.levels[k]);
-    vertices = std::max(vertices, r * r * r);
-  }
+  for (std::size_t k = 0; k < L; ++k) vertices = std::max(vertices, gridVertices(k));
   if (vertices > w.vertices) {
     ensure(w.inSet, vertices * sizeof(GLuint), "grid info: in set");
     ensure(w.vertexAncestors, vertices * sizeof(std::int32_t), "grid info: ancestor");
@@ -226,13 +236,19 @@ void dispatchOverLevel(const DynamicSamplingWorkspace& w, std::size_t k, std::si
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
 }
 
-/// Evaluate level k (indirect dispatch after level 0): S, ∇S, E_j and on level 0 (not final)
-/// the contributions. GPU time: "ds evaluate+error".
+/// How a level is evaluated: split level (S, ∇S, E_j), final (S, ∇S), or final without ∇S
+/// (the per-voxel fallback's voxels).
+enum class Evaluation { Split = 0, Final = 1, FinalNoGradient = 2 };
+
+/// Evaluate level k (indirect dispatch after level 0) in three passes (dynamic_error.comp.glsl):
+/// S, ∇S, τ and on level 0 the contributions; unless final, the probes in groups of
+/// kProbeGroup, then E_j. GPU time: "ds evaluate+error".
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
-                   std::size_t k, bool final, const TracerSteps& steps,
+                   std::size_t k, Evaluation mode, const TracerSteps& steps,
                    const DynamicSamplingSettings& settings, StageTimer* timer) {
+  const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
   const DynamicSamplingWorkspace::Level& l = w.levels[k];
-  const std::size_t L = settings.levels.size();
+  const std::size_t L = levelGrids(settings).size();
   const GLint groupsPerSample = probeGroups(settings);
   ScopedGpuTimer t(timer, "ds evaluate+error");
   {  // pass 1: S, ∇S, τ, the contributions; pass 2's dispatch
@@ -241,9 +257,11 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     inputs.apply(program);
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
     glUniform1f(program.uniform("uDelta2"), steps.delta2);
+    glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
     glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
-    glUniform1i(program.uniform("uFinal"), final ? 1 : 0);
+    glUniform1i(program.uniform("uVisibleTau"), settings.visibleTau ? 1 : 0);
+    glUniform1i(program.uniform("uFinal"), int(mode));
     glUniform1ui(program.uniform("uProbeDispatchSlot"), GLuint(probeDispatchSlot(L)));
     glUniform1i(program.uniform("uProbeGroups"), groupsPerSample);
     setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
@@ -255,14 +273,13 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     dispatchOverLevel(w, k, L);
   }
-  if (final) {
+  if (mode != Evaluation::Split) {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return;
   }
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   {  // pass 2: one invocation per sample and group of probes
     const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Probes);
-    const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
     program.use();
     inputs.apply(program);
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
@@ -336,6 +353,7 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size
   program.use();
   glUniform1ui(program.uniform("uLevel"), GLuint(k));
   setGridUniforms(program, grid);
+  glUniform1i(program.uniform("uCell"), grid.voxels || grid.cells ? 1 : 0);
   l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
   l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
   l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
@@ -401,9 +419,9 @@ struct LevelReadBack {
 /// dispatch size. `points`/`anc`: the level's samples as the host holds them (level 0: the
 /// initial ones; later: those uploaded here), replaced by the next level's.
 BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, std::size_t k,
-                             std::size_t L, const DynamicSamplingSettings& settings,
-                             double threshold, long long kept, long long budget,
-                             std::vector<GpuSamplePoint>& points, std::vector<std::int32_t>& anc) {
+                             std::size_t L, const std::vector<LevelGrid>& grids, double threshold,
+                             long long kept, long long budget, std::vector<GpuSamplePoint>& points,
+                             std::vector<std::int32_t>& anc) {
   const std::size_t n = points.size();
   std::vector<float> errors(n);
   if (n) w.levels[k].errors.read(errors.data(), n * sizeof(float));
@@ -414,26 +432,32 @@ BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, st
     radii[j] = points[j].radius;
   }
   BudgetLevel bl;
-  bl.decision = budgetedSplit(scene.medium.bounds, settings.levels[k], centres, radii, anc, errors,
-                              threshold, kept + (long long)n, budget, L - k);
-  bl.resolution = settings.levels[k];
+  bl.decision = budgetedSplit(scene.medium.bounds, grids[k], centres, radii, anc, errors, threshold,
+                              kept + (long long)n, budget, L - k);
+  bl.grid = grids[k];
   bl.centres = std::move(centres);
   bl.radii = std::move(radii);
   bl.anc = anc;
   bl.errors = std::move(errors);
   const SplitDecision& d = bl.decision;
-  const GridInfoBuffer grid(scene.medium.bounds, settings.levels[k]);
+  const GridGeometry grid(scene.medium.bounds, grids[k]);
   const std::size_t m = d.vertices.size();
   DynamicSamplingWorkspace::Level& next = w.levels[k + 1];
   if (m > next.capacity)
     throw GpuError("dynamic sampling: level " + std::to_string(k + 1) + " (grid " +
-                   std::to_string(settings.levels[k]) + "^3) has " + std::to_string(m) +
+                   std::to_string(grids[k].dims.x) + "^3) has " + std::to_string(m) +
                    " samples, more than the " + std::to_string(next.capacity) +
                    " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
                    "larger epsilon");
   points.resize(m);
   const float R = grid.radius();
-  for (std::size_t i = 0; i < m; ++i) points[i] = {grid.vertex(d.vertices[i]), R};
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::size_t v = d.vertices[i];
+    const IVec3 c(int(v % std::size_t(grid.dims.x)),
+                  int((v / std::size_t(grid.dims.x)) % std::size_t(grid.dims.y)),
+                  int(v / (std::size_t(grid.dims.x) * std::size_t(grid.dims.y))));
+    points[i] = {grid.bounds.min + (Vec3(c) + 0.5f) * grid.interval, R};
+  }
   anc = d.ancestors;
   if (m) {
     glNamedBufferSubData(next.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)),
@@ -454,25 +478,39 @@ BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, st
 void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
                       const Volume& density, const TracerSteps& steps,
                       const DynamicSamplingSettings& settings, TopUp& t, StageTimer* timer) {
-  const std::size_t L = settings.levels.size();
+  const std::vector<LevelGrid> grids = levelGrids(settings);
+  const std::size_t L = grids.size();
   DynamicSamplingWorkspace::Level& l = w.levels[L];
-  for (std::size_t first = 0; first < t.children.size(); first += l.capacity) {
-    const std::size_t m = std::min(l.capacity, t.children.size() - first);
-    std::vector<GpuSamplePoint> points(m);
-    for (std::size_t i = 0; i < m; ++i)
-      points[i] = {t.children[first + i].position, t.children[first + i].radius};
-    glNamedBufferSubData(l.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)), points.data());
-    glNamedBufferSubData(l.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)),
-                         t.ancestors.data() + first);
-    const GLuint count = GLuint(m);
-    glNamedBufferSubData(w.counts.id(), GLintptr(L * sizeof(GLuint)), sizeof(GLuint), &count);
-    const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
-    glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * L) * sizeof(GLuint)),
-                         sizeof dispatch, dispatch);
-    evaluateLevel(w, inputs, density, L, /*final=*/true, steps, settings, timer);
-    std::vector<GpuRadianceRecord> radiance(m);
-    l.radiance.read(radiance.data(), m * sizeof(GpuRadianceRecord));
-    for (std::size_t i = 0; i < m; ++i) unpackRadiance(radiance[i], t.children[first + i]);
+  // Two batches, as on the CPU (evaluateTopUp): with ∇S, then the voxel grid's without.
+  for (const bool voxels : {false, true}) {
+    std::vector<std::size_t> idx;
+    for (std::size_t i = 0; i < t.children.size(); ++i) {
+      const std::size_t lv = std::size_t(t.children[i].level);
+      if (lv >= 1 && lv <= L && grids[lv - 1].voxels == voxels) idx.push_back(i);
+    }
+    for (std::size_t first = 0; first < idx.size(); first += l.capacity) {
+      const std::size_t m = std::min(l.capacity, idx.size() - first);
+      std::vector<GpuSamplePoint> points(m);
+      std::vector<std::int32_t> anc(m);
+      for (std::size_t i = 0; i < m; ++i) {
+        const RadianceSample& c = t.children[idx[first + i]];
+        points[i] = {c.position, c.radius};
+        anc[i] = t.ancestors[idx[first + i]];
+      }
+      glNamedBufferSubData(l.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)),
+                           points.data());
+      glNamedBufferSubData(l.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)), anc.data());
+      const GLuint count = GLuint(m);
+      glNamedBufferSubData(w.counts.id(), GLintptr(L * sizeof(GLuint)), sizeof(GLuint), &count);
+      const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
+      glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * L) * sizeof(GLuint)),
+                           sizeof dispatch, dispatch);
+      evaluateLevel(w, inputs, density, L, voxels ? Evaluation::FinalNoGradient : Evaluation::Final,
+                    steps, settings, timer);
+      std::vector<GpuRadianceRecord> radiance(m);
+      l.radiance.read(radiance.data(), m * sizeof(GpuRadianceRecord));
+      for (std::size_t i = 0; i < m; ++i) unpackRadiance(radiance[i], t.children[idx[first + i]]);
+    }
   }
   checkGl("dynamic sampling: top-up");
 }
@@ -487,7 +525,8 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
                                    std::vector<std::vector<float>>* errorsOut,
                                    DynamicSamplingWorkspace& w) {
   using Clock = std::chrono::steady_clock;
-  const std::size_t L = settings.levels.size();
+  const std::vector<LevelGrid> grids = levelGrids(settings);
+  const std::size_t L = grids.size();
   DynamicSamplingResult result;
   std::vector<double> enqueueMs(L + 1, 0.0);
   const long long budget = sampleBudget(settings, initial.size());
@@ -506,7 +545,11 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
     for (std::size_t k = 0; k <= L; ++k) {
       const auto t0 = Clock::now();
       const bool final = k == L;
-      evaluateLevel(w, inputs, density, k, final, steps, settings, timer);
+      evaluateLevel(w, inputs, density, k,
+                    !final                         ? Evaluation::Split
+                    : k > 0 && grids[k - 1].voxels ? Evaluation::FinalNoGradient
+                                                   : Evaluation::Final,
+                    steps, settings, timer);
       if (!final) {
         if (k == 0) computeThreshold(w, settings, timer);
         if (budget > 0) {
@@ -517,10 +560,10 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
           }
           const long long n = (long long)points.size();
           decisions.push_back(
-              budgetedSplitGpu(w, scene, k, L, settings, hostThreshold, kept, budget, points, anc));
+              budgetedSplitGpu(w, scene, k, L, grids, hostThreshold, kept, budget, points, anc));
           kept += n - decisions.back().decision.splits;
         } else {
-          const GridGeometry grid(scene.medium.bounds, settings.levels[k]);
+          const GridGeometry grid(scene.medium.bounds, grids[k]);
           splitLevel(w, grid, k, L, timer);
           compactLevel(w, grid, k + 1, L, timer);
         }
@@ -539,7 +582,7 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
       if (counts[overflowSlot(L)] > 0) {
         const std::size_t k = counts[overflowSlot(L) + 1];
         throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
-                       std::to_string(settings.levels[k - 1]) + "^3) has " +
+                       std::to_string(grids[k - 1].dims.x) + "^3) has " +
                        std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
                        std::to_string(w.levels[k].capacity) +
                        " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
@@ -550,7 +593,8 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
     const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
     for (std::size_t k = 0; k <= L; ++k) {
       LevelStats ls;
-      ls.resolution = k == 0 ? 0 : settings.levels[k - 1];
+      ls.resolution = k == 0 ? 0 : grids[k - 1].dims.x;
+      ls.voxels = k > 0 && grids[k - 1].voxels;
       const std::size_t n = counts[k];
       ls.samples = (long long)n;
       ls.ms = enqueueMs[k];
@@ -584,9 +628,11 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
           ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
           ls.p90Error = quantile(rb.errors, 0.9);
         }
-        // The samples that stay (all of them on the final level), in evaluation order: the CPU's.
+        // The samples that stay (all of them on the final level, and those the per-voxel
+        // fallback splits), in evaluation order: the CPU's.
+        const bool keepSplit = !final && grids[k].voxels;
         for (std::size_t j = 0; j < n; ++j) {
-          if (split[j]) continue;
+          if (split[j] && !keepSplit) continue;
           RadianceSample s;
           s.position = rb.samples[j].position;
           s.radius = rb.samples[j].radius;
@@ -598,8 +644,12 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
       }
       result.levels.push_back(ls);
       if (n == 0) {
-        for (std::size_t l = k + 1; l <= L; ++l)
-          result.levels.push_back(LevelStats{settings.levels[l - 1]});
+        for (std::size_t l = k + 1; l <= L; ++l) {
+          LevelStats e;
+          e.resolution = grids[l - 1].dims.x;
+          e.voxels = grids[l - 1].voxels;
+          result.levels.push_back(e);
+        }
         break;
       }
     }

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <string>
 
 #include "sampling/scan.h"
 #include "shading/transport.h"
@@ -21,6 +22,25 @@ GridInfoBuffer::GridInfoBuffer(const Box& b, int resolution)
   ancestor.assign(n, -1);
 }
 
+GridInfoBuffer::GridInfoBuffer(const Box& b, const LevelGrid& grid)
+    : bounds(b), dims(grid.dims), voxels(grid.voxels), cells(grid.cells) {
+  // A cubic grid's interval exactly as the int constructor computes it; the voxel grid's as
+  // Grid3 computes its cell size, so its vertices are the radiance volume's voxel centres.
+  if (grid.dims.x == grid.dims.y && grid.dims.y == grid.dims.z && !grid.voxels)
+    interval = b.extent() / float(grid.dims.x);
+  else
+    interval = b.extent() / Vec3(grid.dims);
+  inSet.assign(vertexCount(), 0);
+  ancestor.assign(vertexCount(), -1);
+}
+
+std::vector<LevelGrid> levelGrids(const DynamicSamplingSettings& s) {
+  std::vector<LevelGrid> g;
+  for (int l : s.levels) g.push_back({IVec3(l), false, s.splitCells});
+  if (s.voxelFallback) g.push_back({s.voxelDims, true, true});
+  return g;
+}
+
 Vec3 GridInfoBuffer::vertex(std::size_t linear) const {
   const int i = int(linear % dims.x), j = int((linear / dims.x) % dims.y),
             k = int(linear / (std::size_t(dims.x) * dims.y));
@@ -28,7 +48,7 @@ Vec3 GridInfoBuffer::vertex(std::size_t linear) const {
 }
 
 void GridInfoBuffer::markSphere(const Vec3& c, float R, std::int32_t anc) {
-  forEachInSphere(c, R, [&](std::size_t v) {
+  forEachChild(c, R, [&](std::size_t v) {
     std::atomic_ref<std::uint8_t>(inSet[v]).store(1, std::memory_order_relaxed);
     std::atomic_ref<std::int32_t> a(ancestor[v]);
     std::int32_t cur = a.load(std::memory_order_relaxed);
@@ -138,10 +158,11 @@ long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t init
   return std::max(settings.maxSamples, 0LL);
 }
 
-SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector<Vec3>& centres,
-                            const std::vector<float>& radii, const std::vector<std::int32_t>& anc,
-                            const std::vector<float>& errors, double threshold,
-                            long long countBefore, long long budget, std::size_t splitLevelsLeft) {
+SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
+                            const std::vector<Vec3>& centres, const std::vector<float>& radii,
+                            const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
+                            double threshold, long long countBefore, long long budget,
+                            std::size_t splitLevelsLeft) {
   const std::size_t n = centres.size();
   SplitDecision d;
   d.split.assign(n, 0);
@@ -154,14 +175,13 @@ SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector
                    [&](std::uint32_t a, std::uint32_t b) { return errors[a] > errors[b]; });
   // This level's allotment: an equal share of the headroom among the split levels left.
   const long long headroom = std::max(0LL, budget - countBefore);
-  const long long limit =
-      countBefore + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
-  GridInfoBuffer next(bounds, resolution);
+  long long limit = countBefore + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
+  GridInfoBuffer next(bounds, grid);
   std::size_t stop = order.size();
   for (std::size_t r = 0; r < order.size(); ++r) {
     const std::uint32_t j = order[r];
-    long long fresh = 0;
-    next.forEachInSphere(centres[j], radii[j], [&](std::size_t v) { fresh += !next.inSet[v]; });
+    long long fresh = next.voxels ? 1 : 0;  // a fallback keeps its sample
+    next.forEachChild(centres[j], radii[j], [&](std::size_t v) { fresh += !next.inSet[v]; });
     if (d.count + fresh - 1 > limit) {
       stop = r;  // worst first: no smaller error splits once a larger one did not fit
       break;
@@ -169,7 +189,7 @@ SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector
     d.count += fresh - 1;
     d.split[j] = 1;
     ++d.splits;
-    next.forEachInSphere(centres[j], radii[j], [&](std::size_t v) {
+    next.forEachChild(centres[j], radii[j], [&](std::size_t v) {
       next.inSet[v] = 1;
       if (next.ancestor[v] < 0 || anc[j] < next.ancestor[v]) next.ancestor[v] = anc[j];
     });
@@ -212,14 +232,14 @@ TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long
   std::vector<GridInfoBuffer> grids;
   std::vector<std::vector<std::size_t>> rank(levels.size());
   for (std::size_t k = 0; k < levels.size(); ++k) {
-    grids.emplace_back(bounds, levels[k].resolution);
+    grids.emplace_back(bounds, levels[k].grid);
     grids.back().inSet.swap(levels[k].decision.marked);
     const std::vector<std::uint8_t>& split = levels[k].decision.split;
     rank[k].resize(split.size());
     std::size_t r = 0;
     for (std::size_t j = 0; j < split.size(); ++j) {
       rank[k][j] = r;
-      r += split[j] ? 0 : 1;
+      r += split[j] && !levels[k].grid.voxels ? 0 : 1;
     }
   }
   for (const Candidate& c : cands) {
@@ -227,12 +247,12 @@ TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long
     GridInfoBuffer& g = grids[c.level];
     const Vec3 centre = L.centres[c.j];
     const float radius = L.radii[c.j];
-    long long fresh = 0;
-    g.forEachInSphere(centre, radius, [&](std::size_t v) { fresh += !g.inSet[v]; });
+    long long fresh = g.voxels ? 1 : 0;  // a fallback keeps its sample
+    g.forEachChild(centre, radius, [&](std::size_t v) { fresh += !g.inSet[v]; });
     if (count + fresh - 1 > budget) break;  // worst first across the levels
     count += fresh - 1;
     const float R = g.radius();
-    g.forEachInSphere(centre, radius, [&](std::size_t v) {
+    g.forEachChild(centre, radius, [&](std::size_t v) {
       if (g.inSet[v]) return;
       g.inSet[v] = 1;
       RadianceSample child;
@@ -242,7 +262,7 @@ TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long
       t.children.push_back(child);
       t.ancestors.push_back(L.anc[c.j]);
     });
-    t.removed.push_back(L.offset + rank[c.level][c.j]);
+    if (!g.voxels) t.removed.push_back(L.offset + rank[c.level][c.j]);
     L.decision.split[c.j] = 1;
     ++L.decision.splits;
     --L.decision.capped;
@@ -287,6 +307,24 @@ void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& l
 
 namespace {
 
+/// The top-up's children evaluated: with ∇S, but those of the voxel grid without (as the
+/// voxel level itself), each group in one batch.
+void evaluateTopUp(Frame& frame, const Scene& scene, RadianceEvaluator& evaluator,
+                   const std::vector<LevelGrid>& grids, TopUp& t) {
+  for (const bool voxels : {false, true}) {
+    std::vector<std::size_t> idx;
+    for (std::size_t i = 0; i < t.children.size(); ++i) {
+      const std::size_t l = std::size_t(t.children[i].level);
+      if (l >= 1 && l <= grids.size() && grids[l - 1].voxels == voxels) idx.push_back(i);
+    }
+    if (idx.empty()) continue;
+    std::vector<RadianceSample> batch(idx.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) batch[i] = t.children[idx[i]];
+    evaluator.evaluate(frame, scene, batch, /*gradients=*/!voxels);
+    for (std::size_t i = 0; i < idx.size(); ++i) t.children[idx[i]] = batch[i];
+  }
+}
+
 /// One pass of recursive splitting: dynamicSampling(). With a budget (budget > 0) the splits
 /// of each level are budgetedSplit()'s; without one every E > threshold splits (the paper).
 DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
@@ -306,14 +344,21 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
   });
 
   double threshold = settings.epsilon, errorScale = 0.0;  // set on level 0
-  const std::size_t nLevels = settings.levels.size();
+  const std::vector<LevelGrid> grids = levelGrids(settings);
+  const std::size_t nLevels = grids.size();
+  const auto emptyStats = [&](std::size_t l) {
+    LevelStats e;
+    e.resolution = grids[l - 1].dims.x;
+    e.voxels = grids[l - 1].voxels;
+    return e;
+  };
   for (std::size_t level = 0; level <= nLevels; ++level) {
     const auto t0 = Clock::now();
-    LevelStats ls;
-    ls.resolution = level == 0 ? 0 : settings.levels[level - 1];
+    LevelStats ls = level == 0 ? LevelStats{} : emptyStats(level);
     ls.samples = (long long)current.size();
     for (auto& s : current) s.level = int(level);
-    evaluator.evaluate(frame, scene, current, /*gradients=*/true);
+    // The voxel level's samples (final) need no ∇S: each reaches its own voxel centre only.
+    evaluator.evaluate(frame, scene, current, /*gradients=*/!ls.voxels);
 
     if (level == nLevels || current.empty()) {
       // The finest level is not split further.
@@ -321,8 +366,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
       ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       result.levels.push_back(ls);
       if (current.empty()) {
-        for (std::size_t l = level + 1; l <= nLevels; ++l)
-          result.levels.push_back(LevelStats{settings.levels[l - 1]});
+        for (std::size_t l = level + 1; l <= nLevels; ++l) result.levels.push_back(emptyStats(l));
         break;
       }
       continue;
@@ -347,10 +391,16 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         S[i] = probes[np * j + i].S;
         D[i] = density.sample(probes[np * j + i].position);
       }
-      const float tau =
-          settings.perSampleTau && level > 0
-              ? viewTransmittance(scene, density, current[j].position, settings.delta1)
-              : rootTau[anc[j]];
+      float tau = settings.perSampleTau && level > 0
+                      ? viewTransmittance(scene, density, current[j].position, settings.delta1)
+                      : rootTau[anc[j]];
+      if (settings.visibleTau) {
+        // τ of the most visible of the sample and its six axis probes (tau "visible").
+        Vec3 pp[6];
+        probePoints(current[j], pp, 6);
+        for (int i = 0; i < 6; ++i)
+          tau = std::max(tau, viewTransmittance(scene, density, pp[i], settings.delta1));
+      }
       errors[j] = localShadingError(current[j], S, D, tau, np, settings.space);
       if (!contributions.empty())
         contributions[j] = sampleContribution(current[j], density.sample(current[j].position), tau,
@@ -375,18 +425,18 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         radii[j] = current[j].radius;
       }
       BudgetLevel& bl = budgetLevels.emplace_back();
-      bl.decision = budgetedSplit(
-          scene.medium.bounds, settings.levels[level], centres, radii, anc, errors, threshold,
-          (long long)(result.samples.size() + current.size()), budget, nLevels - level);
+      bl.decision = budgetedSplit(scene.medium.bounds, grids[level], centres, radii, anc, errors,
+                                  threshold, (long long)(result.samples.size() + current.size()),
+                                  budget, nLevels - level);
       const SplitDecision& d = bl.decision;
       bl.offset = result.samples.size();
-      bl.resolution = settings.levels[level];
+      bl.grid = grids[level];
       for (std::size_t j = 0; j < current.size(); ++j)
-        if (!d.split[j]) result.samples.push_back(current[j]);
+        if (!d.split[j] || grids[level].voxels) result.samples.push_back(current[j]);
       ls.split = d.splits;
       ls.capped = d.capped;
       ls.maxLeft = d.maxLeft;
-      const GridInfoBuffer grid(scene.medium.bounds, settings.levels[level]);
+      const GridInfoBuffer grid(scene.medium.bounds, grids[level]);
       std::vector<RadianceSample> nextSamples(d.vertices.size());
       const float R = grid.radius();
       for (std::size_t i = 0; i < d.vertices.size(); ++i) {
@@ -405,7 +455,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     }
 
     // Split: mark the vertices of G_{k+1} inside every sphere with E > threshold.
-    GridInfoBuffer next(scene.medium.bounds, settings.levels[level]);
+    GridInfoBuffer next(scene.medium.bounds, grids[level]);
     std::vector<std::uint8_t> split(current.size());
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
       split[j] = double(errors[j]) > threshold ? 1 : 0;
@@ -414,6 +464,9 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     for (std::size_t j = 0; j < current.size(); ++j) {
       if (split[j]) {
         ++ls.split;
+        // The fallback keeps the sample: its cell's voxels are added, the sample still serves
+        // the rest of its sphere.
+        if (grids[level].voxels) result.samples.push_back(current[j]);
       } else {
         result.samples.push_back(current[j]);
         ls.maxLeft = std::max(ls.maxLeft, errors[j]);
@@ -440,7 +493,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     const auto t0 = Clock::now();
     TopUp t =
         budgetTopUp(scene.medium.bounds, budgetLevels, (long long)result.samples.size(), budget);
-    if (!t.children.empty()) evaluator.evaluate(frame, scene, t.children, /*gradients=*/true);
+    evaluateTopUp(frame, scene, evaluator, grids, t);
     applyTopUp(result, budgetLevels, std::move(t));
     result.levels.back().ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
@@ -484,6 +537,7 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
                       {"topped_up", ls.toppedUp},
                       {"max_left", ls.maxLeft},
                       {"ms", ls.ms}});
+    if (ls.voxels) levels.back()["fallback"] = true;
   }
   st.extra["samples_per_level"] = perLevel;
   st.extra["initial_samples"] = levelStats.empty() ? 0 : levelStats[0].samples;
@@ -510,7 +564,10 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
     const double threshold = levelStats[0].threshold;
     st.extra["error_left"] = threshold > 0.0 ? double(maxLeft) / threshold : 0.0;
   }
-  st.extra["tau"] = settings.perSampleTau ? "sample" : "ancestor";
+  st.extra["fallback"] = settings.voxelFallback;
+  st.extra["split_rule"] = settings.splitCells ? "cell" : "sphere";
+  st.extra["tau"] =
+      settings.visibleTau ? "visible" : (settings.perSampleTau ? "sample" : "ancestor");
   st.extra["probes"] = settings.probes;
 }
 
@@ -528,8 +585,11 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
       {"levels", "array of int", "[16, 32, 64] (those <= half the medium resolution)",
        "increasing, each 2…1024, finest <= half the medium resolution",
        "vertices per axis of the split grids G1, G2, …", "[2]"},
-      {"tau", "string", "ancestor", "ancestor, sample",
-       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper) or the sample itself",
+      {"tau", "string", "visible (ancestor with paper)",
+       "ancestor, sample, visible (not with paper)",
+       "τ to the viewer in Eq. 5: from the level-0 ancestor (paper), the sample itself, or the "
+       "most visible of the ancestor's and the sample's six axis probes (a sample hidden behind "
+       "an occluder whose sphere reaches the visible side)",
        R"("sample")"},
       {"probes", "int", "40 (6 with paper)", "6, 14, 26, 40",
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
@@ -540,6 +600,16 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "most samples in the final set: each level splits its largest errors first within an "
        "equal share of the budget left (one pass)",
        "100"},
+      {"split", "string", R"("cell" ("sphere" with paper))", "cell, sphere (not with paper)",
+       "what a split sample is replaced by: the vertices of the next grid in its cell (the cube "
+       "of edge R around it: 8 when the grid doubles) or, the paper, every vertex inside its "
+       "sphere (about 33)",
+       R"("sphere")"},
+      {"fallback", "bool", "false", "true, false (not with paper)",
+       "per-voxel fallback: the finest level is probed too, and where a cell of it still fails "
+       "the error test S is evaluated directly at the voxels inside it (final samples that "
+       "give the reconstruction exactly that value there)",
+       "true"},
   };
   return keys;
 }
@@ -559,6 +629,10 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
     p.allow("max_samples");
     s.maxSamples = paper ? 0 : kAutoBudget;
   }
+  if (paper && p.has("fallback"))
+    p.fail("fallback", "is an extension; it cannot be set with render.paper = true");
+  s.voxelFallback = p.boolean("fallback", false);
+  s.voxelDims = scene.medium.resolution;
   const IVec3 res = scene.medium.resolution;
   const int finestAllowed = std::max(2, std::max(res.x, std::max(res.y, res.z)) / 2);
   if (p.has("levels")) {
@@ -584,7 +658,15 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
     p.fail("levels", "finest level " + std::to_string(s.levels.back()) +
                          " exceeds half the medium resolution (" + std::to_string(finestAllowed) +
                          ")");
-  s.perSampleTau = p.choice("tau", {"ancestor", "sample"}, "ancestor") == "sample";
+  if (paper && p.has("split"))
+    p.fail("split", "is an extension; it cannot be set with render.paper = true");
+  s.splitCells = p.choice("split", {"sphere", "cell"}, paper ? "sphere" : "cell") == "cell";
+  const std::string tau =
+      p.choice("tau", {"ancestor", "sample", "visible"}, paper ? "ancestor" : "visible");
+  if (paper && tau == "visible")
+    p.fail("tau", "\"visible\" is an extension; it cannot be set with render.paper = true");
+  s.perSampleTau = tau == "sample";
+  s.visibleTau = tau == "visible";
   const long long probes = p.integer("probes", paper ? 6 : kExtendedProbes);
   if (probes != 6 && probes != 14 && probes != 26 && probes != 40)
     p.fail("probes", "value " + std::to_string(probes) +
@@ -620,6 +702,8 @@ StageRegistry<RefinerMaker>& refiners() {
 DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineSettings& ps) {
   ds.delta1 = ps.delta1;
   ds.space = {taylorBounds(ps), ps.logValues()};
+  // The fallback's voxels are the radiance volume's, whose centres the reconstruction fills.
+  if (ps.radianceResolution.x > 0) ds.voxelDims = ps.radianceResolution;
   return ds;
 }
 

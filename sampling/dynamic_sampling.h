@@ -21,12 +21,13 @@
 /// Sample budget (extension, issue 24): a most final count B, met in the one splitting pass
 /// (budgetedSplit(); never a re-run). Splitting level k reveals the errors of level k + 1 only
 /// once they are evaluated, but what a split costs is known before: the vertices of G_{k+1}
-/// strictly inside its sphere that no earlier split of the level marked (shared vertices count
-/// once), minus the sample itself. So each split level (1) orders its candidates (E_j >
-/// threshold) by E_j, worst first (ties: lower index first), (2) accepts them in that order
-/// while the final count (kept samples of the coarser levels + this level's unsplit samples + the
-/// next level's marked vertices) stays within the level's allotment, and stops at the first
-/// that does not fit, so a split never goes to a smaller error while a larger one waits. The
+/// it marks (strictly inside its sphere, or with splitCells in its cell: forEachChild) that no
+/// earlier split of the level marked (shared vertices count once), minus the sample itself
+/// (not on the per-voxel fallback's grid, where the sample stays). So each split level (1) orders
+/// its candidates (E_j > threshold) by E_j, worst first (ties: lower index first), (2) accepts them
+/// in that order while the final count (kept samples of the coarser levels + this level's unsplit
+/// samples + the next level's marked vertices) stays within the level's allotment, and stops at the
+/// first that does not fit, so a split never goes to a smaller error while a larger one waits. The
 /// allotment: the headroom left, B − count, shared equally by the split levels still to come
 /// (level k of L split levels may use 1/(L − k) of it); what a level does not use passes to
 /// the finer ones. A plain worst-first greedy (allotment 1 on every level) spends the whole
@@ -43,7 +44,12 @@
 /// relative ε. The error left is reported: per level the candidates left unsplit
 /// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft; /
 /// threshold > 1: the budget stopped the refinement there). The finest level is not probed, so its
-/// errors are not known.
+/// errors are not known (with voxelFallback the finest of `levels` is probed, and the voxel
+/// level, exact at its voxels, is the one not probed).
+///
+/// Issue 24 (docs/fidelity.md §8): the allocation between levels was measured against other
+/// shares (top-up as a share, shares growing per level, greedy) and kept; what bound the budget
+/// on the smokes was the price of a split, which splitCells cuts from ~33 children to 8.
 
 #include <cstdint>
 #include <functional>
@@ -62,7 +68,13 @@ struct DynamicSamplingSettings {
   bool relative = false;
   std::vector<int> levels{16, 32, 64};  ///< vertices per axis of G1, G2, ... (increasing)
   bool perSampleTau = false;            ///< τ from each sample instead of its level-0 ancestor
-  float delta1 = 0.0f;                  ///< step for tracing τ to the viewer (world units)
+  /// τ in Eq. 5 raised to the most visible of the six axis probes x_j ± R_j·(X, Y, Z) (tau
+  /// "visible", extension, issue 24): a sample behind a thin dense occluder (τ ≈ 0) whose
+  /// sphere reaches through it to the visible side is weighted by what its sphere shows, not by
+  /// its hidden centre, so its error there gets it split. Also used for the contribution of the
+  /// relative ε's scale. Six view-transmittance traces per probed sample.
+  bool visibleTau = false;
+  float delta1 = 0.0f;  ///< step for tracing τ to the viewer (world units)
   /// Probe points per sample: 6 is Eq. 5 (x ± R along X, Y, Z). 14 and 26 add diagonal
   /// directions at distance R, 40 also the 6 axis and 8 diagonal directions at R/2: extensions
   /// for shading boundaries that pass between the axis probes (a light shaft beside a large
@@ -71,6 +83,24 @@ struct DynamicSamplingSettings {
   /// Most samples in the final set (0: no cap; kAutoBudget: sampleBudget() of the initial
   /// count): see budgetedSplit().
   long long maxSamples = 0;
+  /// Per-voxel fallback (extension, issue 24; key `fallback`): after `levels` one more split
+  /// grid, the voxels of the radiance volume (voxelDims per axis). The finest of `levels` is then
+  /// probed like the others, and a cell of it that fails the error test is replaced by S
+  /// evaluated directly at the voxel centres inside its sphere: final samples of radius ½ the
+  /// smallest voxel edge, so each reaches only its own voxel centre, where its weight R/‖x − x_j‖
+  /// (clamped at a tiny ‖·‖) outweighs every other sample's and the reconstruction returns that
+  /// S, the per-voxel value. They carry no ∇S (never used there; saves the six central
+  /// differences per sample).
+  bool voxelFallback = false;
+  IVec3 voxelDims{0};  ///< the fallback grid (the radiance volume's dims; withPipeline())
+  /// Split into the cell (extension, key `split`: "cell"): a split sample is replaced by the
+  /// vertices of G_{k+1} in its cell, the cube of edge R_j centred on it (for a cubic grid the
+  /// cell of the partition: 8 children when the next grid is twice as fine), instead of every
+  /// vertex inside its sphere (the paper: about 33). The cells of the children tile the
+  /// parent's, and each child's sphere (R = h_{k+1}) covers its own cell; the rest of the
+  /// parent's sphere is its neighbours'. A split costs 4× fewer samples, so a budget splits 4×
+  /// more of them (docs/fidelity.md §8).
+  bool splitCells = false;
   /// How the error compares values (set from the pipeline, not a key): see ErrorSpace.
   struct ErrorSpace {
     /// Taylor estimates clamped as the reconstruction clamps them (boundedTaylor).
@@ -85,19 +115,40 @@ struct DynamicSamplingSettings {
 /// N³ partition of the medium box (vertex (i,j,k) at min + (i + ½, j + ½, k + ½)·h), each with
 /// its membership in Q^k and the level-0 sample whose τ it inherits. (The local shading errors
 /// stay with the sample list of the level, which the scan compaction orders by vertex.)
+/// A split grid: `dims` vertices per axis; `voxels`: the per-voxel fallback's grid (see
+/// DynamicSamplingSettings::voxelFallback), whose samples are final, without ∇S, and reach only
+/// their own voxel centre.
+struct LevelGrid {
+  IVec3 dims{0};
+  bool voxels = false;
+  bool cells = false;  ///< a split marks the vertices in the cell, not the sphere (splitCells)
+};
+
+/// The split grids G1, G2, … of `s`: one cubic grid per entry of `levels`, then with
+/// voxelFallback the voxel grid.
+std::vector<LevelGrid> levelGrids(const DynamicSamplingSettings& s);
+
 struct GridInfoBuffer {
   Box bounds;
   IVec3 dims{0};
   Vec3 interval{0.0f};                 ///< h per axis
+  bool voxels = false;                 ///< the per-voxel fallback's grid (LevelGrid::voxels)
+  bool cells = false;                  ///< splits mark cells (LevelGrid::cells)
   std::vector<std::uint8_t> inSet;     ///< 1 when the vertex is in Q^k
   std::vector<std::int32_t> ancestor;  ///< index of the level-0 ancestor, or -1
 
   GridInfoBuffer(const Box& b, int resolution);
+  GridInfoBuffer(const Box& b, const LevelGrid& grid);
   Vec3 vertex(std::size_t linear) const;
-  /// Valid radius of the level's samples: the grid interval (largest component of h).
-  float radius() const { return std::max(interval.x, std::max(interval.y, interval.z)); }
-  /// Marks every vertex strictly inside the sphere (c, R) as in the set, with ancestor
-  /// min(existing, anc). Thread-safe.
+  /// Valid radius of the level's samples: the grid interval (largest component of h); on the
+  /// voxel grid ½ the smallest voxel edge (a sample reaches its own voxel centre only).
+  float radius() const {
+    if (voxels) return 0.5f * std::min(interval.x, std::min(interval.y, interval.z));
+    return std::max(interval.x, std::max(interval.y, interval.z));
+  }
+  std::size_t vertexCount() const { return std::size_t(dims.x) * dims.y * dims.z; }
+  /// Marks every vertex strictly inside the sphere (c, R) (on the voxel grid: inside the cell,
+  /// forEachChild) as in the set, with ancestor min(existing, anc). Thread-safe.
   void markSphere(const Vec3& c, float R, std::int32_t anc);
   /// Calls f(linear vertex index) for every vertex strictly inside the sphere (c, R), the
   /// vertices markSphere() marks, in ascending k, j, i.
@@ -115,10 +166,38 @@ struct GridInfoBuffer {
           f((std::size_t(k) * dims.y + j) * dims.x + i);
         }
   }
+  /// Calls f(linear vertex index) for every vertex in the cube of edge R centred on c, half
+  /// open per axis ([c − R/2, c + R/2)): the cell of a sample of a cubic grid (R = its interval),
+  /// which the cells of the level tile. The voxels the per-voxel fallback evaluates.
+  template <class F>
+  void forEachInCell(const Vec3& c, float R, F&& f) const {
+    const Vec3 a = c - 0.5f * R, b = c + 0.5f * R;
+    const IVec3 lo = glm::max(IVec3(glm::floor((a - bounds.min) / interval - 0.5f)), IVec3(0));
+    const IVec3 hi = glm::min(IVec3(glm::ceil((b - bounds.min) / interval - 0.5f)), dims - 1);
+    for (int k = lo.z; k <= hi.z; ++k)
+      for (int j = lo.y; j <= hi.y; ++j)
+        for (int i = lo.x; i <= hi.x; ++i) {
+          const Vec3 q = bounds.min + (Vec3(i, j, k) + 0.5f) * interval;
+          if (q.x < a.x || q.y < a.y || q.z < a.z || !(q.x < b.x) || !(q.y < b.y) || !(q.z < b.z))
+            continue;
+          f((std::size_t(k) * dims.y + j) * dims.x + i);
+        }
+  }
+  /// The vertices a split of the sample (c, R) marks: inside its sphere (forEachInSphere, the
+  /// paper), or inside its cell (forEachInCell: with `cells`, and always on the voxel grid, where
+  /// the sample stays and the voxels are added).
+  template <class F>
+  void forEachChild(const Vec3& c, float R, F&& f) const {
+    if (voxels || cells)
+      forEachInCell(c, R, std::forward<F>(f));
+    else
+      forEachInSphere(c, R, std::forward<F>(f));
+  }
 };
 
 struct LevelStats {
-  int resolution = 0;     ///< 0 for the initial set
+  int resolution = 0;     ///< 0 for the initial set (the voxel grid: its x dims)
+  bool voxels = false;    ///< the per-voxel fallback's level
   long long samples = 0;  ///< |Q^k| evaluated at this level
   long long split = 0;    ///< of which split (E > threshold)
   float maxError = 0.0f, p90Error = 0.0f;
@@ -211,7 +290,7 @@ struct BudgetLevel {
   std::vector<float> radii;
   std::vector<std::int32_t> anc;
   std::vector<float> errors;
-  int resolution = 0;      ///< of G_{k+1}
+  LevelGrid grid;          ///< G_{k+1}
   std::size_t offset = 0;  ///< index in DynamicSamplingResult::samples of its first kept sample
 };
 
@@ -242,10 +321,11 @@ void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& l
 /// uploads the next level). centres/radii/anc/errors: the level's samples; `threshold`: the
 /// absolute one; countBefore: kept samples of the coarser levels + this level's count; budget;
 /// splitLevelsLeft: L − k (this level included). Deterministic.
-SplitDecision budgetedSplit(const Box& bounds, int resolution, const std::vector<Vec3>& centres,
-                            const std::vector<float>& radii, const std::vector<std::int32_t>& anc,
-                            const std::vector<float>& errors, double threshold,
-                            long long countBefore, long long budget, std::size_t splitLevelsLeft);
+SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
+                            const std::vector<Vec3>& centres, const std::vector<float>& radii,
+                            const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
+                            double threshold, long long countBefore, long long budget,
+                            std::size_t splitLevelsLeft);
 
 /// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's
 /// density. `evaluator` (of the frame's backend) computes S and ∇S of the samples and S at the

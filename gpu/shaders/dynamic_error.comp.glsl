@@ -45,7 +45,9 @@ void main() {
 uniform float uDelta2;
 uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
 uniform float uTauDelta1;       // step of the τ trace
-uniform int uFinal;             // 1: finest level, S and ∇S only
+uniform int uVisibleTau;        // 1: τ = max(τ, τ at the six axis probes) (tau "visible")
+uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU (the six axis probes of uVisibleTau)
+uniform int uFinal;             // 1: finest level, S and ∇S only; 2: S only (∇S = 0)
 uniform uint uProbeDispatchSlot;  // counts[slot + 3·level ...]: pass 2's (x, groups, 1)
 uniform int uProbeGroups;       // ceil(uProbes / kProbeGroup)
 uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
@@ -77,7 +79,9 @@ void main() {
   for (int a = 0; a < 3; ++a) {
     vec3 e = vec3(0.0);
     e[a] = uDelta2;
-    dS[a] = (sourceTowardsEye(x + e) - sourceTowardsEye(x - e)) / (2.0 * uDelta2);
+    // uFinal 2: the per-voxel fallback's voxels, S only (the CPU's gradients = false).
+    dS[a] = uFinal == 2 ? vec3(0.0)
+                        : (sourceTowardsEye(x + e) - sourceTowardsEye(x - e)) / (2.0 * uDelta2);
   }
   results[j].S = vec4(S, 0.0);
   for (int a = 0; a < 3; ++a) results[j].dS[a] = vec4(dS[a], 0.0);
@@ -93,6 +97,14 @@ void main() {
     tau = rootTau[ancestors[j]];
   } else {
     tau = viewTransmittance(x);
+  }
+  if (uVisibleTau != 0) {
+    // tau "visible": the most visible of the sample and its six axis probes (the CPU's
+    // probePoints order; rootTau keeps the centre's τ).
+    for (int i = 0; i < 6; ++i) {
+      precise vec3 p = x + R * uProbeDirs[i];
+      tau = max(tau, viewTransmittance(p));
+    }
   }
   errors[j] = tau;  // E_j once pass 3 has combined the probe groups
   if (uTauMode == 0) {

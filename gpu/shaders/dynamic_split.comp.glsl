@@ -18,6 +18,7 @@ uniform uint uLevel;  // k: the level's sample count is counts[k]
 uniform vec3 uGridMin;
 uniform vec3 uGridInterval;
 uniform ivec3 uGridDims;
+uniform int uCell;  // 1: mark the cell, not the sphere (split "cell", and the per-voxel fallback)
 
 void main() {
   uint s = gl_GlobalInvocationID.x;
@@ -28,13 +29,20 @@ void main() {
   ivec3 lo = max(ivec3(ceil((c - R - uGridMin) / uGridInterval - 0.5)) - 1, ivec3(0));
   ivec3 hi = min(ivec3(floor((c + R - uGridMin) / uGridInterval - 0.5)) + 1, uGridDims - 1);
   precise float R2 = R * R;
+  precise vec3 ca = c - 0.5 * R, cb = c + 0.5 * R;
   for (int k = lo.z; k <= hi.z; ++k)
     for (int j = lo.y; j <= hi.y; ++j)
       for (int i = lo.x; i <= hi.x; ++i) {
         precise vec3 q = uGridMin + (vec3(i, j, k) + 0.5) * uGridInterval;
-        precise vec3 d = q - c;
-        precise float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-        if (d2 >= R2) continue;
+        if (uCell != 0) {
+          // Split "cell" and the per-voxel fallback: the vertices in the sample's cell
+          // [c − R/2, c + R/2) (GridInfoBuffer::forEachInCell).
+          if (any(lessThan(q, ca)) || !all(lessThan(q, cb))) continue;
+        } else {
+          precise vec3 d = q - c;
+          precise float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+          if (d2 >= R2) continue;
+        }
         uint v = (uint(k) * uint(uGridDims.y) + uint(j)) * uint(uGridDims.x) + uint(i);
         inSet[v] = 1u;
         atomicMin(vertexAncestor[v], anc);

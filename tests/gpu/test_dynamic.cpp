@@ -300,6 +300,81 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
   }
 }
 
+/// Issue 24: split "cell", the per-voxel fallback and tau "visible" give the CPU's samples, without
+/// a budget (the GPU's split pass in cell mode, its S-only final level) and with one (the host's
+/// budgetedSplit, the top-up's voxel children evaluated without ∇S).
+TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
+  SCATTERLAB_REQUIRE_GPU();
+  const Scene scene = spotScene();
+  DensityGrid density(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(density);
+  const float delta1 = 1.0f / 24, delta2 = 1.0f / 24;
+  PipelineSettings ps;
+  ps.delta1 = delta1;
+  ps.delta2 = delta2;
+  auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
+  const gpu::Volume d = gpu::uploadDensity(density);
+  DynamicSamplingSettings ds;
+  ds.levels = {6, 12};
+  ds.delta1 = delta1;
+  ds.relative = true;
+  ds.epsilon = 0.05;
+  ds.probes = 40;
+  ds.splitCells = true;
+  ds.voxelFallback = true;
+  ds.voxelDims = IVec3(24);
+  ds.visibleTau = true;  // tau "visible" (the default without paper): six more τ traces
+  for (long long cap : {0LL, 400LL, kAutoBudget}) {
+    ds.maxSamples = cap;
+    const DynamicSamplingResult cpu =
+        dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
+    std::vector<std::vector<float>> errors;
+    const DynamicSamplingResult g =
+        gpu::dynamicSamplingGpu(scene, d, latticeSamples(), {delta1, delta2}, ds, nullptr, &errors);
+    expectNoGlError();
+    double closest = 1e30;
+    for (const auto& level : errors)
+      for (float e : level)
+        closest = std::min(closest, std::abs(double(e) / cpu.levels[0].threshold - 1.0));
+    std::printf("cell split + fallback, cap %lld: %zu samples, closest E %.3g\n", cap,
+                cpu.samples.size(), closest);
+    EXPECT_GT(closest, 1e-3);
+    ASSERT_EQ(g.levels.size(), cpu.levels.size());
+    ASSERT_EQ(cpu.levels.size(), 4u);
+    EXPECT_TRUE(cpu.levels[3].voxels);
+    EXPECT_TRUE(g.levels[3].voxels);
+    EXPECT_GT(cpu.levels[2].split, 0) << "the scene must reach the fallback";
+    for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
+      EXPECT_EQ(g.levels[l].samples, cpu.levels[l].samples) << "level " << l;
+      EXPECT_EQ(g.levels[l].split, cpu.levels[l].split) << "level " << l;
+      EXPECT_EQ(g.levels[l].capped, cpu.levels[l].capped) << "level " << l;
+      EXPECT_EQ(g.levels[l].toppedUp, cpu.levels[l].toppedUp) << "level " << l;
+    }
+    if (cap > 0) EXPECT_LE((long long)cpu.samples.size(), cap);
+    ASSERT_EQ(g.samples.size(), cpu.samples.size());
+    int bad = 0, badS = 0, voxels = 0;
+    float sMax = 0.0f;
+    for (const RadianceSample& c : cpu.samples)
+      sMax = std::max(sMax, std::max(c.S.x, std::max(c.S.y, c.S.z)));
+    for (std::size_t i = 0; i < cpu.samples.size(); ++i) {
+      const RadianceSample &a = g.samples[i], &b = cpu.samples[i];
+      bad += a.position != b.position || a.level != b.level || a.radius != b.radius;
+      for (int c = 0; c < 3; ++c)
+        badS += std::abs(a.S[c] - b.S[c]) > 1e-3f * (std::abs(b.S[c]) + 1e-2f * sMax);
+      if (b.level == 3) {
+        ++voxels;
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_EQ(b.dS[k], Vec3(0.0f));
+          EXPECT_EQ(a.dS[k], Vec3(0.0f));
+        }
+      }
+    }
+    EXPECT_GT(voxels, 0);
+    EXPECT_EQ(bad, 0);
+    EXPECT_EQ(badS, 0);
+  }
+}
+
 TEST(GpuDynamicSampling, InfiniteAndZeroEpsilon) {
   SCATTERLAB_REQUIRE_GPU();
   const Scene scene = spotScene();

@@ -7,6 +7,7 @@
 #include <random>
 #include <sstream>
 
+#include "cpu/interpolation.h"
 #include "cpu/radiance_evaluator.h"
 #include "sampling/dynamic_sampling.h"
 #include "sampling/scan.h"
@@ -471,7 +472,8 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   ASSERT_EQ(fresh, 8);
   // Room for exactly one split (count 3 → 3 + fresh − 1): the worst (E = 5) splits, the others
   // are capped.
-  SplitDecision d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + fresh - 1, 1);
+  SplitDecision d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
+                                  3 + fresh - 1, 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
   EXPECT_EQ(d.splits, 1);
   EXPECT_EQ(d.capped, 2);
@@ -480,11 +482,13 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   for (std::int32_t a : d.ancestors) EXPECT_EQ(a, 1);
   EXPECT_FLOAT_EQ(d.maxLeft, 3.0f);
   // Room for two: E = 5 and 3, not 2.
-  d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 1);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
+                    3 + 2 * (fresh - 1), 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_FLOAT_EQ(d.maxLeft, 2.0f);
   // The same budget with two split levels left: this level may use half the headroom: one.
-  d = budgetedSplit(box, 10, centres, radii, anc, errors, 1.0, 3, 3 + 2 * (fresh - 1), 2);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
+                    3 + 2 * (fresh - 1), 2);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
   // The top-up: that share left the budget of one split unused (no finer level here); after
   // the pass it goes to the next worst capped candidate (E = 3, the second kept sample in the
@@ -495,7 +499,7 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   levels[0].radii = radii;
   levels[0].anc = anc;
   levels[0].errors = errors;
-  levels[0].resolution = 10;
+  levels[0].grid = LevelGrid{IVec3(10)};
   TopUp t = budgetTopUp(box, levels, d.count, 3 + 2 * (fresh - 1));
   EXPECT_EQ(t.removed, (std::vector<std::size_t>{1}));
   EXPECT_EQ((long long)t.children.size(), fresh);
@@ -508,7 +512,7 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   EXPECT_EQ(levels[0].decision.capped, 1);
   EXPECT_FLOAT_EQ(levels[0].decision.maxLeft, 2.0f);
   // The threshold still rules: E = 2 is not a candidate at a threshold of 2.5.
-  d = budgetedSplit(box, 10, centres, radii, anc, errors, 2.5, 3, 1000, 1);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 2.5, 3, 1000, 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_EQ(d.capped, 0);
 }
@@ -579,3 +583,130 @@ TEST(DynamicSampling, ErrorSpaceClampsAndComparesOnV) {
 
 }  // namespace
 }  // namespace scatterlab
+
+// ---- Issue 24: split "cell" and the per-voxel fallback -------------------------------------
+
+TEST(DynamicSampling, CellSplitMarksTheCellAndTheCellsTileTheNextGrid) {
+  const Box box{Vec3(0.0f), Vec3(1.0f)};
+  const GridInfoBuffer g8(box, 8);
+  const GridInfoBuffer cells(box, LevelGrid{IVec3(16), false, true});
+  const GridInfoBuffer spheres(box, LevelGrid{IVec3(16), false, false});
+  std::vector<int> hits(cells.vertexCount(), 0);
+  for (std::size_t v = 0; v < g8.vertexCount(); ++v) {
+    int n = 0;
+    cells.forEachChild(g8.vertex(v), g8.radius(), [&](std::size_t c) {
+      ++hits[c];
+      ++n;
+    });
+    EXPECT_EQ(n, 8) << "G8 vertex " << v;  // the 2×2×2 vertices of G16 in its cell
+  }
+  for (std::size_t c = 0; c < hits.size(); ++c) EXPECT_EQ(hits[c], 1) << "G16 vertex " << c;
+  // The paper's split of an inner vertex marks the 32 vertices of G16 inside its sphere.
+  int n = 0;
+  spheres.forEachChild(g8.vertex((3 * 8 + 3) * 8 + 3), g8.radius(), [&](std::size_t) { ++n; });
+  EXPECT_EQ(n, 32);
+}
+
+TEST(DynamicSampling, FallbackGridIsTheRadianceVoxelsPerAxis) {
+  // A non-cubic medium like lamps32.json (128 × 52 × 104 voxels): the fallback's vertices are
+  // the radiance volume's voxel centres, bit for bit, and a sample reaches only its own voxel.
+  const Box box{Vec3(0.0f), Vec3(2.0f, 0.8f, 1.6f)};
+  const IVec3 dims(20, 8, 16);
+  const GridInfoBuffer g(box, LevelGrid{dims, true, true});
+  const RadianceGrid rg(box, dims);
+  ASSERT_EQ(g.vertexCount(), std::size_t(20 * 8 * 16));
+  for (int k = 0; k < dims.z; ++k)
+    for (int j = 0; j < dims.y; ++j)
+      for (int i = 0; i < dims.x; ++i)
+        EXPECT_EQ(g.vertex((std::size_t(k) * dims.y + j) * dims.x + i), rg.cellCenter(i, j, k));
+  EXPECT_FLOAT_EQ(g.radius(), 0.05f);  // ½ the smallest voxel edge (0.1)
+  EXPECT_LT(g.radius(), rg.cellSize().x);
+}
+
+TEST(DynamicSampling, FallbackVoxelsReconstructToTheirOwnS) {
+  // A spot shaft in a 16³ medium, one split level (4³) and the fallback: every cell whose E is
+  // above 0 gets its voxels evaluated. Where a voxel has its own sample, Eq. 4 gives exactly
+  // that sample's S (its weight R/‖x − x_j‖ is clamped at R/1e-9), which is the traced S at the
+  // voxel centre: per-voxel accuracy there. The split samples stay (their cells' other voxels
+  // would otherwise lose them).
+  Json doc = homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0), 1.0f, 16, 12, 16);
+  doc["lights"] = Json::parse(R"([{"type": "spot", "position": [0.5, 1.3, 0.5],
+      "direction": [0, -1, 0], "intensity": 10, "inner_deg": 10, "outer_deg": 12}])");
+  const Scene scene = sceneFromJson(doc);
+  const DensityGrid density = densityOf(scene);
+  TracingEvaluator ev;
+  DynamicSamplingSettings st;
+  st.delta1 = scene.medium.voxelSize();
+  st.levels = {4};
+  st.splitCells = true;
+  st.voxelFallback = true;
+  st.voxelDims = scene.medium.resolution;
+  st.epsilon = 1e-9;
+  st.probes = 40;  // the inner probes see the shaft between the initial samples
+  std::vector<RadianceSample> init;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) init.push_back(sampleAt((Vec3(i, j, k) + 0.5f) * 0.5f, 0.5f));
+  const DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
+  ASSERT_EQ(r.levels.size(), 3u);
+  EXPECT_TRUE(r.levels[2].voxels);
+  EXPECT_GT(r.levels[1].split, 0);
+  long long voxelSamples = 0, keptSplit = 0;
+  for (const RadianceSample& s : r.samples) {
+    voxelSamples += s.level == 2;
+    keptSplit += s.level == 1;
+    if (s.level != 2) continue;
+    EXPECT_FLOAT_EQ(s.radius, 0.5f / 16.0f);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(s.dS[a], Vec3(0.0f));  // no ∇S evaluated
+  }
+  EXPECT_EQ(voxelSamples, r.levels[2].samples);
+  EXPECT_EQ(voxelSamples, 64 * r.levels[1].split);  // 4×4×4 voxels of 16³ per cell of G4
+  EXPECT_EQ(keptSplit, r.levels[1].samples);        // the split samples stay
+  RadianceGrid out(scene.medium.bounds, scene.medium.resolution);
+  interpolateSamples(Interpolation::Gradient, density, r.samples, out);
+  int checked = 0;
+  for (const RadianceSample& s : r.samples) {
+    if (s.level != 2) continue;
+    const IVec3 v = IVec3((s.position - scene.medium.bounds.min) / out.cellSize());
+    const Vec3 got = out.at(v.x, v.y, v.z);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], s.S[c], 1e-5f * (1.0f + s.S[c]));
+    ++checked;
+  }
+  EXPECT_GT(checked, 64);
+}
+
+TEST(DynamicSampling, CellSplitAndFallbackKeysParsed) {
+  const Scene scene = spotScene();  // 64³
+  const auto parse = [&](const Json& j, bool paper) {
+    Params p(j, "render");
+    return parseDynamicSampling(p, scene, paper);
+  };
+  const DynamicSamplingSettings paper = parse(Json::object(), true);
+  EXPECT_FALSE(paper.splitCells);
+  EXPECT_FALSE(paper.voxelFallback);
+  EXPECT_TRUE(levelGrids(paper).size() == paper.levels.size());
+  EXPECT_THROW(parse({{"split", "cell"}}, true), ConfigError);
+  EXPECT_THROW(parse({{"fallback", true}}, true), ConfigError);
+  EXPECT_FALSE(paper.visibleTau);
+  EXPECT_THROW(parse({{"tau", "visible"}}, true), ConfigError);
+  const DynamicSamplingSettings ext = parse(Json::object(), false);
+  EXPECT_TRUE(ext.visibleTau);
+  EXPECT_FALSE(parse({{"tau", "ancestor"}}, false).visibleTau);
+  EXPECT_TRUE(ext.splitCells);
+  EXPECT_FALSE(ext.voxelFallback);
+  EXPECT_FALSE(parse({{"split", "sphere"}}, false).splitCells);
+  EXPECT_THROW(parse({{"split", "box"}}, false), ConfigError);
+  EXPECT_THROW(parse({{"fallback", 3}}, false), ConfigError);
+  const DynamicSamplingSettings fb = parse({{"fallback", true}}, false);
+  EXPECT_TRUE(fb.voxelFallback);
+  EXPECT_EQ(fb.voxelDims, IVec3(64));
+  const std::vector<LevelGrid> grids = levelGrids(fb);
+  ASSERT_EQ(grids.size(), fb.levels.size() + 1);
+  EXPECT_TRUE(grids.back().voxels);
+  EXPECT_EQ(grids.back().dims, IVec3(64));
+  EXPECT_TRUE(grids.front().cells);
+  // The fallback's voxels follow the pipeline's radiance volume.
+  PipelineSettings ps;
+  ps.radianceResolution = IVec3(32, 16, 8);
+  EXPECT_EQ(withPipeline(fb, ps).voxelDims, IVec3(32, 16, 8));
+}
