@@ -2,6 +2,7 @@
 
 #include "gpu/context.h"
 #include "gpu/stages.h"
+#include "shading/transport.h"
 
 namespace scatterlab::gpu {
 
@@ -92,6 +93,7 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   ReconstructionStats st;
   sigmaT_ = scene.medium.sigmaT;
+  if (settingsBounds_ && lamp_) bounds_ = lampBounds(*settingsBounds_, scene, f.hostDensity());
   f.radiance = Volume();  // the previous render's volume goes back to the recycler first
   f.radiance = reconstruct(f.density, samples, scene.medium.bounds, dims, &st, &f.timer);
   return st;

@@ -426,5 +426,14 @@ TEST(GpuLogSpace, AdaptiveMatchesCpu) {
   EXPECT_LT(adaptiveExtensionGpuVsCpu("log_space", {8, 10}), 8.0e-5);
 }
 
+// The near-lamp model (render.lamp_model, on by default with factor_lights; the blob scene's
+// point light is inside the medium): the GPU's A, V and Eq. 5 evaluate m_l from the density
+// texture at the light, the CPU from the density grid.
+TEST(GpuLampModel, AdaptiveMatchesCpu) {
+  SCATTERLAB_REQUIRE_GPU();
+  // Measured on llvmpipe 2026-11-26 (compute pipeline): see the commit; ×1.5.
+  EXPECT_LT(adaptiveExtensionGpuVsCpu("lamp_model", {8}), 5.0e-5);
+}
+
 }  // namespace
 }  // namespace scatterlab::testing
