@@ -643,9 +643,8 @@ void registerReconstructions() {
   const auto interp = [](Interpolation k) {
     return [k](const PipelineSettings& s) {
       const ValueSpace space = s.logValues() ? ValueSpace::Log : ValueSpace::Linear;
-      return std::unique_ptr<Reconstruction>(
-          new InterpolatingReconstruction(k, space, s.occlusionWeights, taylorBounds(s),
-                                          s.tracerSteps().lampModel));
+      return std::unique_ptr<Reconstruction>(new InterpolatingReconstruction(
+          k, space, s.occlusionWeights, taylorBounds(s), s.tracerSteps().lampModel));
     };
   };
   const StageDecl fromSamples{.keys = {{interpolationKeys, parseInterpolation}}};

@@ -387,8 +387,7 @@ namespace {
 
 /// The slice marcher's program: ray-step layers or the paper's view-plane slabs, with the light
 /// factor and the objects' shadow-map variant as asked.
-const Program& sliceMarchProgram(bool raySteps, bool factor, bool lamp,
-                                 const ShadowMaps* shadows) {
+const Program& sliceMarchProgram(bool raySteps, bool factor, bool lamp, const ShadowMaps* shadows) {
   std::string key = raySteps ? "slice marcher (ray steps)" : "slice marcher";
   if (factor) key += " x A";
   if (factor && lamp) key += " lamp";

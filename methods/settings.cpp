@@ -1,5 +1,6 @@
 #include "methods/settings.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -127,7 +128,8 @@ const std::vector<KeyDoc>& sampleKeys() {
        "dynamic sampling then measures its error on V; methods with samples",
        "true"},
       {"lamp_model", "bool",
-       "true with factor_lights in scenes without objects (false with paper)",
+       "true with factor_lights in scenes without objects with a point or spot light inside the "
+       "medium's box (false with paper)",
        "true, false (true needs factor_lights)",
        "A also holds each point or spot light's transmittance through a homogeneous medium of "
        "the light's own extinction, saturating at optical depth 2, so V = S / A has no cusp at "
@@ -154,8 +156,13 @@ void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool 
   s.logSpace = p.boolean("log_space", false);
   // Default chosen by measurement (docs/fidelity.md §8): a clear win with lamps inside smoke
   // and fog, but it loses at the hard shadows of scene objects (window: 6.6 % -> 7.3 %), so it
-  // is on only in scenes without objects.
-  s.lampModel = p.boolean("lamp_model", s.factorLights && !s.paper && !scene.objects);
+  // is on only in scenes without objects, and only where a point or spot light lies inside the
+  // medium's box (elsewhere it changes nothing but the looser bound of Eq. 5's Taylor clamp).
+  const bool lampInside =
+      std::any_of(scene.lights.begin(), scene.lights.end(), [&](const Light& l) {
+        return l.type != Light::Type::Directional && scene.medium.bounds.contains(l.position);
+      });
+  s.lampModel = p.boolean("lamp_model", s.factorLights && !s.paper && !scene.objects && lampInside);
   if (s.paper && s.lampModel)
     p.fail("lamp_model", "is an extension; it cannot be true with render.paper = true");
   if (s.lampModel && !s.factorLights)

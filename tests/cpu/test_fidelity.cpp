@@ -106,8 +106,9 @@ TEST(LampModel, VTimesAIsTheSourceRadianceWithTheModel) {
       EXPECT_TRUE(v[c] >= 0.0f && v[c] <= std::exp(kLampDepth)) << i << " " << v[c];
     }
   }
-  // Measured 2026-11-26: 2.4e-7 (float rounding of the division and product); ×1.5.
-  EXPECT_LT(worst, 3.6e-7);
+  std::printf("lamp model: worst relative |V·A - S| %.3g\n", worst);
+  // Measured 2026-11-26: 3.3e-7 (float rounding of the division and product); ×1.5.
+  EXPECT_LT(worst, 5e-7);
 }
 
 TEST(LampModel, VIsSmoothAtALampInAHomogeneousMedium) {
@@ -130,7 +131,8 @@ TEST(LampModel, VIsSmoothAtALampInAHomogeneousMedium) {
     EXPECT_NEAR(off[i].S.x, std::exp(-q), 1e-5f) << i;
     // The radial slope: dV/dd = −σt·ρ·q(q + 2κ)/(q + κ)²·V with the model, −σt·ρ·V without.
     const float k = sigmaT * rho, vOn = std::exp(-q * q / (q + kLampDepth));
-    const float slopeOn = -k * q * (q + 2.0f * kLampDepth) / ((q + kLampDepth) * (q + kLampDepth)) * vOn;
+    const float slopeOn =
+        -k * q * (q + 2.0f * kLampDepth) / ((q + kLampDepth) * (q + kLampDepth)) * vOn;
     const float gOn = glm::dot(Vec3(on[i].dS[0].x, on[i].dS[1].x, on[i].dS[2].x), dir);
     EXPECT_NEAR(gOn, slopeOn, 2e-3f * k) << i;
   }
@@ -199,9 +201,11 @@ TEST(LightFactorization, ALampInsideTheMediumAgainstExact) {
   const ImageError paper = error({{"method", "gradient"}, {"sampler", sampler}, {"paper", true}});
   std::printf("lamp inside: factored %.4f (masked %.4f), paper %.4f (masked %.4f)\n",
               factored.relL2, factored.maskedRelL2, paper.relL2, paper.maskedRelL2);
-  // Measured 2026-11-23: factored 0.0171 (masked 0.0327); paper 0.619 (masked 0.616); ×1.5.
-  EXPECT_LT(factored.relL2, 0.026);
-  EXPECT_LT(factored.maskedRelL2, 0.049);
+  // Measured 2026-11-26 with lamp_model (on by default here, docs/fidelity.md §8): factored
+  // 0.0102 (masked 0.0109; without it, 2026-11-23: 0.0171, masked 0.0327); paper 0.619
+  // (masked 0.616); ×1.5.
+  EXPECT_LT(factored.relL2, 0.0153);
+  EXPECT_LT(factored.maskedRelL2, 0.0164);
   EXPECT_GT(paper.maskedRelL2, 10 * factored.maskedRelL2);
 }
 

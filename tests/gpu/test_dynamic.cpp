@@ -431,8 +431,10 @@ TEST(GpuLogSpace, AdaptiveMatchesCpu) {
 // texture at the light, the CPU from the density grid.
 TEST(GpuLampModel, AdaptiveMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  // Measured on llvmpipe 2026-11-26 (compute pipeline): see the commit; ×1.5.
-  EXPECT_LT(adaptiveExtensionGpuVsCpu("lamp_model", {8}), 5.0e-5);
+  // Measured on llvmpipe 2026-11-26 (compute pipeline): 3.17e-7 (240 samples, as many as the
+  // CPU's); ×1.5. Not yet measured on a hardware GPU, where the sibling extensions above differ
+  // by up to 5e-5 (hardware exp/fma): widen it from such a measurement.
+  EXPECT_LT(adaptiveExtensionGpuVsCpu("lamp_model", {8}), 4.8e-7);
 }
 
 }  // namespace
