@@ -231,12 +231,16 @@ class SurfaceRadiance {
 class LampModel {
  public:
   LampModel() = default;
-  LampModel(const Scene& scene, const DensityGrid& density) : on_(true) {
+  LampModel(const Scene& scene, const DensityGrid& density)
+      : LampModel(scene, density.bounds(), [&](const Vec3& p) { return density.sample(p); }) {}
+  /// With the density at a point of `box` from `densityAt` (DensityGrid::sample's value; the
+  /// GPU reads the eight voxels around each light instead of the whole volume).
+  template <class DensityAt>
+  LampModel(const Scene& scene, const Box& box, DensityAt densityAt) : on_(true) {
     k_.reserve(scene.lights.size());
     for (const Light& l : scene.lights) {
-      const bool inside =
-          l.type != Light::Type::Directional && density.bounds().contains(l.position);
-      k_.push_back(inside ? scene.medium.sigmaT * density.sample(l.position) : 0.0f);
+      const bool inside = l.type != Light::Type::Directional && box.contains(l.position);
+      k_.push_back(inside ? scene.medium.sigmaT * densityAt(l.position) : 0.0f);
     }
   }
   bool on() const { return on_; }
@@ -263,13 +267,16 @@ class LampModel {
 /// `b` (V's bounds with the model, taylorBounds()) tightened for one frame: hi = LampModel's
 /// vBound for the scene's lights and density, so the Taylor clamp is V <= 1 again where no lamp
 /// sits in the medium. Log bounds (lo < 0) get ln of it.
-inline TaylorBounds lampBounds(TaylorBounds b, const Scene& scene, const DensityGrid& density) {
-  const float v = LampModel(scene, density).vBound(glm::length(density.bounds().extent()));
+inline TaylorBounds lampBounds(TaylorBounds b, const LampModel& model, const Box& box) {
+  const float v = model.vBound(glm::length(box.extent()));
   if (b.lo < 0.0f)
     b.hi = std::min(b.hi, std::log(v));
   else
     b.hi = std::min(b.hi, v);
   return b;
+}
+inline TaylorBounds lampBounds(TaylorBounds b, const Scene& scene, const DensityGrid& density) {
+  return lampBounds(b, LampModel(scene, density), density.bounds());
 }
 
 /// The singular-light factorization (docs/fidelity.md): S(x, ω) = A(x, ω) ⊙ V(x, ω), per RGB
