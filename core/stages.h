@@ -144,6 +144,9 @@ struct TracerSteps {
   bool factorLights = false;
   /// With factorLights: ln V and ∇ ln V (V clamped below at kMinV).
   bool logSpace = false;
+  /// With factorLights: A and V include the near-lamp transmittance model (LampModel in
+  /// shading/transport.h, docs/fidelity.md §8).
+  bool lampModel = false;
   /// Whether the values are ln V: the one place where factorLights and logSpace combine.
   bool logValues() const { return factorLights && logSpace; }
 };
@@ -161,6 +164,11 @@ struct PipelineSettings {
   /// stores V = exp(u). ln V is minus a light-weighted optical depth, nearly linear where V =
   /// exp(−τ) is convex, so first-order estimates do not undershoot (docs/fidelity.md).
   bool logSpace = false;
+  /// With factorLights: A holds, per point or spot light inside the medium, the transmittance
+  /// of a homogeneous medium of the light's own extinction, saturating at optical depth
+  /// kLampDepth (LampModel, shading/transport.h), so V = S / A has no cusp at the lamp
+  /// (docs/fidelity.md §8). Default: on with factorLights unless `paper`.
+  bool lampModel = false;
   /// Occlusion-aware Eq. 4 weights: W_j(x)·exp(−σt·τ(x_j, x)), τ the optical depth between the
   /// sample and the voxel, so no sample contributes across a dense occluder.
   bool occlusionWeights = false;
@@ -186,13 +194,20 @@ struct PipelineSettings {
   /// froxel's, dynamic sampling's, ...), parsed by their StageDecl; empty for stages without.
   StageOwnSettings integratorKeys, refinerKeys;
 
-  TracerSteps tracerSteps() const { return {delta1, delta2, factorLights, logSpace}; }
+  TracerSteps tracerSteps() const {
+    return {delta1, delta2, factorLights, logSpace, factorLights && lampModel};
+  }
   /// The samples and the radiance volume hold ln V (TracerSteps::logValues()).
   bool logValues() const { return tracerSteps().logValues(); }
 };
 
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.
 inline constexpr float kMinV = 1e-9f;
+
+/// LampModel's saturation depth κ (shading/transport.h): each lamp's model transmittance
+/// falls from 1 at the lamp towards e^(−κ), so V = S / A lies in [0, e^κ] with it. Chosen by
+/// measurement among 0.25, 0.5, 1, 2, 4, 8 (docs/fidelity.md §8).
+inline constexpr float kLampDepth = 2.0f;
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted
 /// (PipelineSettings::boundedTaylor): [0, 1] for V, [ln kMinV, 0] for ln V, [0, FLT_MAX] for S.
@@ -204,8 +219,9 @@ struct TaylorBounds {
 /// The bounds for what `s`'s samples hold (nullopt when boundedTaylor is off).
 inline std::optional<TaylorBounds> taylorBounds(const PipelineSettings& s) {
   if (!s.boundedTaylor) return std::nullopt;
-  if (s.logValues()) return TaylorBounds{std::log(kMinV), 0.0f};
-  if (s.factorLights) return TaylorBounds{0.0f, 1.0f};
+  const bool lamp = s.tracerSteps().lampModel;
+  if (s.logValues()) return TaylorBounds{std::log(kMinV), lamp ? kLampDepth : 0.0f};
+  if (s.factorLights) return TaylorBounds{0.0f, lamp ? std::exp(kLampDepth) : 1.0f};
   return TaylorBounds{0.0f, std::numeric_limits<float>::max()};
 }
 

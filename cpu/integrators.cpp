@@ -79,13 +79,14 @@ class RayMarcher : public Integrator {
       : march_(s.march),
         gpuKeysGiven_(s.gpuKeysGiven),
         factored_(s.factorLights),
+        lampModel_(s.tracerSteps().lampModel),
         delta1_(s.delta1) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
     const HostFrame& f = static_cast<const HostFrame&>(frame);
     const RadianceGrid& radiance = *f.radiance;
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
-    const LightFactor A(scene);
+    const LightFactor A(scene, lampModel_ ? LampModel(scene, *f.density) : LampModel());
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       const FusedVolume volume(*f.density, radiance, march_.halfFloat);
       const FusedLookup lookup{volume,
@@ -114,6 +115,7 @@ class RayMarcher : public Integrator {
   MarchSettings march_;
   std::vector<std::string> gpuKeysGiven_;
   bool factored_;
+  bool lampModel_;  ///< A includes LampModel's m_l (PipelineSettings::lampModel)
   float delta1_;
 };
 

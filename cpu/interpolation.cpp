@@ -8,6 +8,7 @@
 
 #include "cpu/gather_rows.h"
 #include "cpu/per_voxel.h"
+#include "shading/transport.h"
 
 // The RBF baseline. Zhou, Ren, Lin, Bao, Guo, Shum, "Real-time smoke rendering using
 // compensated ray marching" (2007; the paper's [Zhou et al. 2007b]) represent the density as
@@ -565,15 +566,20 @@ RadianceGrid& newRadiance(Frame& frame, const Scene& scene, IVec3 dims) {
 
 class InterpolatingReconstruction : public Reconstruction {
  public:
+  /// lamp: the values are V with LampModel (PipelineSettings::lampModel); the bounds' hi is
+  /// tightened per frame (lampBounds).
   InterpolatingReconstruction(Interpolation k, ValueSpace space, bool occlusion,
-                              std::optional<TaylorBounds> bounds)
-      : kind_(k), space_(space), occlusion_(occlusion), bounds_(bounds) {}
+                              std::optional<TaylorBounds> bounds, bool lamp)
+      : kind_(k), space_(space), occlusion_(occlusion), bounds_(bounds), lamp_(lamp) {}
   bool needsGradients() const override { return kind_ == Interpolation::Gradient; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
                                   Progress*) override {
-    return interpolateSamples(kind_, frame.hostDensity(), samples, newRadiance(frame, scene, dims),
-                              nullptr, space_, occlusion_ ? scene.medium.sigmaT : 0.0f, bounds_);
+    const DensityGrid& density = frame.hostDensity();
+    std::optional<TaylorBounds> bounds = bounds_;
+    if (bounds && lamp_) bounds = lampBounds(*bounds, scene, density);
+    return interpolateSamples(kind_, density, samples, newRadiance(frame, scene, dims), nullptr,
+                              space_, occlusion_ ? scene.medium.sigmaT : 0.0f, bounds);
   }
 
  private:
@@ -581,6 +587,7 @@ class InterpolatingReconstruction : public Reconstruction {
   ValueSpace space_;
   bool occlusion_;
   std::optional<TaylorBounds> bounds_;
+  bool lamp_;
 };
 
 class PerVoxelReconstruction : public Reconstruction {
@@ -636,8 +643,8 @@ void registerReconstructions() {
   const auto interp = [](Interpolation k) {
     return [k](const PipelineSettings& s) {
       const ValueSpace space = s.logValues() ? ValueSpace::Log : ValueSpace::Linear;
-      return std::unique_ptr<Reconstruction>(
-          new InterpolatingReconstruction(k, space, s.occlusionWeights, taylorBounds(s)));
+      return std::unique_ptr<Reconstruction>(new InterpolatingReconstruction(
+          k, space, s.occlusionWeights, taylorBounds(s), s.tracerSteps().lampModel));
     };
   };
   const StageDecl fromSamples{.keys = {{interpolationKeys, parseInterpolation}}};

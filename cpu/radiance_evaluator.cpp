@@ -42,14 +42,14 @@ void evaluateWith(const Source& source, const Scene& scene, float delta2,
 void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
                      std::span<RadianceSample> samples, bool gradients) {
   if (steps.logValues()) {
-    const FactoredSourceRadiance v(scene, density, steps.delta1);
+    const FactoredSourceRadiance v(scene, density, steps.delta1, steps.lampModel);
     const auto logV = [&](const Vec3& x, const Vec3& toViewer) {
       return glm::log(glm::max(v(x, toViewer), Vec3(kMinV)));
     };
     evaluateWith(logV, scene, steps.delta2, samples, gradients);
   } else if (steps.factorLights)
-    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
-                 gradients);
+    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1, steps.lampModel), scene,
+                 steps.delta2, samples, gradients);
   else
     evaluateWith(SourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
                  gradients);

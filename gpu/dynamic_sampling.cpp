@@ -152,6 +152,10 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
   if (steps.factorLights) {
     defines.push_back("SL_FACTOR_LIGHTS");
     key += " V";
+    if (steps.lampModel) {
+      defines.push_back("SL_LAMP_MODEL");
+      key += " lamp";
+    }
   }
   if (steps.logValues()) {
     defines.push_back("SL_LOG_SPACE");

@@ -2,6 +2,7 @@
 
 #include "gpu/context.h"
 #include "gpu/stages.h"
+#include "shading/transport.h"
 
 namespace scatterlab::gpu {
 
@@ -13,6 +14,42 @@ void GpuFrame::buildDensity(const Scene& scene) {
   density = gpu::buildDensity(scene, &timer, &splatted_, pipeline_);
   host_.reset();
 }
+
+namespace {
+
+/// DensityGrid::sample(p) of an uploaded density volume, from the (up to) eight voxels around
+/// p read back alone (LampModel's k_l without reading the whole volume back), in the order and
+/// with the clamps of Grid3::sampleIndex.
+auto densityAtPoint(const Volume& v) {
+  return [&v](const Vec3& p) {
+    const Vec3 cell = v.bounds.extent() / Vec3(v.dims);
+    const Vec3 inv = Vec3(1.0f) / cell;
+    Vec3 u = (p - v.bounds.min) * inv - 0.5f;
+    const Vec3 maxIndex(v.dims - 1);
+    for (int a = 0; a < 3; ++a) {
+      u[a] = u[a] > 0.0f ? u[a] : 0.0f;
+      u[a] = u[a] < maxIndex[a] ? u[a] : maxIndex[a];
+    }
+    const IVec3 b = glm::min(IVec3(u), glm::max(v.dims - 2, IVec3(0)));
+    const Vec3 f = u - Vec3(b);
+    const IVec3 n = glm::min(v.dims - b, IVec3(2));  // 1 along a one-voxel axis
+    float c[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    glGetTextureSubImage(v.texture.id(), 0, b.x, b.y, b.z, n.x, n.y, n.z, GL_RED, GL_FLOAT,
+                         GLsizei(sizeof c), c);
+    const auto at = [&](int i, int j, int k) {
+      return c[(std::min(k, n.z - 1) * n.y + std::min(j, n.y - 1)) * n.x + std::min(i, n.x - 1)];
+    };
+    const float c00 = at(0, 0, 0) + (at(1, 0, 0) - at(0, 0, 0)) * f.x;
+    const float c10 = at(0, 1, 0) + (at(1, 1, 0) - at(0, 1, 0)) * f.x;
+    const float c01 = at(0, 0, 1) + (at(1, 0, 1) - at(0, 0, 1)) * f.x;
+    const float c11 = at(0, 1, 1) + (at(1, 1, 1) - at(0, 1, 1)) * f.x;
+    const float c0 = c00 + (c10 - c00) * f.y;
+    const float c1 = c01 + (c11 - c01) * f.y;
+    return c0 + (c1 - c0) * f.z;
+  };
+}
+
+}  // namespace
 
 const DensityGrid& GpuFrame::hostDensity() {
   if (!host_) {
@@ -92,6 +129,10 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   ReconstructionStats st;
   sigmaT_ = scene.medium.sigmaT;
+  if (settingsBounds_ && lamp_)
+    bounds_ =
+        lampBounds(*settingsBounds_, LampModel(scene, f.density.bounds, densityAtPoint(f.density)),
+                   f.density.bounds);
   f.radiance = Volume();  // the previous render's volume goes back to the recycler first
   f.radiance = reconstruct(f.density, samples, scene.medium.bounds, dims, &st, &f.timer);
   return st;

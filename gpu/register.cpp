@@ -75,18 +75,20 @@ void registerGpuStages() {
     return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(s.tracerSteps(), s.shadowMap));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(
-        new GradientSplatGpu(s.logValues(), s.occlusionWeights, taylorBounds(s), s.gpuPipeline));
+    return std::unique_ptr<Reconstruction>(new GradientSplatGpu(s.logValues(), s.occlusionWeights,
+                                                                taylorBounds(s), s.gpuPipeline,
+                                                                s.tracerSteps().lampModel));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1, s.shadowMap));
   });
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
     if (s.gpuPipeline == GpuPipeline::Compute)
-      return std::unique_ptr<Integrator>(
-          new ViewMarchGpu(s.march, s.factorLights, s.delta1, s.shadowMap));
+      return std::unique_ptr<Integrator>(new ViewMarchGpu(s.march, s.factorLights, s.delta1,
+                                                          s.shadowMap, s.tracerSteps().lampModel));
     return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps,
-                                                        s.factorLights, s.delta1, s.shadowMap));
+                                                        s.factorLights, s.delta1, s.shadowMap,
+                                                        s.tracerSteps().lampModel));
   });
   integrators().addVariant("light-space-march", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new LightSpaceMarchGpu(

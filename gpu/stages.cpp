@@ -11,6 +11,7 @@
 #include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
 #include "gpu/sphere_bins.h"
+#include "shading/transport.h"
 
 namespace scatterlab::gpu {
 
@@ -66,9 +67,11 @@ void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
   if (samples.empty()) return;
   std::string key = gradients ? "volume tracer (S, grad S)" : "volume tracer (S)";
   if (factor_) key += log_ ? " ln V" : " V";
+  if (lamp_) key += " lamp";
   std::vector<std::string> defines, files = {"common.glsl", "volume_tracer.comp.glsl"};
   if (gradients) defines.push_back("SL_GRADIENTS");
   if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
+  if (lamp_) defines.push_back("SL_LAMP_MODEL");
   if (log_) defines.push_back("SL_LOG_SPACE");
   addShadowVariant(shadows, key, files, defines);
   const Program& program = cachedProgram(key, [&] { return computeProgram(files, defines, key); });
@@ -104,6 +107,7 @@ ReconstructionStats GradientSplatGpu::reconstruct(const Scene& scene, const Dens
                                                   RadianceGrid& out) {
   const Volume d = uploadDensity(density);
   ReconstructionStats st;
+  if (settingsBounds_ && lamp_) bounds_ = lampBounds(*settingsBounds_, scene, density);
   const Volume v = reconstruct(d, samples, out.bounds(), out.dims(), &st, nullptr);
   out = readRadiance(v);
   return st;
@@ -383,12 +387,14 @@ namespace {
 
 /// The slice marcher's program: ray-step layers or the paper's view-plane slabs, with the light
 /// factor and the objects' shadow-map variant as asked.
-const Program& sliceMarchProgram(bool raySteps, bool factor, const ShadowMaps* shadows) {
+const Program& sliceMarchProgram(bool raySteps, bool factor, bool lamp, const ShadowMaps* shadows) {
   std::string key = raySteps ? "slice marcher (ray steps)" : "slice marcher";
   if (factor) key += " x A";
+  if (factor && lamp) key += " lamp";
   std::vector<std::string> defines, files = {"common.glsl", "slice_march.frag.glsl"};
   if (raySteps) defines.push_back("SL_RAY_STEPS");
   if (factor) defines.push_back("SL_FACTOR_LIGHTS");
+  if (factor && lamp) defines.push_back("SL_LAMP_MODEL");
   addShadowVariant(shadows, key, files, defines);
   return cachedProgram(
       key, [&] { return graphicsProgram({"fullscreen.vert.glsl"}, files, defines, key); });
@@ -484,7 +490,7 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
   context();
   const bool surfaces = objects && objects->geometry && objects->maps;
   const ShadowMaps* shadows = surfaces ? objects->maps.get() : nullptr;
-  const Program& program = sliceMarchProgram(raySteps_, factor_, shadows);
+  const Program& program = sliceMarchProgram(raySteps_, factor_, lamp_, shadows);
   const Camera& cam = scene.camera;
   const int w = cam.width, h = cam.height;
   const Texture target = Texture::make2D(GL_RGBA32F, w, h, "slice marcher image");

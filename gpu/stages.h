@@ -94,6 +94,7 @@ class VolumeTracerGpu : public RadianceEvaluator {
         delta2_(steps.delta2),
         factor_(steps.factorLights),
         log_(steps.logValues()),
+        lamp_(steps.lampModel),
         shadowMap_(shadowMap) {}
   void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override;
@@ -105,7 +106,7 @@ class VolumeTracerGpu : public RadianceEvaluator {
 
  private:
   float delta1_, delta2_;
-  bool factor_, log_;
+  bool factor_, log_, lamp_;
   ShadowMapSettings shadowMap_;
 };
 
@@ -122,10 +123,17 @@ class GradientSplatGpu : public Reconstruction {
   /// weights are multiplied by exp(−σt·τ) of the segment sample → voxel (set σt with
   /// setOcclusion, or through the frame override, which takes it from the scene).
   /// bounds: each sample's Taylor estimate is clamped to it (PipelineSettings::boundedTaylor).
+  /// lamp: the values are V with LampModel; the bounds' hi is tightened per frame
+  /// (lampBounds, shading/transport.h) as the CPU gather does.
   explicit GradientSplatGpu(bool logSpace = false, bool occlusion = false,
                             std::optional<TaylorBounds> bounds = std::nullopt,
-                            GpuPipeline pipeline = GpuPipeline::Compute)
-      : log_(logSpace), occlusion_(occlusion), bounds_(bounds), pipeline_(pipeline) {}
+                            GpuPipeline pipeline = GpuPipeline::Compute, bool lamp = false)
+      : log_(logSpace),
+        occlusion_(occlusion),
+        lamp_(lamp),
+        bounds_(bounds),
+        settingsBounds_(bounds),
+        pipeline_(pipeline) {}
   bool needsGradients() const override { return true; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
@@ -137,8 +145,9 @@ class GradientSplatGpu : public Reconstruction {
                      const Box& bounds, IVec3 dims, ReconstructionStats* stats, StageTimer* timer);
 
  private:
-  bool log_, occlusion_;
-  std::optional<TaylorBounds> bounds_;
+  bool log_, occlusion_, lamp_;
+  std::optional<TaylorBounds> bounds_;          ///< this frame's (tightened with lamp_)
+  std::optional<TaylorBounds> settingsBounds_;  ///< taylorBounds() of the settings
   GpuPipeline pipeline_;
   float sigmaT_ = 0.0f;  ///< for the occlusion weights
 };
@@ -185,11 +194,14 @@ class SliceMarcher : public Integrator {
  public:
   /// factorLights: the radiance volume holds V = S / A; A is multiplied back per layer.
   /// delta1: the step of T(p, l) for surfaces; shadowMap: their visibility lookups.
+  /// lampModel: A includes LampModel's m_l (PipelineSettings::lampModel, with factorLights).
   explicit SliceMarcher(MarchSettings settings, bool raySteps = false, bool factorLights = false,
-                        float delta1 = 0.0f, ShadowMapSettings shadowMap = {})
+                        float delta1 = 0.0f, ShadowMapSettings shadowMap = {},
+                        bool lampModel = false)
       : settings_(settings),
         raySteps_(raySteps),
         factor_(factorLights),
+        lamp_(lampModel),
         delta1_(delta1),
         shadowMap_(shadowMap) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
@@ -204,6 +216,7 @@ class SliceMarcher : public Integrator {
   MarchSettings settings_;
   bool raySteps_;
   bool factor_;
+  bool lamp_;
   float delta1_;
   ShadowMapSettings shadowMap_;
   int slices_ = 0;

@@ -38,6 +38,10 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   if (factor_) {
     defines.push_back("SL_FACTOR_LIGHTS");
     key += " x A";
+    if (lamp_) {
+      defines.push_back("SL_LAMP_MODEL");
+      key += " lamp";
+    }
   }
   if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims)) {
     defines.push_back("SL_FUSED");

@@ -17,8 +17,14 @@ class ViewMarchGpu : public Integrator {
  public:
   /// factorLights: the radiance volume holds V = S / A; A is multiplied back at each step.
   /// delta1: the step of the surfaces' T(p, l); shadowMap: their visibility lookups.
-  ViewMarchGpu(MarchSettings settings, bool factorLights, float delta1, ShadowMapSettings shadowMap)
-      : settings_(settings), factor_(factorLights), delta1_(delta1), shadowMap_(shadowMap) {}
+  /// lampModel: A includes LampModel's m_l (PipelineSettings::lampModel, with factorLights).
+  ViewMarchGpu(MarchSettings settings, bool factorLights, float delta1, ShadowMapSettings shadowMap,
+               bool lampModel = false)
+      : settings_(settings),
+        factor_(factorLights),
+        lamp_(lampModel),
+        delta1_(delta1),
+        shadowMap_(shadowMap) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override;
   /// gpu_pipeline "compute".
   void describe(RenderStats& stats) const override;
@@ -32,6 +38,7 @@ class ViewMarchGpu : public Integrator {
  private:
   MarchSettings settings_;
   bool factor_;
+  bool lamp_;
   float delta1_;
   ShadowMapSettings shadowMap_;
 };

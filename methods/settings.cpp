@@ -1,5 +1,6 @@
 #include "methods/settings.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -126,6 +127,14 @@ const std::vector<KeyDoc>& sampleKeys() {
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "dynamic sampling then measures its error on V; methods with samples",
        "true"},
+      {"lamp_model", "bool",
+       "true with factor_lights in scenes without objects with a point or spot light inside the "
+       "medium's box (false with paper)",
+       "true, false (true needs factor_lights)",
+       "A also holds each point or spot light's transmittance through a homogeneous medium of "
+       "the light's own extinction, saturating at optical depth 2, so V = S / A has no cusp at "
+       "lamps inside the medium; methods with samples",
+       "false"},
       {"sampler", "object", "see the table below", "",
        "where the samples are placed (render.sampler); methods with samples", "", samplerKeys},
       {"evaluator", "string", "volume-tracer", "a registered radiance evaluator",
@@ -136,7 +145,7 @@ const std::vector<KeyDoc>& sampleKeys() {
 
 /// paper, factor_lights, log_space (sampler and evaluator: makePipelineMethod). `extended`:
 /// the method's extensions are on by default.
-void parseSampleValues(Params& p, PipelineSettings& s, bool extended) {
+void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool extended) {
   s.paper = p.boolean("paper", false);
   s.factorLights = p.boolean("factor_lights", extended && !s.paper);
   if (s.paper && s.factorLights)
@@ -145,6 +154,19 @@ void parseSampleValues(Params& p, PipelineSettings& s, bool extended) {
   // smoke (chimney, smoke1) and loses with lamps inside fog and, badly, at the hard shadows
   // of scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV.
   s.logSpace = p.boolean("log_space", false);
+  // Default chosen by measurement (docs/fidelity.md §8): a clear win with lamps inside smoke
+  // and fog, but it loses at the hard shadows of scene objects (window: 6.6 % -> 7.3 %), so it
+  // is on only in scenes without objects, and only where a point or spot light lies inside the
+  // medium's box (elsewhere it changes nothing but the looser bound of Eq. 5's Taylor clamp).
+  const bool lampInside =
+      std::any_of(scene.lights.begin(), scene.lights.end(), [&](const Light& l) {
+        return l.type != Light::Type::Directional && scene.medium.bounds.contains(l.position);
+      });
+  s.lampModel = p.boolean("lamp_model", s.factorLights && !s.paper && !scene.objects && lampInside);
+  if (s.paper && s.lampModel)
+    p.fail("lamp_model", "is an extension; it cannot be true with render.paper = true");
+  if (s.lampModel && !s.factorLights)
+    p.fail("lamp_model", "is part of factor_lights' A; it needs factor_lights = true");
   if (s.logSpace && !s.factorLights)
     p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
 }
@@ -285,7 +307,7 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
   const StageDecl& integrator = integratorDecl(d);
   if (integrator.viewMarch) parseViewMarch(p, scene, s);
   parseCommon(p, scene, s);
-  if (d.sampler) parseSampleValues(p, s, d.extended);
+  if (d.sampler) parseSampleValues(p, scene, s, d.extended);
   if (d.radianceVolume()) parseRadianceVolume(p, scene, s);
   for (const StageDecl* st : stageDecls(d))
     for (const KeyGroup& g : st->keys) g.parse(p, scene, s);

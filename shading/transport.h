@@ -11,6 +11,7 @@
 #include "core/max_density_grid.h"
 #include "core/phase.h"
 #include "core/scene.h"
+#include "core/stages.h"
 
 namespace scatterlab {
 
@@ -221,6 +222,63 @@ class SurfaceRadiance {
   const SceneObjects* objects_;
 };
 
+/// The near-lamp transmittance model (docs/fidelity.md §8): for point or spot light l inside the
+/// medium, m_l(x) = exp(−κ·q / (q + κ)), q = k_l·‖x − s_l‖, k_l = σt·D(s_l) the extinction at
+/// the light, κ = kLampDepth. Next to the lamp m_l is the transmittance e^(−k_l·d) of a
+/// homogeneous medium (the cusp of T_l at the lamp), far away the constant e^(−κ); smooth in
+/// between. Directional lights and lights outside the medium's box (or where D = 0): m = 1.
+/// Default-constructed: off (every m = 1, nothing computed).
+class LampModel {
+ public:
+  LampModel() = default;
+  LampModel(const Scene& scene, const DensityGrid& density)
+      : LampModel(scene, density.bounds(), [&](const Vec3& p) { return density.sample(p); }) {}
+  /// With the density at a point of `box` from `densityAt` (DensityGrid::sample's value; the
+  /// GPU reads the eight voxels around each light instead of the whole volume).
+  template <class DensityAt>
+  LampModel(const Scene& scene, const Box& box, DensityAt densityAt) : on_(true) {
+    k_.reserve(scene.lights.size());
+    for (const Light& l : scene.lights) {
+      const bool inside = l.type != Light::Type::Directional && box.contains(l.position);
+      k_.push_back(inside ? scene.medium.sigmaT * densityAt(l.position) : 0.0f);
+    }
+  }
+  bool on() const { return on_; }
+  /// m_l at `distance` from light i.
+  float operator()(std::size_t i, float distance) const {
+    const float k = k_[i];
+    if (!(k > 0.0f)) return 1.0f;
+    const float q = k * distance;
+    return std::exp(-kLampDepth * q / (q + kLampDepth));
+  }
+  /// An upper bound of V = S / A with the model: 1 / min m_l over the box of diagonal `diag`
+  /// (V = Σ w·T / Σ w·m <= max_l T_l / m_l <= max_l 1 / m_l(diag)); 1 without lamps inside.
+  float vBound(float diag) const {
+    float m = 1.0f;
+    for (std::size_t i = 0; i < k_.size(); ++i) m = std::min(m, (*this)(i, diag));
+    return 1.0f / m;
+  }
+
+ private:
+  bool on_ = false;
+  std::vector<float> k_;  ///< k_l = σt·D(s_l), 0 where the model is 1
+};
+
+/// `b` (V's bounds with the model, taylorBounds()) tightened for one frame: hi = LampModel's
+/// vBound for the scene's lights and density, so the Taylor clamp is V <= 1 again where no lamp
+/// sits in the medium. Log bounds (lo < 0) get ln of it.
+inline TaylorBounds lampBounds(TaylorBounds b, const LampModel& model, const Box& box) {
+  const float v = model.vBound(glm::length(box.extent()));
+  if (b.lo < 0.0f)
+    b.hi = std::min(b.hi, std::log(v));
+  else
+    b.hi = std::min(b.hi, v);
+  return b;
+}
+inline TaylorBounds lampBounds(TaylorBounds b, const Scene& scene, const DensityGrid& density) {
+  return lampBounds(b, LampModel(scene, density), density.bounds());
+}
+
 /// The singular-light factorization (docs/fidelity.md): S(x, ω) = A(x, ω) ⊙ V(x, ω), per RGB
 /// channel, with A = Σ_l f(ω_l → ω)·E⁰_l(x) the analytic, unshadowed source radiance (E⁰ =
 /// I·cone/d² for point and spot lights, the sun's irradiance for directional ones) and
@@ -230,12 +288,22 @@ class SurfaceRadiance {
 /// back at each step.
 class LightFactor {
  public:
-  /// References must outlive this object.
-  explicit LightFactor(const Scene& scene) : lights_(scene.lights), phase_(scene.medium.phase) {}
+  /// References must outlive this object. `lamp` (on: PipelineSettings::lampModel): each
+  /// light's term times its near-lamp model m_l.
+  explicit LightFactor(const Scene& scene, LampModel lamp = {})
+      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)) {}
 
   /// A(x, toViewer): one analytic evaluation per light (no tracing).
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
     Vec3 a(0.0f);
+    if (lamp_.on()) {
+      for (std::size_t i = 0; i < lights_.size(); ++i) {
+        Light::Incident inc;
+        if (!lights_[i].incident(x, inc)) continue;
+        a += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * lamp_(i, inc.distance));
+      }
+      return a;
+    }
     for (const Light& l : lights_) {
       Light::Incident inc;
       if (!l.incident(x, inc)) continue;
@@ -247,6 +315,7 @@ class LightFactor {
  private:
   const std::vector<Light>& lights_;
   Phase phase_;
+  LampModel lamp_;
 };
 
 /// V(x, ω) = S / A of LightFactor, traced like SourceRadiance. Where A is zero in a channel
@@ -255,14 +324,18 @@ class LightFactor {
 /// samples outside a cone do not drag the interpolated V down at its edge.
 class FactoredSourceRadiance {
  public:
-  /// `delta1`: volume tracing step (world units). References must outlive this object.
-  FactoredSourceRadiance(const Scene& scene, const DensityGrid& density, float delta1)
+  /// `delta1`: volume tracing step (world units). `lampModel`: A includes LampModel's m_l,
+  /// so V = S / A divides it out (PipelineSettings::lampModel). References must outlive this
+  /// object.
+  FactoredSourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
+                         bool lampModel = false)
       : lights_(scene.lights),
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
         density_(density),
         delta1_(delta1),
-        objects_(scene.objects.get()) {
+        objects_(scene.objects.get()),
+        lamp_(lampModel ? LampModel(scene, density) : LampModel()) {
     for (const Light& l : lights_) lit_ = glm::max(lit_, l.intensity);
   }
 
@@ -277,7 +350,7 @@ class FactoredSourceRadiance {
         continue;
       }
       s += t.w * (t.cone * transmittance(x, t));
-      a += t.w * t.cone;
+      a += t.w * (t.cone * t.m);
     }
     Vec3 v(0.0f), free(-1.0f);
     for (int c = 0; c < 3; ++c) {
@@ -298,6 +371,7 @@ class FactoredSourceRadiance {
     Vec3 w, end, toLight;
     float cone = 1.0f;
     float distance = 0.0f;  ///< to the light (infinity: directional), for visibility
+    float m = 1.0f;         ///< LampModel's m_l, in A only (1 without the model)
   };
   bool term(std::size_t i, const Vec3& x, const Vec3& toViewer, Term& t) const {
     const Light& l = lights_[i];
@@ -316,6 +390,7 @@ class FactoredSourceRadiance {
       t.end = l.position;
     }
     t.w = e0 * phase_.eval(-g.toLight, toViewer);
+    t.m = lamp_.on() ? lamp_(i, g.distance) : 1.0f;
     return true;
   }
   /// V_l·T towards the light of `t` (objects block it entirely).
@@ -330,7 +405,7 @@ class FactoredSourceRadiance {
       Term t;
       if (!term(i, x, toViewer, t)) continue;
       s += t.w * transmittance(x, t);
-      a += t.w;
+      a += t.w * t.m;
     }
     Vec3 v(0.0f);
     for (int c = 0; c < 3; ++c) v[c] = a[c] > 0.0f ? s[c] / a[c] : 0.0f;
@@ -343,6 +418,7 @@ class FactoredSourceRadiance {
   const DensityGrid& density_;
   float delta1_;
   const SceneObjects* objects_;
+  LampModel lamp_;
   Vec3 lit_{0.0f};  ///< channels some light emits in
 };
 

@@ -173,6 +173,22 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
   return s;
 }
 
+#ifdef SL_LAMP_MODEL
+const float kLampDepth = 2.0;  // core/stages.h
+// LampModel (shading/transport.h): m_l = exp(−κ·q / (q + κ)), q = k_l·d, k_l = σt·D(s_l) for a
+// point or spot light inside the medium's box; 1 otherwise.
+float lampModel(int li, vec3 x) {
+  GpuLight l = lights[li];
+  if (int(l.positionType.w) == 2) return 1.0;
+  vec3 p = l.positionType.xyz;
+  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 1.0;
+  float k = uSigmaT * densityAtIndex(p * uDensityScale + uDensityOffset);
+  if (!(k > 0.0)) return 1.0;
+  float q = k * length(p - x);
+  return exp(-kLampDepth * q / (q + kLampDepth));
+}
+#endif
+
 // One light's analytic weight, the twin of FactoredSourceRadiance::term (shading/transport.h):
 // w = E0·f (cone not applied), the cone factor, and the far end of the segment to trace.
 bool lightTerm(int li, vec3 x, vec3 toViewer, out vec3 w, out float cone, out vec3 segEnd) {
@@ -210,7 +226,11 @@ vec3 lightFactor(vec3 x, vec3 toViewer) {
   for (int li = 0; li < uLightCount; ++li) {
     vec3 w, segEnd;
     float cone;
+#ifdef SL_LAMP_MODEL
+    if (lightTerm(li, x, toViewer, w, cone, segEnd)) a += w * (cone * lampModel(li, x));
+#else
     if (lightTerm(li, x, toViewer, w, cone, segEnd)) a += w * cone;
+#endif
   }
   return a;
 }
@@ -230,7 +250,11 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
       continue;
     }
     s += w * (cone * lightTransmittance(li, x, segEnd));
+#ifdef SL_LAMP_MODEL
+    a += w * (cone * lampModel(li, x));
+#else
     a += w * cone;
+#endif
   }
   vec3 v = vec3(0.0);
   bool needFree = false;
@@ -245,7 +269,11 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
       float cone;
       if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
       sf += w * lightTransmittance(li, x, segEnd);
+#ifdef SL_LAMP_MODEL
+      af += w * lampModel(li, x);
+#else
       af += w;
+#endif
     }
     for (int c = 0; c < 3; ++c)
       if (!(a[c] > 0.0) && outside && lit[c] > 0.0) v[c] = af[c] > 0.0 ? sf[c] / af[c] : 0.0;
