@@ -215,18 +215,33 @@ TEST(GpuDynamicSampling, ManyLightsFortyProbesErrorsAsOnCpu) {
   EXPECT_LT(worst, 1.4e-2);
 }
 
+/// spotScene() with its density on the host and the GPU, and the CPU volume tracer with steps of
+/// kStep: what the sample-for-sample comparisons below start from.
+struct SpotSampling {
+  static constexpr float kStep = 1.0f / 24;
+  Scene scene = spotScene();
+  DensityGrid density{scene.medium.bounds, scene.medium.resolution};
+  std::unique_ptr<RadianceEvaluator> cpuEval;
+  gpu::Volume gpuDensity;
+  SpotSampling() {
+    scene.medium.density->build(density);
+    PipelineSettings ps;
+    ps.delta1 = kStep;
+    ps.delta2 = kStep;
+    cpuEval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
+    gpuDensity = gpu::uploadDensity(density);
+  }
+};
+
 /// The extensions (issue 11): relative ε, 40 probes and a sample budget give the CPU's samples.
 TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  const Scene scene = spotScene();
-  DensityGrid density(scene.medium.bounds, scene.medium.resolution);
-  scene.medium.density->build(density);
-  const float delta1 = 1.0f / 24, delta2 = 1.0f / 24;
-  PipelineSettings ps;
-  ps.delta1 = delta1;
-  ps.delta2 = delta2;
-  auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
-  const gpu::Volume d = gpu::uploadDensity(density);
+  const SpotSampling f;
+  const Scene& scene = f.scene;
+  const DensityGrid& density = f.density;
+  const float delta1 = SpotSampling::kStep, delta2 = SpotSampling::kStep;
+  RadianceEvaluator* cpuEval = f.cpuEval.get();
+  const gpu::Volume& d = f.gpuDensity;
   DynamicSamplingSettings ds;
   ds.levels = {8, 12};
   ds.delta1 = delta1;
@@ -305,15 +320,12 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
 /// budgetedSplit, the top-up's voxel children evaluated without ∇S).
 TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  const Scene scene = spotScene();
-  DensityGrid density(scene.medium.bounds, scene.medium.resolution);
-  scene.medium.density->build(density);
-  const float delta1 = 1.0f / 24, delta2 = 1.0f / 24;
-  PipelineSettings ps;
-  ps.delta1 = delta1;
-  ps.delta2 = delta2;
-  auto cpuEval = radianceEvaluators().get("volume-tracer", "evaluator").on[int(Backend::Cpu)](ps);
-  const gpu::Volume d = gpu::uploadDensity(density);
+  const SpotSampling f;
+  const Scene& scene = f.scene;
+  const DensityGrid& density = f.density;
+  const float delta1 = SpotSampling::kStep, delta2 = SpotSampling::kStep;
+  RadianceEvaluator* cpuEval = f.cpuEval.get();
+  const gpu::Volume& d = f.gpuDensity;
   DynamicSamplingSettings ds;
   ds.levels = {6, 12};
   ds.delta1 = delta1;
