@@ -101,6 +101,15 @@ float densityAtIndex(vec3 u) {
 #endif
 }
 
+// DensityGrid::sample: the density at a world point, 0 outside the (closed) box, in the CPU's
+// operations (the dynamic-sampling passes compare with the CPU sample for sample).
+uniform vec3 uDensityInvCell;  // u = (p − min)·invCell − 0.5
+float densityAtPoint(vec3 p) {
+  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 0.0;
+  precise vec3 u = (p - uBoxMin) * uDensityInvCell - 0.5;
+  return densityAtIndex(u);
+}
+
 // opticalDepth(DensityGrid, a, b, step): midpoint rule in index space.
 float opticalDepth(vec3 a, vec3 b, float stepLen) {
   vec3 d = b - a;

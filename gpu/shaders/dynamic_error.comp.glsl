@@ -50,14 +50,6 @@ uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU (the six axis probe
 uniform int uFinal;             // 1: finest level, S and ∇S only; 2: S only (∇S = 0)
 uniform uint uProbeDispatchSlot;  // counts[slot + 3·level ...]: pass 2's (x, groups, 1)
 uniform int uProbeGroups;       // ceil(uProbes / kProbeGroup)
-uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
-
-// DensityGrid::sample: 0 outside the (closed) box.
-float densityAt(vec3 p) {
-  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 0.0;
-  precise vec3 u = (p - uBoxMin) * uDensityInvCell - 0.5;
-  return densityAtIndex(u);
-}
 
 float viewTransmittance(vec3 x) { return exp(-uSigmaT * opticalDepth(x, uEye, uTauDelta1)); }
 
@@ -113,7 +105,7 @@ void main() {
 #else
     precise vec3 a = abs(S);
 #endif
-    precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAt(x) * tau;
+    precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAtPoint(x) * tau;
     errors[count + j] = c;
   }
 }

@@ -14,17 +14,9 @@ uniform uint uLevel;            // k: the level's sample count is counts[k]
 uniform int uProbes;            // 6, 14, 26 or 40
 uniform int uProbeGroup;        // kProbeGroup: probes per group
 uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
-uniform vec3 uDensityInvCell;   // DensityGrid::sample: u = (p − min)·invCell − 0.5
 #ifdef SL_BOUNDED
 uniform vec2 uTaylorBounds;     // TaylorBounds (lo, hi): the Taylor estimate is clamped to it
 #endif
-
-// DensityGrid::sample: 0 outside the (closed) box.
-float densityAt(vec3 p) {
-  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 0.0;
-  precise vec3 u = (p - uBoxMin) * uDensityInvCell - 0.5;
-  return densityAtIndex(u);
-}
 
 void main() {
   uint j = gl_GlobalInvocationID.x;
@@ -40,7 +32,7 @@ void main() {
   for (int i = g * uProbeGroup; i < end; ++i) {
     precise vec3 p = x + R * uProbeDirs[i];
     vec3 Sp = sourceTowardsEye(p);
-    float D = densityAt(p);
+    float D = densityAtPoint(p);
     precise vec3 d = p - x;
     precise vec3 taylor = S + d.x * dS0 + d.y * dS1 + d.z * dS2;
 #ifdef SL_BOUNDED
