@@ -372,15 +372,28 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
       continue;
     }
 
-    // Probes: S traced at x_j ± R_j along X, Y, Z (one batched evaluation).
+    // Probes: S traced at x_j + R_j·d_i (one batched evaluation). A probe where the density is
+    // zero adds nothing to Eq. 5 (its term is weighted by D), so only the others are traced.
     const int np = settings.probes;
-    std::vector<RadianceSample> probes(current.size() * std::size_t(np));
+    const std::size_t nProbes = current.size() * std::size_t(np);
+    std::vector<Vec3> probeAt(nProbes);
+    std::vector<float> probeD(nProbes);
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
       Vec3 p[kMaxProbes];
       probePoints(current[j], p, np);
-      for (int i = 0; i < np; ++i) probes[np * j + i].position = p[i];
+      for (int i = 0; i < np; ++i) {
+        probeAt[np * j + i] = p[i];
+        probeD[np * j + i] = density.sample(p[i]);
+      }
     });
+    std::vector<std::uint32_t> traced;  // indices of the probes with D > 0, in order
+    for (std::size_t k = 0; k < nProbes; ++k)
+      if (probeD[k] != 0.0f) traced.push_back(std::uint32_t(k));
+    std::vector<RadianceSample> probes(traced.size());
+    for (std::size_t t = 0; t < traced.size(); ++t) probes[t].position = probeAt[traced[t]];
     evaluator.evaluate(frame, scene, probes, /*gradients=*/false);
+    std::vector<Vec3> probeS(nProbes, Vec3(0.0f));
+    for (std::size_t t = 0; t < traced.size(); ++t) probeS[traced[t]] = probes[t].S;
 
     std::vector<float> errors(current.size()), contributions;
     if (level == 0 && settings.relative) contributions.resize(current.size());
@@ -388,8 +401,8 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
       Vec3 S[kMaxProbes];
       float D[kMaxProbes];
       for (int i = 0; i < np; ++i) {
-        S[i] = probes[np * j + i].S;
-        D[i] = density.sample(probes[np * j + i].position);
+        S[i] = probeS[np * j + i];
+        D[i] = probeD[np * j + i];
       }
       float tau = settings.perSampleTau && level > 0
                       ? viewTransmittance(scene, density, current[j].position, settings.delta1)
