@@ -31,8 +31,9 @@ void main() {
   int end = min(uProbes, (g + 1) * uProbeGroup);
   for (int i = g * uProbeGroup; i < end; ++i) {
     precise vec3 p = x + R * uProbeDirs[i];
-    vec3 Sp = sourceTowardsEye(p);
     float D = densityAtPoint(p);
+    if (D == 0.0) continue;  // its term is 0: not traced (as on the CPU)
+    vec3 Sp = sourceTowardsEye(p);
     precise vec3 d = p - x;
     precise vec3 taylor = S + d.x * dS0 + d.y * dS1 + d.z * dS2;
 #ifdef SL_BOUNDED
