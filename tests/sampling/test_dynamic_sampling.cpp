@@ -821,6 +821,13 @@ TEST(DynamicSampling, ErrorWeightKeyParsed) {
   EXPECT_FALSE(parse({{"error_weight", "transmittance"}}, false, true).space.weightA);
   EXPECT_THROW(parse({{"error_weight", "transmittance"}}, false, false), ConfigError);
   EXPECT_THROW(parse({{"error_weight", "light"}}, false, true), ConfigError);
+  // With directional lights only A varies by the phase alone: unweighted by default.
+  Scene sun = scene;
+  sun.lights[0].type = Light::Type::Directional;
+  Params ps0(Json::object(), "render");
+  EXPECT_FALSE(parseDynamicSampling(ps0, sun, false, true).space.weightA);
+  Params ps1(Json{{"error_weight", "radiance"}}, "render");
+  EXPECT_TRUE(parseDynamicSampling(ps1, sun, false, true).space.weightA);
   // The pipeline keeps it with factor_lights and gives it the lamp model of the samples' A.
   PipelineSettings ps;
   ps.factorLights = true;
