@@ -165,6 +165,11 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
     defines.push_back("SL_BOUNDED");
     key += " bounded";
   }
+  if (settings.space.weightA && steps.factorLights) {
+    // A's model is the samples' (steps.lampModel): ErrorSpace::lampModel is the same flag.
+    defines.push_back("SL_WEIGHT_A");
+    key += " weighted";
+  }
   std::vector<std::string> files = {"common.glsl", pass == ErrorPass::Probes
                                                        ? "dynamic_probes.comp.glsl"
                                                        : "dynamic_error.comp.glsl"};

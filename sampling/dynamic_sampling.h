@@ -108,6 +108,15 @@ struct DynamicSamplingSettings {
     /// The samples hold ln V: E_j and the contribution are measured on V = exp(·), what the
     /// image sees, not on ln V (whose errors are largest where V is too dark to matter).
     bool log = false;
+    /// The samples hold V = S / A (factor_lights): E_j and the contribution are measured on
+    /// S = A ⊙ V, what the image sees (key `error_weight` "radiance", issue 24, docs/fidelity.md
+    /// §12): each probe's |Ṽ − V| (after exp in log space) is multiplied per RGB channel by A at
+    /// the probe, the contribution's V by A at the sample, A = LightFactor towards the camera.
+    /// Off: measured on V itself ("transmittance"; what the error was before).
+    bool weightA = false;
+    /// With weightA: A includes the near-lamp model (PipelineSettings::lampModel), as the
+    /// march's A does.
+    bool lampModel = false;
   } space;
 };
 
@@ -221,9 +230,12 @@ struct DynamicSamplingResult {
 };
 
 /// Contribution of one sample to the image, in the units of E_j (Eq. 5 with the error replaced
-/// by S itself): R_j³ · mean_RGB |S_j| · D(x_j) · τ_j.
+/// by S itself): R_j³ · mean_RGB |S_j| · D(x_j) · τ_j. `a` (ErrorSpace::weightA; null: none):
+/// A at the sample, multiplying |S_j| (exp(S_j) in log space) per channel: the S = A ⊙ V the
+/// image sees.
 float sampleContribution(const RadianceSample& s, float density, float tau,
-                         const DynamicSamplingSettings::ErrorSpace& space = {});
+                         const DynamicSamplingSettings::ErrorSpace& space = {},
+                         const Vec3* a = nullptr);
 
 /// The error scale of a relative ε: the mean sampleContribution() of the initial samples,
 /// summed in index order in double (so the CPU and GPU variants agree to float rounding). With
@@ -247,9 +259,19 @@ const Vec3* probeOffsets();
 /// probePoints), the density there, and τ. count = 6 is the paper's Eq. 5. The mean is over
 /// the probes (Eq. 5's Σ/n), summed in groups of kProbeGroup. `space`: the Taylor estimate is
 /// clamped to its bounds, and in log space both sides are exponentiated before they are compared
-/// (extensions; the default is the paper's Eq. 5).
+/// (extensions; the default is the paper's Eq. 5). `probeA` (ErrorSpace::weightA; null: none):
+/// A at each probe (lightFactorTowardsEye()), multiplying the probe's |L̃ − L| per RGB channel
+/// before the channel mean: the error of S = A ⊙ V when the samples hold V.
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
-                        int count = 6, const DynamicSamplingSettings::ErrorSpace& space = {});
+                        int count = 6, const DynamicSamplingSettings::ErrorSpace& space = {},
+                        const Vec3* probeA = nullptr);
+
+class LightFactor;
+
+/// A(p, ω) of `A` with ω the unit direction from p to the camera at `eye` ((0, 0, 1) at the eye
+/// itself): the direction the volume tracer evaluates V in (cpu/radiance_evaluator.cpp), so A ⊙
+/// V is the S of the image there. The weights of ErrorSpace::weightA.
+Vec3 lightFactorTowardsEye(const LightFactor& A, const Vec3& p, const Vec3& eye);
 
 /// The probe points x_j + R_j·d of a sample, d = probeOffsets()[0 … count): +X −X +Y −Y +Z −Z
 /// (the paper's six), then the 8 cube diagonals, the 12 edge diagonals, and the inner shell at
@@ -382,8 +404,10 @@ void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& 
 /// epsilon is relative (a fraction of relativeErrorScale(), default 0.05) and the defaults are
 /// the measured best (docs/dynamic-sampling.md). delta1 is not read here (the pipeline's Δ1 is
 /// used, withPipeline(); this sets it to one voxel edge for callers without a pipeline).
-DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene,
-                                             bool paper = false);
+/// `factorLights` (PipelineSettings::factorLights): the samples hold V = S / A, and error_weight
+/// "radiance" (default) weights E_j by A (ErrorSpace::weightA).
+DynamicSamplingSettings parseDynamicSampling(Params& render, const Scene& scene, bool paper = false,
+                                             bool factorLights = false);
 
 /// The key table of parseDynamicSampling (render keys of method `adaptive`).
 const std::vector<KeyDoc>& dynamicSamplingKeys();

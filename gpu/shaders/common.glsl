@@ -294,10 +294,14 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
 // convention): S; V = S / A with SL_FACTOR_LIGHTS; ln V (V clamped below at 1e-9, kMinV of
 // cpu/radiance_evaluator.h) with SL_LOG_SPACE too.
 uniform vec3 uEye;
-vec3 sourceTowardsEye(vec3 p) {
+// The unit direction from p to the camera, (0, 0, 1) at the camera itself.
+vec3 towardsEye(vec3 p) {
   vec3 v = uEye - p;
   float len = length(v);
-  vec3 toViewer = len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0);
+  return len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0);
+}
+vec3 sourceTowardsEye(vec3 p) {
+  vec3 toViewer = towardsEye(p);
 #if defined(SL_FACTOR_LIGHTS) && defined(SL_LOG_SPACE)
   return log(max(factoredSource(p, toViewer), vec3(1e-9)));
 #elif defined(SL_FACTOR_LIGHTS)
@@ -306,3 +310,7 @@ vec3 sourceTowardsEye(vec3 p) {
   return sourceRadiance(p, toViewer);
 #endif
 }
+
+// lightFactorTowardsEye (sampling/dynamic_sampling.cpp): A at p towards the camera, the weight of
+// dynamic sampling's error of S = A ⊙ V (SL_WEIGHT_A, ErrorSpace::weightA).
+vec3 lightFactorTowardsEye(vec3 p) { return lightFactor(p, towardsEye(p)); }

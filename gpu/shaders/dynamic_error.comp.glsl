@@ -4,10 +4,11 @@
 // after 65535 iterations in all, which 40 probes × 16 lights reached):
 // 1. this file without SL_COMBINE, one invocation per sample of the current level: S and ∇S (as
 //    volume_tracer.comp.glsl); unless final, τ to the viewer (kept in errors[j] until pass 3) and
-//    on level 0 the sample's contribution R³·mean|S|·D·τ (the scale of a relative ε), and the
+//    on level 0 the sample's contribution R³·mean|S|·D·τ (the scale of a relative ε; with
+//    SL_WEIGHT_A |S| times A at the sample), and the
 //    indirect dispatch of pass 2 (x: the level's groups, y: its probe groups);
 // 2. dynamic_probes.comp.glsl, one invocation per sample and group of kProbeGroup probes: the
-//    group's sum of mean_RGB|L̃ − L|·D;
+//    group's sum of mean_RGB|L̃ − L|·D (with SL_WEIGHT_A mean_RGB(A ⊙ |L̃ − L|)·D, A at the probe);
 // 3. this file with SL_COMBINE, one invocation per sample: E_j = R³·(Σ of the groups' sums in
 //    group order)/n·τ, Eq. 5.
 // The level's sample count is read from the GPU (counts[uLevel], written by the count pass of
@@ -104,6 +105,9 @@ void main() {
     precise vec3 a = exp(S);
 #else
     precise vec3 a = abs(S);
+#endif
+#ifdef SL_WEIGHT_A
+    a *= lightFactorTowardsEye(x);  // S = A ⊙ V (ErrorSpace::weightA)
 #endif
     precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAtPoint(x) * tau;
     errors[count + j] = c;

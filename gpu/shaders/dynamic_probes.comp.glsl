@@ -2,7 +2,8 @@
 // sample j of the current level (x) and group g of kProbeGroup probes (the workgroup's y): the
 // sum over the group's probes x_i = x_j + R_j·d_i of mean_RGB|L̃(x_i) − L(x_i)|·D(x_i), L̃ the
 // sample's Taylor estimate (S and ∇S from pass 1), L the traced S, D the density; in probe
-// order, as localShadingError (sampling/dynamic_sampling.cpp) sums each group.
+// order, as localShadingError (sampling/dynamic_sampling.cpp) sums each group. With SL_WEIGHT_A
+// each probe's |L̃ − L| is multiplied per channel by A at the probe (lightFactorTowardsEye).
 layout(local_size_x = 64) in;
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
@@ -44,6 +45,9 @@ void main() {
     precise vec3 diff = abs(exp(taylor) - exp(Sp));
 #else
     precise vec3 diff = abs(taylor - Sp);
+#endif
+#ifdef SL_WEIGHT_A
+    diff *= lightFactorTowardsEye(p);  // the error of S = A ⊙ V (ErrorSpace::weightA)
 #endif
     sum += (diff.x + diff.y + diff.z) / 3.0 * D;
   }

@@ -581,6 +581,103 @@ TEST(DynamicSampling, ErrorSpaceClampsAndComparesOnV) {
   EXPECT_NEAR(sampleContribution(s, 1.0f, 1.0f), r3 * std::log(2.0f), 1e-8);
 }
 
+TEST(DynamicSampling, ErrorWeightedByAIsTheErrorOfS) {
+  // One point light of intensity (1, 2, 3) at l, isotropic phase: A(p) = I / (4π·|p − l|²) per
+  // channel, computed here without LightFactor. A sample at x with V = 0.5 and ∇V = 0 (its
+  // Taylor estimate is 0.5 everywhere) and the traced V = 0.5 + δ_i at probe i: the weighted E
+  // is R³ · Σ_i mean_RGB(δ_i·A_i)·D_i / n · τ, the unweighted R³ · Σ_i δ_i·D_i / n · τ.
+  Json doc = homogeneousBoxDoc(1.0f, 1.0f, 1.0f, Vec3(0.5f, 0.75f, 0.5f), 1.0f, 8, 6, 32);
+  doc["lights"][0]["intensity"] = {1.0, 2.0, 3.0};
+  const Scene scene = sceneFromJson(doc);
+  const Vec3 light(0.5f, 0.75f, 0.5f), eye = scene.camera.position;
+  const LightFactor A(scene);
+  RadianceSample s;
+  s.position = Vec3(0.5f, 0.5f, 0.45f);
+  s.radius = 0.1f;
+  s.S = Vec3(0.5f);
+  Vec3 p[kMaxProbes], S[kMaxProbes], probeA[kMaxProbes];
+  float D[kMaxProbes];
+  probePoints(s, p, kMaxProbes);
+  double weighted = 0.0, plain = 0.0;
+  for (int i = 0; i < kMaxProbes; ++i) {
+    const float delta = 0.01f * float(i + 1);
+    S[i] = Vec3(0.5f + delta);
+    D[i] = 0.5f + 0.01f * float(i);
+    probeA[i] = lightFactorTowardsEye(A, p[i], eye);
+    const Vec3 d = p[i] - light;
+    const double a = 1.0 / (4.0 * 3.14159265358979 * double(glm::dot(d, d)));  // × I per channel
+    const double diff = double((0.5f + delta) - 0.5f);  // |Ṽ − V| in float, as E computes it
+    weighted += diff * a * (1.0 + 2.0 + 3.0) / 3.0 * double(D[i]);
+    plain += diff * double(D[i]);
+  }
+  const double r3 = 1e-3, tau = 0.7, n = kMaxProbes;
+  const float E = localShadingError(s, S, D, 0.7f, kMaxProbes, {}, probeA);
+  EXPECT_NEAR(E, r3 * weighted / n * tau, 1e-6 * r3 * weighted / n * tau);  // float sums
+  EXPECT_NEAR(localShadingError(s, S, D, 0.7f, kMaxProbes), r3 * plain / n * tau,
+              1e-6 * r3 * plain / n * tau);
+  // A is 1/d²: the +Y probe (d² = 0.15² + 0.05²) weighs 5× the −Y probe (d² = 0.35² + 0.05²).
+  EXPECT_NEAR(probeA[2].x / probeA[3].x, 0.125f / 0.025f, 1e-4);
+  // In log space the difference is taken after exp: the same E for ln V.
+  DynamicSamplingSettings::ErrorSpace logSpace;
+  logSpace.log = true;
+  RadianceSample u = s;
+  u.S = Vec3(std::log(0.5f));
+  Vec3 lnS[kMaxProbes];
+  for (int i = 0; i < kMaxProbes; ++i) lnS[i] = glm::log(S[i]);
+  EXPECT_NEAR(localShadingError(u, lnS, D, 0.7f, kMaxProbes, logSpace, probeA), E, 1e-5 * E);
+  // The contribution: R³·mean_RGB(A ⊙ V)·D·τ, A at the sample.
+  const Vec3 d = s.position - light;
+  const float a0 = 1.0f / (4.0f * kPi * glm::dot(d, d));
+  const Vec3 As = lightFactorTowardsEye(A, s.position, eye);
+  EXPECT_NEAR(sampleContribution(s, 0.8f, 0.7f, {}, &As), 1e-3f * 0.5f * a0 * 2.0f * 0.8f * 0.7f,
+              1e-6 * a0 * 1e-3f);
+  EXPECT_NEAR(sampleContribution(u, 0.8f, 0.7f, logSpace, &As),
+              sampleContribution(s, 0.8f, 0.7f, {}, &As), 1e-6 * a0 * 1e-3f);
+}
+
+TEST(DynamicSampling, ErrorWeightedByAIsZeroOutsideTheSpotCone) {
+  // V with curvature everywhere (its Taylor estimate misses at every probe) under a narrow spot
+  // light (cone of radius ~0.2 at y = 0.5, around x = z = 0.5): weighted by A, only samples
+  // whose probes reach into the cone have an error, so only they split; unweighted, every
+  // sample has the same error and all split.
+  const Scene scene = spotScene();
+  const DensityGrid density = densityOf(scene);
+  AnalyticEvaluator ev;
+  ev.S = [](const Vec3& p) { return Vec3(0.2f + glm::dot(p, p)); };
+  ev.grad = [](const Vec3& p, Vec3 g[3]) {
+    for (int a = 0; a < 3; ++a) g[a] = Vec3(2.0f * p[a]);
+  };
+  DynamicSamplingSettings st;
+  st.levels = {16};
+  st.probes = 40;
+  st.epsilon = 1e-12;  // every nonzero error splits
+  st.delta1 = scene.medium.voxelSize();
+  std::vector<RadianceSample> init;
+  for (int i = 0; i < 8; ++i)
+    for (int k = 0; k < 8; ++k)
+      init.push_back(sampleAt(Vec3((i + 0.5f) / 8, 0.5f, (k + 0.5f) / 8), 0.125f));
+  const DynamicSamplingResult plain = dynamicSampling(scene, density, init, ev, st);
+  EXPECT_EQ(plain.levels[0].split, 64);
+  st.space.weightA = true;
+  const DynamicSamplingResult weighted = dynamicSampling(scene, density, init, ev, st);
+  // The light at (0.5, 1.3, 0.5), outer half-angle 12°: radius 0.8·tan 12° = 0.17 at y = 0.5
+  // (more above it); a sample splits iff a probe (at most R = 0.125 away) is inside the cone.
+  int expected = 0;
+  for (const RadianceSample& s : init) {
+    Vec3 p[kMaxProbes];
+    probePoints(s, p, kMaxProbes);
+    bool inside = false;
+    for (int i = 0; i < kMaxProbes; ++i) {
+      const Vec3 d = glm::normalize(p[i] - Vec3(0.5f, 1.3f, 0.5f));
+      inside = inside || -d.y > std::cos(glm::radians(12.0f));
+    }
+    expected += inside;
+  }
+  EXPECT_GT(expected, 0);
+  EXPECT_LT(expected, 64);
+  EXPECT_EQ(weighted.levels[0].split, expected);
+}
+
 }  // namespace
 }  // namespace scatterlab
 
@@ -709,4 +806,36 @@ TEST(DynamicSampling, CellSplitAndFallbackKeysParsed) {
   PipelineSettings ps;
   ps.radianceResolution = IVec3(32, 16, 8);
   EXPECT_EQ(withPipeline(fb, ps).voxelDims, IVec3(32, 16, 8));
+}
+
+TEST(DynamicSampling, ErrorWeightKeyParsed) {
+  const Scene scene = spotScene();
+  const auto parse = [&](const Json& j, bool paper, bool factorLights) {
+    Params p(j, "render");
+    return parseDynamicSampling(p, scene, paper, factorLights);
+  };
+  // "radiance" (default): with factor_lights E weighs V's error by A; without, S is held.
+  EXPECT_TRUE(parse(Json::object(), false, true).space.weightA);
+  EXPECT_FALSE(parse(Json::object(), false, false).space.weightA);
+  EXPECT_FALSE(parse(Json::object(), true, false).space.weightA);  // the paper's Eq. 5 on S
+  EXPECT_FALSE(parse({{"error_weight", "transmittance"}}, false, true).space.weightA);
+  EXPECT_THROW(parse({{"error_weight", "transmittance"}}, false, false), ConfigError);
+  EXPECT_THROW(parse({{"error_weight", "light"}}, false, true), ConfigError);
+  // With directional lights only A varies by the phase alone: unweighted by default.
+  Scene sun = scene;
+  sun.lights[0].type = Light::Type::Directional;
+  Params ps0(Json::object(), "render");
+  EXPECT_FALSE(parseDynamicSampling(ps0, sun, false, true).space.weightA);
+  Params ps1(Json{{"error_weight", "radiance"}}, "render");
+  EXPECT_TRUE(parseDynamicSampling(ps1, sun, false, true).space.weightA);
+  // The pipeline keeps it with factor_lights and gives it the lamp model of the samples' A.
+  PipelineSettings ps;
+  ps.factorLights = true;
+  ps.lampModel = true;
+  const DynamicSamplingSettings w = withPipeline(parse(Json::object(), false, true), ps);
+  EXPECT_TRUE(w.space.weightA);
+  EXPECT_TRUE(w.space.lampModel);
+  ps.factorLights = false;
+  ps.lampModel = false;
+  EXPECT_FALSE(withPipeline(parse(Json::object(), false, true), ps).space.weightA);
 }
