@@ -612,6 +612,16 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
 /// in docs/dynamic-sampling.md.
 constexpr double kRelativeEpsilon = 0.05;
 constexpr int kExtendedProbes = 40;
+/// Every probe traces every light: by default a sample's probes trace at most this many light
+/// segments (40 probes up to 4 lights, 26 with 5–6, never fewer than 14; docs/fidelity.md §13).
+constexpr int kProbeLightTraces = 160;
+
+static int defaultProbes(std::size_t lights) {
+  for (int n : {kExtendedProbes, 26})
+    if (std::size_t(n) * std::max<std::size_t>(1, lights) <= std::size_t(kProbeLightTraces))
+      return n;
+  return 14;
+}
 
 const std::vector<KeyDoc>& dynamicSamplingKeys() {
   static const std::vector<KeyDoc> keys = {
@@ -628,7 +638,10 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "most visible of the ancestor's and the sample's six axis probes (a sample hidden behind "
        "an occluder whose sphere reaches the visible side)",
        R"("sample")"},
-      {"probes", "int", "40 (6 with paper)", "6, 14, 26, 40",
+      {"probes", "int",
+       "40 with up to 4 lights, 26 with 5–6, 14 with more (at most 160 light traces per "
+       "sample); 6 with paper",
+       "6, 14, 26, 40",
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
        "R/2",
        "6"},
@@ -712,7 +725,7 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
     p.fail("tau", "\"visible\" is an extension; it cannot be set with render.paper = true");
   s.perSampleTau = tau == "sample";
   s.visibleTau = tau == "visible";
-  const long long probes = p.integer("probes", paper ? 6 : kExtendedProbes);
+  const long long probes = p.integer("probes", paper ? 6 : defaultProbes(scene.lights.size()));
   if (probes != 6 && probes != 14 && probes != 26 && probes != 40)
     p.fail("probes", "value " + std::to_string(probes) +
                          " is not allowed; allowed: 6 (Eq. 5: x ± R along X, Y, Z), 14 (+ cube "

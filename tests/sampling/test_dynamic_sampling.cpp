@@ -839,3 +839,22 @@ TEST(DynamicSampling, ErrorWeightKeyParsed) {
   ps.lampModel = false;
   EXPECT_FALSE(withPipeline(parse(Json::object(), false, true), ps).space.weightA);
 }
+
+TEST(DynamicSampling, DefaultProbesBoundTheLightTracesPerSample) {
+  // 40 probes while probes × lights <= 160, then 26, never fewer than 14 (docs/fidelity.md §13);
+  // the paper's 6 and an explicit count whatever the lights.
+  const auto probes = [](std::size_t lights, const Json& j, bool paper) {
+    Scene scene = spotScene();
+    scene.lights.assign(lights, scene.lights[0]);
+    Params p(j, "render");
+    return parseDynamicSampling(p, scene, paper, !paper).probes;
+  };
+  EXPECT_EQ(probes(1, Json::object(), false), 40);
+  EXPECT_EQ(probes(4, Json::object(), false), 40);
+  EXPECT_EQ(probes(5, Json::object(), false), 26);
+  EXPECT_EQ(probes(6, Json::object(), false), 26);
+  EXPECT_EQ(probes(7, Json::object(), false), 14);
+  EXPECT_EQ(probes(32, Json::object(), false), 14);
+  EXPECT_EQ(probes(32, Json::object(), true), 6);
+  EXPECT_EQ(probes(32, Json{{"probes", 40}}, false), 40);
+}
