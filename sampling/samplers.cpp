@@ -152,7 +152,7 @@ void checkSampleMemory(Params& p, long long count) {
 const std::vector<KeyDoc>& samplerKeys() {
   static const std::vector<KeyDoc> keys = {
       {"type", "string",
-       "gradient: jittered with count 2000; adaptive: grid with count 2000; with paper and for "
+       "gradient: jittered with count 8000; adaptive: grid with count 2000; with paper and for "
        "rbf, nearest: gaussian-centres when the medium is a sum of Gaussians, else jittered",
        "gaussian-centres, jittered, grid", "how the initial samples are placed", R"("jittered")"},
       {"count", "int", "512 (gaussian-centres: every Gaussian)", "1…1e8",
