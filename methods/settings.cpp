@@ -329,8 +329,9 @@ PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const Meth
 std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type,
                                      const SamplerChoice& extendedDefault) {
   const bool hasGaussians = scene.medium.density && scene.medium.density->gaussians();
-  const Json defaultSampler = !extendedDefault.type.empty() ? Json{{"type", extendedDefault.type},
-                                                                   {"count", extendedDefault.count}}
+  Json extended = {{"type", extendedDefault.type}, {"count", extendedDefault.count}};
+  if (extendedDefault.atMost) extended["at_most"] = true;
+  const Json defaultSampler = !extendedDefault.type.empty() ? extended
                               : hasGaussians                ? Json{{"type", "gaussian-centres"}}
                                                             : Json{{"type", "jittered"}};
   const bool given = p.has("sampler");

@@ -18,6 +18,7 @@ namespace scatterlab {
 struct SamplerChoice {
   std::string type = {};  ///< empty: the paper's default (see makeSampler)
   long long count = 0;
+  bool atMost = false;  ///< count is a ceiling (the cell samplers' at_most)
 };
 
 /// One method: which stages it runs (by registered name), each with a variant per backend.

@@ -102,12 +102,19 @@ class GaussianCentresSampler : public Sampler {
 
 class CellSampler : public Sampler {
  public:
-  CellSampler(bool jitter, long long count, float scale, std::uint64_t seed, bool skipEmpty)
-      : jitter_(jitter), count_(count), scale_(scale), seed_(seed), skipEmpty_(skipEmpty) {}
-  /// The cells chosen come as close to `count` as the grid allows (chooseSampleCells).
+  CellSampler(bool jitter, long long count, float scale, std::uint64_t seed, bool skipEmpty,
+              bool atMost)
+      : jitter_(jitter),
+        count_(count),
+        scale_(scale),
+        seed_(seed),
+        skipEmpty_(skipEmpty),
+        atMost_(atMost) {}
+  /// The cells chosen come as close to `count` as the grid allows, or with at_most the most
+  /// that do not exceed it (chooseSampleCells).
   long long plannedCount(const Scene&) const override { return count_; }
   std::vector<RadianceSample> generate(const Scene&, const DensityGrid& density) override {
-    const SampleCells cells = chooseSampleCells(density, count_, skipEmpty_);
+    const SampleCells cells = chooseSampleCells(density, count_, skipEmpty_, atMost_);
     const float R = scale_ * std::max({cells.cell.x, cells.cell.y, cells.cell.z});
     const Vec3 lo = density.bounds().min;
     std::vector<RadianceSample> out(cells.occupied.size());
@@ -135,6 +142,7 @@ class CellSampler : public Sampler {
   float scale_;
   std::uint64_t seed_;
   bool skipEmpty_;
+  bool atMost_;
 };
 
 const Interval kCount = Interval::closed(1, 1e8);
@@ -162,6 +170,10 @@ const std::vector<KeyDoc>& samplerKeys() {
       {"seed", "int", "0", ">= 0", "jittered: random seed", "1"},
       {"skip_empty", "bool", "true", "true, false", "jittered, grid: drop cells without density",
        "false"},
+      {"at_most", "bool", "false (true for gradient's default sampler)", "true, false",
+       "jittered, grid: count is a ceiling (the finest cell grid with at most count occupied "
+       "cells) instead of a target (the grid whose occupied cells come nearest to it)",
+       "true"},
   };
   return keys;
 }
@@ -170,7 +182,8 @@ double sampleSetBytes(double count) {
   return count * double(sizeof(RadianceSample) + 2 * sizeof(std::int64_t));
 }
 
-SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty) {
+SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty,
+                              bool atMost) {
   const Vec3 ext = density.bounds().extent();
   const IVec3 nd = density.dims();
   // Cells no smaller than a voxel: below that, occupancy by voxel centres is meaningless.
@@ -191,7 +204,11 @@ SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool 
     }
   }
   int best = lo;
-  if (lo > 1 && std::llabs(occ(lo - 1) - count) < std::llabs(occ(lo) - count)) best = lo - 1;
+  if (atMost) {
+    while (best > 1 && occ(best) > count) --best;  // a ceiling (one cell if nothing fits)
+  } else if (lo > 1 && std::llabs(occ(lo - 1) - count) < std::llabs(occ(lo) - count)) {
+    best = lo - 1;
+  }
   SampleCells c;
   c.dims = dimsForLongAxis(ext, best);
   c.cell = ext / Vec3(c.dims);
@@ -223,7 +240,9 @@ void registerSamplers() {
       const std::uint64_t seed =
           jitter ? std::uint64_t(p.integer("seed", 0, Interval::atLeast(0))) : 0;
       const bool skipEmpty = p.boolean("skip_empty", true);
-      return std::unique_ptr<Sampler>(new CellSampler(jitter, count, scale, seed, skipEmpty));
+      const bool atMost = p.boolean("at_most", false);
+      return std::unique_ptr<Sampler>(
+          new CellSampler(jitter, count, scale, seed, skipEmpty, atMost));
     };
   };
   samplers().add("jittered", cell(true));

@@ -41,7 +41,9 @@ struct SampleCells {
   std::vector<int> occupied;  ///< linear indices (i + nx·(j + ny·k)) of the cells used, ascending
 };
 
-/// Chooses the cells for about `count` samples over `density`'s box (see file comment).
-SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty);
+/// Chooses the cells for about `count` samples over `density`'s box (see file comment); with
+/// `atMost` the finest grid with at most `count` occupied cells (1 cell if none has so few).
+SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty,
+                              bool atMost = false);
 
 }  // namespace scatterlab

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "core/stages.h"
+#include "sampling/dynamic_sampling.h"
 #include "sampling/samplers.h"
 #include "support/scenes.h"
 
@@ -158,6 +159,21 @@ TEST(CellSamplers, SkipsEmptyCellsAndAimsAtTheCount) {
   const SampleCells allCells = chooseSampleCells(d, count, false);
   EXPECT_EQ(all.size(), std::size_t(allCells.dims.x) * allCells.dims.y * allCells.dims.z);
   EXPECT_GT(all.size(), s.size());
+}
+
+TEST(CellSamplers, AtMostMakesTheCountACeiling) {
+  // 200 aimed at gives 192 (the test above); 190 aimed at gives the nearest, 192, above it, and
+  // with at_most the finest layout with at most 190: 109 (one cell less along the long axis).
+  const Scene scene = testing::sceneFromJson(blobsDoc());
+  const auto nearest = sample(scene, {{"type", "jittered"}, {"count", 190}});
+  const auto ceiling = sample(scene, {{"type", "jittered"}, {"count", 190}, {"at_most", true}});
+  EXPECT_EQ(nearest.size(), 192u);
+  EXPECT_EQ(ceiling.size(), 109u);
+  // A count the layout meets exactly is kept either way.
+  EXPECT_EQ(sample(scene, {{"type", "grid"}, {"count", 192}, {"at_most", true}}).size(), 192u);
+  // gradient's default sampler is jittered with at most adaptive's budget cap.
+  const auto cap = sample(scene, {{"type", "jittered"}, {"count", kBudgetCap}, {"at_most", true}});
+  EXPECT_LE(cap.size(), std::size_t(kBudgetCap));
 }
 
 TEST(CellSamplers, BadParameters) {
