@@ -54,6 +54,12 @@ class DensityModel {
   /// can build the volume by splatting them (paper Sec. 6) instead of uploading build()'s.
   virtual bool isSumOfGaussians() const { return false; }
 
+  /// The largest density the model takes (for a sum of up to 4096 Gaussians: the largest of the
+  /// sums at the blobs' centres, an estimate), or nullopt where the model does not know it
+  /// cheaply.
+  /// Decides defaults before any volume is built (render.log_space, methods/settings.cpp).
+  virtual std::optional<float> peak() const { return std::nullopt; }
+
   /// One-line human-readable summary for `scatterlab info`.
   virtual std::string describe() const = 0;
 };

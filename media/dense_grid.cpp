@@ -1,6 +1,7 @@
 #include "media/dense_grid.h"
 
 #include <tbb/parallel_for.h>
+#include <algorithm>
 
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,12 @@ void DenseGridDensity::build(DensityGrid& out) const {
     return;
   }
   DensityModel::build(out);
+}
+
+std::optional<float> DenseGridDensity::peak() const {
+  float m = 0.0f;
+  for (float v : grid_.data()) m = std::max(m, v);
+  return m;
 }
 
 std::string DenseGridDensity::describe() const {

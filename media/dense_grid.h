@@ -13,6 +13,7 @@ class DenseGridDensity : public DensityModel {
       : grid_(std::move(grid)), source_(std::move(source)) {}
   std::string type() const override { return "grid"; }
   float eval(const Vec3& x) const override { return grid_.sample(x); }
+  std::optional<float> peak() const override;
   void build(DensityGrid& out) const override;
   std::string describe() const override;
   const DensityGrid& grid() const { return grid_; }

@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <algorithm>
 
 #include <sstream>
 
@@ -62,6 +63,17 @@ void GaussianDensity::build(DensityGrid& grid) const {
 
 std::string GaussianDensity::describe() const {
   return "sum of " + std::to_string(blobs_.size()) + " Gaussian blob(s)";
+}
+
+std::optional<float> GaussianDensity::peak() const {
+  // The sums at the centres: where a sum of Gaussians peaks unless blobs overlap closely (two
+  // equal blobs one radius apart peak between them, 14 % higher). n² evaluations: not
+  // estimated for more than kPeakBlobs blobs.
+  constexpr std::size_t kPeakBlobs = 4096;
+  if (blobs_.size() > kPeakBlobs) return std::nullopt;
+  float m = 0.0f;
+  for (const GaussianBlob& b : blobs_) m = std::max(m, evalGaussians(blobs_, b.center));
+  return m;
 }
 
 float HeightDensity::eval(const Vec3& x) const {

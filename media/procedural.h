@@ -15,6 +15,7 @@ class UniformDensity : public DensityModel {
   explicit UniformDensity(float value) : value_(value) {}
   std::string type() const override { return "uniform"; }
   float eval(const Vec3&) const override { return value_; }
+  std::optional<float> peak() const override { return value_; }
   void build(DensityGrid& grid) const override;
   std::string describe() const override;
   float value() const { return value_; }
@@ -44,6 +45,7 @@ class GaussianDensity : public DensityModel {
   std::string describe() const override;
   const std::vector<GaussianBlob>& blobs() const { return blobs_; }
   const std::vector<GaussianBlob>* gaussians() const override { return &blobs_; }
+  std::optional<float> peak() const override;
   bool isSumOfGaussians() const override { return true; }
 
   static constexpr float kCullRadius = kGaussianCullRadius;  ///< in units of r
@@ -59,6 +61,7 @@ class HeightDensity : public DensityModel {
   HeightDensity(const Box& box, float bottom, float top) : bottom_(bottom), top_(top), box_(box) {}
   std::string type() const override { return "height"; }
   float eval(const Vec3& x) const override;
+  std::optional<float> peak() const override { return std::max(bottom_, top_); }
   std::string describe() const override;
 
  private:

@@ -1,6 +1,7 @@
 #include "media/vdb.h"
 
 #include <tbb/parallel_for.h>
+#include <algorithm>
 
 #include <fcntl.h>
 #include <openvdb/io/File.h>
@@ -449,6 +450,11 @@ void VdbDensity::build(DensityGrid& grid) const {
         for (int i = 0; i < n.x; ++i)
           grid.at(i, j, k) = std::max(0.0f, s.wsSample(toVdb(grid.cellCenter(i, j, k))));
   });
+}
+
+std::optional<float> VdbDensity::peak() const {
+  if (!info_.hasValueRange) return std::nullopt;
+  return std::max(0.0f, float(info_.valueMax));
 }
 
 std::string VdbDensity::describe() const {

@@ -64,6 +64,8 @@ class VdbDensity : public DensityModel {
   /// The axis-aligned world box of the active index box (voxel cells, so half a voxel beyond
   /// the outermost voxel centres), transformed corner by corner.
   std::optional<Box> naturalBounds() const override { return bounds_; }
+  /// The largest active value (clamped at 0, as eval() is), when the grid has a value range.
+  std::optional<float> peak() const override;
   std::string describe() const override;
 
   /// Dims of a dense grid over naturalBounds() whose cells have the grid's smallest voxel edge

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 
 #include "core/metrics.h"
@@ -179,6 +180,30 @@ TEST(LampModel, OnByDefaultWithFactorLightsAndRejectedWithoutIt) {
                 .find("lamp_model': is part of factor_lights' A"),
             std::string::npos);
   EXPECT_EQ(error({{"method", "gradient"}, {"factor_lights", false}}), "");
+}
+
+TEST(LogSpace, OnByDefaultWhereTheDensestVoxelIsNearlyOpaque) {
+  // A uniform box of 16³ voxels (h = 1/16): σt·D·h = 0.4 keeps V linear, 0.6 interpolates ln V
+  // (the threshold is 0.5, docs/fidelity.md §14); never with objects or render.paper.
+  const auto images = [](float sigmaT, const Json& extra) {
+    Scene s = testing::sceneFromJson(
+        testing::homogeneousBoxDoc(1.0f, sigmaT, 0.6f, Vec3(0.5f, 0.6f, 0.45f), 2.0f, 24, 18, 16));
+    const auto render = [&](Json r) {
+      r["method"] = "gradient";
+      r["sampler"] = {{"type", "jittered"}, {"count", 200}};
+      for (const auto& [k, v] : extra.items()) r[k] = v;
+      s.render = r;
+      return createMethod(s)->render(s, nullptr).image;
+    };
+    return std::array<Image, 3>{render(Json::object()), render({{"log_space", true}}),
+                                render({{"log_space", false}})};
+  };
+  const auto thin = images(0.4f * 16.0f, Json::object());
+  EXPECT_EQ(compareImages(thin[0], thin[2]).relL2, 0.0);
+  EXPECT_GT(compareImages(thin[0], thin[1]).relL2, 0.0);
+  const auto dense = images(0.6f * 16.0f, Json::object());
+  EXPECT_EQ(compareImages(dense[0], dense[1]).relL2, 0.0);
+  EXPECT_GT(compareImages(dense[0], dense[2]).relL2, 0.0);
 }
 
 TEST(LightFactorization, ALampInsideTheMediumAgainstExact) {

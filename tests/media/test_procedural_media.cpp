@@ -104,5 +104,17 @@ TEST(DustyRoom, BadKeysNamed) {
   EXPECT_THROW(testing::sceneFromJson(doc({{"type", "dusty-room"}, {"speed", 1}})), ConfigError);
 }
 
+TEST(DensityPeak, TheLargestDensityOfEachModel) {
+  EXPECT_EQ(UniformDensity(0.7f).peak(), 0.7f);
+  // Two blobs far apart: the larger weight; two equal blobs one radius apart: the sum at a
+  // centre, 1 + e^−1 = 1.368 (the true peak, between them, is 2·e^−1/4 = 1.558: 12 % lower).
+  EXPECT_FLOAT_EQ(*GaussianDensity({{Vec3(0.2f), 0.05f, 1.5f}, {Vec3(0.8f), 0.05f, 0.7f}}).peak(),
+                  1.5f);
+  const GaussianDensity pair(
+      {{Vec3(0.4f, 0.5f, 0.5f), 0.1f, 1.0f}, {Vec3(0.5f, 0.5f, 0.5f), 0.1f, 1.0f}});
+  EXPECT_NEAR(*pair.peak(), 1.0f + std::exp(-1.0f), 1e-6f);
+  EXPECT_NEAR(pair.eval(Vec3(0.45f, 0.5f, 0.5f)), 2.0f * std::exp(-0.25f), 1e-6f);
+}
+
 }  // namespace
 }  // namespace scatterlab

@@ -144,6 +144,9 @@ TEST(Vdb, Smoke1NativeDenseMatchesVoxels) {
   EXPECT_LT(maxErr, 1e-3);
   EXPECT_NEAR(mx, 5.715f, 2e-3f);
   EXPECT_NEAR(sum / 1049275.0, 0.163, 2e-3);  // sidecar: mean of active voxels
+  // peak(): the largest active value, the maximum of the voxels read back here.
+  ASSERT_TRUE(d->peak().has_value());
+  EXPECT_FLOAT_EQ(*d->peak(), mx);
 }
 
 TEST(Vdb, DenseToVdbToDenseRoundTrip) {
