@@ -128,8 +128,8 @@ const std::vector<KeyDoc>& sampleKeys() {
        "back at each march step (singular lights); methods with samples",
        "true"},
       {"log_space", "bool",
-       "true with factor_lights in scenes without objects whose densest voxel has an optical "
-       "depth σt·D·h of at least 0.5 (false with paper)",
+       "true with factor_lights and bounded_taylor in scenes without objects whose densest "
+       "voxel has an optical depth σt·D·h of at least 0.5 (false with paper)",
        "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "dynamic sampling then measures its error on V; methods with samples",
@@ -168,7 +168,13 @@ void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool 
   const bool opaqueVoxels =
       peak &&
       scene.medium.sigmaT * *peak * std::max({voxel.x, voxel.y, voxel.z}) >= kOpaqueVoxelDepth;
-  s.logSpace = p.boolean("log_space", s.factorLights && !s.paper && !scene.objects && opaqueVoxels);
+  // Not where the Taylor terms are unbounded (bounded_taylor: false, read by the
+  // reconstruction): exp of an unbounded extrapolation of ln V overflows (docs/fidelity.md §14).
+  const auto bounded = p.json().find("bounded_taylor");
+  const bool unbounded =
+      bounded != p.json().end() && bounded->is_boolean() && !bounded->get<bool>();
+  s.logSpace = p.boolean(
+      "log_space", s.factorLights && !s.paper && !scene.objects && opaqueVoxels && !unbounded);
   // Default chosen by measurement (docs/fidelity.md §8): a clear win with lamps inside smoke
   // and fog, but it loses at the hard shadows of scene objects (window: 6.6 % -> 7.3 %), so it
   // is on only in scenes without objects, and only where a point or spot light lies inside the

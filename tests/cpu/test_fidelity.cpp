@@ -204,6 +204,10 @@ TEST(LogSpace, OnByDefaultWhereTheDensestVoxelIsNearlyOpaque) {
   const auto dense = images(0.6f * 16.0f, Json::object());
   EXPECT_EQ(compareImages(dense[0], dense[1]).relL2, 0.0);
   EXPECT_GT(compareImages(dense[0], dense[2]).relL2, 0.0);
+  // Unbounded Taylor terms keep V (exp of an unbounded extrapolation of ln V overflows).
+  const auto unbounded = images(0.6f * 16.0f, {{"bounded_taylor", false}});
+  EXPECT_EQ(compareImages(unbounded[0], unbounded[2]).relL2, 0.0);
+  EXPECT_GT(compareImages(unbounded[0], unbounded[1]).relL2, 0.0);
 }
 
 TEST(LightFactorization, ALampInsideTheMediumAgainstExact) {
