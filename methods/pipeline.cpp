@@ -197,6 +197,10 @@ class PipelineMethod : public Method {
     if (sampler) {
       st.samples = (long long)samples.size();
       st.extra["sampler"] = samplerType;
+      // The extensions as resolved for this scene (their defaults depend on it).
+      st.extra["factor_lights"] = settings_.factorLights;
+      st.extra["lamp_model"] = settings_.lampModel;
+      st.extra["log_space"] = settings_.logSpace;
     }
     if (integratorDecl(desc_).viewMarch) st.extra["march_step"] = settings_.march.step;
     st.extra["delta1"] = settings_.delta1;

@@ -203,6 +203,14 @@ TEST(LogSpace, OnByDefaultWhereTheDensestVoxelIsNearlyOpaque) {
   EXPECT_GT(compareImages(thin[0], thin[1]).relL2, 0.0);
   const auto dense = images(0.6f * 16.0f, Json::object());
   EXPECT_EQ(compareImages(dense[0], dense[1]).relL2, 0.0);
+  {  // the stats say which it was
+    Scene s = testing::sceneFromJson(
+        testing::homogeneousBoxDoc(1.0f, 9.6f, 0.6f, Vec3(0.5f, 0.6f, 0.45f), 2.0f, 8, 6, 16));
+    s.render = {{"method", "gradient"}, {"sampler", {{"type", "jittered"}, {"count", 50}}}};
+    const RenderStats st = createMethod(s)->render(s, nullptr).stats;
+    EXPECT_EQ(st.extra.at("log_space"), true);
+    EXPECT_EQ(st.extra.at("factor_lights"), true);
+  }
   EXPECT_GT(compareImages(dense[0], dense[2]).relL2, 0.0);
   // Unbounded Taylor terms keep V (exp of an unbounded extrapolation of ln V overflows).
   const auto unbounded = images(0.6f * 16.0f, {{"bounded_taylor", false}});
