@@ -77,9 +77,7 @@ PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& densi
           ++s;
           continue;
         }
-        const Vec3 v = eye - c;
-        const float len = glm::length(v);
-        radiance.at(i, j, k) = source(c, len > 0.0f ? v / len : Vec3(0, 0, 1));
+        radiance.at(i, j, k) = source(c, towardsEye(eye, c));
         ++t;
       }
     traced += t;

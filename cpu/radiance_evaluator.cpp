@@ -13,11 +13,7 @@ template <class Source>
 void evaluateWith(const Source& source, const Scene& scene, float delta2,
                   std::span<RadianceSample> samples, bool gradients) {
   const Vec3 eye = scene.camera.position;
-  const auto S = [&](const Vec3& p) {
-    const Vec3 v = eye - p;
-    const float len = glm::length(v);
-    return source(p, len > 0.0f ? v / len : Vec3(0, 0, 1));
-  };
+  const auto S = [&](const Vec3& p) { return source(p, towardsEye(eye, p)); };
   const float h = delta2, inv2h = 0.5f / delta2;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 16),
                     [&](const tbb::blocked_range<std::size_t>& r) {

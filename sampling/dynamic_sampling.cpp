@@ -102,9 +102,7 @@ void probePoints(const RadianceSample& s, Vec3* out, int count) {
 }
 
 Vec3 lightFactorTowardsEye(const LightFactor& A, const Vec3& p, const Vec3& eye) {
-  const Vec3 v = eye - p;
-  const float len = glm::length(v);
-  return A(p, len > 0.0f ? v / len : Vec3(0, 0, 1));
+  return A(p, towardsEye(eye, p));
 }
 
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,

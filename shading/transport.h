@@ -112,6 +112,14 @@ inline float opticalDepth(const DensityGrid& g, const MaxDensityGrid& skip, cons
   return sum * dt;
 }
 
+/// The unit direction from x to the viewer at `eye` (+Z when x is the eye): the toViewer every
+/// S(x, ω) and A(x, ω) of the samples, probes and voxels is evaluated with.
+inline Vec3 towardsEye(const Vec3& eye, const Vec3& x) {
+  const Vec3 v = eye - x;
+  const float len = glm::length(v);
+  return len > 0.0f ? v / len : Vec3(0, 0, 1);
+}
+
 /// The far end of the segment from x towards a light: the light itself, or for directional
 /// lights the point where the ray leaves the box (or x when it is outside).
 inline Vec3 lightSegmentEnd(const Light& l, const Light::Incident& inc, const Box& box,
