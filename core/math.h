@@ -10,6 +10,7 @@ namespace scatterlab {
 
 using Vec3 = glm::vec3;
 using IVec3 = glm::ivec3;
+using UVec3 = glm::uvec3;
 
 inline constexpr float kPi = 3.14159265358979323846f;
 inline constexpr float kInvFourPi = 1.0f / (4.0f * kPi);

@@ -204,10 +204,26 @@ struct PipelineSettings {
 /// With factorLights and logSpace the samples hold ln V, V clamped below at kMinV.
 inline constexpr float kMinV = 1e-9f;
 
+/// Paper Eq. 4's singularity: W_j(x) = R_j / max(‖x − x_j‖, kSingularEps·R_j), so W_j <= 1e9
+/// (cpu/interpolation.h; the GPU gathers and splats read it as SL_SINGULAR_EPS).
+inline constexpr float kSingularEps = 1e-9f;
+
 /// LampModel's saturation depth κ (shading/transport.h): each lamp's model transmittance
 /// falls from 1 at the lamp towards e^(−κ), so V = S / A lies in [0, e^κ] with it. Chosen by
 /// measurement among 0.25, 0.5, 1, 2, 4, 8 (docs/fidelity.md §8).
 inline constexpr float kLampDepth = 2.0f;
+
+/// The physics constants the shaders share with the CPU, by the #define the GPU programs see
+/// them under (gpu/shaders.h injects each one, so that no shader copies a number by hand).
+struct SharedConstant {
+  const char* define;
+  float value;
+};
+inline constexpr SharedConstant kSharedConstants[] = {
+    {"SL_MIN_V", kMinV},
+    {"SL_SINGULAR_EPS", kSingularEps},
+    {"SL_LAMP_DEPTH", kLampDepth},
+};
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted
 /// (PipelineSettings::boundedTaylor): [0, 1] for V, [ln kMinV, 0] for ln V, [0, FLT_MAX] for S.

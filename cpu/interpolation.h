@@ -42,8 +42,6 @@ enum class Interpolation {
   Rbf,
 };
 
-inline constexpr float kSingularEps = 1e-9f;
-
 /// Fills `out` (bounds and dims preset) from the samples. `weightSum`, when given (it is reset
 /// to out's bounds and dims), receives the denominator at each voxel centre (Σ W_j for
 /// Gradient, Σ w_j·B_j for Rbf, 1 where covered for Nearest). No GL context.

@@ -1,19 +1,24 @@
 #pragma once
-/// Small helpers of every GL pass in gpu/: glm-typed uniforms and compute dispatch sizes.
-/// The uniform setters need the program in use (glUniform* acts on the current program).
+/// The pass layer of gpu/ (docs/methods.md, "A GPU stage"): glm-typed uniforms, compute
+/// dispatches that are checked, counted and timed, and dispatch sizes. Every pass in gpu/
+/// dispatches through dispatch() / dispatchIndirect(), never glDispatchCompute directly.
+/// The uniform setters need the program in use (glUniform* acts on the current program);
+/// Program::uniform resolves the name once per program and throws on a name no source declares.
 
 #include <cstddef>
+#include <string_view>
 
 #include "core/math.h"
 #include "gpu/gl.h"
+#include "gpu/timer.h"
 
 namespace scatterlab::gpu {
 
-inline void setVec3(const Program& p, const char* name, const Vec3& v) {
+inline void setVec3(const Program& p, std::string_view name, const Vec3& v) {
   glUniform3f(p.uniform(name), v.x, v.y, v.z);
 }
 
-inline void setIVec3(const Program& p, const char* name, const IVec3& v) {
+inline void setIVec3(const Program& p, std::string_view name, const IVec3& v) {
   glUniform3i(p.uniform(name), v.x, v.y, v.z);
 }
 
@@ -21,5 +26,23 @@ inline void setIVec3(const Program& p, const char* name, const IVec3& v) {
 inline GLuint groups(std::size_t n, GLuint size) {
   return GLuint((n + size - 1) / size);
 }
+
+/// What has been sent to the GPU through the pass layer since the process started (no
+/// context): the stats count them per frame as differences.
+struct PassCounts {
+  long long dispatches = 0;  ///< compute dispatches, direct and indirect
+  long long indirect = 0;    ///< of which indirect (sizes written on the GPU)
+};
+PassCounts passCounts();
+
+/// Dispatches `count` workgroups of the program in use, as pass `pass`: a size over the
+/// device's GL_MAX_COMPUTE_WORK_GROUP_COUNT is a GpuError naming the pass and the limit
+/// before any work (never a silently clipped image); a GL error after it is a GpuError naming
+/// the pass (checkGl). Timed as `pass` into `timer` when one is given (the caller must not be
+/// inside a ScopedGpuTimer of the same timer: stages do not nest). An empty size is no work.
+void dispatch(std::string_view pass, UVec3 count, StageTimer* timer = nullptr);
+/// Same, with the sizes read by the GPU from the GL_DISPATCH_INDIRECT_BUFFER bound, at byte
+/// `offset` (no size check: the shader that wrote them keeps them within the limit).
+void dispatchIndirect(std::string_view pass, GLintptr offset, StageTimer* timer = nullptr);
 
 }  // namespace scatterlab::gpu

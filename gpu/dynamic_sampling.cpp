@@ -18,13 +18,11 @@ namespace {
 constexpr GLuint kScanBlock = 512;  // elements per workgroup of scan.comp.glsl
 
 const Program& scanProgram() {
-  return cachedProgram("scan (block)",
-                       [] { return computeProgram({"scan.comp.glsl"}, {}, "scan (block)"); });
+  return program({.compute = {"scan.comp.glsl"}}, "scan (block)");
 }
 const Program& scanAddProgram() {
-  return cachedProgram("scan (add block sums)", [] {
-    return computeProgram({"scan.comp.glsl"}, {"SL_SCAN_ADD"}, "scan (add block sums)");
-  });
+  return program({.compute = {"scan.comp.glsl"}, .defines = {"SL_SCAN_ADD"}},
+                 "scan (add block sums)");
 }
 
 /// `buffer` with at least `bytes` of storage (re-created only when smaller). Dynamic storage,
@@ -57,7 +55,7 @@ void scanBuffer(const Buffer& in, const Buffer& out, GLuint n, bool flags,
   in.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanIn);
   out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
   blockSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanBlockSums);
-  glDispatchCompute(blocks, 1, 1);
+  dispatch("scan (block)", {blocks, 1, 1});
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   if (blocks > 1) {
     ensure(sums[2 * depth + 1], blocks * sizeof(GLuint), "scanned block sums");
@@ -67,7 +65,7 @@ void scanBuffer(const Buffer& in, const Buffer& out, GLuint n, bool flags,
     glUniform1ui(add.uniform("uCount"), n);
     out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
     sums[2 * depth + 1].bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanScannedSums);
-    glDispatchCompute(blocks, 1, 1);
+    dispatch("scan (add block sums)", {blocks, 1, 1});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
 }
@@ -142,39 +140,21 @@ enum class ErrorPass { Evaluate, Probes, Combine };
 const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& steps,
                             const DynamicSamplingSettings& settings, ErrorPass pass) {
   if (pass == ErrorPass::Combine)
-    return cachedProgram("dynamic sampling error (combine)", [] {
-      return computeProgram({"common.glsl", "dynamic_error.comp.glsl"}, {"SL_COMBINE"},
-                            "dynamic sampling error (combine)");
-    });
-  std::string key =
-      pass == ErrorPass::Probes ? "dynamic sampling probes" : "dynamic sampling evaluate";
-  std::vector<std::string> defines;
-  if (steps.factorLights) {
-    defines.push_back("SL_FACTOR_LIGHTS");
-    key += " V";
-    if (steps.lampModel) {
-      defines.push_back("SL_LAMP_MODEL");
-      key += " lamp";
-    }
-  }
-  if (steps.logValues()) {
-    defines.push_back("SL_LOG_SPACE");
-    key += " ln";
-  }
-  if (settings.space.bounds) {
-    defines.push_back("SL_BOUNDED");
-    key += " bounded";
-  }
-  if (settings.space.weightA && steps.factorLights) {
-    // A's model is the samples' (steps.lampModel): ErrorSpace::lampModel is the same flag.
-    defines.push_back("SL_WEIGHT_A");
-    key += " weighted";
-  }
-  std::vector<std::string> files = {"common.glsl", pass == ErrorPass::Probes
-                                                       ? "dynamic_probes.comp.glsl"
-                                                       : "dynamic_error.comp.glsl"};
-  addShadowVariant(inputs.shadows(), key, files, defines);
-  return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
+    return program(
+        {.compute = {"common.glsl", "dynamic_error.comp.glsl"}, .defines = {"SL_COMBINE"}},
+        "dynamic sampling error (combine)");
+  ProgramVariant variant{.compute = {"common.glsl", pass == ErrorPass::Probes
+                                                        ? "dynamic_probes.comp.glsl"
+                                                        : "dynamic_error.comp.glsl"}};
+  // A's model is the samples' (steps.lampModel): ErrorSpace::lampModel is the same flag.
+  variant.define("SL_FACTOR_LIGHTS", steps.factorLights)
+      .define("SL_LAMP_MODEL", steps.factorLights && steps.lampModel)
+      .define("SL_LOG_SPACE", steps.logValues())
+      .define("SL_BOUNDED", bool(settings.space.bounds))
+      .define("SL_WEIGHT_A", settings.space.weightA && steps.factorLights);
+  return program(addShadowVariant(inputs.shadows(), variant), pass == ErrorPass::Probes
+                                                                  ? "dynamic sampling probes"
+                                                                  : "dynamic sampling evaluate");
 }
 
 /// Sizes the workspace for `n0` initial samples and `levels`, and uploads level 0 (positions,
@@ -235,13 +215,14 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
 
 /// One invocation per sample of level k: level 0's size is known on the host (its capacity);
 /// a later level's is the dispatch size the count pass left in w.counts (no read-back).
-void dispatchOverLevel(const DynamicSamplingWorkspace& w, std::size_t k, std::size_t L) {
+void dispatchOverLevel(const char* pass, const DynamicSamplingWorkspace& w, std::size_t k,
+                       std::size_t L) {
   if (k == 0) {
-    glDispatchCompute(groups(w.levels[0].capacity, 64), 1, 1);
+    dispatch(pass, {groups(w.levels[0].capacity, 64), 1, 1});
     return;
   }
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
-  glDispatchComputeIndirect(GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+  dispatchIndirect(pass, GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
 }
 
@@ -280,7 +261,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
     l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-    dispatchOverLevel(w, k, L);
+    dispatchOverLevel("ds evaluate", w, k, L);
   }
   if (mode != Evaluation::Split) {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -304,7 +285,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     w.probeSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kProbeSums);
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
-    glDispatchComputeIndirect(GLintptr((probeDispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+    dispatchIndirect("ds probes", GLintptr((probeDispatchSlot(L) + 3 * k) * sizeof(GLuint)));
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
@@ -318,7 +299,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     w.probeSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kProbeSums);
-    dispatchOverLevel(w, k, L);
+    dispatchOverLevel("ds combine", w, k, L);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
 }
@@ -327,10 +308,9 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
 /// w.threshold. GPU time: "ds threshold".
 void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings& settings,
                       StageTimer* timer) {
-  const Program& program = cachedProgram("dynamic sampling threshold", [] {
-    return computeProgram({"dynamic_level.comp.glsl"}, {"SL_THRESHOLD"},
-                          "dynamic sampling threshold");
-  });
+  const Program& program =
+      gpu::program({.compute = {"dynamic_level.comp.glsl"}, .defines = {"SL_THRESHOLD"}},
+                   "dynamic sampling threshold");
   ScopedGpuTimer t(timer, "ds threshold");
   program.use();
   glUniform1d(program.uniform("uEpsilon"), settings.epsilon);
@@ -338,7 +318,7 @@ void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings
   w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
   w.levels[0].errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
   w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
-  glDispatchCompute(1, 1, 1);
+  dispatch("ds threshold", {1, 1, 1});
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
@@ -346,9 +326,8 @@ void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings
 /// "ds split".
 void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k, std::size_t L,
                 StageTimer* timer) {
-  const Program& program = cachedProgram("dynamic sampling split", [] {
-    return computeProgram({"dynamic_split.comp.glsl"}, {}, "dynamic sampling split");
-  });
+  const Program& program =
+      gpu::program({.compute = {"dynamic_split.comp.glsl"}}, "dynamic sampling split");
   const std::size_t nv = grid.vertices();
   const GLuint zero = 0;
   const GLint none = INT_MAX;
@@ -370,7 +349,7 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size
   w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
   w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
   w.vertexAncestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexAncestors);
-  dispatchOverLevel(w, k, L);
+  dispatchOverLevel("ds split", w, k, L);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
@@ -378,12 +357,10 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size
 /// times: "ds scan" (scan and count), "ds compact".
 void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t next,
                   std::size_t L, StageTimer* timer) {
-  const Program& count = cachedProgram("dynamic sampling count", [] {
-    return computeProgram({"dynamic_level.comp.glsl"}, {}, "dynamic sampling count");
-  });
-  const Program& program = cachedProgram("dynamic sampling compact", [] {
-    return computeProgram({"compact.comp.glsl"}, {}, "dynamic sampling compact");
-  });
+  const Program& count =
+      gpu::program({.compute = {"dynamic_level.comp.glsl"}}, "dynamic sampling count");
+  const Program& program =
+      gpu::program({.compute = {"compact.comp.glsl"}}, "dynamic sampling compact");
   const std::size_t nv = grid.vertices();
   const DynamicSamplingWorkspace::Level& l = w.levels[next];
   {
@@ -398,7 +375,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-    glDispatchCompute(1, 1, 1);
+    dispatch("ds count", {1, 1, 1});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   }
   ScopedGpuTimer t(timer, "ds compact");
@@ -412,7 +389,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
   w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
   l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
   l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextAncestors);
-  glDispatchCompute(groups(nv, 256), 1, 1);
+  dispatch("ds compact", {groups(nv, 256), 1, 1});
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 

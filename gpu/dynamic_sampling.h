@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "gpu/records.h"
-#include "gpu/stages.h"
 #include "gpu/timer.h"
+#include "gpu/tracing.h"
 #include "gpu/volume.h"
 #include "sampling/dynamic_sampling.h"
 

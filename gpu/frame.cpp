@@ -1,12 +1,29 @@
 #include "gpu/frame.h"
 
 #include "gpu/context.h"
-#include "gpu/stages.h"
+#include "gpu/dispatch.h"
+#include "gpu/reconstructions.h"
+#include "gpu/records.h"
+#include "gpu/slice_marcher.h"
+#include "gpu/tracing.h"
+#include "gpu/volume_tracer.h"
 #include "shading/transport.h"
 
 namespace scatterlab::gpu {
 
-GpuFrame::GpuFrame(const DensityGrid& d) : density(uploadDensity(d)) {}
+GpuFrame::GpuFrame(GpuPipeline pipeline) : pipeline_(pipeline) {
+  startCounts();
+}
+
+GpuFrame::GpuFrame(const DensityGrid& d) : density(uploadDensity(d)) {
+  startCounts();
+}
+
+void GpuFrame::startCounts() {
+  waits0_ = hostWaitCounts();
+  passes0_ = passCounts();
+  deferred_.clear();
+}
 
 void GpuFrame::buildDensity(const Scene& scene) {
   context();  // current before the first timer query or upload
@@ -34,6 +51,7 @@ auto densityAtPoint(const Volume& v) {
     const Vec3 f = u - Vec3(b);
     const IVec3 n = glm::min(v.dims - b, IVec3(2));  // 1 along a one-voxel axis
     float c[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    countHostWait("lamp model: density around a lamp");
     glGetTextureSubImage(v.texture.id(), 0, b.x, b.y, b.z, n.x, n.y, n.z, GL_RED, GL_FLOAT,
                          GLsizei(sizeof c), c);
     const auto at = [&](int i, int j, int k) {
@@ -63,8 +81,10 @@ void GpuFrame::newRender() {
   context();  // the queries are deleted in the frame's context
   timer = StageTimer();
   objects = SceneShadows();
+  samples.radianceCurrent = false;  // the positions and bins stay for a steady frame
   image = Texture();
   marks_.clear();
+  startCounts();
 }
 
 std::optional<std::array<unsigned, 3>> GpuFrame::deviceImage() const {
@@ -73,12 +93,23 @@ std::optional<std::array<unsigned, 3>> GpuFrame::deviceImage() const {
 }
 
 void GpuFrame::sync() {
-  glFinish();
+  // No glFinish: the GPU works on while the host records the next stage; each stage's GPU
+  // time comes from the timer queries (gpu_timings_ms), read in report() after the frame.
   marks_.push_back(timer.count());
 }
 
 void GpuFrame::report(RenderStats& st) {
   const Context& ctx = context();
+  // The frame's waits, before report() itself waits for the queries and the deferred stats.
+  const HostWaitCounts waits = hostWaitCounts();
+  const PassCounts passes = passCounts();
+  st.extra["host_waits"] = waits.waits - waits0_.waits;
+  if (waits.imageReadbacks > waits0_.imageReadbacks)
+    st.extra["image_readback_ms"] = waits.imageReadbackMs - waits0_.imageReadbackMs;
+  st.extra["dispatches"] = passes.dispatches - passes0_.dispatches;
+  st.extra["indirect_dispatches"] = passes.indirect - passes0_.indirect;
+  for (auto& [key, read] : deferred_) st.extra[key] = read();
+  deferred_.clear();
   st.backend = "gpu";
   st.device = ctx.info().renderer;
   const std::vector<std::pair<std::string, double>> spans = timer.spans();
@@ -100,7 +131,7 @@ void GpuFrame::report(RenderStats& st) {
       const std::string& stage = k < marks_.size() ? st.timingsMs[k].first : "after march";
       byStage[stage] = byStage.value(stage, 0.0) + spans[i].second;
     }
-    st.extra["gpu_ms_by_stage"] = byStage;
+    st.extra["gpu_timings_ms"] = byStage;
   }
   marks_.clear();
   st.extra["density_construction"] = splatted_ ? "gpu splat" : "cpu build + upload";
@@ -120,7 +151,16 @@ void VolumeTracerGpu::evaluate(Frame& frame, const Scene& scene, std::span<Radia
                                bool gradients) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
-  evaluate(scene, f.density, samples, gradients, &f.timer, shadows);
+  if (samples.empty()) return;
+  // Into the frame's resident samples: the gather reads S and ∇S where the tracer wrote them.
+  f.samples.setPoints(samples);
+  trace(scene, f.density, f.samples.points, samples.size(), f.samples.radiance, gradients, &f.timer,
+        shadows);
+  f.samples.radianceCurrent = true;
+  // The host copy (RenderResult::samples, a raster splat) unless the frame stays on the device
+  // with the compute gather: a Renderer frame then never waits for S and ∇S.
+  if (!(f.imageOnDevice && f.pipeline() == GpuPipeline::Compute))
+    readRadianceRecords(f.samples.radiance, samples);
 }
 
 ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& scene,
@@ -129,12 +169,27 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   ReconstructionStats st;
   sigmaT_ = scene.medium.sigmaT;
-  if (settingsBounds_ && lamp_)
+  // The lamps' bound: computed by the compute gather on the GPU; the raster splat reads the
+  // density around each lamp back (a host wait).
+  const bool gpuLampBounds = settingsBounds_ && lamp_ && pipeline_ == GpuPipeline::Compute;
+  if (settingsBounds_ && lamp_ && !gpuLampBounds)
     bounds_ =
         lampBounds(*settingsBounds_, LampModel(scene, f.density.bounds, densityAtPoint(f.density)),
                    f.density.bounds);
+  else if (gpuLampBounds)
+    bounds_ = settingsBounds_;
+  lampScene_ = gpuLampBounds ? &scene : nullptr;
   f.radiance = Volume();  // the previous render's volume goes back to the recycler first
-  f.radiance = reconstruct(f.density, samples, scene.medium.bounds, dims, &st, &f.timer);
+  auto counter = std::make_shared<Buffer>();
+  f.radiance = reconstruct(f.density, samples, scene.medium.bounds, dims, &st, &f.timer, &f.samples,
+                           counter.get());
+  // Read after the frame (GpuFrame::report), not inside it.
+  lampScene_ = nullptr;
+  f.deferStat("uncovered_voxels", [counter] {
+    GLuint n = 0;
+    counter->read(&n, sizeof n);
+    return Json(n);
+  });
   return st;
 }
 
@@ -145,7 +200,20 @@ ReconstructionStats PerVoxelGpu::reconstruct(Frame& frame, const Scene& scene,
   ReconstructionStats st;
   const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
   f.radiance = Volume();
-  f.radiance = build(scene, f.density, scene.medium.bounds, dims, &st, &f.timer, shadows);
+  auto counters = std::make_shared<Buffer>();
+  f.radiance =
+      build(scene, f.density, scene.medium.bounds, dims, &st, &f.timer, shadows, counters.get());
+  // Read after the frame (GpuFrame::report), not inside it.
+  f.deferStat("traced_voxels", [counters] {
+    GpuPerVoxelCounters n;
+    counters->read(&n, sizeof n);
+    return Json(n.traced);
+  });
+  f.deferStat("empty_voxels", [counters] {
+    GpuPerVoxelCounters n;
+    counters->read(&n, sizeof n);
+    return Json(n.skipped);
+  });
   return st;
 }
 

@@ -6,12 +6,16 @@
 /// kept by a Renderer (Method::retainDensity) makes every later render take its textures,
 /// buffers, framebuffers and queries from the objects the previous render released.
 
+#include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/stages.h"
-#include "gpu/stages.h"
+#include "gpu/device_samples.h"
+#include "gpu/dispatch.h"
 #include "gpu/timer.h"
+#include "gpu/tracing.h"
 #include "gpu/volume.h"
 
 namespace scatterlab::gpu {
@@ -21,7 +25,7 @@ class GpuFrame : public Frame {
 
  public:
   /// `pipeline`: how a density of Gaussians is built (gather or the paper's slice splat).
-  explicit GpuFrame(GpuPipeline pipeline = GpuPipeline::Compute) : pipeline_(pipeline) {}
+  explicit GpuFrame(GpuPipeline pipeline = GpuPipeline::Compute);
   /// A frame over an uploaded copy of `density` (tests; needs the context).
   explicit GpuFrame(const DensityGrid& density);
 
@@ -33,11 +37,20 @@ class GpuFrame : public Frame {
   void sync() override;
   /// Drops the pass timings and the scene objects of the previous render (the volumes stay).
   void newRender() override;
-  /// backend "gpu", device = GL_RENDERER, gpu_ms per pass, gpu_ms_by_stage (the passes' GPU ms
+  /// backend "gpu", device = GL_RENDERER, gpu_ms per pass, gpu_timings_ms (the passes' GPU ms
   /// summed per pipeline stage of timings_ms: the passes between two sync() calls belong to the
   /// stage that ended with the second), gpu_ms_total, density_construction, gl_version,
-  /// egl_platform. (On llvmpipe "GPU ms" are CPU time of the software rasteriser.)
+  /// egl_platform; host_waits (how many times the host blocked on the GPU in this render, the
+  /// image read-back aside), image_readback_ms (when the image was read back), dispatches and
+  /// indirect_dispatches (compute dispatches of this render), and the deferred stats.
+  /// (On llvmpipe "GPU ms" are CPU time of the software rasteriser.)
   void report(RenderStats& stats) override;
+
+  /// A statistic that would make the host wait if read now (a count the GPU writes): read by
+  /// `read` in report(), after the frame, into stats.extra[key].
+  void deferStat(std::string key, std::function<Json()> read) {
+    deferred_.emplace_back(std::move(key), std::move(read));
+  }
 
   /// The scene objects' triangles and shadow maps, built by the first stage that needs them
   /// (SceneShadows::build; "shadow maps" in the timings).
@@ -49,6 +62,10 @@ class GpuFrame : public Frame {
   std::optional<std::array<unsigned, 3>> deviceImage() const override;
 
   Volume density, radiance;
+  /// The samples on the GPU (gpu/device_samples.h): positions and bins kept across renders
+  /// while the samples do not move, S and ∇S written by each render's tracer.
+  DeviceSamples samples;
+  GpuPipeline pipeline() const { return pipeline_; }
   /// Method::imageOnDevice: the compute view march leaves its image in `image` (RGBA32F, alpha
   /// = the image's alpha) and returns an empty Image.
   bool imageOnDevice = false;
@@ -62,6 +79,11 @@ class GpuFrame : public Frame {
   bool splatted_ = false;
   std::vector<std::size_t> marks_;  ///< timer.count() at each sync() of this render
   std::optional<DensityGrid> host_;
+  /// The counters at the start of this render (host_waits, dispatches are differences).
+  HostWaitCounts waits0_;
+  PassCounts passes0_;
+  std::vector<std::pair<std::string, std::function<Json()>>> deferred_;
+  void startCounts();
 };
 
 }  // namespace scatterlab::gpu

@@ -1,8 +1,11 @@
 #include "gpu/gl.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -152,6 +155,28 @@ void countDeleted() {
 
 }  // namespace detail
 
+namespace {
+HostWaitCounts waitCounts;
+}
+
+HostWaitCounts hostWaitCounts() {
+  return waitCounts;
+}
+
+void countHostWait(std::string_view what) {
+  ++waitCounts.waits;
+  static const bool trace = [] {
+    const char* v = std::getenv("SCATTERLAB_TRACE_WAITS");
+    return v && *v && std::string_view(v) != "0";
+  }();
+  if (trace) std::fprintf(stderr, "scatterlab: host wait: %.*s\n", int(what.size()), what.data());
+}
+
+void countImageReadback(double ms) {
+  ++waitCounts.imageReadbacks;
+  waitCounts.imageReadbackMs += ms;
+}
+
 void checkGl(std::string_view pass) {
   std::string errors;
   for (int i = 0; i < 16; ++i) {
@@ -181,7 +206,9 @@ Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::strin
 }
 
 void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
-  if (n) glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
+  if (!n) return;
+  countHostWait("buffer read-back");
+  glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
 namespace {
@@ -314,6 +341,19 @@ Shader::Shader(GLenum stage, std::string_view source, std::string_view file) {
     throw GpuError("shader " + std::string(file) + " failed to compile:\n" + log);
   }
   label(GL_SHADER, id_, file);
+  declared_ = gpu::declaredUniforms(source);
+}
+
+std::vector<std::string> declaredUniforms(std::string_view source) {
+  // "uniform" as a whole word, optional precision, a type, then the name (arrays: name[N]).
+  static const std::regex decl(
+      R"((?:^|[^\w])uniform\s+(?:(?:lowp|mediump|highp)\s+)?[A-Za-z_]\w*\s+([A-Za-z_]\w*)\s*[\[;=])");
+  std::vector<std::string> names;
+  const std::string text(source);
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), decl); it != std::sregex_iterator();
+       ++it)
+    names.push_back((*it)[1].str());
+  return names;
 }
 
 Program::Program(std::initializer_list<const Shader*> shaders, std::string_view name) {
@@ -332,7 +372,46 @@ Program::Program(std::initializer_list<const Shader*> shaders, std::string_view 
     log.resize(std::strlen(log.c_str()));
     throw GpuError("program " + std::string(name) + " failed to link:\n" + log);
   }
-  label(GL_PROGRAM, id_, name);
+  gpu::label(GL_PROGRAM, id_, name);
+  auto u = std::make_shared<Uniforms>();
+  u->label = std::string(name);
+  for (const Shader* s : shaders)
+    for (const std::string& d : s->declaredUniforms()) u->declared.insert(d);
+  GLint count = 0;
+  glGetProgramInterfaceiv(id_, GL_UNIFORM, GL_ACTIVE_RESOURCES, &count);
+  GLint maxLen = 0;
+  glGetProgramInterfaceiv(id_, GL_UNIFORM, GL_MAX_NAME_LENGTH, &maxLen);
+  std::string buf(std::size_t(std::max(maxLen, 1)), '\0');
+  for (GLint i = 0; i < count; ++i) {
+    const GLenum prop = GL_LOCATION;
+    GLint location = -1;
+    glGetProgramResourceiv(id_, GL_UNIFORM, GLuint(i), 1, &prop, 1, nullptr, &location);
+    if (location < 0) continue;  // a member of a uniform or storage block
+    GLsizei len = 0;
+    glGetProgramResourceName(id_, GL_UNIFORM, GLuint(i), GLsizei(buf.size()), &len, buf.data());
+    std::string n(buf.data(), std::size_t(len));
+    if (n.size() > 3 && n.ends_with("[0]")) n.resize(n.size() - 3);
+    u->active.emplace(std::move(n), location);
+  }
+  uniforms_ = std::move(u);
+}
+
+GLint Program::uniform(std::string_view name) const {
+  if (!uniforms_) throw GpuError("uniform '" + std::string(name) + "' of an empty program");
+  if (const auto it = uniforms_->active.find(name); it != uniforms_->active.end())
+    return it->second;
+  if (uniforms_->declared.count(name)) return -1;
+  throw GpuError("program '" + uniforms_->label + "' has no uniform '" + std::string(name) +
+                 "' (a name no source of it declares)");
+}
+
+bool Program::declares(std::string_view name) const {
+  return uniforms_ && uniforms_->declared.count(name);
+}
+
+const std::string& Program::label() const {
+  static const std::string none;
+  return uniforms_ ? uniforms_->label : none;
 }
 
 Query::Query(GLenum target, std::string_view name) : target_(target) {

@@ -16,14 +16,33 @@
 
 #include <epoxy/gl.h>
 
+#include <map>
+#include <memory>
+#include <set>
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace scatterlab::gpu {
 
 /// Throws GpuError naming `pass` when glGetError reports anything (draining the queue).
 void checkGl(std::string_view pass);
+
+/// Host waits (issue 33): every call in gpu/ that blocks the host until the GPU has finished
+/// work (a read-back of a buffer or texture, glFinish, a query result) counts itself here, so a
+/// frame can report how many times it stopped for the GPU. The final image's read-back is
+/// counted apart, with its wall time. No context needed to read them.
+struct HostWaitCounts {
+  long long waits = 0;           ///< blocking calls other than the image read-back
+  long long imageReadbacks = 0;  ///< read-backs of a final image (readScreenImage)
+  double imageReadbackMs = 0.0;  ///< their host wall time
+};
+HostWaitCounts hostWaitCounts();
+/// Counts one blocking call (`what` is for debugging: SCATTERLAB_TRACE_WAITS=1 prints it).
+void countHostWait(std::string_view what);
+/// Counts one final-image read-back that took `ms` of host time.
+void countImageReadback(double ms);
 
 /// What the wrappers did since the process started (no context needed).
 struct GlObjectCounts {
@@ -192,17 +211,43 @@ class Shader : public GlObject<ShaderDeleter> {
  public:
   Shader() = default;
   Shader(GLenum stage, std::string_view source, std::string_view file);
+  /// The names of every `uniform` declared in the source (inside #ifdef'd-out blocks too).
+  const std::vector<std::string>& declaredUniforms() const { return declared_; }
+
+ private:
+  std::vector<std::string> declared_;
 };
 
+/// The names of the uniforms declared in GLSL `source` ("uniform TYPE NAME" with optional
+/// layout and precision; uniform blocks are not plain uniforms). No context.
+std::vector<std::string> declaredUniforms(std::string_view source);
+
 /// A linked program; link errors throw GpuError with the files and the info log.
+/// Uniform locations are resolved once, when the program is linked (the active uniforms), and
+/// checked on every use: uniform(name) of a name that no source of the program declares
+/// throws GpuError (a misspelt name never fails silently); a declared uniform the compiler
+/// removed (unused in this variant) gives -1, which GL ignores.
 class Program : public GlObject<ProgramDeleter> {
  public:
   Program() = default;
   Program(std::initializer_list<const Shader*> shaders, std::string_view label);
   void use() const { glUseProgram(id_); }
-  /// Location of uniform `name`, or -1 (unused uniforms are optimised away; setting -1 is a
-  /// no-op in GL, so callers need not check).
-  GLint uniform(const char* name) const { return glGetUniformLocation(id_, name); }
+  /// Location of uniform `name` (no GL call), or -1 for a declared uniform the compiler removed;
+  /// throws GpuError when no source declares `name`.
+  GLint uniform(std::string_view name) const;
+  /// Whether a source of the program declares uniform `name` (for passes shared by programs
+  /// that declare different uniforms).
+  bool declares(std::string_view name) const;
+  /// The program's label (for errors).
+  const std::string& label() const;
+
+ private:
+  struct Uniforms {
+    std::string label;
+    std::map<std::string, GLint, std::less<>> active;  ///< name (arrays: without [0]) → location
+    std::set<std::string, std::less<>> declared;
+  };
+  std::shared_ptr<const Uniforms> uniforms_;
 };
 
 /// Query object (timer queries for per-stage GPU times).

@@ -9,7 +9,7 @@
 #include "gpu/frame.h"
 #include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
-#include "gpu/stages.h"
+#include "gpu/tracing.h"
 
 namespace scatterlab::gpu {
 
@@ -48,10 +48,9 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
                    {"common.glsl", "light_space_march.comp.glsl"},
                    traced ? std::vector<std::string>{"SL_MARCH", "SL_TRACED"}
                           : std::vector<std::string>{"SL_MARCH"});
-  const Program& sum = cachedProgram("light-space march block sum", [] {
-    return computeProgram({"common.glsl", "light_space_march.comp.glsl"}, {"SL_BLOCK_SUM"},
-                          "light-space march block sum");
-  });
+  const Program& sum = program(
+      {.compute = {"common.glsl", "light_space_march.comp.glsl"}, .defines = {"SL_BLOCK_SUM"}},
+      "light-space march block sum");
   const int w = scene.camera.width, h = scene.camera.height, M = s_.interleave;
   const Texture terms = Texture::make2D(GL_RGBA32F, w, h, "light-space march terms");
   const Texture base = Texture::make2D(GL_RGBA32F, w, h, "light-space march base");
@@ -67,7 +66,7 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
     setVec3(march, "uBackground", scene.background);
     bindImage(binding::kScreenOutImage, terms, GL_WRITE_ONLY);
     bindImage(binding::kScreenBaseImage, base, GL_READ_WRITE);
-    glDispatchCompute(groups(w, 8), groups(h, 8), 1);
+    dispatch("light-space march", {groups(w, 8), groups(h, 8), 1});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("light-space march");
@@ -81,12 +80,12 @@ Image LightSpaceMarchGpu::integrate(const Scene& scene, const Volume& density, f
     glUniform1i(sum.uniform("uVertical"), 0);
     bindImage(binding::kScreenInImage, terms, GL_READ_ONLY);
     bindImage(binding::kScreenOutImage, rows, GL_WRITE_ONLY);
-    glDispatchCompute(groups(w, 8), groups(h, 8), 1);
+    dispatch("block sum", {groups(w, 8), groups(h, 8), 1});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     glUniform1i(sum.uniform("uVertical"), 1);
     bindImage(binding::kScreenInImage, rows, GL_READ_ONLY);
     bindImage(binding::kScreenOutImage, out, GL_WRITE_ONLY);
-    glDispatchCompute(groups(w, 8), groups(h, 8), 1);
+    dispatch("block sum", {groups(w, 8), groups(h, 8), 1});
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   checkGl("block sum");
@@ -114,8 +113,8 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
   checkRadialBlurScene(scene, s_);
   // delta1 is the step of the surfaces' T(p, l) (the passes trace no light otherwise).
   const ScreenPass pass(scene, density, delta1_ > 0.0f ? delta1_ : march_.step, shadowMap_, timer);
-  const auto program = [&](const char* define, const char* key) -> const Program& {
-    return pass.program(key, {"common.glsl", "radial_blur.comp.glsl"}, {define});
+  const auto program = [&](const char* define, const char* label) -> const Program& {
+    return pass.program(label, {"common.glsl", "radial_blur.comp.glsl"}, {define});
   };
   const Program& basePass = program("SL_BASE", "radial blur base");
   const Program& prePass = program("SL_PREPASS", "radial blur pre-pass");
@@ -136,7 +135,7 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
     marchUniforms(basePass);
     glUniform2i(basePass.uniform("uPassSize"), w, h);
     bindImage(binding::kScreenOutImage, image, GL_WRITE_ONLY);
-    glDispatchCompute(groups(w, 8), groups(h, 8), 1);
+    dispatch("radial blur base", {groups(w, 8), groups(h, 8), 1});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("radial blur base");
@@ -153,7 +152,7 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
       glUniform1i(prePass.uniform("uDownsample"), ds);
       glUniform2i(prePass.uniform("uPassSize"), pw, ph);
       bindImage(binding::kScreenOutImage, pre, GL_WRITE_ONLY);
-      glDispatchCompute(groups(pw, 8), groups(ph, 8), 1);
+      dispatch("radial blur pre-pass", {groups(pw, 8), groups(ph, 8), 1});
       glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     checkGl("radial blur pre-pass");
@@ -170,7 +169,7 @@ Image RadialBlurGpu::integrate(const Scene& scene, const Volume& density, StageT
       glUniform1f(blur.uniform("uScale"), s_.exposure * s_.weight / float(s_.samples));
       bindImage(binding::kScreenInImage, pre, GL_READ_ONLY);
       bindImage(binding::kScreenBaseImage, image, GL_READ_WRITE);
-      glDispatchCompute(groups(w, 8), groups(h, 8), 1);
+      dispatch("radial blur", {groups(w, 8), groups(h, 8), 1});
       glMemoryBarrier(GL_ALL_BARRIER_BITS);
     }
     checkGl("radial blur");

@@ -7,9 +7,12 @@
 #include "gpu/dynamic_sampling.h"
 #include "gpu/frame.h"
 #include "gpu/post_process.h"
+#include "gpu/reconstructions.h"
 #include "gpu/screen_march.h"
-#include "gpu/stages.h"
+#include "gpu/slice_marcher.h"
+#include "gpu/tracing.h"
 #include "gpu/view_march.h"
+#include "gpu/volume_tracer.h"
 #include "sampling/dynamic_sampling.h"
 
 namespace scatterlab::gpu {

@@ -9,7 +9,7 @@
 #include "gpu/frame.h"
 #include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
-#include "gpu/stages.h"
+#include "gpu/tracing.h"
 #include "shading/screen_march.h"
 
 namespace scatterlab::gpu {
@@ -53,7 +53,7 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     glUniform1i(march.uniform("uJitter"), int(s_.jitter));
     glUniform1i(march.uniform("uTableSize"), kBlueNoiseSize);
     glUniform1f(march.uniform("uMinTransmittance"), minT_);
-    glDispatchCompute(groups(lw, 8), groups(lh, 8), 1);
+    dispatch("jittered march", {groups(lw, 8), groups(lh, 8), 1});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("jittered march");
@@ -70,7 +70,7 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     glUniform1i(upsample.uniform("uDownsample"), d);
     glUniform1f(upsample.uniform("uDepthSigma"), kUpsampleDepthSigma);
     setVec3(upsample, "uBackground", scene.background);
-    glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
+    dispatch("bilateral upsample", {groups(cam.width, 8), groups(cam.height, 8), 1});
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   checkGl("bilateral upsample");
@@ -114,7 +114,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     glBindImageTexture(binding::kTransmittanceMapImage, map.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
                        GL_R32F);
     glUniform1i(build.uniform("uMapRes"), R);
-    glDispatchCompute(groups(R, 4), groups(R, 4), groups(layers, 4));
+    dispatch("transmittance map", {groups(R, 4), groups(R, 4), groups(layers, 4)});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("froxel transmittance map");
@@ -138,7 +138,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
                          GL_R32F);
       glUniform1i(scatter.uniform("uMapRes"), R);
     }
-    glDispatchCompute(groups(g.x, 8), groups(g.y, 8), 1);
+    dispatch("froxel accumulate", {groups(g.x, 8), groups(g.y, 8), 1});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("froxel accumulate");
@@ -152,7 +152,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
                        GL_RGBA32F);
     glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     setVec3(lookup, "uBackground", scene.background);
-    glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
+    dispatch("froxel lookup", {groups(cam.width, 8), groups(cam.height, 8), 1});
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   checkGl("froxel lookup");

@@ -1,5 +1,7 @@
 #include "gpu/screen_pass.h"
 
+#include <chrono>
+
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
 #include "gpu/shaders.h"
@@ -14,10 +16,10 @@ ScreenPass::ScreenPass(const Scene& scene, const Volume& density, float delta1,
   surfaces_.build(scene, objects_, inputs_, timer);
 }
 
-const Program& ScreenPass::program(std::string key, std::vector<std::string> files,
+const Program& ScreenPass::program(std::string_view label, std::vector<std::string> files,
                                    std::vector<std::string> defines) const {
-  addShadowVariant(shadows_, key, files, defines);
-  return cachedProgram(key, [&] { return computeProgram(files, defines, key); });
+  ProgramVariant v{.compute = std::move(files), .defines = std::move(defines)};
+  return gpu::program(addShadowVariant(shadows_, v), label);
 }
 
 void ScreenPass::bind(const Program& p) const {
@@ -32,9 +34,11 @@ void setScreenCamera(const Program& p, const Scene& scene) {
   setVec3(p, "uRight", gen.right);
   setVec3(p, "uUp", gen.up);
   glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
-  // Unused (absent) uniforms have location −1, which GL ignores.
-  glUniform2i(p.uniform("uImageSize"), scene.camera.width, scene.camera.height);
-  glUniform2f(p.uniform("uSize"), float(scene.camera.width), float(scene.camera.height));
+  // The image size as the program declares it.
+  if (p.declares("uImageSize"))
+    glUniform2i(p.uniform("uImageSize"), scene.camera.width, scene.camera.height);
+  if (p.declares("uSize"))
+    glUniform2f(p.uniform("uSize"), float(scene.camera.width), float(scene.camera.height));
   glUniform1f(p.uniform("uAlbedo"), scene.medium.albedo);
 }
 
@@ -44,8 +48,11 @@ Image readScreenImage(const Texture& t, int w, int h, OutputAlpha alpha, const c
   std::vector<float> rgba(n * 4);
   {
     ScopedGpuTimer time(timer, "read-back");
+    const auto t0 = std::chrono::steady_clock::now();
     glGetTextureImage(t.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
                       rgba.data());
+    countImageReadback(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   checkGl(pass);
   Image img(w, h);

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/image.h"
-#include "gpu/stages.h"
+#include "gpu/tracing.h"
 
 namespace scatterlab::gpu {
 
@@ -22,9 +22,9 @@ class ScreenPass {
   ScreenPass(const ScreenPass&) = delete;
   ScreenPass& operator=(const ScreenPass&) = delete;
 
-  /// The compute program of `files` with `defines`, built once under `key` (with the shadow-map
-  /// variant, and its key suffix, when the scene has objects).
-  const Program& program(std::string key, std::vector<std::string> files,
+  /// The compute program of `files` with `defines` (with the shadow-map variant when the scene
+  /// has objects), built once per variant; `label` names it.
+  const Program& program(std::string_view label, std::vector<std::string> files,
                          std::vector<std::string> defines = {}) const;
   /// For `p` (in use): binds the tracing inputs and the surface textures and sets the camera
   /// uniforms (setScreenCamera).

@@ -1,8 +1,10 @@
 #include "gpu/shaders.h"
 
+#include <cstdio>
 #include <map>
 
 #include "core/error.h"
+#include "core/stages.h"
 #include "gpu/bindings.h"
 
 namespace scatterlab::gpu {
@@ -21,6 +23,7 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
   std::string src = "#version 450 core\n";
   for (const BindingDefine& b : kBindingDefines)
     src += "#define " + std::string(b.name) + " " + std::to_string(b.value) + "\n";
+  for (const std::string& c : sharedConstantDefines()) src += "#define " + c + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
   std::string names;
   for (size_t i = 0; i < files.size(); ++i) {
@@ -57,11 +60,65 @@ Program graphicsProgram(const std::vector<std::string>& vertexFiles,
   return Program({&vs, &fs}, label);
 }
 
-const Program& cachedProgram(const std::string& key, const std::function<Program()>& make) {
+std::vector<std::string> sharedConstantDefines() {
+  std::vector<std::string> out;
+  for (const SharedConstant& c : kSharedConstants) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g", double(c.value));  // 9 digits: a float round-trips
+    std::string v = buf;
+    if (v.find_first_of(".e") == std::string::npos) v += ".0";  // a float literal, not an int
+    out.push_back(std::string(c.define) + " " + v);
+  }
+  return out;
+}
+
+ProgramVariant& ProgramVariant::prepend(const std::string& file) {
+  std::vector<std::string>& files = compute.empty() ? fragment : compute;
+  files.insert(files.begin(), file);
+  return *this;
+}
+
+std::string ProgramVariant::key() const {
+  std::string k;
+  const auto add = [&](const char* what, const std::vector<std::string>& list) {
+    k += what;
+    for (const std::string& s : list) k += s + ";";
+  };
+  add("cs:", compute);
+  add("|vs:", vertex);
+  add("|fs:", fragment);
+  add("|defines:", defines);
+  return k;
+}
+
+namespace {
+std::size_t built = 0;
+}
+
+const Program& program(const ProgramVariant& v, std::string_view label) {
   static auto* cache = new std::map<std::string, Program>();  // leaked on purpose, see header
+  const std::string key = v.key();
   auto it = cache->find(key);
-  if (it == cache->end()) it = cache->emplace(key, make()).first;
+  if (it == cache->end()) {
+    if (v.compute.empty() == (v.vertex.empty() || v.fragment.empty()))
+      throw GpuError("program '" + std::string(label) +
+                     "': a variant has compute files or vertex and fragment files");
+    std::string name(label);
+    if (!v.defines.empty()) {
+      name += " [";
+      for (std::size_t i = 0; i < v.defines.size(); ++i) name += (i ? " " : "") + v.defines[i];
+      name += "]";
+    }
+    Program p = v.compute.empty() ? graphicsProgram(v.vertex, v.fragment, v.defines, name)
+                                  : computeProgram(v.compute, v.defines, name);
+    it = cache->emplace(key, std::move(p)).first;
+    ++built;
+  }
   return it->second;
+}
+
+std::size_t programsBuilt() {
+  return built;
 }
 
 }  // namespace scatterlab::gpu

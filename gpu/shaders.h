@@ -1,9 +1,10 @@
 #pragma once
 /// Shaders embedded at build time from gpu/shaders/*.glsl (gpu/embed_shaders.cmake), and
 /// programs built from them. A program's source is "#version 450 core", then the binding
-/// points of gpu/bindings.h as #defines (BINDING_LIGHTS 0, ...), then the variant's #defines,
-/// then the listed files in order, each preceded by `#line 1 <index>` so that the info log's
-/// "index:line" points into the right file; a failure throws GpuError naming the files and
+/// points of gpu/bindings.h as #defines (BINDING_LIGHTS 0, ...), then the physics constants
+/// shared with the CPU (kSharedConstants of core/stages.h: SL_MIN_V, ...), then the variant's
+/// #defines, then the listed files in order, each preceded by `#line 1 <index>` so that the info
+/// log's "index:line" points into the right file; a failure throws GpuError naming the files and
 /// quoting the log.
 
 #include <functional>
@@ -40,9 +41,36 @@ Program graphicsProgram(const std::vector<std::string>& vertexFiles,
                         const std::vector<std::string>& fragmentFiles,
                         const std::vector<std::string>& defines, std::string_view label);
 
-/// The program built by `make` under `key`, built once per process: the context lives until
-/// exit, and so do its programs (deliberately never deleted, so that no GL call runs during
-/// static destruction). Needs a current context.
-const Program& cachedProgram(const std::string& key, const std::function<Program()>& make);
+/// The #define line of every shared constant ("SL_MIN_V 1e-09", as GLSL float literals that
+/// read back as the C++ float exactly). No context.
+std::vector<std::string> sharedConstantDefines();
+
+/// A program variant: the embedded files of its stages and its #defines. They are its identity:
+/// the cache key is made from them, so two passes asking for the same files and defines share
+/// one program, and no key can disagree with what was compiled.
+struct ProgramVariant {
+  std::vector<std::string> compute{};   ///< a compute program's files, or
+  std::vector<std::string> vertex{};    ///< a graphics program's vertex stage
+  std::vector<std::string> fragment{};  ///< and fragment stage
+  std::vector<std::string> defines{};   ///< "NAME" or "NAME VALUE", in order
+  /// Appends `d` to the defines when `on`.
+  ProgramVariant& define(std::string d, bool on = true) {
+    if (on) defines.push_back(std::move(d));
+    return *this;
+  }
+  /// Puts `file` before the other files of the compute stage, or else of the fragment stage
+  /// (a library of the stage that traces, such as shadow.glsl).
+  ProgramVariant& prepend(const std::string& file);
+  std::string key() const;
+};
+
+/// The program of `variant`, built once per process (`label` names it in errors and
+/// debuggers: its first use's label, with the defines). The context lives until exit, and so
+/// do the programs (deliberately never deleted, so that no GL call runs during static
+/// destruction). Needs a current context.
+const Program& program(const ProgramVariant& variant, std::string_view label);
+
+/// How many programs program() has built (each variant once).
+std::size_t programsBuilt();
 
 }  // namespace scatterlab::gpu

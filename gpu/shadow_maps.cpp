@@ -13,12 +13,10 @@
 
 namespace scatterlab::gpu {
 
-void addShadowVariant(const ShadowMaps* shadows, std::string& key, std::vector<std::string>& files,
-                      std::vector<std::string>& defines) {
-  if (!shadows) return;
-  key += " +objects";
-  files.insert(files.begin(), "shadow.glsl");
-  defines.push_back("SL_OBJECTS");
+ProgramVariant& addShadowVariant(const ShadowMaps* shadows, ProgramVariant& v) {
+  if (!shadows) return v;
+  v.prepend("shadow.glsl");
+  return v.define("SL_OBJECTS");
 }
 
 ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
@@ -48,11 +46,9 @@ ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
   if (layers.empty()) return;
 
   // Both programs are built before the timer starts (compiling is not the maps' cost).
-  const Program& draw = cachedProgram("shadow map", [] {
-    return graphicsProgram({"objects.vert.glsl"}, {"shadow_map.frag.glsl"}, {}, "shadow map");
-  });
-  const Program& blur = cachedProgram(
-      "shadow blur", [] { return computeProgram({"shadow_blur.comp.glsl"}, {}, "shadow blur"); });
+  const Program& draw = program(
+      {.vertex = {"objects.vert.glsl"}, .fragment = {"shadow_map.frag.glsl"}}, "shadow map");
+  const Program& blur = program({.compute = {"shadow_blur.comp.glsl"}}, "shadow blur");
   ScopedGpuTimer t(timer, "shadow maps");
   const Texture depth = Texture::make2D(GL_DEPTH_COMPONENT32F, res, res, "shadow map depth");
   const Framebuffer fbo("shadow map");
@@ -98,7 +94,7 @@ ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
     glBindImageTexture(binding::kBlurSource, src.id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_RG32F);
     glBindImageTexture(binding::kBlurTarget, dst.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RG32F);
     glUniform1i(blur.uniform("uAxis"), axis);
-    glDispatchCompute(groups(size_t(res), 8), groups(size_t(res), 8), GLuint(layers_));
+    dispatch("shadow map blur", {groups(size_t(res), 8), groups(size_t(res), 8), GLuint(layers_)});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   }
   checkGl("shadow map blur");
@@ -118,6 +114,7 @@ void ShadowMaps::bind(const Program& p) const {
 std::vector<float> ShadowMaps::readLayer(int layer) const {
   const int res = settings_.resolution;
   std::vector<float> out(size_t(res) * res * 2);
+  countHostWait("shadow map read-back");
   glGetTextureSubImage(maps_.id(), 0, 0, 0, layer, res, res, 1, GL_RG, GL_FLOAT,
                        GLsizei(out.size() * sizeof(float)), out.data());
   checkGl("shadow map read-back");

@@ -33,6 +33,7 @@
 #include "core/stages.h"
 #include "gpu/gl.h"
 #include "gpu/objects.h"
+#include "gpu/shaders.h"
 #include "gpu/timer.h"
 
 namespace scatterlab::gpu {
@@ -73,8 +74,7 @@ class ShadowMaps {
 };
 
 /// Adds what a tracing program needs for visibility through `shadows` (when not null): the
-/// define SL_OBJECTS, "shadow.glsl" before the other files, " +objects" to the cache key.
-void addShadowVariant(const ShadowMaps* shadows, std::string& key, std::vector<std::string>& files,
-                      std::vector<std::string>& defines);
+/// define SL_OBJECTS and "shadow.glsl" before the other files of every stage.
+ProgramVariant& addShadowVariant(const ShadowMaps* shadows, ProgramVariant& variant);
 
 }  // namespace scatterlab::gpu

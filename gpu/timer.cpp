@@ -22,6 +22,7 @@ std::vector<std::pair<std::string, double>> StageTimer::spans() {
   end();
   std::vector<std::pair<std::string, double>> out;
   out.reserve(spans_.size());
+  if (!spans_.empty()) countHostWait("timer query results");
   for (Span& s : spans_) {
     GLuint64 t0 = 0, t1 = 0;
     glGetQueryObjectui64v(s.start.id(), GL_QUERY_RESULT, &t0);

@@ -34,21 +34,12 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   // The surfaces' T(p, l) is traced with delta1 (the slice marcher's and CPU's convention).
   const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
   std::vector<std::string> defines;
-  std::string key = "view march";
-  if (factor_) {
-    defines.push_back("SL_FACTOR_LIGHTS");
-    key += " x A";
-    if (lamp_) {
-      defines.push_back("SL_LAMP_MODEL");
-      key += " lamp";
-    }
-  }
-  if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims)) {
+  if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
+  if (factor_ && lamp_) defines.push_back("SL_LAMP_MODEL");
+  if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims))
     defines.push_back("SL_FUSED");
-    key += " fused";
-  }
-  const Program& march =
-      pass.program(key, {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"}, defines);
+  const Program& march = pass.program(
+      "view march", {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"}, defines);
   const Camera& cam = scene.camera;
   Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image");
   const int strata = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
@@ -65,7 +56,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);
     glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    glDispatchCompute(groups(cam.width, 8), groups(cam.height, 8), 1);
+    dispatch("view march", {groups(cam.width, 8), groups(cam.height, 8), 1});
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
   }
   checkGl("view march");

@@ -9,7 +9,7 @@
 /// their distance and adds T·L_p. Needs the GL context for integrate().
 
 #include "core/stages.h"
-#include "gpu/stages.h"
+#include "gpu/tracing.h"
 
 namespace scatterlab::gpu {
 

@@ -56,6 +56,7 @@ DensityGrid readDensity(const Volume& v) {
   context();
   DensityGrid g(v.bounds, v.dims);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  countHostWait("density read-back");
   glGetTextureImage(v.texture.id(), 0, GL_RED, GL_FLOAT, GLsizei(g.size() * sizeof(float)),
                     g.data().data());
   checkGl("density read-back");
@@ -66,6 +67,7 @@ RadianceGrid readRadiance(const Volume& v) {
   context();
   RadianceGrid g(v.bounds, v.dims);
   std::vector<float> rgba(g.size() * 4);
+  countHostWait("radiance read-back");
   glGetTextureImage(v.texture.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
                     rgba.data());
   checkGl("radiance read-back");
@@ -110,9 +112,8 @@ namespace {
 /// splatGaussians under GpuPipeline::Compute.
 Volume gatherGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IVec3 dims,
                        StageTimer* timer) {
-  const Program& program = cachedProgram("density gather", [] {
-    return computeProgram({"density_gather.comp.glsl"}, {}, "density gather");
-  });
+  const Program& program =
+      gpu::program({.compute = {"density_gather.comp.glsl"}}, "density gather");
   Volume v;
   v.bounds = bounds;
   v.dims = dims;
@@ -139,7 +140,7 @@ Volume gatherGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, I
   blobBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBlobs);
   binBufs.bind();
   glBindImageTexture(binding::kDensityImage, v.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
-  glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+  dispatch("density gather", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)});
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                   GL_TEXTURE_UPDATE_BARRIER_BIT);
   checkGl("density gather");
@@ -152,10 +153,9 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
                       StageTimer* timer, GpuPipeline pipeline) {
   context();
   if (pipeline == GpuPipeline::Compute) return gatherGaussians(blobs, bounds, dims, timer);
-  const Program& program = cachedProgram("density splat", [] {
-    return graphicsProgram({"density_splat.vert.glsl"}, {"density_splat.frag.glsl"}, {},
-                           "density splat");
-  });
+  const Program& program =
+      gpu::program({.vertex = {"density_splat.vert.glsl"}, .fragment = {"density_splat.frag.glsl"}},
+                   "density splat");
   Volume v;
   v.bounds = bounds;
   v.dims = dims;
@@ -211,9 +211,8 @@ const Texture& residualLattice(const std::shared_ptr<const SogDensity>& sog, Sta
   cache.address = nullptr;
   cache.texture = Texture::make3D(GL_R32F, n.x, n.y, n.z, "sog residual lattice");
   const Buffer list(packed.size() * sizeof(GLint), packed.data(), 0, "sog residual entries");
-  const Program& scatter = cachedProgram("sog residual scatter", [] {
-    return computeProgram({"sog_residual.comp.glsl"}, {"SL_SCATTER"}, "sog residual scatter");
-  });
+  const Program& scatter = program(
+      {.compute = {"sog_residual.comp.glsl"}, .defines = {"SL_SCATTER"}}, "sog residual scatter");
   ScopedGpuTimer t(timer, "residual upload");
   const float zero = 0.0f;
   glClearTexImage(cache.texture.id(), 0, GL_RED, GL_FLOAT, &zero);
@@ -225,7 +224,7 @@ const Texture& residualLattice(const std::shared_ptr<const SogDensity>& sog, Sta
     list.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kResidualEntries);
     glBindImageTexture(binding::kResidualImage, cache.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
                        GL_R32F);
-    glDispatchCompute(groups(entries.size(), 64), 1, 1);
+    dispatch("residual upload", {groups(entries.size(), 64), 1, 1});
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   }
   checkGl("sog residual upload");
@@ -245,9 +244,7 @@ Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds,
   const bool useF = model.residual.size() > 0;
   const Texture* lattice = useF ? &residualLattice(sog, timer, &uploaded) : nullptr;
   if (residualUploaded) *residualUploaded = uploaded;
-  const Program& add = cachedProgram("sog residual add", [] {
-    return computeProgram({"sog_residual.comp.glsl"}, {}, "sog residual add");
-  });
+  const Program& add = program({.compute = {"sog_residual.comp.glsl"}}, "sog residual add");
   const ResidualHash& r = model.residual;
   ScopedGpuTimer t(timer, "residual add");
   add.use();
@@ -262,7 +259,7 @@ Volume splatSog(const std::shared_ptr<const SogDensity>& sog, const Box& bounds,
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
   if (lattice) glBindTextureUnit(binding::kResidualTexture, lattice->id());
   glBindImageTexture(binding::kDensityImage, v.texture.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_R32F);
-  glDispatchCompute(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+  dispatch("residual add", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)});
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                   GL_TEXTURE_UPDATE_BARRIER_BIT);
   checkGl("sog residual add");

@@ -182,19 +182,26 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
   return s;
 }
 
-#ifdef SL_LAMP_MODEL
-const float kLampDepth = 2.0;  // core/stages.h
+#if defined(SL_LAMP_MODEL) || defined(SL_LAMP_BOUNDS)
+const float kLampDepth = SL_LAMP_DEPTH;  // kLampDepth of core/stages.h, injected
 // LampModel (shading/transport.h): m_l = exp(−κ·q / (q + κ)), q = k_l·d, k_l = σt·D(s_l) for a
 // point or spot light inside the medium's box; 1 otherwise.
-float lampModel(int li, vec3 x) {
+// k_l of light li: σt·D(s_l) inside the box, 0 for a directional light or one outside.
+float lampK(int li) {
   GpuLight l = lights[li];
-  if (int(l.positionType.w) == 2) return 1.0;
+  if (int(l.positionType.w) == 2) return 0.0;
   vec3 p = l.positionType.xyz;
-  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 1.0;
-  float k = uSigmaT * densityAtIndex(p * uDensityScale + uDensityOffset);
+  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 0.0;
+  return uSigmaT * densityAtIndex(p * uDensityScale + uDensityOffset);
+}
+// m_l at distance d from a lamp of k_l = k.
+float lampModelAt(float k, float d) {
   if (!(k > 0.0)) return 1.0;
-  float q = k * length(p - x);
+  float q = k * d;
   return exp(-kLampDepth * q / (q + kLampDepth));
+}
+float lampModel(int li, vec3 x) {
+  return lampModelAt(lampK(li), length(lights[li].positionType.xyz - x));
 }
 #endif
 
@@ -291,7 +298,7 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
 }
 
 // What the samples hold at p seen from the camera at uEye (per-voxel and evaluator
-// convention): S; V = S / A with SL_FACTOR_LIGHTS; ln V (V clamped below at 1e-9, kMinV of
+// convention): S; V = S / A with SL_FACTOR_LIGHTS; ln V (V clamped below at SL_MIN_V, kMinV of
 // cpu/radiance_evaluator.h) with SL_LOG_SPACE too.
 uniform vec3 uEye;
 // The unit direction from p to the camera, (0, 0, 1) at the camera itself.
@@ -303,7 +310,7 @@ vec3 towardsEye(vec3 p) {
 vec3 sourceTowardsEye(vec3 p) {
   vec3 toViewer = towardsEye(p);
 #if defined(SL_FACTOR_LIGHTS) && defined(SL_LOG_SPACE)
-  return log(max(factoredSource(p, toViewer), vec3(1e-9)));
+  return log(max(factoredSource(p, toViewer), vec3(SL_MIN_V)));
 #elif defined(SL_FACTOR_LIGHTS)
   return factoredSource(p, toViewer);
 #else

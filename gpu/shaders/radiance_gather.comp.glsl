@@ -4,10 +4,14 @@
 // (gpu/sphere_bins.h: ascending sample order, the order in which the rasterised splat blends,
 // radiance_splat.frag.glsl, whose per-sample arithmetic this mirrors). The sums go to the same
 // image the normalisation reads. With SL_OCCLUSION compiled after common.glsl.
+// The samples are read as the volume tracer leaves them (struct of arrays): positions and radii
+// at BINDING_SAMPLES (gpu::GpuSamplePoint), S and ∇S at BINDING_RADIANCE (gpu::GpuRadianceRecord),
+// so the tracer's output is gathered where it was written, with no trip through the host.
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 
-struct SplatSample { vec4 positionRadius; vec4 S; vec4 dS[3]; };  // gpu::GpuSplatSample
-layout(std430, binding = BINDING_SPLAT_SAMPLES) readonly buffer Samples { SplatSample samples[]; };
+struct GatherRecord { vec4 S; vec4 dS[3]; };  // gpu::GpuRadianceRecord
+layout(std430, binding = BINDING_SAMPLES) readonly buffer GatherPoints { vec4 points[]; };
+layout(std430, binding = BINDING_RADIANCE) readonly buffer GatherRadiance { GatherRecord records[]; };
 layout(std430, binding = BINDING_BIN_OFFSETS) readonly buffer BinOffsets { uint binOffsets[]; };
 layout(std430, binding = BINDING_BIN_ITEMS) readonly buffer BinItems { uint binItems[]; };
 layout(rgba32f, binding = BINDING_SUMS_IMAGE) uniform writeonly image3D uSums;
@@ -22,6 +26,22 @@ uniform float uDensityVoxel;  // smallest density voxel edge (world units)
 #ifdef SL_BOUNDED
 uniform vec2 uTaylorBounds;  // TaylorBounds (lo, hi): each Taylor estimate is clamped to it
 #endif
+#ifdef SL_LAMP_BOUNDS
+// After common.glsl (its lamp functions): the clamp's hi tightened for this frame on the GPU, as
+// shading/transport.h lampBounds does on the host: hi = min(hi, 1 / min_l m_l(box diagonal)),
+// its ln for ln V (SL_LOG_SPACE), from the lights and the density at each lamp, so that the
+// host never reads the density around the lamps inside a frame.
+uniform float uBoxDiagonal;
+float lampTaylorHi(float hi) {
+  float m = 1.0;
+  for (int i = 0; i < uLightCount; ++i) m = min(m, lampModelAt(lampK(i), uBoxDiagonal));
+#ifdef SL_LOG_SPACE
+  return min(hi, log(1.0 / m));
+#else
+  return min(hi, 1.0 / m);
+#endif
+}
+#endif
 
 void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
@@ -32,15 +52,22 @@ void main() {
   ivec3 b = v / uBinVoxels;
   int bin = (b.z * uBins.y + b.y) * uBins.x + b.x;
   vec4 sum = vec4(0.0);
+#ifdef SL_BOUNDED
+  float hi = uTaylorBounds.y;
+#ifdef SL_LAMP_BOUNDS
+  hi = lampTaylorHi(hi);
+#endif
+#endif
   for (uint k = binOffsets[bin]; k < binOffsets[bin + 1]; ++k) {
-    SplatSample s = samples[binItems[k]];
-    vec3 d = x - s.positionRadius.xyz;
+    uint j = binItems[k];
+    vec4 positionRadius = points[j];
+    vec3 d = x - positionRadius.xyz;
     float dist = length(d);
-    float R = s.positionRadius.w;
+    float R = positionRadius.w;
     if (!(dist < R)) continue;
-    float W = R / max(dist, 1e-6 * R);
+    float W = R / max(dist, SL_SINGULAR_EPS * R);
 #ifdef SL_OCCLUSION
-    vec3 p = s.positionRadius.xyz;
+    vec3 p = positionRadius.xyz;
     int steps = max(1, int(ceil(dist / uDensityVoxel)));
     float tau = 0.0;
     for (int m = 0; m < steps; ++m)
@@ -48,9 +75,10 @@ void main() {
                             uDensityOffset);
     W *= exp(-uSigmaT * tau * (dist / float(steps)));
 #endif
+    GatherRecord s = records[j];
     vec3 taylor = s.S.rgb + d.x * s.dS[0].rgb + d.y * s.dS[1].rgb + d.z * s.dS[2].rgb;
 #ifdef SL_BOUNDED
-    taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(uTaylorBounds.y));
+    taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(hi));
 #endif
     sum += vec4(W * taylor, W);
   }

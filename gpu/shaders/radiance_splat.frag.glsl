@@ -24,7 +24,7 @@ void main() {
   if (!(dist < R)) discard;
   // A voxel centre on the sample itself: W is unbounded; a large finite weight keeps the sum a
   // weighted average dominated by this sample (the same clamp as the CPU twin in the tests).
-  float W = R / max(dist, 1e-6 * R);
+  float W = R / max(dist, SL_SINGULAR_EPS * R);
 #ifdef SL_OCCLUSION
   // Occlusion-aware weight (interpolateSamples' twin): exp(−σt·τ) of the segment from the
   // sample to the voxel, τ by the midpoint rule with steps of at most one density voxel.

@@ -5,6 +5,8 @@
 #include <regex>
 #include <set>
 
+#include "core/stages.h"
+#include "gpu/dispatch.h"
 #include "gpu/gl.h"
 #include "gpu/shaders.h"
 #include "gpu_support.h"
@@ -156,6 +158,99 @@ TEST(GpuShaders, CompileErrorNamesTheFileAndQuotesTheLog) {
                                    "bad define"),
                GpuError);
   glGetError();  // compile failures are not GL errors, but leave the queue clean
+}
+
+TEST(GpuPassLayer, AMisspeltUniformIsAnErrorAndARemovedOneIsIgnored) {
+  SCATTERLAB_REQUIRE_GPU();
+  // The gather declares uTaylorBounds only under SL_BOUNDED (removed otherwise) and never
+  // declares uTaylorBound.
+  const gpu::Program& p =
+      gpu::program({.compute = {"radiance_gather.comp.glsl"}}, "pass layer test");
+  EXPECT_GE(p.uniform("uGridDims"), 0);
+  EXPECT_EQ(p.uniform("uTaylorBounds"), -1);
+  try {
+    (void)p.uniform("uGridDim");
+    FAIL() << "expected GpuError";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("uGridDim'"), std::string::npos) << m;
+    EXPECT_NE(m.find("pass layer test"), std::string::npos) << m;
+  }
+  // Declarations are read from the sources: layout, precision, arrays; not uniform blocks.
+  EXPECT_EQ(gpu::declaredUniforms("layout(binding = 0) uniform sampler3D uDensity;\n"
+                                  "uniform highp vec3 uDirs[40];\nuniform Block { int x; };\n"
+                                  "// not a uniform: uniformity\nuniform float uA = 1.0;"),
+            (std::vector<std::string>{"uDensity", "uDirs", "uA"}));
+}
+
+TEST(GpuPassLayer, AProgramIsItsFilesAndDefines) {
+  SCATTERLAB_REQUIRE_GPU();
+  const gpu::ProgramVariant a{.compute = {"scan.comp.glsl"}, .defines = {"SL_SCAN_ADD"}};
+  const gpu::Program& p1 = gpu::program(a, "one label");
+  const std::size_t built = gpu::programsBuilt();
+  // The same files and defines under another label: the same program, nothing built.
+  EXPECT_EQ(&gpu::program(a, "another label"), &p1);
+  EXPECT_EQ(gpu::programsBuilt(), built);
+  // Another define: another program.
+  gpu::ProgramVariant b = a;
+  b.defines.clear();
+  EXPECT_NE(&gpu::program(b, "one label"), &p1);
+  EXPECT_NE(a.key(), b.key());
+}
+
+TEST(GpuPassLayer, SharedConstantsReachTheShadersBitForBit) {
+  SCATTERLAB_REQUIRE_GPU();
+  // Each constant of kSharedConstants written by a shader that sees only the injected #define
+  // reads back as the C++ float exactly (the Eq. 4 clamp once drifted: 1e-9 on the CPU, 1e-6
+  // in the splat shaders).
+  std::string src =
+      "layout(local_size_x = 1) in;\n"
+      "layout(std430, binding = 0) buffer Out { float v[]; };\nvoid main() {\n";
+  int i = 0;
+  for (const SharedConstant& c : kSharedConstants)
+    src += "  v[" + std::to_string(i++) + "] = " + c.define + ";\n";
+  src += "}\n";
+  std::string text = "#version 450 core\n";
+  for (const std::string& d : gpu::sharedConstantDefines()) text += "#define " + d + "\n";
+  const gpu::Shader cs(GL_COMPUTE_SHADER, text + src, "constants test");
+  const gpu::Program p({&cs}, "constants test");
+  const gpu::Buffer out(std::size(kSharedConstants) * sizeof(float), nullptr, 0, "constants");
+  p.use();
+  out.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  gpu::dispatch("constants test", {1, 1, 1});
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<float> got(std::size(kSharedConstants));
+  out.read(got.data(), got.size() * sizeof(float));
+  i = 0;
+  for (const SharedConstant& c : kSharedConstants)
+    EXPECT_EQ(got[std::size_t(i++)], c.value) << c.define;
+  EXPECT_EQ(std::string(kSharedConstants[1].define), "SL_SINGULAR_EPS");
+  EXPECT_EQ(kSharedConstants[1].value, kSingularEps);
+  // No embedded shader writes the clamp or κ by hand any more.
+  for (const gpu::EmbeddedShader& s : gpu::embeddedShaders()) {
+    const std::string text(s.source);
+    EXPECT_EQ(text.find("1e-6 * R"), std::string::npos) << s.name;
+    EXPECT_EQ(text.find("kLampDepth = 2"), std::string::npos) << s.name;
+  }
+}
+
+TEST(GpuPassLayer, ADispatchBeyondTheDeviceLimitIsAnErrorBeforeAnyWork) {
+  SCATTERLAB_REQUIRE_GPU();
+  GLint maxX = 0;
+  glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &maxX);
+  const gpu::Program& p = gpu::program({.compute = {"scan.comp.glsl"}}, "limit test");
+  p.use();
+  const gpu::PassCounts before = gpu::passCounts();
+  try {
+    gpu::dispatch("limit test", {GLuint(maxX) + 1u, 1, 1});
+    FAIL() << "expected GpuError";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("limit test"), std::string::npos) << m;
+    EXPECT_NE(m.find(std::to_string(maxX)), std::string::npos) << m;
+  }
+  EXPECT_EQ(gpu::passCounts().dispatches, before.dispatches);
+  gpu::checkGl("after the refused dispatch");
 }
 
 TEST(GpuCli, BackendGpuWithoutContextFailsClearly) {

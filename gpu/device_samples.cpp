@@ -1,0 +1,41 @@
+#include "gpu/device_samples.h"
+
+#include <algorithm>
+
+#include "gpu/records.h"
+
+namespace scatterlab::gpu {
+
+bool DeviceSamples::setPoints(std::span<const RadianceSample> samples) {
+  std::vector<glm::vec4> now;
+  now.reserve(samples.size());
+  for (const RadianceSample& s : samples) now.emplace_back(s.position, s.radius);
+  if (points && now == spheres) return false;
+  spheres = std::move(now);
+  std::vector<GpuSamplePoint> packed;
+  packed.reserve(spheres.size());
+  for (const glm::vec4& p : spheres) packed.push_back({Vec3(p), p.w});
+  points = Buffer();  // the old storage goes back to the recycler first
+  points = Buffer(packed.size() * sizeof(GpuSamplePoint), packed.data(), 0, "sample positions");
+  radiance = Buffer();
+  radiance = Buffer(spheres.size() * sizeof(GpuRadianceRecord), nullptr, 0, "sample S and grad S");
+  radianceCurrent = false;
+  bins_.reset();
+  return true;
+}
+
+const BinBuffers& DeviceSamples::binsFor(const Box& bounds, IVec3 dims, IVec3* binCount,
+                                         const char* pass) {
+  if (!bins_ || binBounds_.min != bounds.min || binBounds_.max != bounds.max || binDims_ != dims) {
+    bins_.reset();
+    const SphereBins b = binSpheres(spheres, bounds, dims, pass);
+    bins_.emplace(b);
+    binBounds_ = bounds;
+    binDims_ = dims;
+    binCount_ = b.bins;
+  }
+  *binCount = binCount_;
+  return *bins_;
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,40 @@
+#pragma once
+/// A frame's radiance samples on the GPU, as the volume tracer writes them and the radiance
+/// gather reads them (struct of arrays, issue 33's resident frame): positions and radii
+/// (GpuSamplePoint[] at binding::kSamples), S and ∇S (GpuRadianceRecord[] at
+/// binding::kRadiance), and the gather's bins. The positions and the bins are kept while the
+/// samples do not move (a Renderer's steady frames keep the sampler's samples), so such a frame
+/// uploads nothing and bins nothing; S and ∇S are written anew by every render's tracer.
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "core/stages.h"
+#include "gpu/gl.h"
+#include "gpu/sphere_bins.h"
+
+namespace scatterlab::gpu {
+
+struct DeviceSamples {
+  std::vector<glm::vec4> spheres;  ///< what `points` holds (xyz, radius), to see a change
+  Buffer points;                   ///< GpuSamplePoint[spheres.size()]
+  Buffer radiance;                 ///< GpuRadianceRecord[spheres.size()]
+  bool radianceCurrent = false;    ///< `radiance` was written by this render's tracer
+
+  /// Uploads the samples' positions and radii unless the same ones are uploaded already
+  /// (compared on the host: no GPU wait); a new set drops the bins and S. Sizes `radiance`.
+  /// Returns whether it uploaded. Needs the context.
+  bool setPoints(std::span<const RadianceSample> samples);
+  /// The bins of the points over the voxel centres of (bounds, dims): the kept ones when they
+  /// were built for this grid, else binned on the host and uploaded (once per sample set).
+  const BinBuffers& binsFor(const Box& bounds, IVec3 dims, IVec3* binCount, const char* pass);
+  std::size_t size() const { return spheres.size(); }
+
+ private:
+  std::optional<BinBuffers> bins_;
+  Box binBounds_;
+  IVec3 binDims_{0}, binCount_{0};
+};
+
+}  // namespace scatterlab::gpu

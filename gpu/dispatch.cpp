@@ -1,0 +1,57 @@
+#include "gpu/dispatch.h"
+
+#include <array>
+#include <string>
+
+#include "core/error.h"
+
+namespace scatterlab::gpu {
+
+namespace {
+
+PassCounts counts;
+
+/// GL_MAX_COMPUTE_WORK_GROUP_COUNT per axis of the current context (read once per process:
+/// the context lives until exit).
+const std::array<GLint, 3>& maxGroups() {
+  static const std::array<GLint, 3> max = [] {
+    std::array<GLint, 3> m{};
+    for (GLuint a = 0; a < 3; ++a) glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, a, &m[a]);
+    return m;
+  }();
+  return max;
+}
+
+}  // namespace
+
+PassCounts passCounts() {
+  return counts;
+}
+
+void dispatch(std::string_view pass, UVec3 count, StageTimer* timer) {
+  if (count.x == 0 || count.y == 0 || count.z == 0) return;
+  const std::array<GLint, 3>& max = maxGroups();
+  for (int a = 0; a < 3; ++a)
+    if (count[a] > GLuint(max[std::size_t(a)]))
+      throw GpuError(std::string(pass) + ": " + std::to_string(count[a]) + " workgroups along " +
+                     "xyz"[a] + " exceed this device's GL_MAX_COMPUTE_WORK_GROUP_COUNT of " +
+                     std::to_string(max[std::size_t(a)]));
+  {
+    ScopedGpuTimer t(timer, std::string(pass));
+    glDispatchCompute(count.x, count.y, count.z);
+  }
+  ++counts.dispatches;
+  checkGl(pass);
+}
+
+void dispatchIndirect(std::string_view pass, GLintptr offset, StageTimer* timer) {
+  {
+    ScopedGpuTimer t(timer, std::string(pass));
+    glDispatchComputeIndirect(offset);
+  }
+  ++counts.dispatches;
+  ++counts.indirect;
+  checkGl(pass);
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,188 @@
+#include "gpu/reconstructions.h"
+
+#include <vector>
+
+#include "gpu/bindings.h"
+#include "gpu/context.h"
+#include "gpu/device_samples.h"
+#include "gpu/dispatch.h"
+#include "gpu/records.h"
+#include "gpu/screen_pass.h"
+#include "gpu/shaders.h"
+#include "gpu/sphere_bins.h"
+#include "gpu/tracing.h"
+#include "shading/transport.h"
+
+namespace scatterlab::gpu {
+
+// ---------------------------------------------------------------- gradient splatting
+
+Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const RadianceSample> samples,
+                                     const Box& bounds, IVec3 dims, ReconstructionStats* stats,
+                                     StageTimer* timer, DeviceSamples* resident,
+                                     Buffer* uncoveredCount) {
+  context();
+  const bool occlusion = occlusion_ && sigmaT_ > 0.0f;
+  const bool gather = pipeline_ == GpuPipeline::Compute;
+  ProgramVariant splatVariant;
+  if (gather) {
+    splatVariant.compute = {"radiance_gather.comp.glsl"};
+  } else {
+    splatVariant.vertex = {"radiance_splat.vert.glsl"};
+    splatVariant.fragment = {"radiance_splat.frag.glsl"};
+  }
+  const bool lampBounds = gather && bounds_ && lampScene_;
+  if (occlusion || lampBounds) {
+    // The occlusion weights march the density, the lamps' bound reads it and the lights, with
+    // common.glsl's lookups.
+    auto& files = gather ? splatVariant.compute : splatVariant.fragment;
+    files.insert(files.begin(), "common.glsl");
+  }
+  splatVariant.define("SL_OCCLUSION", occlusion)
+      .define("SL_BOUNDED", bool(bounds_))
+      .define("SL_LAMP_BOUNDS", lampBounds)
+      .define("SL_LOG_SPACE", lampBounds && log_);
+  const Program& splat = program(splatVariant, gather ? "radiance gather" : "radiance splat");
+  const Program& normalize = program(
+      ProgramVariant{.compute = {"radiance_normalize.comp.glsl"}}.define("SL_LOG_SPACE", log_),
+      "radiance normalize");
+  // The raster splat draws one instance per packed sample; the gather reads the samples as the
+  // tracer left them (resident: this render's S and ∇S on the GPU, no upload) or uploads them.
+  Buffer packedSamples;
+  DeviceSamples uploaded;
+  DeviceSamples* gathered = nullptr;
+  if (!gather) {
+    std::vector<GpuSplatSample> packed;
+    packed.reserve(samples.size());
+    for (const RadianceSample& s : samples)
+      packed.push_back({{s.position, s.radius}, packRadiance(s)});
+    packedSamples =
+        Buffer(packed.size() * sizeof(GpuSplatSample), packed.data(), 0, "radiance samples");
+  } else if (resident && resident->radianceCurrent && resident->size() == samples.size()) {
+    gathered = resident;
+  } else {
+    DeviceSamples& d = resident ? *resident : uploaded;
+    d.setPoints(samples);
+    std::vector<GpuRadianceRecord> records;
+    records.reserve(samples.size());
+    for (const RadianceSample& s : samples) records.push_back(packRadiance(s));
+    if (!records.empty())
+      glNamedBufferSubData(d.radiance.id(), 0,
+                           GLsizeiptr(records.size() * sizeof(GpuRadianceRecord)), records.data());
+    gathered = &d;
+  }
+  const GLuint zeroCount = 0;
+  Buffer counter(sizeof(GLuint), &zeroCount, 0, "uncovered voxel count");
+  const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums");
+  Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)");
+  const Vec3 cell = bounds.extent() / Vec3(dims);
+  const BinBuffers* bins = nullptr;
+  IVec3 binDims{0};
+  if (gather) bins = &gathered->binsFor(bounds, dims, &binDims, "radiance gather");
+  {
+    std::optional<ScopedGpuTimer> t;  // the compute gather times its own dispatch
+    if (!gather) t.emplace(timer, "radiance splat");
+    splat.use();
+    if (gather) {
+      gathered->points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+      gathered->radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+    } else {
+      packedSamples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
+    }
+    if (bounds_) glUniform2f(splat.uniform("uTaylorBounds"), bounds_->lo, bounds_->hi);
+    std::optional<TracingInputs> lamps;
+    if (lampBounds) {
+      lamps.emplace(*lampScene_, density, 0.0f);
+      lamps->apply(splat);
+      glUniform1f(splat.uniform("uBoxDiagonal"), glm::length(density.bounds.extent()));
+    }
+    if (occlusion) {
+      glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+      setVec3(splat, "uDensityScale", density.indexScale());
+      setVec3(splat, "uDensityOffset", density.indexOffset());
+      setIVec3(splat, "uDensityDims", density.dims);
+      glUniform1f(splat.uniform("uSigmaT"), sigmaT_);
+      const Vec3 dc = density.cellSize();
+      glUniform1f(splat.uniform("uDensityVoxel"), std::min(dc.x, std::min(dc.y, dc.z)));
+    }
+    if (gather) {
+      bins->bind();
+      glBindImageTexture(binding::kSumsImage, sums.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+      setVec3(splat, "uGridMin", bounds.min);
+      setVec3(splat, "uGridCell", cell);
+      setIVec3(splat, "uGridDims", dims);
+      setIVec3(splat, "uBins", binDims);
+      glUniform1i(splat.uniform("uBinVoxels"), kBinVoxels);
+      dispatch("radiance gather", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)}, timer);
+    } else {
+      splatSlices(splat, sums, bounds, dims, GLsizei(samples.size()), "radiance splat");
+      checkGl("radiance splat");
+    }
+  }
+  {
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    normalize.use();
+    glBindImageTexture(binding::kSumsImage, sums.id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    counter.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+    setIVec3(normalize, "uGridDims", dims);
+    // radiance voxel index v -> density texture coordinate (u + 0.5) / dims_density.
+    const Vec3 dd = Vec3(density.dims), ds = density.indexScale(), dof = density.indexOffset();
+    setVec3(normalize, "uDensityLookupScale", cell * ds / dd);
+    setVec3(normalize, "uDensityLookupOffset", ((bounds.min + 0.5f * cell) * ds + dof + 0.5f) / dd);
+    glUniform1i(normalize.uniform("uSameGrid"), sameGrid(density, bounds, dims));
+    out.densityInAlpha = sameGrid(density, bounds, dims);
+    dispatch("radiance normalize", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)},
+             timer);
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  if (uncoveredCount) {
+    *uncoveredCount = std::move(counter);
+  } else if (stats) {
+    GLuint n = 0;
+    counter.read(&n, sizeof n);
+    stats->uncovered = n;
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- per-voxel
+
+Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& bounds, IVec3 dims,
+                          ReconstructionStats* stats, StageTimer* timer, const ShadowMaps* shadows,
+                          Buffer* countersOut) {
+  context();
+  ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
+  const Program& program = gpu::program(addShadowVariant(shadows, variant), "per-voxel S");
+  Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)");
+  const GpuPerVoxelCounters zeros;
+  Buffer counters(sizeof zeros, &zeros, 0, "per-voxel counters");
+  const TracingInputs inputs(scene, density, delta1_, shadows);
+  {
+    program.use();
+    inputs.apply(program);
+    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    counters.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+    setIVec3(program, "uRadDims", dims);
+    glUniform1i(program.uniform("uSameGrid"), sameGrid(density, bounds, dims));
+    out.densityInAlpha = sameGrid(density, bounds, dims);
+    setVec3(program, "uRadMin", bounds.min);
+    setVec3(program, "uRadCell", bounds.extent() / Vec3(dims));
+    dispatch("per-voxel S", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)}, timer);
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  if (countersOut) {
+    *countersOut = std::move(counters);
+  } else if (stats) {
+    GpuPerVoxelCounters n;
+    counters.read(&n, sizeof n);
+    stats->traced = n.traced;
+    stats->skipped = n.skipped;
+  }
+  return out;
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,144 @@
+#include "gpu/tracing.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <vector>
+
+#include "core/error.h"
+#include "gpu/bindings.h"
+#include "gpu/context.h"
+#include "gpu/dispatch.h"
+#include "gpu/records.h"
+#include "gpu/shaders.h"
+
+namespace scatterlab::gpu {
+
+TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1,
+                             const ShadowMaps* shadows)
+    : scene_(scene), density_(density), delta1_(delta1), shadows_(shadows) {
+  std::vector<GpuLight> packed;
+  packed.reserve(scene.lights.size());
+  for (const Light& l : scene.lights) packed.push_back(packLight(l));
+  lights_ = Buffer(packed.size() * sizeof(GpuLight), packed.data(), 0, "lights");
+}
+
+void TracingInputs::apply(const Program& p) const {
+  const Medium& m = scene_.medium;
+  lights_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
+  glBindTextureUnit(binding::kDensityTexture, density_.texture.id());
+  glUniform1i(p.uniform("uLightCount"), GLint(scene_.lights.size()));
+  glUniform1i(p.uniform("uPhaseType"), m.phase.type == Phase::Type::Isotropic ? 0 : 1);
+  glUniform1f(p.uniform("uPhaseG"), m.phase.g);
+  glUniform1f(p.uniform("uSigmaT"), m.sigmaT);
+  glUniform1f(p.uniform("uDelta1"), delta1_);
+  setVec3(p, "uBoxMin", density_.bounds.min);
+  setVec3(p, "uBoxMax", density_.bounds.max);
+  setVec3(p, "uDensityScale", density_.indexScale());
+  setVec3(p, "uDensityOffset", density_.indexOffset());
+  setIVec3(p, "uDensityDims", density_.dims);
+  setVec3(p, "uEye", scene_.camera.position);
+  if (shadows_) shadows_->bind(p);
+}
+
+const ShadowMaps* SceneShadows::build(const Scene& scene, const ShadowMapSettings& settings,
+                                      StageTimer* timer) {
+  if (!scene.objects) return nullptr;
+  context();
+  if (!geometry) geometry = std::make_unique<ObjectGeometry>(*scene.objects);
+  if (!maps) maps = std::make_unique<ShadowMaps>(scene, *geometry, settings, timer);
+  return maps.get();
+}
+
+namespace {
+
+/// World -> clip of the camera, consistent with Camera::rayGenerator and the slice marcher's
+/// pixel rays (GL row r = image row r, so clip y is flipped): x = q·right/sx, y = −q·up/sy,
+/// w = q·forward (q = p − eye), and z maps view depth [nearD, farD] to [−1, 1].
+glm::mat4 cameraViewProj(const Camera::RayGenerator& g, float nearD, float farD) {
+  const float a = (farD + nearD) / (farD - nearD), b = -2.0f * farD * nearD / (farD - nearD);
+  const auto row = [&](const Vec3& axis, float scale, float shift) {
+    return glm::vec4(axis * scale, -glm::dot(axis, g.origin) * scale + shift);
+  };
+  const glm::mat4 rows(row(g.right, 1.0f / g.sx, 0.0f), row(g.up, -1.0f / g.sy, 0.0f),
+                       row(g.forward, a, b), row(g.forward, 1.0f, 0.0f));
+  return glm::transpose(rows);
+}
+
+}  // namespace
+
+SurfacePass renderSurfaces(const Scene& scene, const SceneShadows& objects,
+                           const TracingInputs& inputs, const Texture& color, StageTimer* timer) {
+  const Camera& cam = scene.camera;
+  const auto gen = cam.rayGenerator();
+  const int w = cam.width, h = cam.height;
+  const ShadowMaps* shadows = objects.maps.get();
+  SurfacePass out;
+  // The depth range: from the eye to the farthest corner of the medium box and the objects.
+  out.farD = 0.0f;
+  Box all = scene.medium.bounds;
+  all.min = glm::min(all.min, scene.objects->bounds().min);
+  all.max = glm::max(all.max, scene.objects->bounds().max);
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 p((c & 1) ? all.max.x : all.min.x, (c & 2) ? all.max.y : all.min.y,
+                 (c & 4) ? all.max.z : all.min.z);
+    out.farD = std::max(out.farD, glm::dot(p - gen.origin, gen.forward));
+  }
+  out.farD = std::max(out.farD, 1e-6f) * 1.01f;
+  out.nearD = out.farD * 1e-5f;
+  out.depth = Texture::make2D(GL_DEPTH_COMPONENT32F, w, h, "surface depth");
+  out.distance = Texture::make2D(GL_R32F, w, h, "surface distance");
+  const Framebuffer surfaceFbo("surface pass");
+  glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT0, color.id(), 0);
+  glNamedFramebufferTexture(surfaceFbo.id(), GL_COLOR_ATTACHMENT1, out.distance.id(), 0);
+  glNamedFramebufferTexture(surfaceFbo.id(), GL_DEPTH_ATTACHMENT, out.depth.id(), 0);
+  const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glNamedFramebufferDrawBuffers(surfaceFbo.id(), 2, both);
+  if (glCheckNamedFramebufferStatus(surfaceFbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GpuError("surface pass: the framebuffer is not complete");
+  ProgramVariant variant{.vertex = {"objects.vert.glsl"},
+                         .fragment = {"common.glsl", "surface.frag.glsl"}};
+  const Program& surf = program(addShadowVariant(shadows, variant), "object surfaces");
+  ScopedGpuTimer t(timer, "surfaces");
+  glBindFramebuffer(GL_FRAMEBUFFER, surfaceFbo.id());
+  glViewport(0, 0, w, h);
+  const float clear[4] = {scene.background.x, scene.background.y, scene.background.z, 1.0f};
+  glClearBufferfv(GL_COLOR, 0, clear);
+  const float none[4] = {3.0e38f, 0.0f, 0.0f, 0.0f};
+  glClearBufferfv(GL_COLOR, 1, none);
+  const float one = 1.0f;
+  glClearBufferfv(GL_DEPTH, 0, &one);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_SCISSOR_TEST);
+  surf.use();
+  inputs.apply(surf);
+  glUniformMatrix4fv(surf.uniform("uViewProj"), 1, GL_FALSE,
+                     glm::value_ptr(cameraViewProj(gen, out.nearD, out.farD)));
+  glUniform1f(surf.uniform("uSurfaceOffset"), scene.objects->epsilon());
+  objects.geometry->draw();
+  glDisable(GL_DEPTH_TEST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  checkGl("object surfaces");
+  return out;
+}
+
+void ScreenSurfaces::build(const Scene& scene, const SceneShadows& objects,
+                           const TracingInputs& inputs, StageTimer* timer) {
+  if (!objects.geometry || !objects.maps) return;
+  radiance =
+      Texture::make2D(GL_RGBA32F, scene.camera.width, scene.camera.height, "surface radiance");
+  pass = renderSurfaces(scene, objects, inputs, radiance, timer);
+  // The compute passes that read them come next.
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  built = true;
+}
+
+void ScreenSurfaces::bind() const {
+  if (!built) return;
+  glBindTextureUnit(binding::kSurfaceTexture, pass.distance.id());
+  glBindTextureUnit(binding::kSurfaceRadianceTexture, radiance.id());
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,80 @@
+#pragma once
+/// What every tracing pass of gpu/ binds (the lights, the density, the medium's uniforms of
+/// common.glsl) and the scene objects on the GPU for one frame: their shadow maps and the
+/// surface pass of the camera. Every function needs a GL context (gpu::context()).
+
+#include <memory>
+
+#include "core/stages.h"
+#include "gpu/objects.h"
+#include "gpu/shadow_maps.h"
+#include "gpu/timer.h"
+#include "gpu/volume.h"
+
+namespace scatterlab::gpu {
+
+/// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
+/// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs
+/// a current context.
+class TracingInputs {
+ public:
+  /// `shadows`: the scene objects' shadow maps (null without objects); programs that trace
+  /// with these inputs must then be built with addShadowVariant(shadows(), ...).
+  TracingInputs(const Scene& scene, const Volume& density, float delta1,
+                const ShadowMaps* shadows = nullptr);
+  /// Binds the buffers and texture and sets the uniforms of `program` (which must be in use).
+  void apply(const Program& program) const;
+  const ShadowMaps* shadows() const { return shadows_; }
+
+ private:
+  const Scene& scene_;
+  const Volume& density_;
+  float delta1_;
+  const ShadowMaps* shadows_;
+  Buffer lights_;
+};
+
+/// The scene objects on the GPU for one frame: their triangles and shadow maps (both null
+/// without objects). Built once per render by the first stage that needs them.
+struct SceneShadows {
+  std::unique_ptr<ObjectGeometry> geometry;
+  std::unique_ptr<ShadowMaps> maps;
+  /// Uploads the objects and renders the maps when the scene has objects and they are not
+  /// built yet; returns maps (null without objects). Needs the context.
+  const ShadowMaps* build(const Scene& scene, const ShadowMapSettings& settings, StageTimer* timer);
+};
+
+/// The surface pass (docs/objects.md "GPU"): the scene's objects rasterised from the camera
+/// with a depth buffer (surface.frag.glsl). Per pixel, the first surface's
+/// L_p = albedo/π·Σ_l E_l·max(0, n·ω_l)·V_l·T(p, l) (V_l from the shadow maps, T marched with
+/// the step of `inputs`) goes into the rgb of `color` (RGBA32F, the camera's size) with alpha 0,
+/// after `color` was cleared to (background, 1); its view-ray distance goes into `distance`
+/// (R32F, 3e38 where no surface), and its depth into `depth` (the depth range nearD..farD of
+/// the camera's projection). The slice marcher composites over `color` with `depth` as its
+/// depth buffer; the per-pixel methods (gpu/post_process.h, gpu/screen_march.h) read `distance`
+/// and `color` (ScreenSurfaces). Needs the context, `objects` built and `inputs` made with its
+/// maps.
+struct SurfacePass {
+  Texture distance;
+  Texture depth;
+  float nearD = 1.0f, farD = 2.0f;
+};
+SurfacePass renderSurfaces(const Scene& scene, const SceneShadows& objects,
+                           const TracingInputs& inputs, const Texture& color, StageTimer* timer);
+
+/// The surface pass as the per-pixel methods read it (built only when the scene has objects):
+/// its L_p image and distances, bound at binding::kSurfaceRadianceTexture and
+/// binding::kSurfaceTexture (the samplers uSurfaceRadiance and uSurfaceDistance of shaders
+/// compiled with SL_OBJECTS: light_space_march, radial_blur, screen_common).
+struct ScreenSurfaces {
+  Texture radiance;
+  SurfacePass pass;
+  bool built = false;
+  /// Runs the surface pass when `objects` has maps (the scene has objects), else does nothing.
+  void build(const Scene& scene, const SceneShadows& objects, const TracingInputs& inputs,
+             StageTimer* timer);
+  /// Binds the two textures (when built).
+  void bind() const;
+};
+
+}  // namespace scatterlab::gpu

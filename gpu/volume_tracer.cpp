@@ -1,0 +1,55 @@
+#include "gpu/volume_tracer.h"
+
+#include <vector>
+
+#include "gpu/bindings.h"
+#include "gpu/context.h"
+#include "gpu/device_samples.h"
+#include "gpu/dispatch.h"
+#include "gpu/records.h"
+#include "gpu/shaders.h"
+#include "gpu/tracing.h"
+
+namespace scatterlab::gpu {
+
+void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buffer& points,
+                            std::size_t count, const Buffer& results, bool gradients,
+                            StageTimer* timer, const ShadowMaps* shadows) {
+  context();
+  if (count == 0) return;
+  ProgramVariant variant{.compute = {"common.glsl", "volume_tracer.comp.glsl"}};
+  variant.define("SL_GRADIENTS", gradients)
+      .define("SL_FACTOR_LIGHTS", factor_)
+      .define("SL_LAMP_MODEL", lamp_)
+      .define("SL_LOG_SPACE", log_);
+  const Program& program = gpu::program(addShadowVariant(shadows, variant), "volume tracer");
+  const TracingInputs inputs(scene, density, delta1_, shadows);
+  program.use();
+  inputs.apply(program);
+  glUniform1ui(program.uniform("uCount"), GLuint(count));
+  glUniform1f(program.uniform("uDelta2"), delta2_);
+  points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+  dispatch("radiance evaluation", {groups(count, 64), 1, 1}, timer);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+void readRadianceRecords(const Buffer& results, std::span<RadianceSample> samples) {
+  std::vector<GpuRadianceRecord> r(samples.size());
+  results.read(r.data(), r.size() * sizeof(GpuRadianceRecord));
+  // Without SL_GRADIENTS the shader writes ∇S = 0, so the records unpack as they are.
+  for (size_t i = 0; i < samples.size(); ++i) unpackRadiance(r[i], samples[i]);
+}
+
+void VolumeTracerGpu::evaluate(const Scene& scene, const Volume& density,
+                               std::span<RadianceSample> samples, bool gradients, StageTimer* timer,
+                               const ShadowMaps* shadows) {
+  context();
+  if (samples.empty()) return;
+  DeviceSamples d;
+  d.setPoints(samples);
+  trace(scene, density, d.points, samples.size(), d.radiance, gradients, timer, shadows);
+  readRadianceRecords(d.radiance, samples);
+}
+
+}  // namespace scatterlab::gpu

@@ -1,0 +1,50 @@
+#pragma once
+/// The GPU radiance evaluator "volume-tracer" (DESIGN.md §3), registered in gpu/register.cpp.
+/// The interface override works in a GpuFrame (gpu/frame.h); the Volume overload is the pass.
+
+#include <span>
+
+#include "core/stages.h"
+#include "gpu/gl.h"
+#include "gpu/shadow_maps.h"
+#include "gpu/timer.h"
+#include "gpu/volume.h"
+
+namespace scatterlab::gpu {
+
+/// S and ∇S at every sample in one compute dispatch (GPU twin of the CPU volume tracer):
+/// S(x) = SourceRadiance(x, towards the camera position), ∇S by central differences with step
+/// delta2 along each world axis, each offset point with its own view direction.
+class VolumeTracerGpu : public RadianceEvaluator {
+ public:
+  /// steps: tracing and central-difference steps (world units), and whether V = S / A (or
+  /// ln V) is evaluated instead of S, as the CPU evaluator does (PipelineSettings).
+  /// shadowMap: how scene objects' visibility is looked up (render.shadow_map).
+  explicit VolumeTracerGpu(TracerSteps steps, ShadowMapSettings shadowMap = {})
+      : delta1_(steps.delta1),
+        delta2_(steps.delta2),
+        factor_(steps.factorLights),
+        log_(steps.logValues()),
+        lamp_(steps.lampModel),
+        shadowMap_(shadowMap) {}
+  void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
+                bool gradients) override;
+  /// `shadows`: the objects' shadow maps (null without objects). Uploads the positions, traces
+  /// and reads S and ∇S back into `samples`.
+  void evaluate(const Scene& scene, const Volume& density, std::span<RadianceSample> samples,
+                bool gradients, StageTimer* timer, const ShadowMaps* shadows = nullptr);
+  /// The pass: S and ∇S of the first `count` GpuSamplePoint of `points` into the
+  /// GpuRadianceRecord of `results` (binding::kSamples, kRadiance), left on the GPU.
+  void trace(const Scene& scene, const Volume& density, const Buffer& points, std::size_t count,
+             const Buffer& results, bool gradients, StageTimer* timer, const ShadowMaps* shadows);
+
+ private:
+  float delta1_, delta2_;
+  bool factor_, log_, lamp_;
+  ShadowMapSettings shadowMap_;
+};
+
+/// Reads the GpuRadianceRecord of `results` back into S and ∇S of `samples` (a host wait).
+void readRadianceRecords(const Buffer& results, std::span<RadianceSample> samples);
+
+}  // namespace scatterlab::gpu
