@@ -188,6 +188,123 @@ void BM_GpuRendererFrameGradient512(benchmark::State& state) {
   state.SetLabel(std::string(pipelineName(state)) + ", " + gpu::context().info().renderer);
 }
 
+/// The frames of the GPU report (issue 33, scripts/gpu-report.sh): what a user measures.
+/// Arg 0 picks the case, arg 1 the resolution, arg 2 the light count, arg 3 the pipeline.
+struct FrameCase {
+  const char* scene;   ///< data/scenes/NAME.json
+  const char* method;  ///< render.method
+  bool paper;          ///< render.paper
+};
+constexpr FrameCase kFrameCases[] = {
+    {"fig3", "gradient", true},   // the plume, the paper's samples (Gaussian centres)
+    {"fig3", "gradient", false},  // the plume at the defaults (jittered, at most 8000)
+    {"fig3", "per-voxel", false},
+    {"shaft", "adaptive", true},
+    {"shaft", "adaptive", false},
+};
+
+/// The case's scene at `res`³, 800×600, with `lights` point lights: the scene's own, then
+/// copies of it (intensity shared out) on a ring around the box's centre.
+Json frameScene(const FrameCase& c, int res, int lights, bool raster) {
+  Json doc = readJsonFile(std::string(SCATTERLAB_SOURCE_DIR "/data/scenes/") + c.scene + ".json");
+  doc["medium"]["resolution"] = res;
+  doc["camera"]["width"] = 800;
+  doc["camera"]["height"] = 600;
+  doc["render"]["method"] = c.method;
+  doc["render"]["paper"] = c.paper;
+  doc["render"]["gpu_pipeline"] = raster ? "raster" : "compute";
+  const Json first = doc["lights"][0];
+  const Json& b = doc["medium"]["bounds"];
+  const Vec3 lo(b["min"][0].get<float>(), b["min"][1].get<float>(), b["min"][2].get<float>());
+  const Vec3 hi(b["max"][0].get<float>(), b["max"][1].get<float>(), b["max"][2].get<float>());
+  const Vec3 centre = 0.5f * (lo + hi), ext = hi - lo;
+  for (int l = 1; l < lights; ++l) {
+    Json light = first;
+    const float a = 6.2831853f * float(l) / float(lights);
+    light["position"] = {centre.x + 0.45f * ext.x * std::cos(a), centre.y + 0.3f * ext.y,
+                         centre.z + 0.45f * ext.z * std::sin(a)};
+    doc["lights"].push_back(light);
+  }
+  if (lights > 1)
+    for (Json& light : doc["lights"])
+      if (light.contains("intensity"))
+        for (Json& v : light["intensity"]) v = v.get<double>() / lights;
+  return doc;
+}
+
+std::string frameLabel(const FrameCase& c, const benchmark::State& state) {
+  return std::string(c.scene) + " " + c.method + (c.paper ? " paper" : " defaults") + ", " +
+         std::to_string(state.range(2)) + " lights, " + (state.range(3) ? "raster" : "compute") +
+         ", " + gpu::context().info().renderer;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+/// Steady frames: one Renderer, light 0 moved every frame (density and samples kept), the image
+/// left on the device (Renderer::keepImageOnDevice). Real time per frame is the wall time an
+/// engine waits for a frame it does not read back; counters: gpu_ms (the median of the stats'
+/// gpu_ms_total: GPU time from timer queries), host_waits (the largest over the frames).
+void BM_GpuSteadyFrame(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  const FrameCase& c = kFrameCases[state.range(0)];
+  const Json doc = frameScene(c, int(state.range(1)), int(state.range(2)), state.range(3) != 0);
+  Renderer r(doc, SCATTERLAB_SOURCE_DIR "/data/scenes", "", "gpu");
+  r.keepImageOnDevice(true);
+  r.render();  // cold: the density, the samples and the programs
+  const Json p0 = doc["lights"][0]["position"];
+  std::vector<double> gpuMs;
+  double waits = 0, dispatches = 0;
+  int frame = 0;
+  for (auto _ : state) {
+    ++frame;
+    r.set("lights.0.position=[" + std::to_string(p0[0].get<double>() + 0.002 * (frame % 5)) +
+          "," + p0[1].dump() + "," + p0[2].dump() + "]");
+    const RenderResult res = r.render();
+    state.PauseTiming();  // the stats were read after the frame (GpuFrame::report)
+    gpuMs.push_back(res.stats.extra.value("gpu_ms_total", 0.0));
+    waits = std::max(waits, res.stats.extra.value("host_waits", 0.0));
+    dispatches = res.stats.extra.value("dispatches", 0.0);
+    state.ResumeTiming();
+  }
+  state.counters["gpu_ms"] = median(gpuMs);
+  state.counters["host_waits"] = waits;
+  state.counters["dispatches"] = dispatches;
+  state.SetLabel("steady: " + frameLabel(c, state));
+}
+
+/// Cold frames, as `scatterlab render` and the harness draw them: a new method per frame
+/// (density built, samples made, programs cached), the image read back. Counters as above, and
+/// image_readback_ms.
+void BM_GpuColdFrame(benchmark::State& state) {
+  if (!needGpu(state)) return;
+  initialize();
+  const FrameCase& c = kFrameCases[state.range(0)];
+  const Scene s = parseScene(
+      frameScene(c, int(state.range(1)), int(state.range(2)), state.range(3) != 0),
+      SCATTERLAB_SOURCE_DIR "/data/scenes");
+  createMethod(s, "", "gpu")->render(s, nullptr);  // programs compiled outside the timing
+  std::vector<double> gpuMs, readback;
+  double waits = 0;
+  for (auto _ : state) {
+    const RenderResult res = createMethod(s, "", "gpu")->render(s, nullptr);
+    benchmark::DoNotOptimize(res.image.pixels().data());
+    state.PauseTiming();
+    gpuMs.push_back(res.stats.extra.value("gpu_ms_total", 0.0));
+    readback.push_back(res.stats.extra.value("image_readback_ms", 0.0));
+    waits = std::max(waits, res.stats.extra.value("host_waits", 0.0));
+    state.ResumeTiming();
+  }
+  state.counters["gpu_ms"] = median(gpuMs);
+  state.counters["image_readback_ms"] = median(readback);
+  state.counters["host_waits"] = waits;
+  state.SetLabel("cold: " + frameLabel(c, state));
+}
+
 /// Like gpuLoop, and adds each stage's mean GPU ms as a counter (per-stage times of a pipeline).
 template <class Body>
 void gpuStageLoop(benchmark::State& state, Body&& body) {
@@ -474,6 +591,18 @@ BENCHMARK(BM_GpuViewMarch800x600)
     ->Arg(128)
     ->Arg(256)
     ->UseManualTime()
+    ->Iterations(iters(1))
+    ->Unit(benchmark::kMillisecond);
+// Cases × {128³, 256³} × {1, 64} lights × compute; the paper's gradient also raster.
+BENCHMARK(BM_GpuSteadyFrame)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {128, 256}, {1, 64}, {0}})
+    ->ArgsProduct({{0}, {128, 256}, {1}, {1}})
+    ->UseRealTime()
+    ->Iterations(iters(2))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GpuColdFrame)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {128, 256}, {1}, {0}})
+    ->UseRealTime()
     ->Iterations(iters(1))
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GpuRendererFrameGradient512)

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# One command for a GPU report (issue 33): where a machine with a GPU stands.
+#   1. the device (scatterlab info --gpu);
+#   2. steady frames (a Renderer, a light moved each frame, the image left on the GPU: what an
+#      engine waits for) and cold frames (a new method per frame, image read back: what
+#      `scatterlab render` and the harness draw) of gradient (paper and defaults), per-voxel and
+#      adaptive (paper and defaults), 128³ and 256³, 1 and 64 lights, the compute pipeline and,
+#      for the paper's gradient, the raster one — wall ms, GPU ms (timer queries), host waits;
+#   3. the GPU stage benchmarks (bench/bench_gpu.cpp);
+#   4. test_gpu.
+# Usage: scripts/gpu-report.sh [OUT_DIR]   (default gpu-report/; after scripts/setup.sh).
+# On a machine without packages: ../shared/tools/gpu-bundle.sh here, then on that machine
+#   bash .gpu-bundle/run.sh bash scripts/gpu-report.sh
+# Writes OUT_DIR/device.txt, frames.json (+ frames.txt), stages.json (+ stages.txt),
+# test_gpu.txt, and prints a summary. Takes about 6 minutes on an H100/H200; set
+# SCATTERLAB_GPU_BENCH_ITERS to change the iterations (default 30). On llvmpipe use
+# SCATTERLAB_GPU_BENCH_ITERS=1: its times are CPU times, only the counts mean something.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+OUT=${1:-gpu-report}
+mkdir -p "$OUT"
+bin() {  # a tool from build/bin, else from PATH (the GPU bundle's wrappers)
+  if [[ -x build/bin/$1 ]]; then echo "build/bin/$1"; else command -v "$1"; fi
+}
+CLI=$(bin scatterlab) BENCH=$(bin scatterlab_bench) TESTS=$(bin test_gpu)
+[[ -n $CLI && -n $BENCH && -n $TESTS ]] || { echo "gpu-report: build first (scripts/setup.sh)" >&2; exit 2; }
+export SCATTERLAB_GPU_BENCH_ITERS=${SCATTERLAB_GPU_BENCH_ITERS:-30}
+status=0
+
+echo "== device"
+"$CLI" info --gpu | tee "$OUT/device.txt" || status=1
+echo "load average: $(cat /proc/loadavg)" | tee -a "$OUT/device.txt"
+
+echo "== frames (steady and cold; ms per frame, gpu_ms, host_waits)"
+timeout 330 "$BENCH" --benchmark_filter='BM_Gpu(Steady|Cold)Frame' \
+  --benchmark_out="$OUT/frames.json" --benchmark_out_format=json \
+  --benchmark_counters_tabular=true | tee "$OUT/frames.txt" || status=1
+
+echo "== GPU stage benchmarks"
+timeout 150 "$BENCH" --benchmark_filter='BM_Gpu(DensitySplat|VolumeTracer512|GradientSplat512|PerVoxel|ViewMarch800x600|SliceMarch800x600|GradientPipeline512|AdaptivePipeline)' \
+  --benchmark_out="$OUT/stages.json" --benchmark_out_format=json | tee "$OUT/stages.txt" || status=1
+
+echo "== test_gpu (compute and raster pipelines)"
+timeout 300 "$TESTS" --gtest_brief=1 2>&1 | tee "$OUT/test_gpu.txt"
+[[ ${PIPESTATUS[0]} -eq 0 ]] || status=1
+
+echo "== written to $OUT/ (status $status)"
+exit $status
