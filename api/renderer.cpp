@@ -5,6 +5,7 @@
 #include "api/scatterlab.h"
 #include "core/error.h"
 #include "core/quick_look.h"
+#include "gpu/context.h"
 
 namespace scatterlab {
 
@@ -28,11 +29,38 @@ Renderer Renderer::fromFile(const std::string& path, const std::vector<std::stri
   }
 }
 
+void shareGlContextWithCurrent() {
+  gpu::shareWithCurrentContext();
+}
+
 Renderer::Renderer(Renderer&&) noexcept = default;
-Renderer& Renderer::operator=(Renderer&&) noexcept = default;
-Renderer::~Renderer() = default;
+
+Renderer& Renderer::operator=(Renderer&& o) noexcept {
+  {
+    const gpu::CallerContextGuard guard;  // the old method's GL objects die in our context
+    method_.reset();
+  }
+  doc_ = std::move(o.doc_);
+  baseDir_ = std::move(o.baseDir_);
+  methodName_ = std::move(o.methodName_);
+  backend_ = std::move(o.backend_);
+  time_ = o.time_;
+  scene_ = std::move(o.scene_);
+  mediumDoc_ = std::move(o.mediumDoc_);
+  objectsDoc_ = std::move(o.objectsDoc_);
+  renderDoc_ = std::move(o.renderDoc_);
+  method_ = std::move(o.method_);
+  imageOnDevice_ = o.imageOnDevice_;
+  return *this;
+}
+
+Renderer::~Renderer() {
+  const gpu::CallerContextGuard guard;  // GL objects are deleted in scatterlab's context
+  method_.reset();
+}
 
 void Renderer::rebuild(const Json& doc, double t) {
+  const gpu::CallerContextGuard guard;  // a replaced method frees its GL objects in our context
   // Everything is parsed and created before anything is replaced: a bad value leaves the
   // renderer as it was.
   const Json work = sceneAtTime(doc, t);
@@ -81,6 +109,9 @@ Method& Renderer::method() {
 }
 
 RenderResult Renderer::render(Progress* progress) {
+  // An engine's context current on entry is current again on return, and (shared) sees the
+  // image: gpu/context.h.
+  const gpu::CallerContextGuard guard;
   RenderResult r = method_->render(scene_, progress);
   r.stats.extra["time"] = time_;
   return r;

@@ -40,6 +40,16 @@
 
 namespace scatterlab {
 
+/// For an engine that draws scatterlab's image with its own OpenGL context (issue 34): call with
+/// the engine's EGL context (desktop OpenGL, 4.5 core) current on this thread, before anything
+/// of scatterlab uses the GPU. scatterlab's context is then made on the same EGL display in the
+/// engine context's share group: RenderResult::deviceImage (Renderer::keepImageOnDevice) is a
+/// texture name of the engine's context too. Every Renderer call leaves the engine's context
+/// current when it returns, and the engine's context waits on the GPU (not the host) for the
+/// image (docs/library.md, "Drawing the image in an engine"). Throws GpuError when no context is
+/// current, or scatterlab's already exists unshared.
+void shareGlContextWithCurrent();
+
 class Renderer {
  public:
   /// A renderer of the scene document `doc` (relative paths resolve from `baseDir`) with

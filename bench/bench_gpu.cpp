@@ -198,9 +198,7 @@ struct FrameCase {
 constexpr FrameCase kFrameCases[] = {
     {"fig3", "gradient", true},   // the plume, the paper's samples (Gaussian centres)
     {"fig3", "gradient", false},  // the plume at the defaults (jittered, at most 8000)
-    {"fig3", "per-voxel", false},
-    {"shaft", "adaptive", true},
-    {"shaft", "adaptive", false},
+    {"fig3", "per-voxel", false}, {"shaft", "adaptive", true}, {"shaft", "adaptive", false},
 };
 
 /// The case's scene at `res`³, 800×600, with `lights` point lights: the scene's own, then
@@ -262,8 +260,8 @@ void BM_GpuSteadyFrame(benchmark::State& state) {
   int frame = 0;
   for (auto _ : state) {
     ++frame;
-    r.set("lights.0.position=[" + std::to_string(p0[0].get<double>() + 0.002 * (frame % 5)) +
-          "," + p0[1].dump() + "," + p0[2].dump() + "]");
+    r.set("lights.0.position=[" + std::to_string(p0[0].get<double>() + 0.002 * (frame % 5)) + "," +
+          p0[1].dump() + "," + p0[2].dump() + "]");
     const RenderResult res = r.render();
     state.PauseTiming();  // the stats were read after the frame (GpuFrame::report)
     gpuMs.push_back(res.stats.extra.value("gpu_ms_total", 0.0));
@@ -284,9 +282,9 @@ void BM_GpuColdFrame(benchmark::State& state) {
   if (!needGpu(state)) return;
   initialize();
   const FrameCase& c = kFrameCases[state.range(0)];
-  const Scene s = parseScene(
-      frameScene(c, int(state.range(1)), int(state.range(2)), state.range(3) != 0),
-      SCATTERLAB_SOURCE_DIR "/data/scenes");
+  const Scene s =
+      parseScene(frameScene(c, int(state.range(1)), int(state.range(2)), state.range(3) != 0),
+                 SCATTERLAB_SOURCE_DIR "/data/scenes");
   createMethod(s, "", "gpu")->render(s, nullptr);  // programs compiled outside the timing
   std::vector<double> gpuMs, readback;
   double waits = 0;

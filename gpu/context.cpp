@@ -61,9 +61,14 @@ std::string eglErrorName(EGLint e) {
   }
 }
 
-/// Initialises `dpy` and creates a 4.5 core context on it; on failure terminates it and
-/// appends the reason to `why`.
-bool makeContext(EGLDisplay dpy, const std::string& platform, Egl& out, std::string& why) {
+/// Initialises `dpy` and creates a 4.5 core context on it (in `share`'s share group when not
+/// EGL_NO_CONTEXT); on failure terminates it (unless `borrowed`: a display of the caller's)
+/// and appends the reason to `why`.
+bool makeContext(EGLDisplay dpy, const std::string& platform, Egl& out, std::string& why,
+                 EGLContext share = EGL_NO_CONTEXT, bool borrowed = false) {
+  const auto terminate = [&] {
+    if (!borrowed) eglTerminate(dpy);
+  };
   EGLint major = 0, minor = 0;
   if (!eglInitialize(dpy, &major, &minor)) {
     why += platform + ": eglInitialize failed (" + eglErrorName(eglGetError()) + "); ";
@@ -72,7 +77,7 @@ bool makeContext(EGLDisplay dpy, const std::string& platform, Egl& out, std::str
   const char* exts = eglQueryString(dpy, EGL_EXTENSIONS);
   if (!eglBindAPI(EGL_OPENGL_API)) {
     why += platform + ": no desktop OpenGL API; ";
-    eglTerminate(dpy);
+    terminate();
     return false;
   }
   EGLConfig config = nullptr;
@@ -83,7 +88,7 @@ bool makeContext(EGLDisplay dpy, const std::string& platform, Egl& out, std::str
     EGLint n = 0;
     if (!eglChooseConfig(dpy, attrs, &config, 1, &n) || n < 1) {
       why += platform + ": no EGL config for OpenGL; ";
-      eglTerminate(dpy);
+      terminate();
       return false;
     }
   }
@@ -101,18 +106,17 @@ bool makeContext(EGLDisplay dpy, const std::string& platform, Egl& out, std::str
                              EGL_CONTEXT_FLAGS_KHR,
                              debugFlag,
                              EGL_NONE};
-  EGLContext ctx =
-      eglCreateContext(dpy, noConfig ? EGL_NO_CONFIG_KHR : config, EGL_NO_CONTEXT, ctxAttrs);
+  EGLContext ctx = eglCreateContext(dpy, noConfig ? EGL_NO_CONFIG_KHR : config, share, ctxAttrs);
   if (ctx == EGL_NO_CONTEXT) {
     why += platform + ": no OpenGL 4.5 core context (" + eglErrorName(eglGetError()) + "); ";
-    eglTerminate(dpy);
+    terminate();
     return false;
   }
   if (!eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
     why += platform + ": eglMakeCurrent without surface failed (" + eglErrorName(eglGetError()) +
            "); ";
     eglDestroyContext(dpy, ctx);
-    eglTerminate(dpy);
+    terminate();
     return false;
   }
   out.display = dpy;
@@ -181,6 +185,9 @@ std::mutex gMutex;
 std::unique_ptr<Context> gContext;
 std::optional<std::string> gFailure;
 Egl gEgl;
+/// shareWithCurrentContext(): the caller's display and context to share with.
+EGLDisplay gShareDisplay = EGL_NO_DISPLAY;
+EGLContext gShareContext = EGL_NO_CONTEXT;
 
 }  // namespace
 
@@ -189,7 +196,17 @@ Context::Context() {
   if (const char* off = std::getenv("SCATTERLAB_NO_GPU"); off && *off && std::strcmp(off, "0"))
     throw GpuError("no OpenGL context: the GPU backend is disabled by SCATTERLAB_NO_GPU=" +
                    std::string(off) + "; use --backend cpu");
-  auto egl = createEgl(why);
+  std::optional<Egl> egl;
+  if (gShareContext != EGL_NO_CONTEXT) {
+    Egl shared;
+    if (makeContext(gShareDisplay, "shared with the caller's context", shared, why, gShareContext,
+                    true))
+      egl = shared;
+    else
+      throw GpuError("no OpenGL 4.5 core context sharing the caller's EGL context (" + why + ")");
+  } else {
+    egl = createEgl(why);
+  }
   if (!egl) {
     // `why` lists each EGL platform's failure as "platform: reason; ".
     while (!why.empty() && (why.back() == ' ' || why.back() == ';')) why.pop_back();
@@ -237,6 +254,61 @@ Context& context() {
                      eglErrorName(eglGetError()) + "); it may be current on another thread");
   }
   return *gContext;
+}
+
+void shareWithCurrentContext() {
+  std::lock_guard<std::mutex> lock(gMutex);
+  const EGLContext current = eglGetCurrentContext();
+  if (current == EGL_NO_CONTEXT)
+    throw GpuError(
+        "shareWithCurrentContext: no EGL context is current on this thread (make the "
+        "engine's context current first)");
+  if (gContext) {
+    if (gShareContext == current) return;  // already shared with it
+    throw GpuError(
+        "shareWithCurrentContext: scatterlab's GL context exists already and shares nothing "
+        "with this one; call it before anything of scatterlab uses the GPU");
+  }
+  if (eglQueryAPI() != EGL_OPENGL_API)
+    throw GpuError("shareWithCurrentContext: the current context is not a desktop OpenGL one");
+  gShareDisplay = eglGetCurrentDisplay();
+  gShareContext = current;
+  gFailure.reset();
+}
+
+bool sharesWithCaller() {
+  std::lock_guard<std::mutex> lock(gMutex);
+  return gContext && gShareContext != EGL_NO_CONTEXT;
+}
+
+CallerContextGuard::CallerContextGuard() {
+  display_ = eglGetCurrentDisplay();
+  context_ = eglGetCurrentContext();
+  draw_ = eglGetCurrentSurface(EGL_DRAW);
+  read_ = eglGetCurrentSurface(EGL_READ);
+  std::lock_guard<std::mutex> lock(gMutex);
+  // A foreign context is current: scatterlab's (when it exists) becomes current for the work
+  // in this scope, so that no GL call of ours (object deletion included) lands in the caller's.
+  foreign_ = context_ != EGL_NO_CONTEXT && (!gContext || context_ != gEgl.ctx);
+  if (foreign_ && gContext) eglMakeCurrent(gEgl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, gEgl.ctx);
+}
+
+CallerContextGuard::~CallerContextGuard() {
+  if (!foreign_) return;
+  std::lock_guard<std::mutex> lock(gMutex);
+  const bool oursCurrent = gContext && eglGetCurrentContext() == gEgl.ctx;
+  const bool shared = gShareContext == context_;
+  GLsync done = nullptr;
+  if (oursCurrent) {
+    // The caller's context waits for our commands on the GPU (glWaitSync below), not the host.
+    if (shared) done = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    glFlush();
+  }
+  eglMakeCurrent(display_, draw_, read_, context_);
+  if (done) {
+    glWaitSync(done, 0, GL_TIMEOUT_IGNORED);
+    glDeleteSync(done);  // deleted once no wait refers to it
+  }
 }
 
 Context* tryContext(std::string* why) {

@@ -48,4 +48,34 @@ Context& context();
 /// Needs no context beforehand (it is how callers ask whether one can be made).
 Context* tryContext(std::string* why = nullptr);
 
+/// For an engine (issue 34): scatterlab's context is created on the display of the EGL context
+/// current on the calling thread and in its share group, so textures and buffers scatterlab
+/// makes (RenderResult::deviceImage) are names in the caller's context too. Call it with the
+/// engine's desktop-OpenGL context current, before anything of scatterlab uses the GPU; throws
+/// GpuError when no context is current or scatterlab's exists already unshared.
+void shareWithCurrentContext();
+/// Whether scatterlab's context exists and shares objects with the caller's.
+bool sharesWithCaller();
+
+/// Scope guard at the API's edge (Renderer): when a context that is not scatterlab's is current
+/// on entry (an engine's), scatterlab's is made current for the scope (so no GL call of ours,
+/// object deletion included, lands in the caller's context) and the caller's (display,
+/// surfaces, context) is current again at the end; with a shared context, the caller's context
+/// then waits on the GPU for scatterlab's commands (a fence and glWaitSync: no host wait), so
+/// it sees the image. Does nothing when no context or scatterlab's is current on entry.
+class CallerContextGuard {
+ public:
+  CallerContextGuard();
+  ~CallerContextGuard();
+  CallerContextGuard(const CallerContextGuard&) = delete;
+  CallerContextGuard& operator=(const CallerContextGuard&) = delete;
+
+ private:
+  void* display_ = nullptr;
+  void* context_ = nullptr;
+  void* draw_ = nullptr;
+  void* read_ = nullptr;
+  bool foreign_ = false;
+};
+
 }  // namespace scatterlab::gpu

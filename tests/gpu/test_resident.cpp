@@ -240,8 +240,9 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
                 paper ? " (paper)" : "", f, waits,
                 res.stats.extra.at("dispatches").get<long long>());
     EXPECT_EQ(waits, 0) << "frame " << f;
-    if (std::string(method) != "per-voxel")
+    if (std::string(method) != "per-voxel") {
       EXPECT_TRUE(res.stats.extra.at("samples_reused").get<bool>());
+    }
     ASSERT_TRUE(res.deviceImage.has_value());
     EXPECT_FALSE(res.stats.extra.contains("image_readback_ms"));
     // The image, read after the frame, equals a fresh render's (which reads its image back).
@@ -267,7 +268,13 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
 INSTANTIATE_TEST_SUITE_P(Methods, GpuSteadyFrame,
                          ::testing::Values(std::make_tuple("gradient", true),
                                            std::make_tuple("gradient", false),
-                                           std::make_tuple("per-voxel", false)));
+                                           std::make_tuple("per-voxel", false)),
+                         [](const auto& info) {
+                           std::string name = std::get<0>(info.param);
+                           for (char& c : name)
+                             if (c == '-') c = '_';
+                           return name + (std::get<1>(info.param) ? "_paper" : "_defaults");
+                         });
 
 }  // namespace
 }  // namespace scatterlab::testing
