@@ -59,7 +59,7 @@ Renderer::~Renderer() {
   method_.reset();
 }
 
-void Renderer::rebuild(const Json& doc, double t) {
+void Renderer::rebuild(const Json& doc, double t, bool mediumKept) {
   const gpu::CallerContextGuard guard;  // a replaced method frees its GL objects in our context
   // Everything is parsed and created before anything is replaced: a bad value leaves the
   // renderer as it was.
@@ -68,7 +68,8 @@ void Renderer::rebuild(const Json& doc, double t) {
   const Json& medium = work.contains("medium") ? work["medium"] : none;
   const Json& render = work.contains("render") ? work["render"] : none;
   const Json& objects = work.contains("objects") ? work["objects"] : none;
-  const bool sameMedium = method_ && medium == mediumDoc_;
+  // mediumKept: `doc` has no medium (set() detached it, unchanged): the kept one stays.
+  const bool sameMedium = method_ && (mediumKept || medium == mediumDoc_);
   Scene s = sameMedium ? parseScene(work, baseDir_, &scene_.medium) : parseScene(work, baseDir_);
   // The same objects stay the same object: the method sees the visibility unchanged (and
   // keeps its radiance volume where nothing else it depends on changed).
@@ -82,13 +83,30 @@ void Renderer::rebuild(const Json& doc, double t) {
   doc_ = doc;
   time_ = t;
   scene_ = std::move(s);
-  mediumDoc_ = medium;
+  if (!mediumKept) mediumDoc_ = medium;
   objectsDoc_ = objects;
   renderDoc_ = render;
   if (m) method_ = std::move(m);
 }
 
 void Renderer::set(const std::string& assignment) {
+  const std::string top = assignment.substr(0, assignment.find_first_of(".=["));
+  if (method_ && top != "medium" && doc_.is_object() && doc_.contains("medium")) {
+    // The medium is untouched: it is detached from the document (a move), so that neither the
+    // override's copy nor rebuild's copies and comparisons walk it (fig3's 800 blobs cost ~1 ms
+    // a call), and put back whatever happens.
+    Json medium = std::move(doc_["medium"]);
+    doc_.erase("medium");
+    struct Reattach {
+      Json& doc;
+      Json& medium;
+      ~Reattach() { doc["medium"] = std::move(medium); }
+    } reattach{doc_, medium};
+    Json doc = doc_;
+    applyOverride(doc, assignment);
+    rebuild(doc, time_, /*mediumKept=*/true);
+    return;
+  }
   Json doc = doc_;
   applyOverride(doc, assignment);
   rebuild(doc, time_);

@@ -89,7 +89,7 @@ class Renderer {
   Method& method();
 
  private:
-  void rebuild(const Json& doc, double t);
+  void rebuild(const Json& doc, double t, bool mediumKept = false);
 
   Json doc_;
   std::filesystem::path baseDir_;
