@@ -305,10 +305,13 @@ TEST(Objects, DynamicSamplingRefinesAlongTheShadowBoundary) {
   const auto [freeNear, freeAll] = refinedNearCone(false);
   const double withShare = double(withNear) / double(withAll);
   const double bandShare = double(freeNear) / double(freeAll);
-  // Measured (64^3, default adaptive settings): with the sphere 6852 of the 9470 samples of
-  // the finest level (0.72) lie within 0.05 of the cone's surface; the band holds 234 of the
-  // 1000 initial grid samples (0.23): 3.1x concentration. Limit 2x.
-  EXPECT_GT(withShare, 2.0 * bandShare)
+  std::printf("finest level near the cone: %lld of %lld with the sphere, %lld of %lld without\n",
+              withNear, withAll, freeNear, freeAll);
+  // Measured 2026-11-27 (64^3, default adaptive settings, budget 8000): with the sphere 4296 of
+  // the 4800 samples of the finest level (0.895) lie within 0.05 of the cone's surface; the band
+  // holds 508 of the 2197 initial grid samples (0.231): 3.87x concentration. Limit 3.87 / 1.5.
+  // (2026-11-23, before the budget: 6852 of 9470 against 234 of 1000, 3.1x.)
+  EXPECT_GT(withShare, 2.58 * bandShare)
       << withNear << "/" << withAll << " vs " << freeNear << "/" << freeAll;
 }
 
