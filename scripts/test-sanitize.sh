@@ -7,6 +7,7 @@
 # Usage: scripts/test-sanitize.sh [BUILD_DIR]   (SCATTERLAB_JOBS: parallel jobs, default 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+ROOT=$(pwd)
 BUILD=${1:-build-asan}
 JOBS=${SCATTERLAB_JOBS:-2}
 launcher=()
@@ -32,7 +33,16 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$(cd .. && pwd)/scripts/lsan.su
 # and piped output, its leak check completes and reports nothing (measured 2026-11-23, 12 runs).
 # It still runs under ASan + UBSan + LSan here, only outside ctest.
 direct='GpuResident.SogDensitySplattedOnTheGpuEqualsTheCpuSplat'
-ctest --output-on-failure -j "$JOBS" --timeout 1800 -E "^${direct}\$"
+# The same tracer crash has hit other GPU tests once in a while (2026-11-27:
+# GpuCompetitorObjects.MatchesCpu/6 after it passed): a test that fails only that way is run
+# again directly by scripts/asan_rerun.py; any other failure fails the run.
+set +e
+ctest --output-on-failure -j "$JOBS" --timeout 1800 -E "^${direct}\$" 2>&1 | tee ctest-asan.log
+rc=${PIPESTATUS[0]}
+set -e
+if [ "$rc" -ne 0 ]; then
+  python3 "$ROOT/scripts/asan_rerun.py" ctest-asan.log
+fi
 if [ -x bin/test_gpu ]; then
   (cd tests && ../bin/test_gpu --gtest_filter="$direct")
 fi
