@@ -55,9 +55,9 @@ def main():
         print(f"asan_rerun: test #{index} passed but LeakSanitizer's tracer died at exit; "
               f"running it directly: {' '.join(test['command'])}", flush=True)
         # The crash is intermittent (2026-11-27: 1 of 5 direct runs of
-        # GpuCompetitorObjects.MatchesCpu/6, 3 of 7 runs from build-asan/); up to five runs, each
+        # GpuCompetitorObjects.MatchesCpu/6, 7 of 12 runs from build-asan/); up to ten runs, each
         # of which may fail only so.
-        for attempt in range(5):
+        for attempt in range(10):
             r = subprocess.run(test["command"], cwd=cwd, capture_output=True, text=True)
             sys.stdout.write(r.stdout + r.stderr)
             if r.returncode == 0:
