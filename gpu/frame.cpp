@@ -108,7 +108,7 @@ void GpuFrame::report(RenderStats& st) {
     st.extra["image_readback_ms"] = waits.imageReadbackMs - waits0_.imageReadbackMs;
   st.extra["dispatches"] = passes.dispatches - passes0_.dispatches;
   st.extra["indirect_dispatches"] = passes.indirect - passes0_.indirect;
-  for (auto& [key, read] : deferred_) st.extra[key] = read();
+  for (const auto& read : deferred_) read(st.extra);
   deferred_.clear();
   st.backend = "gpu";
   st.device = ctx.info().renderer;
@@ -185,10 +185,10 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
                            counter.get());
   // Read after the frame (GpuFrame::report), not inside it.
   lampScene_ = nullptr;
-  f.deferStat("uncovered_voxels", [counter] {
+  f.deferStats([counter](Json& extra) {
     GLuint n = 0;
     counter->read(&n, sizeof n);
-    return Json(n);
+    extra["uncovered_voxels"] = n;
   });
   return st;
 }
@@ -204,15 +204,11 @@ ReconstructionStats PerVoxelGpu::reconstruct(Frame& frame, const Scene& scene,
   f.radiance =
       build(scene, f.density, scene.medium.bounds, dims, &st, &f.timer, shadows, counters.get());
   // Read after the frame (GpuFrame::report), not inside it.
-  f.deferStat("traced_voxels", [counters] {
-    GpuPerVoxelCounters n;
+  f.deferStats([counters](Json& extra) {
+    GpuPerVoxelCounters n;  // one read for both counts
     counters->read(&n, sizeof n);
-    return Json(n.traced);
-  });
-  f.deferStat("empty_voxels", [counters] {
-    GpuPerVoxelCounters n;
-    counters->read(&n, sizeof n);
-    return Json(n.skipped);
+    extra["traced_voxels"] = n.traced;
+    extra["empty_voxels"] = n.skipped;
   });
   return st;
 }

@@ -46,11 +46,9 @@ class GpuFrame : public Frame {
   /// (On llvmpipe "GPU ms" are CPU time of the software rasteriser.)
   void report(RenderStats& stats) override;
 
-  /// A statistic that would make the host wait if read now (a count the GPU writes): read by
-  /// `read` in report(), after the frame, into stats.extra[key].
-  void deferStat(std::string key, std::function<Json()> read) {
-    deferred_.emplace_back(std::move(key), std::move(read));
-  }
+  /// Statistics that would make the host wait if read now (counts the GPU writes): `read`
+  /// fills them into the stats' extra in report(), after the frame.
+  void deferStats(std::function<void(Json& extra)> read) { deferred_.push_back(std::move(read)); }
 
   /// The scene objects' triangles and shadow maps, built by the first stage that needs them
   /// (SceneShadows::build; "shadow maps" in the timings).
@@ -82,7 +80,7 @@ class GpuFrame : public Frame {
   /// The counters at the start of this render (host_waits, dispatches are differences).
   HostWaitCounts waits0_;
   PassCounts passes0_;
-  std::vector<std::pair<std::string, std::function<Json()>>> deferred_;
+  std::vector<std::function<void(Json&)>> deferred_;
   void startCounts();
 };
 

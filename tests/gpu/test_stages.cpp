@@ -163,7 +163,7 @@ TEST(GpuGradientSplat, MatchesDirectEq4) {
       }
   EXPECT_EQ(bad, 0);
   EXPECT_GT(covered, 0);
-  // The frame reads the GPU's count after the frame (GpuFrame::deferStat), into its report.
+  // The frame reads the GPU's count after the frame (GpuFrame::deferStats), into its report.
   (void)st;
   RenderStats report;
   frame.report(report);
