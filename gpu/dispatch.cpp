@@ -41,6 +41,11 @@ void dispatch(std::string_view pass, UVec3 count, StageTimer* timer) {
     glDispatchCompute(count.x, count.y, count.z);
   }
   ++counts.dispatches;
+  const long long n = (long long)count.x * count.y * count.z * currentProgramLocalSize();
+  if (const auto it = counts.invocations.find(pass); it != counts.invocations.end())
+    it->second += n;
+  else
+    counts.invocations.emplace(std::string(pass), n);
   checkGl(pass);
 }
 

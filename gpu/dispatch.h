@@ -6,6 +6,8 @@
 /// Program::uniform resolves the name once per program and throws on a name no source declares.
 
 #include <cstddef>
+#include <map>
+#include <string>
 #include <string_view>
 
 #include "core/math.h"
@@ -32,14 +34,18 @@ inline GLuint groups(std::size_t n, GLuint size) {
 struct PassCounts {
   long long dispatches = 0;  ///< compute dispatches, direct and indirect
   long long indirect = 0;    ///< of which indirect (sizes written on the GPU)
+  /// Invocations of the direct dispatches per pass (workgroups × the program's workgroup
+  /// size; an indirect dispatch's sizes are known only on the GPU and are not counted).
+  std::map<std::string, long long, std::less<>> invocations;
 };
 PassCounts passCounts();
 
-/// Dispatches `count` workgroups of the program in use, as pass `pass`: a size over the
-/// device's GL_MAX_COMPUTE_WORK_GROUP_COUNT is a GpuError naming the pass and the limit
-/// before any work (never a silently clipped image); a GL error after it is a GpuError naming
-/// the pass (checkGl). Timed as `pass` into `timer` when one is given (the caller must not be
-/// inside a ScopedGpuTimer of the same timer: stages do not nest). An empty size is no work.
+/// Dispatches `count` workgroups of the program in use (made current by Program::use), as pass
+/// `pass`: a size over the device's GL_MAX_COMPUTE_WORK_GROUP_COUNT is a GpuError naming the pass
+/// and the limit before any work (never a silently clipped image); a GL error after it is a
+/// GpuError naming the pass (checkGl). Timed as `pass` into `timer` when one is given (the caller
+/// must not be inside a ScopedGpuTimer of the same timer: stages do not nest). An empty size is no
+/// work.
 void dispatch(std::string_view pass, UVec3 count, StageTimer* timer = nullptr);
 /// Same, with the sizes read by the GPU from the GL_DISPATCH_INDIRECT_BUFFER bound, at byte
 /// `offset` (no size check: the shader that wrote them keeps them within the limit).

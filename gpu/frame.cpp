@@ -108,6 +108,14 @@ void GpuFrame::report(RenderStats& st) {
     st.extra["image_readback_ms"] = waits.imageReadbackMs - waits0_.imageReadbackMs;
   st.extra["dispatches"] = passes.dispatches - passes0_.dispatches;
   st.extra["indirect_dispatches"] = passes.indirect - passes0_.indirect;
+  Json invocations = Json::object();
+  for (const auto& [pass, n] : passes.invocations) {
+    const auto before = passes0_.invocations.find(pass);
+    const long long d = n - (before != passes0_.invocations.end() ? before->second : 0);
+    if (d > 0) invocations[pass] = d;
+  }
+  if (invocations.contains(kTracerPass)) st.extra["tracer_invocations"] = invocations[kTracerPass];
+  st.extra["invocations"] = std::move(invocations);
   for (const auto& read : deferred_) read(st.extra);
   deferred_.clear();
   st.backend = "gpu";

@@ -323,7 +323,7 @@ Framebuffer::Framebuffer(std::string_view name) {
   label(GL_FRAMEBUFFER, id_, name);
 }
 
-Shader::Shader(GLenum stage, std::string_view source, std::string_view file) {
+Shader::Shader(GLenum stage, std::string_view source, std::string_view file) : stage_(stage) {
   id_ = glCreateShader(stage);
   detail::countCreated();
   const char* src = source.data();
@@ -393,7 +393,26 @@ Program::Program(std::initializer_list<const Shader*> shaders, std::string_view 
     if (n.size() > 3 && n.ends_with("[0]")) n.resize(n.size() - 3);
     u->active.emplace(std::move(n), location);
   }
+  for (const Shader* s : shaders)
+    if (s->stage() == GL_COMPUTE_SHADER) {
+      GLint size[3] = {0, 0, 0};
+      glGetProgramiv(id_, GL_COMPUTE_WORK_GROUP_SIZE, size);
+      u->localSize = std::int64_t(size[0]) * size[1] * size[2];
+    }
   uniforms_ = std::move(u);
+}
+
+namespace {
+std::int64_t currentLocalSize = 0;  // of the program last made current by Program::use
+}  // namespace
+
+void Program::use() const {
+  glUseProgram(id_);
+  currentLocalSize = uniforms_ ? uniforms_->localSize : 0;
+}
+
+std::int64_t currentProgramLocalSize() {
+  return currentLocalSize;
 }
 
 GLint Program::uniform(std::string_view name) const {

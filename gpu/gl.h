@@ -16,6 +16,7 @@
 
 #include <epoxy/gl.h>
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <set>
@@ -213,9 +214,11 @@ class Shader : public GlObject<ShaderDeleter> {
   Shader(GLenum stage, std::string_view source, std::string_view file);
   /// The names of every `uniform` declared in the source (inside #ifdef'd-out blocks too).
   const std::vector<std::string>& declaredUniforms() const { return declared_; }
+  GLenum stage() const { return stage_; }
 
  private:
   std::vector<std::string> declared_;
+  GLenum stage_ = 0;
 };
 
 /// The names of the uniforms declared in GLSL `source` ("uniform TYPE NAME" with optional
@@ -231,7 +234,8 @@ class Program : public GlObject<ProgramDeleter> {
  public:
   Program() = default;
   Program(std::initializer_list<const Shader*> shaders, std::string_view label);
-  void use() const { glUseProgram(id_); }
+  /// Makes the program current (and its workgroup size the one dispatch() counts).
+  void use() const;
   /// Location of uniform `name` (no GL call), or -1 for a declared uniform the compiler removed;
   /// throws GpuError when no source declares `name`.
   GLint uniform(std::string_view name) const;
@@ -246,9 +250,14 @@ class Program : public GlObject<ProgramDeleter> {
     std::string label;
     std::map<std::string, GLint, std::less<>> active;  ///< name (arrays: without [0]) → location
     std::set<std::string, std::less<>> declared;
+    std::int64_t localSize = 0;  ///< invocations per workgroup of a compute program, else 0
   };
   std::shared_ptr<const Uniforms> uniforms_;
 };
+
+/// Invocations per workgroup of the program last made current through Program::use (0 for a
+/// graphics program): what dispatch() multiplies the workgroups by to count invocations.
+std::int64_t currentProgramLocalSize();
 
 /// Query object (timer queries for per-stage GPU times).
 class Query : public GlObject<QueryDeleter> {

@@ -1,5 +1,8 @@
 #include "gpu/volume_tracer.h"
 
+#include <algorithm>
+#include <bit>
+#include <string>
 #include <vector>
 
 #include "gpu/bindings.h"
@@ -17,8 +20,15 @@ void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buf
                             StageTimer* timer, const ShadowMaps* shadows) {
   context();
   if (count == 0) return;
+  // Lanes split the lights (a power of two, for the tree sum), rows are the 7 points of S and
+  // ∇S (1 without gradients), 32 / lanes samples per workgroup: 224 invocations per group with
+  // gradients, one per (sample, point, light) up to 32 lights.
+  const TracerShape shape = tracerShape(scene.lights.size(), gradients);
   ProgramVariant variant{.compute = {"common.glsl", "volume_tracer.comp.glsl"}};
-  variant.define("SL_GRADIENTS", gradients)
+  variant.define("SL_LANES " + std::to_string(shape.lanes))
+      .define("SL_ROWS " + std::to_string(shape.rows))
+      .define("SL_SLOTS " + std::to_string(shape.slots))
+      .define("SL_GRADIENTS", gradients)
       .define("SL_FACTOR_LIGHTS", factor_)
       .define("SL_LAMP_MODEL", lamp_)
       .define("SL_LOG_SPACE", log_);
@@ -30,8 +40,18 @@ void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buf
   glUniform1f(program.uniform("uDelta2"), delta2_);
   points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
   results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
-  dispatch("radiance evaluation", {groups(count, 64), 1, 1}, timer);
+  // Workgroups stride over the samples: at most 65535 (GL's least maximum) whatever the count.
+  dispatch(kTracerPass, {std::min<GLuint>(groups(count, GLuint(shape.slots)), 65535u), 1, 1},
+           timer);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+TracerShape tracerShape(std::size_t lights, bool gradients) {
+  TracerShape s;
+  s.lanes = int(std::min<std::size_t>(32, std::bit_ceil(std::max<std::size_t>(1, lights))));
+  s.rows = gradients ? 7 : 1;
+  s.slots = 32 / s.lanes;
+  return s;
 }
 
 void readRadianceRecords(const Buffer& results, std::span<RadianceSample> samples) {

@@ -12,7 +12,8 @@
 
 namespace scatterlab::gpu {
 
-/// S and ∇S at every sample in one compute dispatch (GPU twin of the CPU volume tracer):
+/// S and ∇S at every sample in one compute dispatch (GPU twin of the CPU volume tracer),
+/// parallel over (sample, point, light) (TracerShape):
 /// S(x) = SourceRadiance(x, towards the camera position), ∇S by central differences with step
 /// delta2 along each world axis, each offset point with its own view direction.
 class VolumeTracerGpu : public RadianceEvaluator {
@@ -43,6 +44,17 @@ class VolumeTracerGpu : public RadianceEvaluator {
   bool factor_, log_, lamp_;
   ShadowMapSettings shadowMap_;
 };
+
+/// The tracer's pass name (its GPU time and its invocations in the stats).
+inline constexpr const char* kTracerPass = "radiance evaluation";
+
+/// How the tracer's workgroups are laid out (volume_tracer.comp.glsl): `lanes` invocations split
+/// the lights of each of a sample's `rows` points (7 with gradients: x and x ± δ2·e_a), `slots`
+/// samples per workgroup (lanes × slots = 32).
+struct TracerShape {
+  int lanes = 1, rows = 1, slots = 32;
+};
+TracerShape tracerShape(std::size_t lights, bool gradients);
 
 /// Reads the GpuRadianceRecord of `results` back into S and ∇S of `samples` (a host wait).
 void readRadianceRecords(const Buffer& results, std::span<RadianceSample> samples);

@@ -154,10 +154,12 @@ vec3 boxExit(vec3 x, vec3 toLight) {
   return intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
 }
 
-// SourceRadiance::operator(): S at x for light leaving towards the viewer along toViewer.
-vec3 sourceRadiance(vec3 x, vec3 toViewer) {
+// SourceRadiance::operator()'s terms for lights li = first, first + stride, … (S at x for
+// light leaving towards the viewer along toViewer is their sum over every light; the volume
+// tracer splits the lights between invocations and adds the parts in shared memory).
+vec3 sourceRadiancePart(vec3 x, vec3 toViewer, int first, int stride) {
   vec3 s = vec3(0.0);
-  for (int li = 0; li < uLightCount; ++li) {
+  for (int li = first; li < uLightCount; li += stride) {
     GpuLight l = lights[li];
     vec3 toLight, irradiance, segEnd;
     float dist, dist2, f;
@@ -181,6 +183,9 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) {
   }
   return s;
 }
+
+// SourceRadiance::operator(): S at x for light leaving towards the viewer along toViewer.
+vec3 sourceRadiance(vec3 x, vec3 toViewer) { return sourceRadiancePart(x, toViewer, 0, 1); }
 
 #if defined(SL_LAMP_MODEL) || defined(SL_LAMP_BOUNDS)
 const float kLampDepth = SL_LAMP_DEPTH;  // kLampDepth of core/stages.h, injected
@@ -251,18 +256,21 @@ vec3 lightFactor(vec3 x, vec3 toViewer) {
   return a;
 }
 
-// FactoredSourceRadiance::operator(): V = S / A; where A is zero in a channel (outside every
-// cone), V with the cones ignored.
-vec3 factoredSource(vec3 x, vec3 toViewer) {
-  vec3 s = vec3(0.0), a = vec3(0.0), lit = vec3(0.0);
-  bool outside = false;
-  for (int li = 0; li < uLightCount; ++li) {
-    lit = max(lit, lights[li].intensityCosOuter.rgb);
+// FactoredSourceRadiance::operator() in parts, for lights li = first, first + stride, … (the
+// volume tracer splits the lights between invocations and adds the parts):
+// s = Σ w·cone·V_l·T and a = Σ w·cone·m_l over the lights whose cone holds x; `outside` counts
+// those whose cone does not (their w and T are not traced unless factoredNeedsFree).
+void factoredPart(vec3 x, vec3 toViewer, int first, int stride, out vec3 s, out vec3 a,
+                  out float outside) {
+  s = vec3(0.0);
+  a = vec3(0.0);
+  outside = 0.0;
+  for (int li = first; li < uLightCount; li += stride) {
     vec3 w, segEnd;
     float cone;
     if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
     if (cone <= 0.0) {
-      outside = true;
+      outside += 1.0;
       continue;
     }
     s += w * (cone * lightTransmittance(li, x, segEnd));
@@ -272,29 +280,55 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
     a += w * cone;
 #endif
   }
+}
+// Where A (a, the sum over every light) is zero in a channel that some light lights while x
+// lies outside a cone (outside > 0), V is taken with the cones ignored: the sums of
+// factoredFreePart are needed.
+bool factoredNeedsFree(vec3 a, float outside) {
+  if (!(outside > 0.0)) return false;
+  vec3 lit = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) lit = max(lit, lights[li].intensityCosOuter.rgb);
+  for (int c = 0; c < 3; ++c)
+    if (!(a[c] > 0.0) && lit[c] > 0.0) return true;
+  return false;
+}
+// The cones-ignored sums sf = Σ w·V_l·T, af = Σ w·m_l for lights first, first + stride, ….
+void factoredFreePart(vec3 x, vec3 toViewer, int first, int stride, out vec3 sf, out vec3 af) {
+  sf = vec3(0.0);
+  af = vec3(0.0);
+  for (int li = first; li < uLightCount; li += stride) {
+    vec3 w, segEnd;
+    float cone;
+    if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
+    sf += w * lightTransmittance(li, x, segEnd);
+#ifdef SL_LAMP_MODEL
+    af += w * lampModel(li, x);
+#else
+    af += w;
+#endif
+  }
+}
+// V from the sums over every light: s / a per channel; where a is zero, sf / af when
+// factoredNeedsFree (else 0).
+vec3 factoredCombine(vec3 s, vec3 a, float outside, vec3 sf, vec3 af) {
+  vec3 lit = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) lit = max(lit, lights[li].intensityCosOuter.rgb);
   vec3 v = vec3(0.0);
-  bool needFree = false;
   for (int c = 0; c < 3; ++c) {
     if (a[c] > 0.0) v[c] = s[c] / a[c];
-    else if (outside && lit[c] > 0.0) needFree = true;
-  }
-  if (needFree) {
-    vec3 sf = vec3(0.0), af = vec3(0.0);
-    for (int li = 0; li < uLightCount; ++li) {
-      vec3 w, segEnd;
-      float cone;
-      if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
-      sf += w * lightTransmittance(li, x, segEnd);
-#ifdef SL_LAMP_MODEL
-      af += w * lampModel(li, x);
-#else
-      af += w;
-#endif
-    }
-    for (int c = 0; c < 3; ++c)
-      if (!(a[c] > 0.0) && outside && lit[c] > 0.0) v[c] = af[c] > 0.0 ? sf[c] / af[c] : 0.0;
+    else if (outside > 0.0 && lit[c] > 0.0) v[c] = af[c] > 0.0 ? sf[c] / af[c] : 0.0;
   }
   return v;
+}
+
+// FactoredSourceRadiance::operator(): V = S / A; where A is zero in a channel (outside every
+// cone), V with the cones ignored.
+vec3 factoredSource(vec3 x, vec3 toViewer) {
+  vec3 s, a, sf = vec3(0.0), af = vec3(0.0);
+  float outside;
+  factoredPart(x, toViewer, 0, 1, s, a, outside);
+  if (factoredNeedsFree(a, outside)) factoredFreePart(x, toViewer, 0, 1, sf, af);
+  return factoredCombine(s, a, outside, sf, af);
 }
 
 // What the samples hold at p seen from the camera at uEye (per-voxel and evaluator

@@ -61,10 +61,16 @@ GLenum stageOf(const std::string& name) {
 /// The SL_* variant macros a source tests (#ifdef, #ifndef, defined(...)).
 std::set<std::string> variantsOf(const std::string& source) {
   static const std::regex re(R"((?:#\s*ifn?def\s+|defined\s*\(\s*)(SL_\w+))");
-  std::set<std::string> out;
+  // A size the host sets, with a default for a lone compile ("#ifndef SL_LANES" then
+  // "#define SL_LANES 1"): not a switch to try on its own.
+  static const std::regex size(R"(#\s*ifndef\s+(SL_\w+)[^\n]*\n\s*#\s*define\s+\1\s+\S)");
+  std::set<std::string> out, sizes;
+  for (auto it = std::sregex_iterator(source.begin(), source.end(), size);
+       it != std::sregex_iterator(); ++it)
+    sizes.insert((*it)[1].str());
   for (auto it = std::sregex_iterator(source.begin(), source.end(), re);
        it != std::sregex_iterator(); ++it)
-    out.insert((*it)[1].str());
+    if (!sizes.count((*it)[1].str())) out.insert((*it)[1].str());
   return out;
 }
 
