@@ -23,6 +23,7 @@
 
 #include "core/grid.h"
 #include "core/image.h"
+#include "core/max_density_grid.h"
 #include "core/params.h"
 #include "core/progress.h"
 #include "core/registry.h"
@@ -223,6 +224,7 @@ inline constexpr SharedConstant kSharedConstants[] = {
     {"SL_MIN_V", kMinV},
     {"SL_SINGULAR_EPS", kSingularEps},
     {"SL_LAMP_DEPTH", kLampDepth},
+    {"SL_BLOCK", float(MaxDensityGrid::kBlock)},  // voxels per edge of an empty-space block
 };
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted

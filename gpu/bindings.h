@@ -88,11 +88,16 @@ inline constexpr GLuint kSurfaceTexture = 3;
 inline constexpr GLuint kSurfaceRadianceTexture = 4;
 /// The R32F lattice of a .sog residual F, read by texelFetch (sog_residual.comp.glsl).
 inline constexpr GLuint kResidualTexture = 5;
+/// The R32F empty-space grid: per block of voxels the largest density a lookup can read
+/// (sampler3D uBlockMax, block_walk.glsl; gpu/empty_space.h).
+inline constexpr GLuint kBlockMaxTexture = 6;
 
 // ---- image units
 
 /// RGBA32F sums of radiance splatting, read by the normalisation.
 inline constexpr GLuint kSumsImage = 0;
+/// The R32F empty-space grid its build pass writes (block_max.comp.glsl).
+inline constexpr GLuint kBlockMaxImage = 0;
 /// The RGBA32F source-radiance volume a compute pass writes.
 inline constexpr GLuint kRadianceImage = 1;
 /// The shadow-map blur's source and target layers (shadow_blur.comp.glsl).
@@ -155,6 +160,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_OBJECT_VERTICES", binding::kObjectVertices},
     {"BINDING_DENSITY_TEXTURE", binding::kDensityTexture},
     {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
+    {"BINDING_BLOCK_MAX_TEXTURE", binding::kBlockMaxTexture},
+    {"BINDING_BLOCK_MAX_IMAGE", binding::kBlockMaxImage},
     {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
     {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
     {"BINDING_SURFACE_RADIANCE_TEXTURE", binding::kSurfaceRadianceTexture},

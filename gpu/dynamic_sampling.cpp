@@ -9,6 +9,7 @@
 #include "gpu/bindings.h"
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
+#include "gpu/empty_space.h"
 #include "gpu/shaders.h"
 
 namespace scatterlab::gpu {
@@ -152,6 +153,7 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
       .define("SL_LOG_SPACE", steps.logValues())
       .define("SL_BOUNDED", bool(settings.space.bounds))
       .define("SL_WEIGHT_A", settings.space.weightA && steps.factorLights);
+  addShadowRaySkip(variant);
   return program(addShadowVariant(inputs.shadows(), variant), pass == ErrorPass::Probes
                                                                   ? "dynamic sampling probes"
                                                                   : "dynamic sampling evaluate");
@@ -675,7 +677,8 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
                                          const ShadowMaps* shadows,
                                          DynamicSamplingWorkspace* workspace) {
   context();
-  const TracingInputs inputs(scene, density, steps.delta1, shadows);
+  TracingInputs inputs(scene, density, steps.delta1, shadows);
+  inputs.skipEmptySpace(timer);
   DynamicSamplingWorkspace local;
   DynamicSamplingWorkspace& w = workspace ? *workspace : local;
   if (errorsOut) errorsOut->clear();

@@ -37,7 +37,15 @@ const char* glErrorName(GLenum e) {
 }
 
 void label(GLenum identifier, GLuint id, std::string_view name) {
-  if (!name.empty()) glObjectLabel(identifier, id, GLsizei(name.size()), name.data());
+  if (name.empty()) return;
+  // A label of GL_MAX_LABEL_LENGTH or more characters is GL_INVALID_VALUE: keep its start.
+  static const GLsizei maxLength = [] {
+    GLint n = 0;
+    glGetIntegerv(GL_MAX_LABEL_LENGTH, &n);
+    return GLsizei(n);
+  }();
+  const GLsizei n = std::min(GLsizei(name.size()), maxLength > 0 ? maxLength - 1 : 0);
+  glObjectLabel(identifier, id, n, name.data());
 }
 
 /// The recycler's state. GL is single-threaded here (gpu/context.h), so no locking.

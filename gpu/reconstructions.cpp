@@ -6,6 +6,7 @@
 #include "gpu/context.h"
 #include "gpu/device_samples.h"
 #include "gpu/dispatch.h"
+#include "gpu/empty_space.h"
 #include "gpu/records.h"
 #include "gpu/screen_pass.h"
 #include "gpu/shaders.h"
@@ -155,11 +156,13 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
                           Buffer* countersOut) {
   context();
   ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
+  addShadowRaySkip(variant);
   const Program& program = gpu::program(addShadowVariant(shadows, variant), "per-voxel S");
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)");
   const GpuPerVoxelCounters zeros;
   Buffer counters(sizeof zeros, &zeros, 0, "per-voxel counters");
-  const TracingInputs inputs(scene, density, delta1_, shadows);
+  TracingInputs inputs(scene, density, delta1_, shadows);
+  inputs.skipEmptySpace(timer);
   {
     program.use();
     inputs.apply(program);

@@ -97,6 +97,17 @@ inline GpuBlob packBlob(const GaussianBlob& b) {
   return {b.center, b.radius, b.weight};
 }
 
+/// view_march.comp.glsl `MarchCounts` (at BINDING_COUNTERS): steps looked up and steps jumped
+/// over (empty-space skipping), each a 64-bit count as two 32-bit words (low, high); size 16.
+struct GpuMarchCounters {
+  std::uint32_t looked[2] = {0, 0};
+  std::uint32_t skipped[2] = {0, 0};
+  static long long join(const std::uint32_t w[2]) {
+    return (long long)w[0] | ((long long)w[1] << 32);
+  }
+};
+static_assert(sizeof(GpuMarchCounters) == 16);
+
 /// per_voxel.comp.glsl `Counters` (at BINDING_COUNTERS). std430: traced 0, skipped 4; size 8.
 struct GpuPerVoxelCounters {
   std::uint32_t traced = 0;

@@ -29,6 +29,9 @@ class ScreenPass {
   /// For `p` (in use): binds the tracing inputs and the surface textures and sets the camera
   /// uniforms (setScreenCamera).
   void bind(const Program& p) const;
+  /// For a program that walks the density's empty-space grid (block_walk.glsl): builds it
+  /// (TracingInputs::skipEmptySpace; before the program is made current), and bind() binds it.
+  void skipEmptySpace(StageTimer* timer) { inputs_.skipEmptySpace(timer); }
 
   const ShadowMaps* shadows() const { return shadows_; }
   const TracingInputs& inputs() const { return inputs_; }

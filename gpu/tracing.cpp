@@ -7,6 +7,7 @@
 #include "gpu/bindings.h"
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
+#include "gpu/empty_space.h"
 #include "gpu/records.h"
 #include "gpu/shaders.h"
 
@@ -19,6 +20,10 @@ TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float de
   packed.reserve(scene.lights.size());
   for (const Light& l : scene.lights) packed.push_back(packLight(l));
   lights_ = Buffer(packed.size() * sizeof(GpuLight), packed.data(), 0, "lights");
+}
+
+void TracingInputs::skipEmptySpace(StageTimer* timer) {
+  blockMax_ = &blockMaxGrid(density_, timer);
 }
 
 void TracingInputs::apply(const Program& p) const {
@@ -37,6 +42,14 @@ void TracingInputs::apply(const Program& p) const {
   setIVec3(p, "uDensityDims", density_.dims);
   setVec3(p, "uEye", scene_.camera.position);
   if (shadows_) shadows_->bind(p);
+  if (p.declares("uBlocks")) {
+    if (!blockMax_)
+      throw GpuError("program '" + p.label() +
+                     "' skips empty space in its shadow rays: TracingInputs::skipEmptySpace "
+                     "was not called");
+    glBindTextureUnit(binding::kBlockMaxTexture, blockMax_->id());
+    setIVec3(p, "uBlocks", blockCount(density_));
+  }
 }
 
 const ShadowMaps* SceneShadows::build(const Scene& scene, const ShadowMapSettings& settings,

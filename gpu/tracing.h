@@ -22,6 +22,10 @@ class TracingInputs {
   /// with these inputs must then be built with addShadowVariant(shadows(), ...).
   TracingInputs(const Scene& scene, const Volume& density, float delta1,
                 const ShadowMaps* shadows = nullptr);
+  /// Shadow rays that jump over blocks of zero density (programs built with
+  /// addShadowRaySkip): builds the density's empty-space grid (gpu/empty_space.h) unless it is
+  /// built, so call it before the program is made current; apply() then binds it.
+  void skipEmptySpace(StageTimer* timer);
   /// Binds the buffers and texture and sets the uniforms of `program` (which must be in use).
   void apply(const Program& program) const;
   const ShadowMaps* shadows() const { return shadows_; }
@@ -32,6 +36,7 @@ class TracingInputs {
   float delta1_;
   const ShadowMaps* shadows_;
   Buffer lights_;
+  const Texture* blockMax_ = nullptr;
 };
 
 /// The scene objects on the GPU for one frame: their triangles and shadow maps (both null

@@ -5,6 +5,7 @@
 #include "gpu/bindings.h"
 #include "gpu/dispatch.h"
 #include "gpu/frame.h"
+#include "gpu/records.h"
 #include "gpu/screen_pass.h"
 #include "gpu/volume.h"
 
@@ -12,10 +13,19 @@ namespace scatterlab::gpu {
 
 Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
-  if (!f.imageOnDevice) return integrate(scene, f.density, f.radiance, &f.timer);
+  auto counters = std::make_shared<Buffer>();
+  // Read after the frame (GpuFrame::report), not inside it.
+  f.deferStats([counters](Json& extra) {
+    GpuMarchCounters n;
+    counters->read(&n, sizeof n);
+    extra["march_steps"] = GpuMarchCounters::join(n.looked);
+    extra["march_steps_skipped"] = GpuMarchCounters::join(n.skipped);
+  });
+  if (!f.imageOnDevice)
+    return integrate(scene, f.density, f.radiance, &f.timer, nullptr, counters.get());
   f.imageWidth = scene.camera.width;
   f.imageHeight = scene.camera.height;
-  return integrate(scene, f.density, f.radiance, &f.timer, &f.image);
+  return integrate(scene, f.density, f.radiance, &f.timer, &f.image, counters.get());
 }
 
 void ViewMarchGpu::describe(RenderStats& stats) const {
@@ -30,19 +40,30 @@ Image ViewMarchGpu::integrate(const Scene& scene, const DensityGrid& density,
 }
 
 Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const Volume& radiance,
-                              StageTimer* timer, Texture* keep) {
+                              StageTimer* timer, Texture* keep, Buffer* counters) {
   // The surfaces' T(p, l) is traced with delta1 (the slice marcher's and CPU's convention).
-  const ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
+  ScreenPass pass(scene, density, delta1_, shadowMap_, timer);
   std::vector<std::string> defines;
+  std::vector<std::string> files = {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"};
+  if (skipEmpty_) {
+    defines.push_back("SL_SKIP");
+    files.insert(files.end() - 1, "block_walk.glsl");
+  }
   if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
   if (factor_ && lamp_) defines.push_back("SL_LAMP_MODEL");
   if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims))
     defines.push_back("SL_FUSED");
-  const Program& march = pass.program(
-      "view march", {"common.glsl", "screen_common.glsl", "view_march.comp.glsl"}, defines);
+  const Program& march = pass.program("view march", files, defines);
+  // The steps looked up and jumped over (GpuMarchCounters), zero before the pass.
+  const GpuMarchCounters zero;
+  Buffer own;
+  if (!counters) counters = &own;
+  *counters = Buffer(sizeof zero, &zero, 0, "view march counters");
   const Camera& cam = scene.camera;
   Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image");
   const int strata = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
+  // Built by the density's first march (its own pass, timed apart); bound by pass.bind.
+  if (skipEmpty_) pass.skipEmptySpace(timer);
   {
     ScopedGpuTimer t(timer, "view march");
     march.use();
@@ -55,9 +76,10 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glUniform1f(march.uniform("uMinT"), settings_.minTransmittance);
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);
+    counters->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch("view march", {groups(cam.width, 8), groups(cam.height, 8), 1});
-    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
   checkGl("view march");
   if (keep) {

@@ -6,7 +6,8 @@
 /// that CPU ≡ GPU holds to float rounding. The paper's rasterised slice marcher
 /// (gpu::SliceMarcher, render.gpu_pipeline = raster) stays beside it. Scene objects: their
 /// surfaces are rasterised once (the surface pass of gpu/stages.h) and the march stops at
-/// their distance and adds T·L_p. Needs the GL context for integrate().
+/// their distance and adds T·L_p. Steps inside blocks of zero density are jumped over
+/// (gpu/empty_space.h; they add exactly 0). Needs the GL context for integrate().
 
 #include "core/stages.h"
 #include "gpu/tracing.h"
@@ -31,9 +32,14 @@ class ViewMarchGpu : public Integrator {
   /// The march over uploaded volumes (tests: CPU ≡ GPU).
   Image integrate(const Scene& scene, const DensityGrid& density, const RadianceGrid& radiance);
   /// The pass itself; GPU times "view march" and "read-back" into `timer` (may be null). With
-  /// `keep`, the image stays in *keep (RGBA32F) and an empty Image is returned.
+  /// `keep`, the image stays in *keep (RGBA32F) and an empty Image is returned. With
+  /// `counters`, it is made a GpuMarchCounters buffer the pass fills (steps looked up and
+  /// jumped over; the frame's stats march_steps and march_steps_skipped).
   Image integrate(const Scene& scene, const Volume& density, const Volume& radiance,
-                  StageTimer* timer, Texture* keep = nullptr);
+                  StageTimer* timer, Texture* keep = nullptr, Buffer* counters = nullptr);
+  /// Empty-space skipping (on by default; gpu/empty_space.h): the same image bit for bit, off
+  /// only to measure it.
+  void skipEmptySpace(bool on) { skipEmpty_ = on; }
 
  private:
   MarchSettings settings_;
@@ -41,6 +47,7 @@ class ViewMarchGpu : public Integrator {
   bool lamp_;
   float delta1_;
   ShadowMapSettings shadowMap_;
+  bool skipEmpty_ = true;
 };
 
 }  // namespace scatterlab::gpu

@@ -30,6 +30,9 @@ struct Volume {
   /// (written by the reconstructions): the compute view march then reads D and S in one
   /// trilinear lookup of 8 texels per step instead of two of 8 (cpu/fused_volume.h's twin).
   bool densityInAlpha = false;
+  /// A density volume's empty-space grid (gpu/empty_space.h), built by its first use: a new
+  /// density is a new Volume, so the grid never outlives the voxels it was built from.
+  mutable std::shared_ptr<const Texture> blockMax;
 
   Vec3 cellSize() const { return bounds.extent() / Vec3(dims); }
   Vec3 indexScale() const { return Vec3(1.0f) / cellSize(); }

@@ -9,6 +9,7 @@
 #include "gpu/context.h"
 #include "gpu/device_samples.h"
 #include "gpu/dispatch.h"
+#include "gpu/empty_space.h"
 #include "gpu/records.h"
 #include "gpu/shaders.h"
 #include "gpu/tracing.h"
@@ -32,8 +33,10 @@ void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buf
       .define("SL_FACTOR_LIGHTS", factor_)
       .define("SL_LAMP_MODEL", lamp_)
       .define("SL_LOG_SPACE", log_);
+  addShadowRaySkip(variant);
   const Program& program = gpu::program(addShadowVariant(shadows, variant), "volume tracer");
-  const TracingInputs inputs(scene, density, delta1_, shadows);
+  TracingInputs inputs(scene, density, delta1_, shadows);
+  inputs.skipEmptySpace(timer);
   program.use();
   inputs.apply(program);
   glUniform1ui(program.uniform("uCount"), GLuint(count));

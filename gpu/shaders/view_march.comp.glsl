@@ -4,8 +4,11 @@
 // the first surface), lookups at the steps' middles in index space u0 + i·du,
 //   L += T·Ω·(1 − a)·S,  T *= a,  a = exp(−σt·D·Δt),
 // until T <= uMinT; then L + T·L_p (the surface's, from the surface pass) or L + T·background.
-// camera.spp = k²: k × k stratum centres per pixel, box filter (as the CPU). After common.glsl
-// and screen_common.glsl.
+// camera.spp = k²: k × k stratum centres per pixel, box filter (as the CPU). With SL_SKIP the
+// steps inside blocks of zero density (block_walk.glsl) are jumped over: they add exactly 0, so
+// the image is the plain march's bit for bit. Every march counts the steps it looked up and the
+// steps it jumped over into uMarchCounts (64-bit sums as two 32-bit words each). After
+// common.glsl, screen_common.glsl (and block_walk.glsl with SL_SKIP).
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(rgba32f, binding = BINDING_OUTPUT_IMAGE) uniform writeonly image2D uOutput;
@@ -17,6 +20,11 @@ uniform float uStep;
 uniform float uMinT;
 uniform int uStrata;  // k: k × k rays per pixel
 uniform vec3 uBackground;
+// Mirrored by gpu::GpuMarchCounters (gpu/records.h): steps looked up, steps jumped over, each
+// as (low word, high word).
+layout(std430, binding = BINDING_COUNTERS) buffer MarchCounts { uint marchCounts[4]; };
+uint stepsLooked = 0u, stepsSkipped = 0u;  // this invocation's
+shared uint groupLooked, groupSkipped;
 
 // Grid3::sampleIndex of the RGBA radiance volume at index u: the eight neighbours interpolated
 // in float, in the CPU's order (densityAtIndex's twin, per channel). Its rgb is S; with SL_FUSED
@@ -57,25 +65,42 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
       float dt = (t1 - t0) / float(n);
       vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
       vec3 du = dir * dt * uDensityScale;
-      for (int i = 0; i < n && T > uMinT; ++i) {
+#ifdef SL_SKIP
+      BlockWalk walk = blockWalk(u0, du, n);
+#endif
+      int i = 0;
+      while (i < n && T > uMinT) {
+        int end = n;
+#ifdef SL_SKIP
+        bool empty;
+        end = blockSpan(walk, i, empty);
+        if (empty) {
+          stepsSkipped += uint(end - i);
+          i = end;
+          continue;
+        }
+#endif
+        for (; i < end && T > uMinT; ++i) {
+          ++stepsLooked;
 #ifdef SL_FUSED
-        vec4 DS = radianceAtIndex(u0 + float(i) * du);
-        float D = DS.a;
-        if (!(D > 0.0)) continue;
-        vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
-        vec3 S = DS.rgb;
+          vec4 DS = radianceAtIndex(u0 + float(i) * du);
+          float D = DS.a;
+          if (!(D > 0.0)) continue;
+          vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+          vec3 S = DS.rgb;
 #else
-        float D = densityAtIndex(u0 + float(i) * du);
-        if (!(D > 0.0)) continue;
-        vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
-        vec3 S = radianceAtIndex(x * uRadScale + uRadOffset).rgb;
+          float D = densityAtIndex(u0 + float(i) * du);
+          if (!(D > 0.0)) continue;
+          vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+          vec3 S = radianceAtIndex(x * uRadScale + uRadOffset).rgb;
 #endif
 #ifdef SL_FACTOR_LIGHTS
-        S *= lightFactor(x, -dir);  // the volume holds V = S / A
+          S *= lightFactor(x, -dir);  // the volume holds V = S / A
 #endif
-        float a = exp(-uSigmaT * D * dt);
-        L += (T * uAlbedo * (1.0 - a)) * S;
-        T *= a;
+          float a = exp(-uSigmaT * D * dt);
+          L += (T * uAlbedo * (1.0 - a)) * S;
+          T *= a;
+        }
       }
     }
   }
@@ -89,14 +114,36 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
 #endif
 }
 
+// Adds v to the 64-bit counter at word w (low) and w + 1 (high).
+void addCount(uint w, uint v) {
+  uint before = atomicAdd(marchCounts[w], v);
+  if (before + v < before) atomicAdd(marchCounts[w + 1u], 1u);
+}
+
 void main() {
+  if (gl_LocalInvocationIndex == 0u) {
+    groupLooked = 0u;
+    groupSkipped = 0u;
+  }
+  memoryBarrierShared();
+  barrier();
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  if (p.x >= int(uSize.x) || p.y >= int(uSize.y)) return;
-  vec4 sum = vec4(0.0);
-  for (int j = 0; j < uStrata; ++j)
-    for (int i = 0; i < uStrata; ++i) {
-      vec2 f = vec2(p) + (vec2(i, j) + 0.5) / float(uStrata);
-      sum += marchRay(cameraRay(f), p);
-    }
-  imageStore(uOutput, p, sum / float(uStrata * uStrata));
+  if (p.x < int(uSize.x) && p.y < int(uSize.y)) {
+    vec4 sum = vec4(0.0);
+    for (int j = 0; j < uStrata; ++j)
+      for (int i = 0; i < uStrata; ++i) {
+        vec2 f = vec2(p) + (vec2(i, j) + 0.5) / float(uStrata);
+        sum += marchRay(cameraRay(f), p);
+      }
+    imageStore(uOutput, p, sum / float(uStrata * uStrata));
+  }
+  // One global atomic per workgroup and counter.
+  atomicAdd(groupLooked, stepsLooked);
+  atomicAdd(groupSkipped, stepsSkipped);
+  memoryBarrierShared();
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    addCount(0u, groupLooked);
+    addCount(2u, groupSkipped);
+  }
 }

@@ -90,8 +90,9 @@ TEST(GpuShaders, EveryEmbeddedFileIsPresent) {
 /// Every shader of the embedded table, in every variant it tests, compiles (and a compute
 /// shader links), so a new file or #ifdef SL_* is covered without editing this test. A stage
 /// file that does not compile alone is compiled after a library file (what the stages do with
-/// common.glsl), after two of them (screen_common.glsl builds on common.glsl), or after all of
-/// them; it must compile one way or another.
+/// common.glsl), after two or three of them (screen_common.glsl builds on common.glsl;
+/// common.glsl's SL_SKIP_SHADOWS on block_walk.glsl), or after all of them; it must compile one
+/// way or another.
 TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
   SCATTERLAB_REQUIRE_GPU();
   std::vector<std::string> libraries;
@@ -112,6 +113,11 @@ TEST(GpuShaders, EveryEmbeddedShaderCompiles) {
     for (const std::string& a : libraries)
       for (const std::string& b : libraries)
         if (a != b) fileSets.push_back({a, b, s.name});
+    // Or on two (common.glsl with SL_SKIP_SHADOWS after block_walk.glsl, with shadow.glsl).
+    for (const std::string& a : libraries)
+      for (const std::string& b : libraries)
+        for (const std::string& c : libraries)
+          if (a != b && a != c && b != c) fileSets.push_back({a, b, c, s.name});
     std::string log;
     bool ok = false;
     for (const auto& files : fileSets) {
