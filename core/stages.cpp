@@ -20,6 +20,10 @@ DensityGrid buildDensityVolume(const Scene& scene) {
 void HostFrame::report(RenderStats& stats) {
   stats.backend = "cpu";
   stats.device = "CPU (TBB)";
+  if (marchSteps) {
+    stats.extra["march_steps"] = (*marchSteps)[0];
+    stats.extra["march_steps_skipped"] = (*marchSteps)[1];
+  }
 }
 
 std::array<BackendEntry, kBackendCount>& backends() {

@@ -291,6 +291,9 @@ class HostFrame : public Frame {
 
   std::shared_ptr<DensityGrid> density;
   std::shared_ptr<RadianceGrid> radiance;  ///< set by the reconstruction
+  /// The view march's steps looked up and jumped over (stats march_steps,
+  /// march_steps_skipped), set by a marching integrator.
+  std::optional<std::array<long long, 2>> marchSteps;
 };
 
 /// The scene's density volume on the host (medium.bounds, medium.resolution): what

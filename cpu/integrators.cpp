@@ -82,7 +82,20 @@ class RayMarcher : public Integrator {
         lampModel_(s.tracerSteps().lampModel),
         delta1_(s.delta1) {}
   Image integrate(Frame& frame, const Scene& scene, Progress* progress) override {
-    const HostFrame& f = static_cast<const HostFrame&>(frame);
+    HostFrame& f = static_cast<HostFrame&>(frame);
+    MarchCounts counts;
+    Image img = march(f, scene, progress, counts);
+    f.marchSteps = {counts.looked.load(), counts.skipped.load()};
+    return img;
+  }
+  void describe(RenderStats& stats) const override {
+    // The CPU marcher steps along each ray: the GPU's slicing and pipeline mean nothing here.
+    if (!gpuKeysGiven_.empty()) stats.extra["unused_keys"] = gpuKeysGiven_;
+  }
+
+ private:
+  Image march(const HostFrame& f, const Scene& scene, Progress* progress,
+              MarchCounts& counts) const {
     const RadianceGrid& radiance = *f.radiance;
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
@@ -94,24 +107,19 @@ class RayMarcher : public Integrator {
                                fusedSpanKernel(march_.simd),
                                fusedLookupKernel(march_.simd),
                                {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
-      return marchWith(scene, *f.density, lookup, march_, progress, delta1_);
+      return marchWith(scene, *f.density, lookup, march_, progress, delta1_, &counts);
     }
     const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
     if (factored_) {
       const auto lookup = [&](const Vec3& x, const Vec3& toViewer) {
         return radiance.sampleIndex(x * s + o) * A(x, toViewer);
       };
-      return marchImage(scene, *f.density, lookup, march_, progress, delta1_);
+      return marchImage(scene, *f.density, lookup, march_, progress, delta1_, &counts);
     }
     const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
-    return marchImage(scene, *f.density, lookup, march_, progress, delta1_);
-  }
-  void describe(RenderStats& stats) const override {
-    // The CPU marcher steps along each ray: the GPU's slicing and pipeline mean nothing here.
-    if (!gpuKeysGiven_.empty()) stats.extra["unused_keys"] = gpuKeysGiven_;
+    return marchImage(scene, *f.density, lookup, march_, progress, delta1_, &counts);
   }
 
- private:
   MarchSettings march_;
   std::vector<std::string> gpuKeysGiven_;
   bool factored_;
@@ -134,7 +142,11 @@ class ExactIntegrator : public Integrator {
     const SimdShadowRays shadows(density);
     const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast,
                                 march_.fast ? shadows.fn() : ShadowDepthFn{});
-    return marchImage(scene, density, source, march_, progress, delta1_);
+    MarchCounts counts;
+    Image img = marchImage(scene, density, source, march_, progress, delta1_, &counts);
+    if (auto* host = dynamic_cast<HostFrame*>(&frame))
+      host->marchSteps = {counts.looked.load(), counts.skipped.load()};
+    return img;
   }
 
  private:

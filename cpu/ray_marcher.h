@@ -22,6 +22,7 @@
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
+#include <atomic>
 #include <optional>
 #include <type_traits>
 #include <xsimd/xsimd.hpp>
@@ -37,6 +38,14 @@ namespace scatterlab {
 
 /// Pixels per tile edge of the fast march.
 inline constexpr int kMarchTile = 16;
+
+/// The steps of a view march (stats march_steps, march_steps_skipped), summed over its rays:
+/// steps looked up, and steps jumped over in blocks of zero density (the fast march). A run of
+/// non-empty blocks that a fused SIMD kernel marches (MarchesSpans) counts whole, also where
+/// the ray's transmittance fell below min_transmittance inside it.
+struct MarchCounts {
+  std::atomic<long long> looked{0}, skipped{0};
+};
 
 /// The lookups of one march step for marchImage: D at index coordinates u and, where D > 0,
 /// the source S at world point r.at(t) towards the viewer. Returns false where D <= 0 (the step
@@ -180,9 +189,11 @@ void marchReduced(const Scene& scene, int s, const Radiance& radiance, Image& im
 
 /// marchImage with the per-step lookups of `lookup` (DensitySourceLookup's interface); `density`
 /// gives the index space of u, the skipping grid and the surfaces' transmittance.
+/// `counts` (optional): the steps looked up and jumped over.
 template <class Lookup>
 Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lookup,
-                const MarchSettings& ms, Progress* progress, float surfaceDelta1 = 0.0f) {
+                const MarchSettings& ms, Progress* progress, float surfaceDelta1 = 0.0f,
+                MarchCounts* counts = nullptr) {
   const Camera& cam = scene.camera;
   const auto rays = cam.rayGenerator();
   const Medium& m = scene.medium;
@@ -224,8 +235,9 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
           wt += T * (1.0f - a) * (t0 + (float(i) + 0.5f) * dt);
           T *= a;
         };
+        long long looked = 0, skipped = 0;
         if (!skip) {
-          for (int i = 0; i < n && T > minT; ++i) step(i);
+          for (int i = 0; i < n && T > minT; ++i, ++looked) step(i);
         } else {
           // 3D DDA over the blocks: jump the empty ones, march the others in groups of four
           // steps: four lookups, one 4-wide exp (xsimd), then the four sums in order.
@@ -237,6 +249,7 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
               // One call per run of non-empty blocks (the same steps in the same order; fewer
               // calls and partial groups of steps in the kernel).
               if (sp.empty) {
+                skipped += sp.end - i;
                 i = sp.end;
                 continue;
               }
@@ -250,11 +263,14 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
                 e = next = nx.end;
               }
               lookup.marchSpan(r, u0, du, t0, dt, i, e, L, T, wt);
+              looked += e - i;
+              skipped += next - e;
               i = next;
               continue;
             }
             for (; !sp.empty && i < sp.end && T > minT; i += 4) {
               const int q1 = std::min(4, sp.end - i);
+              looked += q1;
               alignas(16) float D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
               Vec3 S[4];
               for (int q = 0; q < q1; ++q)
@@ -268,8 +284,13 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
                 T *= a[q];
               }
             }
+            if (sp.empty) skipped += sp.end - i;
             i = sp.end;
           }
+        }
+        if (counts) {
+          counts->looked.fetch_add(looked, std::memory_order_relaxed);
+          counts->skipped.fetch_add(skipped, std::memory_order_relaxed);
         }
       }
     }
@@ -334,9 +355,10 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
 
 template <class Source>
 Image marchImage(const Scene& scene, const DensityGrid& density, const Source& source,
-                 const MarchSettings& ms, Progress* progress, float surfaceDelta1 = 0.0f) {
+                 const MarchSettings& ms, Progress* progress, float surfaceDelta1 = 0.0f,
+                 MarchCounts* counts = nullptr) {
   return marchWith(scene, density, DensitySourceLookup<Source>{density, source}, ms, progress,
-                   surfaceDelta1);
+                   surfaceDelta1, counts);
 }
 
 }  // namespace scatterlab

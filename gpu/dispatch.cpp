@@ -22,6 +22,14 @@ const std::array<GLint, 3>& maxGroups() {
   return max;
 }
 
+void countPass(std::map<std::string, long long, std::less<>>& m, std::string_view pass,
+               long long n) {
+  if (const auto it = m.find(pass); it != m.end())
+    it->second += n;
+  else
+    m.emplace(std::string(pass), n);
+}
+
 }  // namespace
 
 PassCounts passCounts() {
@@ -41,11 +49,9 @@ void dispatch(std::string_view pass, UVec3 count, StageTimer* timer) {
     glDispatchCompute(count.x, count.y, count.z);
   }
   ++counts.dispatches;
+  countPass(counts.byPass, pass, 1);
   const long long n = (long long)count.x * count.y * count.z * currentProgramLocalSize();
-  if (const auto it = counts.invocations.find(pass); it != counts.invocations.end())
-    it->second += n;
-  else
-    counts.invocations.emplace(std::string(pass), n);
+  countPass(counts.invocations, pass, n);
   checkGl(pass);
 }
 
@@ -56,6 +62,7 @@ void dispatchIndirect(std::string_view pass, GLintptr offset, StageTimer* timer)
   }
   ++counts.dispatches;
   ++counts.indirect;
+  countPass(counts.byPass, pass, 1);
   checkGl(pass);
 }
 

@@ -37,6 +37,8 @@ struct PassCounts {
   /// Invocations of the direct dispatches per pass (workgroups × the program's workgroup
   /// size; an indirect dispatch's sizes are known only on the GPU and are not counted).
   std::map<std::string, long long, std::less<>> invocations;
+  /// Dispatches per pass, direct and indirect.
+  std::map<std::string, long long, std::less<>> byPass;
 };
 PassCounts passCounts();
 

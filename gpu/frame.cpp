@@ -108,12 +108,19 @@ void GpuFrame::report(RenderStats& st) {
     st.extra["image_readback_ms"] = waits.imageReadbackMs - waits0_.imageReadbackMs;
   st.extra["dispatches"] = passes.dispatches - passes0_.dispatches;
   st.extra["indirect_dispatches"] = passes.indirect - passes0_.indirect;
-  Json invocations = Json::object();
-  for (const auto& [pass, n] : passes.invocations) {
-    const auto before = passes0_.invocations.find(pass);
-    const long long d = n - (before != passes0_.invocations.end() ? before->second : 0);
-    if (d > 0) invocations[pass] = d;
-  }
+  // This render's share of a per-pass count.
+  const auto perPass = [](const std::map<std::string, long long, std::less<>>& now,
+                          const std::map<std::string, long long, std::less<>>& start) {
+    Json out = Json::object();
+    for (const auto& [pass, n] : now) {
+      const auto before = start.find(pass);
+      const long long d = n - (before != start.end() ? before->second : 0);
+      if (d > 0) out[pass] = d;
+    }
+    return out;
+  };
+  st.extra["dispatches_by_pass"] = perPass(passes.byPass, passes0_.byPass);
+  Json invocations = perPass(passes.invocations, passes0_.invocations);
   if (invocations.contains(kTracerPass)) st.extra["tracer_invocations"] = invocations[kTracerPass];
   st.extra["invocations"] = std::move(invocations);
   for (const auto& read : deferred_) read(st.extra);

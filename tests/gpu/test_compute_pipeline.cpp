@@ -179,7 +179,8 @@ TEST(GpuViewMarch, SkippingEmptyBlocksChangesNoBit) {
 
 /// The target: rendered by the gradient method at its own resolution (128³; 96 × 96
 /// pixels), the plume's GPU march reports at least half of its steps skipped (measured on
-/// llvmpipe: 56 % at 256 × 256), and the tracer at least one invocation per sample and light.
+/// llvmpipe: 56 % at 256 × 256), and the tracer at least one invocation per sample and light;
+/// the CPU march counts the same steps.
 TEST(GpuViewMarch, ThePlumeSkipsAtLeastHalfItsSteps) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
@@ -194,6 +195,10 @@ TEST(GpuViewMarch, ThePlumeSkipsAtLeastHalfItsSteps) {
   EXPECT_GE(2 * skipped, looked + skipped);
   EXPECT_GE(x.at("tracer_invocations").get<long long>(),
             res.stats.samples.value() * (long long)scene.lights.size());
+  // The CPU march walks the same blocks with the same steps: the same counts (measured equal).
+  const RenderResult cpu = createMethod(scene, "gradient", "cpu")->render(scene, nullptr);
+  EXPECT_EQ(cpu.stats.extra.at("march_steps").get<long long>(), looked);
+  EXPECT_EQ(cpu.stats.extra.at("march_steps_skipped").get<long long>(), skipped);
 }
 
 std::vector<RadianceSample> randomSamples(int n, unsigned seed) {
