@@ -256,7 +256,7 @@ void BM_GpuSteadyFrame(benchmark::State& state) {
   r.render();  // cold: the density, the samples and the programs
   const Json p0 = doc["lights"][0]["position"];
   std::vector<double> gpuMs;
-  double waits = 0, dispatches = 0;
+  double waits = 0, dispatches = 0, tracer = 0, steps = 0, skipped = 0;
   int frame = 0;
   for (auto _ : state) {
     ++frame;
@@ -267,11 +267,19 @@ void BM_GpuSteadyFrame(benchmark::State& state) {
     gpuMs.push_back(res.stats.extra.value("gpu_ms_total", 0.0));
     waits = std::max(waits, res.stats.extra.value("host_waits", 0.0));
     dispatches = res.stats.extra.value("dispatches", 0.0);
+    tracer = res.stats.extra.value("tracer_invocations", 0.0);
+    steps = res.stats.extra.value("march_steps", 0.0);
+    skipped = res.stats.extra.value("march_steps_skipped", 0.0);
     state.ResumeTiming();
   }
   state.counters["gpu_ms"] = median(gpuMs);
   state.counters["host_waits"] = waits;
   state.counters["dispatches"] = dispatches;
+  // The work of a frame (issue 34): the tracer's invocations, the march's steps looked up and
+  // the share it jumped over in empty blocks.
+  state.counters["tracer_inv"] = tracer;
+  state.counters["march_steps"] = steps;
+  state.counters["skipped_pct"] = steps + skipped > 0 ? 100.0 * skipped / (steps + skipped) : 0.0;
   state.SetLabel("steady: " + frameLabel(c, state));
 }
 
