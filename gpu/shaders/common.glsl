@@ -322,15 +322,13 @@ void factoredFreePart(vec3 x, vec3 toViewer, int first, int stride, out vec3 sf,
 #endif
   }
 }
-// V from the sums over every light: s / a per channel; where a is zero, sf / af when
-// factoredNeedsFree (else 0).
-vec3 factoredCombine(vec3 s, vec3 a, float outside, vec3 sf, vec3 af) {
-  vec3 lit = vec3(0.0);
-  for (int li = 0; li < uLightCount; ++li) lit = max(lit, lights[li].intensityCosOuter.rgb);
+// V from the sums over every light: s / a per channel; where a is zero, sf / af (sf and af are
+// zero unless factoredNeedsFree: a channel no light lights has af = 0 too, so V is 0 there).
+vec3 factoredCombine(vec3 s, vec3 a, vec3 sf, vec3 af) {
   vec3 v = vec3(0.0);
   for (int c = 0; c < 3; ++c) {
     if (a[c] > 0.0) v[c] = s[c] / a[c];
-    else if (outside > 0.0 && lit[c] > 0.0) v[c] = af[c] > 0.0 ? sf[c] / af[c] : 0.0;
+    else if (af[c] > 0.0) v[c] = sf[c] / af[c];
   }
   return v;
 }
@@ -342,7 +340,7 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
   float outside;
   factoredPart(x, toViewer, 0, 1, s, a, outside);
   if (factoredNeedsFree(a, outside)) factoredFreePart(x, toViewer, 0, 1, sf, af);
-  return factoredCombine(s, a, outside, sf, af);
+  return factoredCombine(s, a, sf, af);
 }
 
 // What the samples hold at p seen from the camera at uEye (per-voxel and evaluator

@@ -92,7 +92,7 @@ void main() {
     reduceLanes(slot, row, lane);
     if (lane == 0u) {
 #if defined(SL_FACTOR_LIGHTS)
-      vec3 v = factoredCombine(totalS[slot][row].rgb, totalA[slot][row].rgb, totalS[slot][row].w,
+      vec3 v = factoredCombine(totalS[slot][row].rgb, totalA[slot][row].rgb,
                                partS[slot][row][0].rgb, partA[slot][row][0].rgb);
 #if defined(SL_LOG_SPACE)
       v = log(max(v, vec3(SL_MIN_V)));
