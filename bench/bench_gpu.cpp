@@ -468,7 +468,7 @@ BENCHMARK(BM_GpuDynamicSamplingWallKept)
 /// smoke1.vdb fitted with 512 Gaussians (the .sog model of docs/benchmarks.md "Media").
 const std::shared_ptr<const SogDensity>& smokeSog(const char* source) {
   static const SogModel model = [] {
-    const DensityGrid g = loadVdbAsDense(SCATTERLAB_SHARED_DATA "/vdb/smoke1.vdb", "density");
+    const DensityGrid g = loadVdbAsDense(SCATTERLAB_SOURCE_DIR "/data/vdb/smoke1.vdb", "density");
     SogFitOptions o;
     o.gaussians = 512;
     return fitSog(g, o);
@@ -541,8 +541,7 @@ BENCHMARK(BM_GpuGradientSplat512)
     ->Unit(benchmark::kMillisecond);
 /// Shadow maps of scene objects (docs/objects.md, GPU): rendering every light's layers and the
 /// VSM blur, default settings (VSM 1024², filter 3). Arg: 0 window (ortho + cube: 7 layers),
-/// 1 bunny_spot (one perspective map), 2 cornell_fog (one cube). The bunny is read from
-/// ../shared/data: that case skips when it is absent.
+/// 1 bunny_spot (one perspective map), 2 cornell_fog (one cube).
 void BM_GpuShadowMaps(benchmark::State& state) {
   if (!needGpu(state)) return;
   initialize();

@@ -12,7 +12,8 @@ namespace {
 using namespace scatterlab;
 
 const DensityGrid& smoke() {
-  static const DensityGrid g = loadVdbAsDense(SCATTERLAB_SHARED_DATA "/vdb/smoke1.vdb", "density");
+  static const DensityGrid g =
+      loadVdbAsDense(SCATTERLAB_SOURCE_DIR "/data/vdb/smoke1.vdb", "density");
   return g;
 }
 

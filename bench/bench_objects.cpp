@@ -1,7 +1,6 @@
 /// Scene objects (issue 12) on the CPU: `exact` at 320x240 on data/scenes/bunny_spot.json
 /// (128³, the 3,851-triangle Stanford bunny and a floor, one spot light) with and without its
 /// objects; loading the scene (OBJ parse + Embree BVH build); Embree shadow-ray throughput.
-/// The bunny is read from ../shared/data: the benchmarks skip when it is absent.
 
 #include <benchmark/benchmark.h>
 

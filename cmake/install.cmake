@@ -36,18 +36,12 @@ endforeach()
 install(FILES ${PROJECT_SOURCE_DIR}/scatterlab.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab)
 install(FILES ${PROJECT_SOURCE_DIR}/experiment/plots.py ${PROJECT_SOURCE_DIR}/scripts/results_md.py
         DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR})
-# The demo scenes with the data they read that may ship: the Cornell box mesh (public domain)
-# beside them. Scenes that read the project's shared real data (OpenVDB smoke and cloud, the
-# Stanford bunny: not in the repository; where to get them: docs/library.md, "Scenes not
-# installed") are left out, so every installed scene loads from the prefix (tests/consumer).
-set(SCATTERLAB_SCENES_NOT_INSTALLED bunny_spot cloud shaft_smoke smoke smoke1_sun thick_cloud
-    thick_cloud_iso)
-set(_excluded "")
-foreach(_s IN LISTS SCATTERLAB_SCENES_NOT_INSTALLED)
-  list(APPEND _excluded PATTERN "${_s}.json" EXCLUDE)
-endforeach()
+# The demo scenes with the data they read beside them (data/vdb, data/meshes; sources and
+# licences in their .txt sidecars and the README), so that every installed scene loads from the
+# prefix (tests/consumer).
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/scenes DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR}
-        FILES_MATCHING PATTERN "*.json" PATTERN "*.f32" ${_excluded})
+        FILES_MATCHING PATTERN "*.json" PATTERN "*.f32")
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/vdb DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/meshes DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR})
 
 install(EXPORT scatterlabTargets NAMESPACE scatterlab:: DESTINATION ${SCATTERLAB_CMAKE_INSTALL_DIR})

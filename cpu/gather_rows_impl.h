@@ -24,7 +24,7 @@ inline void row(float* __restrict r0, float* __restrict g0, float* __restrict b0
                 float hi) {
   const float R2 = R * R, e2 = eps * eps * R2;
   const float br = base.x, bg = base.y, bb = base.z, gr = gx.x, gg = gx.y, gb = gx.z;
-  const auto taylor = [lo, hi](float v) {
+  const auto taylor = [=](float v) {  // [=]: lo, hi are unused when !kBounded
     if constexpr (kBounded) return std::min(std::max(v, lo), hi);
     return v;
   };

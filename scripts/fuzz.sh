@@ -2,7 +2,7 @@
 # Builds the libFuzzer targets in fuzz/ with clang-14 (ASan + UBSan + libFuzzer) into
 # build-fuzz/ and runs each for SECONDS (default 60), seeded from the repository's files
 # (JSON from data/ and tests/; .sog, .vdb and .exr written by the GCC build in BUILD, default
-# build/, and ../shared/data/vdb). Usage: scripts/fuzz.sh [SECONDS] [TARGET...]. A crash
+# build/, and data/vdb). Usage: scripts/fuzz.sh [SECONDS] [TARGET...]. A crash
 # leaves crash-* in build-fuzz/TARGET/ and exits 1, and so does an input that runs longer than
 # 60 s (timeout-*) or grows the process past 2 GiB resident (oom-*). Objects are compiled
 # through ccache (when installed), two at a time, into build-fuzz/TARGET/obj/. SECONDS = build:
@@ -87,7 +87,7 @@ for name in "${TARGETS[@]}"; do
     fuzz_vdb)
       "$CLI" render data/scenes/glow.json -o "$tmpseeds/v.exr" --density-vdb "${seeds[0]}/g.vdb" \
         --set medium.resolution=6 --set camera.width=8 --set camera.height=6 >/dev/null
-      find ../shared/data/vdb -name '*.vdb' -size -600k -exec cp {} "${seeds[0]}/" \; ;;
+      find data/vdb -name '*.vdb' -size -600k -exec cp {} "${seeds[0]}/" \; ;;
     fuzz_exr)
       "$CLI" render data/scenes/glow.json -o "${seeds[0]}/a.exr" --set camera.width=6 \
         --set camera.height=4 >/dev/null ;;

@@ -35,5 +35,9 @@ PYTHON_ARGS=()
 # second checkout takes the unchanged objects from the cache.
 LAUNCHER=()
 command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release "${PYTHON_ARGS[@]}" "${LAUNCHER[@]}" >/dev/null
+# The test files themselves at -O1 (the library, the tool and the module keep Release's -O3):
+# they compile in two thirds of the time (tests/sampling/test_dynamic_sampling.cpp 19 s
+# against 28 s) and the code they test is the same.
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DSCATTERLAB_TEST_CXX_FLAGS=-O1 \
+  "${PYTHON_ARGS[@]}" "${LAUNCHER[@]}" >/dev/null
 cmake --build "$BUILD_DIR" -j "$JOBS"

@@ -83,7 +83,7 @@ write("perforated_sheet.json", {
 
 # A spot shaft through OpenVDB smoke1 (about 100 units wide).
 write("shaft_smoke.json", {
-    "medium": {"density": {"type": "vdb", "file": "../../../shared/data/vdb/smoke1.vdb",
+    "medium": {"density": {"type": "vdb", "file": "../vdb/smoke1.vdb",
                            "grid": "density"},
                "resolution": 96, "sigma_t": 0.8, "albedo": 0.9,
                "phase": {"type": "henyey-greenstein", "g": 0.3}},
@@ -162,7 +162,7 @@ for name, phase in (("thick_cloud", {"type": "henyey-greenstein", "g": 0.5}),
                     ("thick_cloud_iso", {"type": "isotropic"})):
     write(name + ".json", {
         "medium": {"density": {"type": "vdb",
-                               "file": "../../../shared/data/vdb/wdas_cloud_sixteenth.vdb",
+                               "file": "../vdb/wdas_cloud_sixteenth.vdb",
                                "grid": "density"},
                    "resolution": 128, "sigma_t": 0.06, "albedo": 0.95, "phase": phase},
         "lights": [{"type": "directional", "direction": [0.5, -0.6, 0.6],

@@ -3,7 +3,7 @@
 Every shell line in a ```bash / ```sh block that runs `scatterlab` (build/bin/scatterlab or an
 installed one) must name a command the tool has and only options that command (or the global
 ones) takes, as its --help lists them; every repository path a line names (data/..., scripts/...,
-tests/...) must exist, except the real data under ../shared/data; a Python line that imports
+tests/...) must exist (the real data ships in data/vdb and data/meshes); a Python line that imports
 scatterlab must name the interpreter the build chose. A check, not a run: the long commands
 (experiments of hours, benchmarks) are not executed; the quick ones are run by tests/python and
 tests/consumer. Exit 0 when every line passes, 1 with one message per failing line.
@@ -97,7 +97,7 @@ def main():
             if "import scatterlab" in line and not re.search(r"(^|\s)%s\s" % re.escape(a.python), line):
                 failures.append("%s\n    imports scatterlab without naming %s" % (where, a.python))
             for words in segments(line):
-                # Repository paths (not the shared real data, not outputs under out/).
+                # Repository paths (not outputs under out/).
                 for w in words:
                     for p in re.findall(r"(?:^|=)((?:data|scripts|tests|docs|cmake|experiment)/[\w./-]+)", w):
                         if "$" in p or "*" in p:

@@ -297,7 +297,9 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
         toppedUp += l.toppedUp;
       }
       EXPECT_GT(capped, 0);
-      if (topUp) EXPECT_GT(toppedUp, 0);
+      if (topUp) {
+        EXPECT_GT(toppedUp, 0);
+      }
     }
     ASSERT_EQ(g.levels.size(), cpu.levels.size());
     for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
@@ -375,7 +377,9 @@ TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
       EXPECT_EQ(g.levels[l].capped, cpu.levels[l].capped) << "level " << l;
       EXPECT_EQ(g.levels[l].toppedUp, cpu.levels[l].toppedUp) << "level " << l;
     }
-    if (cap > 0) EXPECT_LE((long long)cpu.samples.size(), cap);
+    if (cap > 0) {
+      EXPECT_LE((long long)cpu.samples.size(), cap);
+    }
     ASSERT_EQ(g.samples.size(), cpu.samples.size());
     int bad = 0, badS = 0, voxels = 0;
     float sMax = 0.0f;

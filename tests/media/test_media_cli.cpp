@@ -11,12 +11,11 @@
 #include "media/sog.h"
 #include "media/temp_dir.h"
 #include "media/vdb.h"
-#include "support/shared_data.h"
 
 namespace scatterlab {
 namespace {
 
-const std::string kVdb = SCATTERLAB_SHARED_DATA "/vdb/";
+const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
 
 struct CliRun {
   int code;
@@ -37,7 +36,6 @@ CliRun run(const std::string& args) {
 }
 
 TEST(MediaCli, InfoVdbListsGrids) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const CliRun r = run("info " + kVdb + "dragon_with_xform.vdb");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("grid 'density': float, fog volume"), std::string::npos) << r.out;
@@ -48,7 +46,6 @@ TEST(MediaCli, InfoVdbListsGrids) {
 }
 
 TEST(MediaCli, FitWritesModelAndReportsErrors) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("cli_fit");
   const std::string out = tmp.file("dragon.sog");
   const CliRun r = run("fit " + kVdb + "dragon_with_xform.vdb -o " + out +
@@ -65,7 +62,6 @@ TEST(MediaCli, FitWritesModelAndReportsErrors) {
 }
 
 TEST(MediaCli, FitSequenceWritesEveryFrame) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("cli_fit");
   const std::string v = kVdb + "dragon_with_xform.vdb";
   const CliRun r = run("fit " + v + " " + v + " -o " + tmp.file("f_{frame}.sog") +
@@ -87,7 +83,6 @@ void expectFailure(const std::string& args, const std::string& needle, const std
 }
 
 TEST(MediaCli, BadInputsFailWithMessageAndNoOutput) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("cli_bad");
   const std::string out = tmp.file("out.sog");
   expectFailure("fit /nonexistent/x.vdb -o " + out, "/nonexistent/x.vdb", out);

@@ -14,12 +14,11 @@
 #include "media/temp_dir.h"
 #include "media/vdb.h"
 #include "support/scenes.h"
-#include "support/shared_data.h"
 
 namespace scatterlab {
 namespace {
 
-const std::string kVdb = SCATTERLAB_SHARED_DATA "/vdb/";
+const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
 
 /// smoke1.vdb at half resolution (56x111x56), loaded once for the whole suite.
 const DensityGrid& smokeHalf() {
@@ -58,7 +57,6 @@ TEST(SogFit, RecoversExactSumOfGaussians) {
 }
 
 TEST(SogFit, SmokeErrorFallsWithGaussianCountAndResidualMeetsTwoPercent) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const DensityGrid& D = smokeHalf();
   double prev = 1e9;
   for (int n : {64, 256, 1024}) {
@@ -152,9 +150,6 @@ Image renderExact(Scene scene, std::shared_ptr<const DensityModel> d) {
 }
 
 TEST(SogFit, Smoke1RenderedWithin3PercentOfTheGrid) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
-  if (!std::filesystem::exists(kVdb + "smoke1.vdb"))
-    GTEST_SKIP() << "needs ../shared/data/vdb/smoke1.vdb (the shared data checkout is absent)";
   // Issue 11.6: 256 Gaussians at default settings, the smoke demo scene, exact.
   initialize();
   const DensityGrid D = loadVdbAsDense(kVdb + "smoke1.vdb", "density");
@@ -213,7 +208,6 @@ TEST(SogModel, SplattingEqualsEvaluationAtCellCentres) {
 }
 
 TEST(SogModel, SplattingEqualsEvaluationForFittedSmoke) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   SogFitOptions o;
   o.gaussians = 64;
   o.fitVoxels = 20 * 20 * 20;
@@ -276,7 +270,6 @@ std::string ioMessage(const std::string& p) {
 }
 
 TEST(SogFile, TruncatedForeignCorruptAreIoErrors) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("sog");
   const std::string good = tmp.file("good.sog");
   writeSog(good, smallModel());

@@ -13,12 +13,11 @@
 #include "media/temp_dir.h"
 #include "media/vdb.h"
 #include "support/scenes.h"
-#include "support/shared_data.h"
 
 namespace scatterlab {
 namespace {
 
-const std::string kVdb = SCATTERLAB_SHARED_DATA "/vdb/";
+const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
 
 const VdbGridInfo& only(const std::vector<VdbGridInfo>& v) {
   EXPECT_EQ(v.size(), 1u);
@@ -26,7 +25,6 @@ const VdbGridInfo& only(const std::vector<VdbGridInfo>& v) {
 }
 
 TEST(Vdb, Smoke1MatchesSidecar) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto infos = inspectVdb(kVdb + "smoke1.vdb");
   const VdbGridInfo& g = only(infos);
   EXPECT_EQ(g.name, "density");
@@ -48,7 +46,6 @@ TEST(Vdb, Smoke1MatchesSidecar) {
 }
 
 TEST(Vdb, CloudMatchesSidecarIncludingActiveTiles) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const VdbGridInfo g = only(inspectVdb(kVdb + "wdas_cloud_sixteenth.vdb"));
   EXPECT_EQ(g.name, "density");
   EXPECT_EQ(g.indexMin, IVec3(-66, -21, -90));
@@ -79,7 +76,6 @@ TEST(Vdb, CloudMatchesSidecarIncludingActiveTiles) {
 }
 
 TEST(Vdb, DragonRotatedTransformGivesRotatedWorldBounds) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto d = VdbDensity::load(kVdb + "dragon_with_xform.vdb", "density");
   const VdbGridInfo& g = d->info();
   EXPECT_EQ(g.indexMin, IVec3(-70, 1, -31));
@@ -108,7 +104,6 @@ TEST(Vdb, DragonRotatedTransformGivesRotatedWorldBounds) {
 }
 
 TEST(Vdb, EvalEqualsBuildAtCellCentres) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto d = VdbDensity::load(kVdb + "dragon_with_xform.vdb", "density");
   DensityGrid grid(*d->naturalBounds(), IVec3(24, 20, 18));
   d->build(grid);
@@ -119,7 +114,6 @@ TEST(Vdb, EvalEqualsBuildAtCellCentres) {
 }
 
 TEST(Vdb, Smoke1NativeDenseMatchesVoxels) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const auto d = VdbDensity::load(kVdb + "smoke1.vdb", "density");
   EXPECT_EQ(d->nativeDims(), IVec3(111, 222, 112));
   DensityGrid grid(*d->naturalBounds(), d->nativeDims());
@@ -209,7 +203,6 @@ TEST(Vdb, ExportThenRerenderEqualsOriginal) {
 }
 
 TEST(Vdb, VdbToDenseToVdbRoundTripKeepsSmokeValues) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("vdb_roundtrip2");
   const DensityGrid dense = loadVdbAsDense(kVdb + "smoke1.vdb", "density");
   const std::string path = tmp.file("smoke_again.vdb");
@@ -262,7 +255,6 @@ TEST(Vdb, RadianceGridWritesVec3Grid) {
 }
 
 TEST(Vdb, SceneWithVdbDefaultsBoxToGridBounds) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const Json doc = {
       {"medium",
        {{"density", {{"type", "vdb"}, {"file", kVdb + "smoke1.vdb"}, {"grid", "density"}}},
@@ -307,7 +299,6 @@ TEST(VdbErrors, NotAVdb) {
 }
 
 TEST(VdbErrors, TruncatedVdb) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   testing::TempDir tmp("vdb_err");
   std::ifstream in(kVdb + "smoke1.vdb", std::ios::binary);
   const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -320,7 +311,6 @@ TEST(VdbErrors, TruncatedVdb) {
 }
 
 TEST(VdbErrors, MissingGridListsGrids) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const std::string m =
       messageOf<ConfigError>([&] { VdbDensity::load(kVdb + "smoke1.vdb", "temperature"); });
   EXPECT_NE(m.find("temperature"), std::string::npos) << m;
@@ -354,7 +344,6 @@ TEST(VdbErrors, NonAffineTransform) {
 }
 
 TEST(VdbErrors, SceneKeyNamedInGridError) {
-  SCATTERLAB_REQUIRE_SHARED_DATA();
   const Json doc = {
       {"medium", {{"density", {{"type", "vdb"}, {"file", kVdb + "smoke1.vdb"}, {"grid", "nope"}}}}},
       {"lights", Json::array({{{"type", "point"}, {"position", {0, 0, 0}}, {"intensity", 1}}})},
