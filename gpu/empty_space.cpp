@@ -21,7 +21,8 @@ const Texture& blockMaxGrid(const Volume& density, StageTimer* timer) {
   if (density.blockMax) return *density.blockMax;
   const IVec3 blocks = blockCount(density);
   auto grid = std::make_shared<Texture>(
-      Texture::make3D(GL_R32F, blocks.x, blocks.y, blocks.z, "empty-space grid"));
+      Texture::make3D(GL_R32F, blocks.x, blocks.y, blocks.z, "empty-space grid",
+                      Texture::Contents::Overwritten));  // one store per block
   const Program& p =
       program({.compute = {"common.glsl", "block_max.comp.glsl"}}, "empty-space grid");
   p.use();

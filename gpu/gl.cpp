@@ -268,13 +268,17 @@ void checkTextureSize(GLenum target, GLenum format, int w, int h, int d, std::st
 
 }  // namespace
 
-Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view name)
+Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view name,
+                 Contents contents)
     : target_(target), key_{detail::ObjectKind::Texture, target, format, w, h, d} {
   checkTextureSize(target, format, w, h, d, name);
   id_ = detail::takeRecycled(key_);
   if (id_) {
-    // A new texture's contents are undefined in GL (zeros in practice): a recycled one is zeroed.
-    glClearTexImage(id_, 0, isDepthFormat(format) ? GL_DEPTH_COMPONENT : GL_RED, GL_FLOAT, nullptr);
+    // A new texture's contents are undefined in GL (zeros in practice): a recycled one is zeroed
+    // unless every texel is about to be written.
+    if (contents == Contents::Zeroed)
+      glClearTexImage(id_, 0, isDepthFormat(format) ? GL_DEPTH_COMPONENT : GL_RED, GL_FLOAT,
+                      nullptr);
   } else {
     glCreateTextures(target, 1, &id_);
     detail::countCreated();
@@ -287,15 +291,16 @@ Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_
   label(GL_TEXTURE, id_, name);
 }
 
-Texture Texture::make2D(GLenum format, int w, int h, std::string_view name) {
-  Texture t(GL_TEXTURE_2D, format, w, h, 1, name);
+Texture Texture::make2D(GLenum format, int w, int h, std::string_view name, Contents contents) {
+  Texture t(GL_TEXTURE_2D, format, w, h, 1, name, contents);
   glTextureParameteri(t.id_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(t.id_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   return t;
 }
 
-Texture Texture::make3D(GLenum format, int w, int h, int d, std::string_view name) {
-  Texture t(GL_TEXTURE_3D, format, w, h, d, name);
+Texture Texture::make3D(GLenum format, int w, int h, int d, std::string_view name,
+                        Contents contents) {
+  Texture t(GL_TEXTURE_3D, format, w, h, d, name, contents);
   glTextureParameteri(t.id_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTextureParameteri(t.id_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})

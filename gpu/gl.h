@@ -171,12 +171,19 @@ class Buffer : public GlObject<BufferDeleter> {
 /// Texture object (glCreateTextures) with immutable storage.
 class Texture : public GlObject<TextureDeleter> {
  public:
+  /// What a texture holds when it is handed out. A recycled texture is cleared to zero unless
+  /// its maker says the next pass writes every texel (`Overwritten`: an upload, or a compute
+  /// pass with one imageStore per texel): on an H200 the clear of a 256³ RGBA32F volume costs
+  /// ~4 ms that no timer query sees (docs/RESULTS.md, "Steady frames on an H200").
+  enum class Contents { Zeroed, Overwritten };
   Texture() = default;
   /// A 2D texture of `format` (sized internal format).
-  static Texture make2D(GLenum format, int w, int h, std::string_view label);
+  static Texture make2D(GLenum format, int w, int h, std::string_view label,
+                        Contents contents = Contents::Zeroed);
   /// A 3D texture of `format`, GL_LINEAR filtering, CLAMP_TO_EDGE: lookups at normalised
   /// coordinates (u + 0.5) / dims match Grid3::sampleIndex(u) inside the box.
-  static Texture make3D(GLenum format, int w, int h, int d, std::string_view label);
+  static Texture make3D(GLenum format, int w, int h, int d, std::string_view label,
+                        Contents contents = Contents::Zeroed);
   /// A 2D array texture of `layers` layers, GL_LINEAR filtering, CLAMP_TO_EDGE.
   static Texture make2DArray(GLenum format, int w, int h, int layers, std::string_view label);
   GLenum target() const { return target_; }
@@ -190,9 +197,10 @@ class Texture : public GlObject<TextureDeleter> {
   }
 
  private:
-  /// A texture of `target`, `format` and size (w, h, d): recycled (cleared to zero) or created
-  /// with its storage.
-  Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view label);
+  /// A texture of `target`, `format` and size (w, h, d): recycled (cleared to zero unless
+  /// `contents` is Overwritten) or created with its storage.
+  Texture(GLenum target, GLenum format, int w, int h, int d, std::string_view label,
+          Contents contents = Contents::Zeroed);
   GLenum target_ = 0;
   detail::ObjectKey key_;
 };

@@ -74,8 +74,12 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   }
   const GLuint zeroCount = 0;
   Buffer counter(sizeof(GLuint), &zeroCount, 0, "uncovered voxel count");
-  const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums");
-  Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)");
+  // Every voxel written: by the gather's imageStore, or (raster) after splatSlices clears each
+  // layer; the normalize pass stores every voxel of `out`.
+  const Texture sums = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "radiance splat sums",
+                                       Texture::Contents::Overwritten);
+  Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)",
+                                  Texture::Contents::Overwritten);
   const Vec3 cell = bounds.extent() / Vec3(dims);
   const BinBuffers* bins = nullptr;
   IVec3 binDims{0};
@@ -158,7 +162,8 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
   ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
   addShadowRaySkip(variant);
   const Program& program = gpu::program(addShadowVariant(shadows, variant), "per-voxel S");
-  Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)");
+  Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)",
+                                  Texture::Contents::Overwritten);  // one store per voxel
   const GpuPerVoxelCounters zeros;
   Buffer counters(sizeof zeros, &zeros, 0, "per-voxel counters");
   TracingInputs inputs(scene, density, delta1_, shadows);

@@ -60,7 +60,8 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   if (!counters) counters = &own;
   *counters = Buffer(sizeof zero, &zero, 0, "view march counters");
   const Camera& cam = scene.camera;
-  Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image");
+  Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image",
+                                Texture::Contents::Overwritten);  // one store per pixel
   const int strata = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
   // Built by the density's first march (its own pass, timed apart); bound by pass.bind.
   if (skipEmpty_) pass.skipEmptySpace(timer);

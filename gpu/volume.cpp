@@ -19,7 +19,8 @@ Volume uploadDensity(const DensityGrid& g) {
   Volume v;
   v.bounds = g.bounds();
   v.dims = g.dims();
-  v.texture = Texture::make3D(GL_R32F, v.dims.x, v.dims.y, v.dims.z, "density volume");
+  v.texture = Texture::make3D(GL_R32F, v.dims.x, v.dims.y, v.dims.z, "density volume",
+                              Texture::Contents::Overwritten);  // the upload below
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   glTextureSubImage3D(v.texture.id(), 0, 0, 0, 0, v.dims.x, v.dims.y, v.dims.z, GL_RED, GL_FLOAT,
                       g.data().data());
@@ -27,17 +28,19 @@ Volume uploadDensity(const DensityGrid& g) {
   return v;
 }
 
-Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label) {
+Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label,
+                          Texture::Contents contents) {
   context();
   Volume v;
   v.bounds = bounds;
   v.dims = dims;
-  v.texture = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, label);
+  v.texture = Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, label, contents);
   return v;
 }
 
 Volume uploadRadiance(const RadianceGrid& g) {
-  Volume v = makeRadianceVolume(g.bounds(), g.dims(), "radiance volume");
+  Volume v =
+      makeRadianceVolume(g.bounds(), g.dims(), "radiance volume", Texture::Contents::Overwritten);
   // RGB32F would do, but RGBA32F is the image format the compute passes write.
   std::vector<float> rgba(g.size() * 4);
   for (size_t i = 0; i < g.size(); ++i) {
@@ -117,7 +120,9 @@ Volume gatherGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, I
   Volume v;
   v.bounds = bounds;
   v.dims = dims;
-  v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (gathered)");
+  // density_gather.comp stores every voxel.
+  v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (gathered)",
+                              Texture::Contents::Overwritten);
   std::vector<GpuBlob> packed;
   std::vector<glm::vec4> spheres;
   packed.reserve(blobs.size());
@@ -159,7 +164,9 @@ Volume splatGaussians(std::span<const GaussianBlob> blobs, const Box& bounds, IV
   Volume v;
   v.bounds = bounds;
   v.dims = dims;
-  v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (splatted)");
+  // splatSlices clears each layer before it blends into it.
+  v.texture = Texture::make3D(GL_R32F, dims.x, dims.y, dims.z, "density volume (splatted)",
+                              Texture::Contents::Overwritten);
   std::vector<GpuBlob> packed;
   packed.reserve(blobs.size());
   for (const GaussianBlob& b : blobs) packed.push_back(packBlob(b));

@@ -49,8 +49,10 @@ Volume uploadRadiance(const RadianceGrid& grid);
 /// Read back to host memory (waits for the GPU).
 DensityGrid readDensity(const Volume& v);
 RadianceGrid readRadiance(const Volume& v);
-/// An empty RGBA32F radiance volume.
-Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label);
+/// An RGBA32F radiance volume: zeros, or (Overwritten) undefined for a pass that writes every
+/// voxel.
+Volume makeRadianceVolume(const Box& bounds, IVec3 dims, std::string_view label,
+                          Texture::Contents contents = Texture::Contents::Zeroed);
 
 /// Density construction by splatting (paper Sec. 6; GPU twin of GaussianDensity::build): for
 /// each z slice, one quad per blob bounding the blob's culling sphere (3r) cut by the slice,

@@ -422,23 +422,25 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
 }
 
 // The target: compute ≡ CPU within 1e-4 relative L2 on llvmpipe, 1e-3 on hardware.
-// Measured on llvmpipe 2026-11-26: compute 1.22e-6 / 1.43e-6 / 1.2e-6, raster 9.56e-7 /
-// 8.33e-7 / 1.01e-6 (gradient / per-voxel / adaptive with levels 4, 8). On the H200 (raster
-// pipeline, the same tracing): gradient 9.1e-5, per-voxel (a .sog smoke) 4.1e-4, adaptive 3.3e-5.
-// Limits 1.5x the larger, for both pipelines.
+// Measured (gradient / per-voxel / adaptive with levels 4, 8), relative L2 against the CPU:
+//   llvmpipe 2026-11-26: compute 1.22e-6 / 1.43e-6 / 1.2e-6, raster 9.56e-7 / 8.33e-7 / 1.01e-6;
+//   NVIDIA H200 (driver 580.159.04) 2026-11-27: compute 1.9e-6 / 7.21e-7 / 1.94e-6, raster
+//   1.44e-4 / 5.41e-4 / 1.38e-4 (the raster pipeline's rasterised slices and blending: the
+//   compute pipeline is the one that matches on hardware).
+// Limits 1.5x the largest over both devices, per pipeline.
 TEST(GpuComputePipeline, GradientEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("gradient", 1.4e-4, 1.4e-4);
+  endToEnd("gradient", 2.9e-6, 2.2e-4);
 }
 
 TEST(GpuComputePipeline, PerVoxelEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("per-voxel", 6.2e-4, 6.2e-4);
+  endToEnd("per-voxel", 2.2e-6, 8.1e-4);
 }
 
 TEST(GpuComputePipeline, AdaptiveEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("adaptive", 5e-5, 5e-5);
+  endToEnd("adaptive", 2.9e-6, 2.1e-4);
 }
 
 TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {

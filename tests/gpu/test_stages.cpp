@@ -169,11 +169,13 @@ TEST(GpuVolumeTracer, FortyLightsSplitBetweenLanesMatchTheCpu) {
     bool factor, log;
     float tolS, tolGrad;
   };
-  // Largest |gpu − cpu| / (|cpu| + 1e-3·max) measured on llvmpipe (Mesa 22.3.6), value and
-  // gradient: S 3.7e-7, 7.4e-5; V 3.8e-7, 6.5e-4; ln V 1.7e-4, 6.5e-4. Tolerances × 1.5.
+  // Largest |gpu − cpu| / (|cpu| + 1e-3·max), value and gradient, measured on llvmpipe (Mesa
+  // 22.3.6; GCC 12 build): S 3.7e-7, 7.4e-5; V 3.8e-7, 6.5e-4; ln V 1.7e-4, 6.5e-4. A clang 14
+  // build: ∇V 1.02e-3. NVIDIA H200 (driver 580.159.04, 2026-11-27): ln V 2.63e-4 (the rest
+  // within the llvmpipe limits). Tolerances 1.5x the largest.
   for (const Space sp :
-       {Space{"S", false, false, 5.5e-7f, 1.1e-4f}, Space{"V", true, false, 5.8e-7f, 9.8e-4f},
-        Space{"ln V", true, true, 2.5e-4f, 9.8e-4f}}) {
+       {Space{"S", false, false, 5.5e-7f, 1.1e-4f}, Space{"V", true, false, 5.8e-7f, 1.5e-3f},
+        Space{"ln V", true, true, 4e-4f, 1.5e-3f}}) {
     PipelineSettings ps;
     ps.delta1 = 1.0f / 16;
     ps.delta2 = 1.0f / 32;
