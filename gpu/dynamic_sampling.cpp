@@ -11,6 +11,7 @@
 #include "gpu/dispatch.h"
 #include "gpu/empty_space.h"
 #include "gpu/shaders.h"
+#include "gpu/volume_tracer.h"
 
 namespace scatterlab::gpu {
 
@@ -232,23 +233,30 @@ void dispatchOverLevel(const char* pass, const DynamicSamplingWorkspace& w, std:
 /// (the per-voxel fallback's voxels).
 enum class Evaluation { Split = 0, Final = 1, FinalNoGradient = 2 };
 
-/// Evaluate level k (indirect dispatch after level 0) in three passes (dynamic_error.comp.glsl):
-/// S, ∇S, τ and on level 0 the contributions; unless final, the probes in groups of
-/// kProbeGroup, then E_j. GPU time: "ds evaluate+error".
+/// Evaluate level k (its count on the GPU after level 0): S and ∇S by the tracer's pass
+/// (traceLevel), then (dynamic_error.comp.glsl) τ and on level 0 the contributions; unless
+/// final, the probes in groups of kProbeGroup, then E_j. GPU time: "ds evaluate+error".
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
-                   std::size_t k, Evaluation mode, const TracerSteps& steps,
+                   std::size_t lights, std::size_t k, Evaluation mode, const TracerSteps& steps,
                    const DynamicSamplingSettings& settings, StageTimer* timer) {
   const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
   const DynamicSamplingWorkspace::Level& l = w.levels[k];
   const std::size_t L = levelGrids(settings).size();
   const GLint groupsPerSample = probeGroups(settings);
   ScopedGpuTimer t(timer, "ds evaluate+error");
-  {  // pass 1: S, ∇S, τ, the contributions; pass 2's dispatch
+  // pass 0: S and ∇S, parallel over (sample, point, light) (∇S = 0 for the per-voxel fallback's
+  // voxels, as the CPU's gradients = false)
+  traceLevel(inputs, lights,
+             {.gradients = mode != Evaluation::FinalNoGradient,
+              .factorLights = steps.factorLights,
+              .lampModel = steps.factorLights && steps.lampModel,
+              .logSpace = steps.logValues()},
+             steps.delta2, l.samples, l.radiance, w.counts, k, l.capacity);
+  {  // pass 1: τ, the contributions; pass 2's dispatch
     const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Evaluate);
     program.use();
     inputs.apply(program);
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
-    glUniform1f(program.uniform("uDelta2"), steps.delta2);
     glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
     glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
@@ -464,7 +472,7 @@ BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, st
 /// S and ∇S of the top-up's children (budgetTopUp) on the GPU: uploaded into the last level's
 /// buffers in chunks of its capacity and evaluated there as a final level (no probes).
 void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
-                      const Volume& density, const TracerSteps& steps,
+                      const Volume& density, std::size_t lights, const TracerSteps& steps,
                       const DynamicSamplingSettings& settings, TopUp& t, StageTimer* timer) {
   const std::vector<LevelGrid> grids = levelGrids(settings);
   const std::size_t L = grids.size();
@@ -493,8 +501,9 @@ void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
       const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
       glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * L) * sizeof(GLuint)),
                            sizeof dispatch, dispatch);
-      evaluateLevel(w, inputs, density, L, voxels ? Evaluation::FinalNoGradient : Evaluation::Final,
-                    steps, settings, timer);
+      evaluateLevel(w, inputs, density, lights, L,
+                    voxels ? Evaluation::FinalNoGradient : Evaluation::Final, steps, settings,
+                    timer);
       std::vector<GpuRadianceRecord> radiance(m);
       l.radiance.read(radiance.data(), m * sizeof(GpuRadianceRecord));
       for (std::size_t i = 0; i < m; ++i) unpackRadiance(radiance[i], t.children[idx[first + i]]);
@@ -533,7 +542,7 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
     for (std::size_t k = 0; k <= L; ++k) {
       const auto t0 = Clock::now();
       const bool final = k == L;
-      evaluateLevel(w, inputs, density, k,
+      evaluateLevel(w, inputs, density, scene.lights.size(), k,
                     !final                         ? Evaluation::Split
                     : k > 0 && grids[k - 1].voxels ? Evaluation::FinalNoGradient
                                                    : Evaluation::Final,
@@ -645,7 +654,8 @@ DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
   if (!decisions.empty()) {
     // The top-up, decided on the host as on the CPU; the children evaluated on the GPU.
     TopUp t = budgetTopUp(scene.medium.bounds, decisions, (long long)result.samples.size(), budget);
-    if (!t.children.empty()) evaluateTopUpGpu(w, inputs, density, steps, settings, t, timer);
+    if (!t.children.empty())
+      evaluateTopUpGpu(w, inputs, density, scene.lights.size(), steps, settings, t, timer);
     applyTopUp(result, decisions, std::move(t));
   }
   if (!result.levels.empty()) result.levels[0].budget = budget;

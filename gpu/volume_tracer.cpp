@@ -16,25 +16,59 @@
 
 namespace scatterlab::gpu {
 
+namespace {
+
+/// The tracer's program. Lanes split the lights (a power of two, for the tree sum), rows are
+/// the 7 points of S and ∇S (1 without gradients), 32 / lanes samples per workgroup: 224
+/// invocations per group with gradients, one per (sample, point, light) up to 32 lights.
+/// levelCount: the count is counts[uLevel] (traceLevel), not uCount.
+const Program& tracerProgram(const TracerShape& shape, const TracerVariant& v,
+                             const ShadowMaps* shadows, bool levelCount) {
+  ProgramVariant variant{.compute = {"common.glsl", "volume_tracer.comp.glsl"}};
+  variant.define("SL_LANES " + std::to_string(shape.lanes))
+      .define("SL_ROWS " + std::to_string(shape.rows))
+      .define("SL_SLOTS " + std::to_string(shape.slots))
+      .define("SL_GRADIENTS", v.gradients)
+      .define("SL_FACTOR_LIGHTS", v.factorLights)
+      .define("SL_LAMP_MODEL", v.lampModel)
+      .define("SL_LOG_SPACE", v.logSpace)
+      .define("SL_LEVEL_COUNT", levelCount);
+  addShadowRaySkip(variant);
+  return gpu::program(addShadowVariant(shadows, variant), "volume tracer");
+}
+
+}  // namespace
+
+void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
+                float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,
+                std::size_t level, std::size_t capacity) {
+  if (capacity == 0) return;
+  const TracerShape shape = tracerShape(lights, variant.gradients);
+  const Program& program = tracerProgram(shape, variant, inputs.shadows(), true);
+  program.use();
+  inputs.apply(program);
+  glUniform1ui(program.uniform("uLevel"), GLuint(level));
+  glUniform1f(program.uniform("uDelta2"), delta2);
+  points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+  counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  // The count is known only on the GPU: enough workgroups for the level's capacity, at most
+  // 4096 (917 504 invocations with gradients, several waves of a large GPU); they stride over
+  // the samples and those past the count return at once.
+  dispatch("ds trace", {std::min<GLuint>(groups(capacity, GLuint(shape.slots)), 4096u), 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
 void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buffer& points,
                             std::size_t count, const Buffer& results, bool gradients,
                             StageTimer* timer, const ShadowMaps* shadows) {
   context();
   if (count == 0) return;
-  // Lanes split the lights (a power of two, for the tree sum), rows are the 7 points of S and
-  // ∇S (1 without gradients), 32 / lanes samples per workgroup: 224 invocations per group with
-  // gradients, one per (sample, point, light) up to 32 lights.
   const TracerShape shape = tracerShape(scene.lights.size(), gradients);
-  ProgramVariant variant{.compute = {"common.glsl", "volume_tracer.comp.glsl"}};
-  variant.define("SL_LANES " + std::to_string(shape.lanes))
-      .define("SL_ROWS " + std::to_string(shape.rows))
-      .define("SL_SLOTS " + std::to_string(shape.slots))
-      .define("SL_GRADIENTS", gradients)
-      .define("SL_FACTOR_LIGHTS", factor_)
-      .define("SL_LAMP_MODEL", lamp_)
-      .define("SL_LOG_SPACE", log_);
-  addShadowRaySkip(variant);
-  const Program& program = gpu::program(addShadowVariant(shadows, variant), "volume tracer");
+  const Program& program = tracerProgram(
+      shape,
+      {.gradients = gradients, .factorLights = factor_, .lampModel = lamp_, .logSpace = log_},
+      shadows, false);
   TracingInputs inputs(scene, density, delta1_, shadows);
   inputs.skipEmptySpace(timer);
   program.use();

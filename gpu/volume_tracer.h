@@ -8,6 +8,7 @@
 #include "gpu/gl.h"
 #include "gpu/shadow_maps.h"
 #include "gpu/timer.h"
+#include "gpu/tracing.h"
 #include "gpu/volume.h"
 
 namespace scatterlab::gpu {
@@ -47,6 +48,21 @@ class VolumeTracerGpu : public RadianceEvaluator {
 
 /// The tracer's pass name (its GPU time and its invocations in the stats).
 inline constexpr const char* kTracerPass = "radiance evaluation";
+
+/// What a tracer program computes: ∇S too, V = S / A (factored lights) with A's lamp model,
+/// ln V (TracerSteps, DynamicSamplingSettings).
+struct TracerVariant {
+  bool gradients = true, factorLights = false, lampModel = false, logSpace = false;
+};
+
+/// The tracer's pass over level `level` of dynamic sampling (gpu/dynamic_sampling.cpp): S and
+/// ∇S of the first counts[level] points of `points` into `results`, the count read on the GPU
+/// from `counts` (binding::kLevelCounts: no read-back), at most `capacity`; parallel over
+/// (sample, point, light) as the evaluator's pass. `inputs` applied (TracingInputs), pass name
+/// "ds trace", timed by the caller's scope.
+void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
+                float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,
+                std::size_t level, std::size_t capacity);
 
 /// How the tracer's workgroups are laid out (volume_tracer.comp.glsl): `lanes` invocations split
 /// the lights of each of a sample's `rows` points (7 with gradients: x and x ± δ2·e_a), `slots`

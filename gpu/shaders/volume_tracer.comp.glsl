@@ -14,7 +14,13 @@ layout(local_size_x = SL_LANES, local_size_y = SL_ROWS, local_size_z = SL_SLOTS)
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Positions { vec4 positions[]; };  // xyz
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
+#ifdef SL_LEVEL_COUNT
+// Dynamic sampling's level uLevel (gpu::traceLevel): its count is written on the GPU.
+layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
+uniform uint uLevel;
+#else
 uniform uint uCount;
+#endif
 uniform float uDelta2;
 
 // Per (slot, row, lane): rgb a part of S (or s), w the lights outside their cone; rgb a part of
@@ -52,10 +58,15 @@ void main() {
   const uint lane = gl_LocalInvocationID.x, row = gl_LocalInvocationID.y;
   const uint slot = gl_LocalInvocationID.z;
   const uint stride = gl_NumWorkGroups.x * uint(SL_SLOTS);
+#ifdef SL_LEVEL_COUNT
+  const uint count = counts[uLevel];
+#else
+  const uint count = uCount;
+#endif
   // The loop's bounds are the workgroup's: every barrier is reached by all its invocations.
-  for (uint base = gl_WorkGroupID.x * uint(SL_SLOTS); base < uCount; base += stride) {
+  for (uint base = gl_WorkGroupID.x * uint(SL_SLOTS); base < count; base += stride) {
     const uint i = base + slot;
-    const bool live = i < uCount;
+    const bool live = i < count;
     const vec3 q = rowPoint(live ? positions[i].xyz : vec3(0.0), row);
     const vec3 toViewer = towardsEye(q);
     vec3 s = vec3(0.0), a = vec3(0.0);
