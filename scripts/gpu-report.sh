@@ -12,8 +12,10 @@
 # Usage: scripts/gpu-report.sh [OUT_DIR]   (default gpu-report/; after scripts/setup.sh).
 # On a machine without packages: ../shared/tools/gpu-bundle.sh here, then on that machine
 #   bash .gpu-bundle/run.sh bash scripts/gpu-report.sh
+#   (where the bundle's run.sh sets B= to a relative path, make it absolute first: the links it
+#   makes to build/bin are relative to where they lie, and the CLI tests then find no binary.)
 # Writes OUT_DIR/device.txt, frames.json (+ frames.txt), stages.json (+ stages.txt),
-# test_gpu.txt, and prints a summary. Takes about 6 minutes on an H100/H200; set
+# test_gpu.txt, and prints a summary. Took 2.5 minutes on an H200 (2026-11-27); set
 # SCATTERLAB_GPU_BENCH_ITERS to change the iterations (default 30). On llvmpipe use
 # SCATTERLAB_GPU_BENCH_ITERS=1: its times are CPU times, only the counts mean something.
 set -uo pipefail
