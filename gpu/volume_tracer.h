@@ -66,7 +66,7 @@ void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVar
 
 /// How the tracer's workgroups are laid out (volume_tracer.comp.glsl): `lanes` invocations split
 /// the lights of each of a sample's `rows` points (7 with gradients: x and x ± δ2·e_a), `slots`
-/// samples per workgroup (lanes × slots = 32).
+/// samples per workgroup (lanes × slots = 32, one sample a workgroup from 32 lanes on).
 struct TracerShape {
   int lanes = 1, rows = 1, slots = 32;
 };

@@ -123,9 +123,9 @@ TEST(GpuVolumeTracer, SAndGradientMatchCpuTracing) {
   EXPECT_EQ(only[3].dS[1], Vec3(0.0f));
 }
 
-/// The tracer is parallel over (sample, point, light) (gpu::tracerShape): 40 lights (lanes
-/// stride over them), among them red spot lights whose cones most samples lie outside of while
-/// no other light is red (the factored V's cones-ignored path, factoredNeedsFree), traced in
+/// The tracer is parallel over (sample, point, light) (gpu::tracerShape): 40 lights (64 lanes,
+/// 24 of them without a light), among them red spot lights whose cones most samples lie outside of
+/// while no other light is red (the factored V's cones-ignored path, factoredNeedsFree), traced in
 /// each value space against the CPU evaluator; and at least one invocation per sample and light.
 TEST(GpuVolumeTracer, FortyLightsSplitBetweenLanesMatchTheCpu) {
   SCATTERLAB_REQUIRE_GPU();
@@ -155,7 +155,10 @@ TEST(GpuVolumeTracer, FortyLightsSplitBetweenLanesMatchTheCpu) {
   DensityGrid density(scene.medium.bounds, scene.medium.resolution);
   scene.medium.density->build(density);
   const gpu::TracerShape shape = gpu::tracerShape(scene.lights.size(), true);
-  EXPECT_EQ(shape.lanes, 32);
+  EXPECT_EQ(shape.lanes, 64);
+  EXPECT_EQ(shape.slots, 1);
+  // Beyond 64 lights the lanes stride over them (lane k: lights k, k + 64, …).
+  EXPECT_EQ(gpu::tracerShape(100, true).lanes, 64);
   // Most samples lie outside every red cone: A's red is 0 there (the cones-ignored path).
   const std::vector<RadianceSample> positions = randomSamples(37, 9, false);
   const LightFactor lightFactor(scene);
