@@ -117,17 +117,12 @@ std::string levelLabel(const char* what, std::size_t level) {
 
 /// Layout of DynamicSamplingWorkspace::counts for L split levels: [0, L] the levels' sample
 /// counts, [L + 1] the largest count a level asked for beyond its capacity, [L + 2] that level,
-/// then from dispatchSlot(L) three uints (x, 1, 1) per level: its evaluate/split dispatch, and
-/// from probeDispatchSlot(L) three (x, probe groups, 1) per level: its probe pass's (written by
-/// its evaluation pass).
+/// then from dispatchSlot(L) three uints (x, 1, 1) per level: its evaluate/split dispatch.
 std::size_t overflowSlot(std::size_t L) {
   return L + 1;
 }
 std::size_t dispatchSlot(std::size_t L) {
   return L + 3;
-}
-std::size_t probeDispatchSlot(std::size_t L) {
-  return dispatchSlot(L) + 3 * (L + 1);
 }
 
 /// Sums per sample of the probe pass: the groups of kProbeGroup probes.
@@ -135,26 +130,47 @@ int probeGroups(const DynamicSamplingSettings& settings) {
   return (settings.probes + kProbeGroup - 1) / kProbeGroup;
 }
 
-/// The three passes of a level (gpu/shaders/dynamic_error.comp.glsl): evaluation, probes,
-/// combination.
+/// The passes of a level after the tracer's (gpu/shaders/dynamic_error.comp.glsl): evaluation,
+/// probes, combination.
 enum class ErrorPass { Evaluate, Probes, Combine };
 
+/// What the level's values are: V = S / A (factored lights) with A's lamp model, ln V. A's model
+/// is the samples' (steps.lampModel): ErrorSpace::lampModel is the same flag.
+TracerVariant valueSpace(const TracerSteps& steps, bool gradients) {
+  return {.gradients = gradients,
+          .factorLights = steps.factorLights,
+          .lampModel = steps.factorLights && steps.lampModel,
+          .logSpace = steps.logValues()};
+}
+
+/// The probe pass's layout: the tracer's lanes over the lights, a row per probe of a group.
+TracerShape probeShape(std::size_t lights) {
+  TracerShape s = tracerShape(lights, false);
+  s.rows = kProbeGroup;
+  return s;
+}
+
 const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& steps,
-                            const DynamicSamplingSettings& settings, ErrorPass pass) {
+                            const DynamicSamplingSettings& settings, ErrorPass pass,
+                            std::size_t lights) {
   if (pass == ErrorPass::Combine)
     return program(
         {.compute = {"common.glsl", "dynamic_error.comp.glsl"}, .defines = {"SL_COMBINE"}},
         "dynamic sampling error (combine)");
-  ProgramVariant variant{.compute = {"common.glsl", pass == ErrorPass::Probes
-                                                        ? "dynamic_probes.comp.glsl"
-                                                        : "dynamic_error.comp.glsl"}};
-  // A's model is the samples' (steps.lampModel): ErrorSpace::lampModel is the same flag.
-  variant.define("SL_FACTOR_LIGHTS", steps.factorLights)
-      .define("SL_LAMP_MODEL", steps.factorLights && steps.lampModel)
-      .define("SL_LOG_SPACE", steps.logValues())
-      .define("SL_BOUNDED", bool(settings.space.bounds))
+  const TracerVariant space = valueSpace(steps, false);
+  ProgramVariant variant;
+  if (pass == ErrorPass::Probes) {
+    variant = tracerProgramVariant(probeShape(lights), space);
+    variant.define("SL_PROBES");
+  } else {
+    variant.compute = {"common.glsl", "dynamic_error.comp.glsl"};
+    variant.define("SL_FACTOR_LIGHTS", space.factorLights)
+        .define("SL_LAMP_MODEL", space.lampModel)
+        .define("SL_LOG_SPACE", space.logSpace);
+    addShadowRaySkip(variant);
+  }
+  variant.define("SL_BOUNDED", bool(settings.space.bounds))
       .define("SL_WEIGHT_A", settings.space.weightA && steps.factorLights);
-  addShadowRaySkip(variant);
   return program(addShadowVariant(inputs.shadows(), variant), pass == ErrorPass::Probes
                                                                   ? "dynamic sampling probes"
                                                                   : "dynamic sampling evaluate");
@@ -195,7 +211,7 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
   for (std::size_t k = 0; k < L; ++k) probed = std::max(probed, w.levels[k].capacity);
   ensure(w.probeSums, probed * std::size_t(probeGroups(settings)) * sizeof(float),
          "dynamic sampling probe sums");
-  const std::size_t words = probeDispatchSlot(L) + 3 * (L + 1);
+  const std::size_t words = dispatchSlot(L) + 3 * (L + 1);
   ensure(w.counts, words * sizeof(GLuint), "dynamic sampling counts");
   std::vector<GLuint> counts(words, 0u);
   counts[0] = GLuint(n0);
@@ -246,14 +262,10 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
   ScopedGpuTimer t(timer, "ds evaluate+error");
   // pass 0: S and ∇S, parallel over (sample, point, light) (∇S = 0 for the per-voxel fallback's
   // voxels, as the CPU's gradients = false)
-  traceLevel(inputs, lights,
-             {.gradients = mode != Evaluation::FinalNoGradient,
-              .factorLights = steps.factorLights,
-              .lampModel = steps.factorLights && steps.lampModel,
-              .logSpace = steps.logValues()},
-             steps.delta2, l.samples, l.radiance, w.counts, k, l.capacity);
-  {  // pass 1: τ, the contributions; pass 2's dispatch
-    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Evaluate);
+  traceLevel(inputs, lights, valueSpace(steps, mode != Evaluation::FinalNoGradient), steps.delta2,
+             l.samples, l.radiance, w.counts, k, l.capacity);
+  {  // pass 1: τ, the contributions
+    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Evaluate, lights);
     program.use();
     inputs.apply(program);
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
@@ -262,8 +274,6 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
     glUniform1i(program.uniform("uVisibleTau"), settings.visibleTau ? 1 : 0);
     glUniform1i(program.uniform("uFinal"), int(mode));
-    glUniform1ui(program.uniform("uProbeDispatchSlot"), GLuint(probeDispatchSlot(L)));
-    glUniform1i(program.uniform("uProbeGroups"), groupsPerSample);
     setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
     l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
     l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
@@ -277,14 +287,13 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return;
   }
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-  {  // pass 2: one invocation per sample and group of probes
-    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Probes);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  {  // pass 2: parallel over (sample, probe, light); a workgroup's y is its group of probes
+    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Probes, lights);
     program.use();
     inputs.apply(program);
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
     glUniform1i(program.uniform("uProbes"), settings.probes);
-    glUniform1i(program.uniform("uProbeGroup"), kProbeGroup);
     glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
     if (settings.space.bounds)
       glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
@@ -294,13 +303,15 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     w.probeSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kProbeSums);
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
-    dispatchIndirect("ds probes", GLintptr((probeDispatchSlot(L) + 3 * k) * sizeof(GLuint)));
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    // The count is known only on the GPU: workgroups for the level's capacity, at most 4096
+    // along x; they stride over the samples (as traceLevel).
+    const TracerShape shape = probeShape(lights);
+    dispatch("ds probes", {std::min<GLuint>(groups(l.capacity, GLuint(shape.slots)), 4096u),
+                           GLuint(groupsPerSample), 1});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
   {  // pass 3: E_j from the groups' sums
-    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Combine);
+    const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Combine, lights);
     program.use();
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
     glUniform1i(program.uniform("uProbes"), settings.probes);

@@ -24,6 +24,14 @@ namespace {
 /// levelCount: the count is counts[uLevel] (traceLevel), not uCount.
 const Program& tracerProgram(const TracerShape& shape, const TracerVariant& v,
                              const ShadowMaps* shadows, bool levelCount) {
+  ProgramVariant variant = tracerProgramVariant(shape, v);
+  variant.define("SL_LEVEL_COUNT", levelCount);
+  return gpu::program(addShadowVariant(shadows, variant), "volume tracer");
+}
+
+}  // namespace
+
+ProgramVariant tracerProgramVariant(const TracerShape& shape, const TracerVariant& v) {
   ProgramVariant variant{.compute = {"common.glsl", "volume_tracer.comp.glsl"}};
   variant.define("SL_LANES " + std::to_string(shape.lanes))
       .define("SL_ROWS " + std::to_string(shape.rows))
@@ -31,13 +39,10 @@ const Program& tracerProgram(const TracerShape& shape, const TracerVariant& v,
       .define("SL_GRADIENTS", v.gradients)
       .define("SL_FACTOR_LIGHTS", v.factorLights)
       .define("SL_LAMP_MODEL", v.lampModel)
-      .define("SL_LOG_SPACE", v.logSpace)
-      .define("SL_LEVEL_COUNT", levelCount);
+      .define("SL_LOG_SPACE", v.logSpace);
   addShadowRaySkip(variant);
-  return gpu::program(addShadowVariant(shadows, variant), "volume tracer");
+  return variant;
 }
-
-}  // namespace
 
 void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
                 float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,

@@ -6,6 +6,7 @@
 
 #include "core/stages.h"
 #include "gpu/gl.h"
+#include "gpu/shaders.h"
 #include "gpu/shadow_maps.h"
 #include "gpu/timer.h"
 #include "gpu/tracing.h"
@@ -71,6 +72,11 @@ struct TracerShape {
   int lanes = 1, rows = 1, slots = 32;
 };
 TracerShape tracerShape(std::size_t lights, bool gradients);
+
+/// The tracer's shader and defines for `shape` and `variant`, the empty-space skip of shadow rays
+/// included; the caller adds its own defines and addShadowVariant (dynamic sampling's probe pass:
+/// SL_PROBES, volume_tracer.comp.glsl).
+ProgramVariant tracerProgramVariant(const TracerShape& shape, const TracerVariant& variant);
 
 /// Reads the GpuRadianceRecord of `results` back into S and ∇S of `samples` (a host wait).
 void readRadianceRecords(const Buffer& results, std::span<RadianceSample> samples);

@@ -245,9 +245,9 @@ double relativeErrorScale(const std::vector<float>& contributions);
 
 /// Most probe points a sample can have.
 inline constexpr int kMaxProbes = 40;
-/// Probes summed together before the groups' sums are added (localShadingError): the GPU traces
-/// one group per invocation (gpu/shaders/dynamic_probes.comp.glsl), and both sum in this order
-/// so that they agree to rounding. Eq. 5's six probes are one group, summed as the paper's sum.
+/// Probes summed together before the groups' sums are added (localShadingError): the GPU's probe
+/// pass sums one group per workgroup row set (gpu/shaders/volume_tracer.comp.glsl, SL_PROBES),
+/// and both sum in this order so that they agree to rounding. Eq. 5's six probes are one group, summed as the paper's sum.
 inline constexpr int kProbeGroup = 8;
 
 /// The probe offsets of a unit sphere at the origin, in probePoints() order: the 6 axis

@@ -1,23 +1,24 @@
-// Dynamic sampling (paper Sec. 5) in three passes per level, so that no invocation traces more
-// than kProbeGroup probes (an invocation per sample traced up to 47 points: 2000 invocations on
-// level 0 could fill a few of a large GPU's SMs, and llvmpipe ends every loop of an invocation
-// after 65535 iterations in all, which 40 probes × 16 lights reached):
+// Dynamic sampling (paper Sec. 5), four passes per level, none of which has an invocation trace
+// more than a few lights for one point (one invocation per sample traced up to 47 points × every
+// light: 2 240 invocations for 64 lights, 348 ms on an H200; and llvmpipe ends every loop of an
+// invocation after 65535 iterations in all, which 40 probes × 16 lights reached):
 // 0. volume_tracer.comp.glsl (gpu::traceLevel), parallel over (sample, point, light): S and ∇S
-//    of the level's samples into results[] (one invocation per sample tracing every light for 7
-//    points left 2 240 invocations to trace 64 lights: 348 ms on an H200);
+//    of the level's samples into results[];
 // 1. this file without SL_COMBINE, one invocation per sample of the current level: unless
-//    final, τ to the viewer (kept in errors[j] until pass 3) and
-//    on level 0 the sample's contribution R³·mean|S|·D·τ (the scale of a relative ε; with
-//    SL_WEIGHT_A |S| times A at the sample), and the
-//    indirect dispatch of pass 2 (x: the level's groups, y: its probe groups);
-// 2. dynamic_probes.comp.glsl, one invocation per sample and group of kProbeGroup probes: the
-//    group's sum of mean_RGB|L̃ − L|·D (with SL_WEIGHT_A mean_RGB(A ⊙ |L̃ − L|)·D, A at the probe);
+//    final, τ to the viewer (kept in errors[j] until pass 3) and on level 0 the sample's
+//    contribution R³·mean|S|·D·τ (the scale of a relative ε; with SL_WEIGHT_A |S| times A at
+//    the sample);
+// 2. volume_tracer.comp.glsl with SL_PROBES, parallel over (sample, probe, light): each group of
+//    kProbeGroup probes' sum of mean_RGB|L̃ − L|·D (with SL_WEIGHT_A mean_RGB(A ⊙ |L̃ − L|)·D, A
+//    at the probe);
 // 3. this file with SL_COMBINE, one invocation per sample: E_j = R³·(Σ of the groups' sums in
 //    group order)/n·τ, Eq. 5.
 // The level's sample count is read from the GPU (counts[uLevel], written by the count pass of
-// dynamic_level.comp.glsl; the dispatch is indirect); the threshold and the split decisions are
-// left to the next passes. Mirrors sampling/dynamic_sampling.cpp (localShadingError, which sums
-// the probes in the same groups, sampleContribution, viewTransmittance) operation for operation.
+// dynamic_level.comp.glsl; the dispatches are indirect or stride over the samples); the
+// threshold and the split decisions are left to the next passes. Mirrors
+// sampling/dynamic_sampling.cpp (localShadingError, which sums the probes in the same groups,
+// sampleContribution, viewTransmittance) operation for operation, but for the order in which
+// the lights' terms of one point are added (the lanes' tree).
 layout(local_size_x = 64) in;
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
@@ -26,8 +27,8 @@ layout(std430, binding = BINDING_ROOT_TAU) buffer RootTau { float rootTau[]; }; 
 layout(std430, binding = BINDING_RADIANCE) readonly buffer Results { RadianceRecord results[]; };
 // Pass 1 leaves τ at [j] and on level 0 the contribution at [count + j]; pass 3 replaces τ by E_j.
 layout(std430, binding = BINDING_ERRORS) buffer Errors { float errors[]; };
-// The level counts; pass 1 writes pass 2's indirect dispatch.
-layout(std430, binding = BINDING_LEVEL_COUNTS) buffer LevelCounts { uint counts[]; };
+// The level counts.
+layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
 
 uniform uint uLevel;            // k: the level's sample count is counts[k]
 
@@ -50,9 +51,7 @@ uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1
 uniform float uTauDelta1;       // step of the τ trace
 uniform int uVisibleTau;        // 1: τ = max(τ, τ at the six axis probes) (tau "visible")
 uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU (the six axis probes of uVisibleTau)
-uniform int uFinal;             // 1: finest level, S and ∇S only; 2: S only (∇S = 0)
-uniform uint uProbeDispatchSlot;  // counts[slot + 3·level ...]: pass 2's (x, groups, 1)
-uniform int uProbeGroups;       // ceil(uProbes / kProbeGroup)
+uniform int uFinal;             // 1, 2: a final level (S and ∇S, or S only, traced): E = 0
 
 float viewTransmittance(vec3 x) { return exp(-uSigmaT * opticalDepth(x, uEye, uTauDelta1)); }
 
@@ -60,12 +59,6 @@ void main() {
   uint j = gl_GlobalInvocationID.x;
   uint count = counts[uLevel];
   if (j >= count) return;
-  if (j == 0u && uFinal == 0) {
-    uint d = uProbeDispatchSlot + 3u * uLevel;
-    counts[d] = (count + 63u) / 64u;
-    counts[d + 1u] = uint(uProbeGroups);
-    counts[d + 2u] = 1u;
-  }
   vec4 pr = samples[j];
   vec3 x = pr.xyz;
   float R = pr.w;

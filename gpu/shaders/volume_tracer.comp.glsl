@@ -5,6 +5,13 @@
 // k + SL_LANES, …) and add their parts in shared memory, in a fixed tree order. The sums are
 // those of sourceTowardsEye (common.glsl) up to their order. Workgroups stride over the samples
 // (a dispatch stays within the device's workgroup count whatever uCount is).
+// SL_PROBES: dynamic sampling's probe pass (gpu/dynamic_sampling.cpp; after pass 1 of
+// dynamic_error.comp.glsl): the rows are the kProbeGroup probes x_i = x_j + R_j·d_i of group
+// g = the workgroup's y; the traced S at each (0 where D = 0: not traced, as on the CPU) against
+// the sample's Taylor estimate L̃ (S and ∇S in results[]) gives mean_RGB|L̃ − L|·D (with
+// SL_WEIGHT_A times A at the probe per channel; SL_LOG_SPACE compares V = exp), and lane 0 of
+// row 0 sums the group's terms in probe order, as localShadingError (sampling/
+// dynamic_sampling.cpp) sums each group, into probeSums[j·groups + g].
 #ifndef SL_LANES  // set by gpu::VolumeTracerGpu (tracerShape); these are for a lone compile
 #define SL_LANES 1
 #define SL_ROWS 7
@@ -12,16 +19,27 @@
 #endif
 layout(local_size_x = SL_LANES, local_size_y = SL_ROWS, local_size_z = SL_SLOTS) in;
 
-layout(std430, binding = BINDING_SAMPLES) readonly buffer Positions { vec4 positions[]; };  // xyz
+layout(std430, binding = BINDING_SAMPLES) readonly buffer Positions { vec4 positions[]; };  // xyz, R
+#ifdef SL_PROBES
+layout(std430, binding = BINDING_RADIANCE) readonly buffer Results { RadianceRecord results[]; };
+layout(std430, binding = BINDING_PROBE_SUMS) writeonly buffer ProbeSums { float probeSums[]; };
+uniform int uProbes;            // 6, 14, 26 or 40
+uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
+#ifdef SL_BOUNDED
+uniform vec2 uTaylorBounds;     // TaylorBounds (lo, hi): the Taylor estimate is clamped to it
+#endif
+shared float term[SL_SLOTS][SL_ROWS];
+#else
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
-#ifdef SL_LEVEL_COUNT
+uniform float uDelta2;
+#endif
+#if defined(SL_LEVEL_COUNT) || defined(SL_PROBES)
 // Dynamic sampling's level uLevel (gpu::traceLevel): its count is written on the GPU.
 layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
 uniform uint uLevel;
 #else
 uniform uint uCount;
 #endif
-uniform float uDelta2;
 
 // Per (slot, row, lane): rgb a part of S (or s), w the lights outside their cone; rgb a part of
 // A (factored). Lane 0 ends with the sums over every light.
@@ -46,6 +64,7 @@ void reduceLanes(uint slot, uint row, uint lane) {
   barrier();
 }
 
+#ifndef SL_PROBES
 // Point `row` of the sample at p: p, then p + δ2·e_a and p − δ2·e_a for a = 0, 1, 2.
 vec3 rowPoint(vec3 p, uint row) {
   if (row == 0u) return p;
@@ -53,12 +72,13 @@ vec3 rowPoint(vec3 p, uint row) {
   e[(row - 1u) / 2u] = uDelta2;
   return (row & 1u) == 1u ? p + e : p - e;
 }
+#endif
 
 void main() {
   const uint lane = gl_LocalInvocationID.x, row = gl_LocalInvocationID.y;
   const uint slot = gl_LocalInvocationID.z;
   const uint stride = gl_NumWorkGroups.x * uint(SL_SLOTS);
-#ifdef SL_LEVEL_COUNT
+#if defined(SL_LEVEL_COUNT) || defined(SL_PROBES)
   const uint count = counts[uLevel];
 #else
   const uint count = uCount;
@@ -67,11 +87,20 @@ void main() {
   for (uint base = gl_WorkGroupID.x * uint(SL_SLOTS); base < count; base += stride) {
     const uint i = base + slot;
     const bool live = i < count;
+#ifdef SL_PROBES
+    const int probe = int(gl_WorkGroupID.y) * SL_ROWS + int(row);
+    const vec4 pr = live ? positions[i] : vec4(0.0);
+    precise vec3 q = pr.xyz + pr.w * uProbeDirs[min(probe, uProbes - 1)];
+    const float D = live && probe < uProbes ? densityAtPoint(q) : 0.0;
+    const bool traced = D != 0.0;  // a term of 0 is not traced (as on the CPU)
+#else
     const vec3 q = rowPoint(live ? positions[i].xyz : vec3(0.0), row);
+    const bool traced = live;
+#endif
     const vec3 toViewer = towardsEye(q);
     vec3 s = vec3(0.0), a = vec3(0.0);
     float outside = 0.0;
-    if (live) {
+    if (traced) {
 #ifdef SL_FACTOR_LIGHTS
       factoredPart(q, toViewer, int(lane), SL_LANES, s, a, outside);
 #else
@@ -86,7 +115,7 @@ void main() {
       totalA[slot][row] = partA[slot][row][0];
 #ifdef SL_FACTOR_LIGHTS
       needsFree[slot][row] =
-          live && factoredNeedsFree(partA[slot][row][0].rgb, partS[slot][row][0].w);
+          traced && factoredNeedsFree(partA[slot][row][0].rgb, partS[slot][row][0].w);
 #else
       needsFree[slot][row] = false;
 #endif
@@ -115,6 +144,40 @@ void main() {
     }
     memoryBarrierShared();
     barrier();
+#ifdef SL_PROBES
+    if (lane == 0u) {
+      float t = 0.0;
+      if (traced) {
+        const vec3 Sp = value[slot][row];
+        const vec3 S = results[i].S.xyz;
+        precise vec3 d = q - pr.xyz;
+        precise vec3 taylor =
+            S + d.x * results[i].dS[0].xyz + d.y * results[i].dS[1].xyz + d.z * results[i].dS[2].xyz;
+#ifdef SL_BOUNDED
+        taylor = clamp(taylor, vec3(uTaylorBounds.x), vec3(uTaylorBounds.y));
+#endif
+#ifdef SL_LOG_SPACE
+        // ln V held: compared on V, what the image sees (localShadingError's ErrorSpace::log).
+        precise vec3 diff = abs(exp(taylor) - exp(Sp));
+#else
+        precise vec3 diff = abs(taylor - Sp);
+#endif
+#ifdef SL_WEIGHT_A
+        diff *= lightFactorTowardsEye(q);  // the error of S = A ⊙ V (ErrorSpace::weightA)
+#endif
+        t = (diff.x + diff.y + diff.z) / 3.0 * D;
+      }
+      term[slot][row] = t;
+    }
+    memoryBarrierShared();
+    barrier();
+    if (live && lane == 0u && row == 0u) {
+      // The group's terms in probe order (a term of 0 adds nothing: the CPU skips it).
+      precise float sum = 0.0;
+      for (int r = 0; r < SL_ROWS; ++r) sum += term[slot][r];
+      probeSums[i * gl_NumWorkGroups.y + gl_WorkGroupID.y] = sum;
+    }
+#else
     if (live && lane == 0u && row == 0u) {
       results[i].S = vec4(value[slot][0], 0.0);
 #ifdef SL_GRADIENTS
@@ -125,6 +188,7 @@ void main() {
       for (uint d = 0u; d < 3u; ++d) results[i].dS[d] = vec4(0.0);
 #endif
     }
+#endif
     // value[] is read above before the next sample's lanes write partS (no barrier needed:
     // value is written again only after two more barriers).
   }
