@@ -61,6 +61,10 @@ struct SweepSpec {
   std::vector<std::string> methods;  ///< names of MethodSpecs (all when the config gives none)
   std::vector<std::string> scenes;   ///< names of SceneSpecs (all when none)
   int repetitions = 3, warmup = 1;
+  /// Steady frames per run after the cold repetitions (0: none): a Renderer over the run's
+  /// scene, light 0 moved a little each frame, the image left on the device (what an engine
+  /// draws; docs/harness.md).
+  int steadyFrames = 0;
   std::string baseline;  ///< method name that speed-ups are measured against ("" = none)
   /// method name -> paper value per sweep point (in product order), e.g. Table 2's fps.
   Json paperFps = Json::object();
@@ -129,6 +133,10 @@ struct RunRecord {
   /// to the median total); plots.py draws its stage bars from them.
   std::vector<std::pair<std::string, double>> medianRunMs;
   int repetitions = 0, warmup = 0;
+  /// The steady frames (SweepSpec::steadyFrames), null when none were drawn: frames, wall_ms
+  /// (median of Renderer::set + render), gpu_ms (median of gpu_ms_total; GPU only),
+  /// host_waits (the most of any frame; GPU only).
+  Json steady;
   std::vector<std::string> references;  ///< names, in order
   std::vector<ImageError> errors;       ///< one per reference
   /// Reference name -> its convergence check (converged references only): steps, the relative

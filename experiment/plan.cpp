@@ -238,7 +238,7 @@ bool hasMethod(const ExperimentPlan& plan, const std::string& name) {
 /// One entry of 'sweeps'; `index` names it when it has no name, `seen` holds the names of the
 /// sweeps before it.
 SweepSpec parseSweep(Params& s, std::size_t index, const ExperimentPlan& plan, int defReps,
-                     int defWarm, std::set<std::string>& seen) {
+                     int defWarm, int defSteady, std::set<std::string>& seen) {
   SweepSpec sp;
   sp.name = s.string("name", "sweep" + std::to_string(index));
   checkName(s, "name", sp.name);
@@ -262,6 +262,7 @@ SweepSpec parseSweep(Params& s, std::size_t index, const ExperimentPlan& plan, i
       s.fail("scenes", "'" + n + "' is not the name of an entry of 'scenes'");
   sp.repetitions = int(s.integer("repetitions", defReps, Interval::closed(1, 1000)));
   sp.warmup = int(s.integer("warmup", defWarm, Interval::closed(0, 100)));
+  sp.steadyFrames = int(s.integer("steady_frames", defSteady, Interval::closed(0, 10000)));
   sp.baseline = s.string("baseline", std::string());
   if (!sp.baseline.empty() && !hasMethod(plan, sp.baseline))
     s.fail("baseline", "'" + sp.baseline + "' is not the name of an entry of 'methods'");
@@ -276,13 +277,14 @@ SweepSpec parseSweep(Params& s, std::size_t index, const ExperimentPlan& plan, i
 }
 
 /// 'sweeps', or one sweep "main" without axes when the config gives none.
-void parseSweeps(Params& p, ExperimentPlan& plan, int defReps, int defWarm) {
+void parseSweeps(Params& p, ExperimentPlan& plan, int defReps, int defWarm, int defSteady) {
   if (!p.has("sweeps")) {
     p.allow("sweeps");
     SweepSpec sp;
     sp.name = "main";
     sp.repetitions = defReps;
     sp.warmup = defWarm;
+    sp.steadyFrames = defSteady;
     plan.sweeps.push_back(sp);
     return;
   }
@@ -292,7 +294,7 @@ void parseSweeps(Params& p, ExperimentPlan& plan, int defReps, int defWarm) {
   std::set<std::string> seen;
   for (std::size_t i = 0; i < sw.size(); ++i) {
     Params s(sw[i], p.keyPath("sweeps") + "[" + std::to_string(i) + "]");
-    plan.sweeps.push_back(parseSweep(s, i, plan, defReps, defWarm, seen));
+    plan.sweeps.push_back(parseSweep(s, i, plan, defReps, defWarm, defSteady, seen));
   }
 }
 
@@ -307,6 +309,7 @@ std::string runHash(const ExperimentPlan& plan, const RunSpec& r, const std::str
               {"repetitions", r.sweepSpec->repetitions},
               {"warmup", r.sweepSpec->warmup},
               {"lights", r.lights ? Json(*r.lights) : Json()}};
+  if (r.sweepSpec->steadyFrames > 0) key["steady_frames"] = r.sweepSpec->steadyFrames;
   Json refs = Json::array();
   for (const MethodSpec& ref : plan.references)
     refs.push_back(ref.converge ? Json{ref.method, ref.backend, ref.sets, "converge"}
@@ -495,8 +498,9 @@ ExperimentPlan parseExperiment(const std::string& configPath,
   plan.htmlMaxSide = int(p.integer("html_max_side", 512, Interval::closed(16, 16384)));
   const int defReps = int(p.integer("repetitions", 3, Interval::closed(1, 1000)));
   const int defWarm = int(p.integer("warmup", 1, Interval::closed(0, 100)));
+  const int defSteady = int(p.integer("steady_frames", 0, Interval::closed(0, 10000)));
   parseMethods(p, defBackend, plan);
-  parseSweeps(p, plan, defReps, defWarm);
+  parseSweeps(p, plan, defReps, defWarm, defSteady);
   p.finish();
   expandRuns(plan, globalSets);
   return plan;

@@ -42,7 +42,10 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
   md << "Config `" << configPath << "`; " << res.runs.size() << " runs (" << res.rendered
      << " rendered now, " << res.resumed << " resumed from `runs/`, " << res.failed
      << " failed). Written " << nowIso() << ".\n\n"
-     << "Times are medians over the stated repetitions after the warm-up, in ms per frame. "
+     << "Times are medians over the stated repetitions after the warm-up, in ms per frame "
+        "(cold frames: a new method per render); the steady columns, where a sweep has "
+        "steady_frames, are medians over that many frames of one method kept between renders, "
+        "light 0 moved, the image left on the device (what an engine draws). "
         "Errors (docs/metrics.md), against the reference `"
      << plan.references[0].name << "`"
      << (plan.references.size() > 1 ? " (against the others: rel L2 here, the rest in results.csv)"
@@ -95,6 +98,8 @@ void sweepTableHeader(std::ostream& md, const ExperimentPlan& plan, const SweepS
   for (const Axis& a : sw.axes)
     md << " " << (a.name == "samples" ? "sample budget" : a.name) << " |";
   md << " samples used | time (ms) | fps |";
+  // Steady frames (SweepSpec::steadyFrames): the cold columns above, these beside them.
+  if (sw.steadyFrames > 0) md << " steady wall ms | steady GPU ms | steady host waits |";
   if (!sw.paperFps.empty()) md << " paper fps |";
   if (!sw.baseline.empty()) md << " speed-up vs " << sw.baseline << " |";
   const std::string& head = plan.references[0].name;
@@ -104,6 +109,7 @@ void sweepTableHeader(std::ostream& md, const ExperimentPlan& plan, const SweepS
   md << " paper rel. error | dominant stage | peak MiB |\n|---|---|---|---|";
   for (std::size_t k = 0; k < sw.axes.size(); ++k) md << "---|";
   md << "---|---|---|";
+  if (sw.steadyFrames > 0) md << "---|---|---|";
   if (!sw.paperFps.empty()) md << "---|";
   if (!sw.baseline.empty()) md << "---|";
   md << "---|---|---|";
@@ -124,6 +130,14 @@ void sweepTableRow(std::ostream& md, const ResultFacts& facts, const SweepSpec& 
   md << " " << (rec.samples ? std::to_string(*rec.samples) : "—") << " | "
      << fmt(rec.totalMs(), "%.1f") << " | " << fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.2f")
      << " |";
+  if (sw.steadyFrames > 0) {
+    const auto steady = [&](const char* key, const char* format) {
+      const Json& v = rec.steady.is_object() ? rec.steady.value(key, Json()) : Json();
+      return v.is_number() ? fmt(v.get<double>(), format) : std::string("—");
+    };
+    md << " " << steady("wall_ms", "%.2f") << " | " << steady("gpu_ms", "%.2f") << " | "
+       << steady("host_waits", "%.0f") << " |";
+  }
   if (!sw.paperFps.empty()) md << " " << paperValue(rec.paper, "fps", "%.1f") << " |";
   if (!sw.baseline.empty()) {
     const RunRecord* b = facts.baselineOf(rec);

@@ -226,6 +226,7 @@ class Runner {
     rec.samples = last.stats.samples;
     rec.repetitions = reps;
     rec.warmup = warm;
+    if (r.sweepSpec->steadyFrames > 0) rec.steady = steadyFrames(r, m, scene);
     rec.image = "images/" + r.id + ".png";
     writeExr(last.image, out_.path("images/" + r.id + ".exr"));
     writePng(last.image, out_.path(rec.image), plan_.exposure);
@@ -246,6 +247,46 @@ class Runner {
       if (!ref.check.is_null()) rec.referenceChecks[refSpec.name] = ref.check;
     }
     rec.status = "ok";
+  }
+
+  /// SweepSpec::steadyFrames frames of the run's method kept between renders after a first
+  /// (cold) one, as a Renderer keeps it (Method::retainDensity, imageOnDevice): light 0 moved by
+  /// 0.1 % of the box's width in a cycle of five positions (a directional light's direction
+  /// tilted as much), density and samples kept, the image left on the device. Wall time per
+  /// frame is the method's render (which returns once the frame's statistics are read: the
+  /// GPU's work is inside it).
+  Json steadyFrames(const RunSpec& r, const MethodSpec& m, const Scene& scene) {
+    if (scene.lights.empty()) throw Error("steady frames need a light to move");
+    std::unique_ptr<Method> method = createMethod(scene, m.method, m.backend);
+    method->retainDensity = true;
+    method->imageOnDevice = true;
+    method->render(scene, nullptr);
+    const Light& light = scene.lights[0];
+    const bool directional = light.type == Light::Type::Directional;
+    const float step = 1e-3f * (directional ? 1.0f : scene.medium.bounds.extent().x);
+    std::vector<double> wall, gpu;
+    double waits = 0;
+    Scene moved = scene;  // shares the medium's density: the method sees it unchanged
+    for (int f = 1; f <= r.sweepSpec->steadyFrames; ++f) {
+      Light& l = moved.lights[0];
+      if (directional)
+        l.direction = glm::normalize(light.direction + Vec3(step * float(f % 5), 0.0f, 0.0f));
+      else
+        l.position = light.position + Vec3(step * float(f % 5), 0.0f, 0.0f);
+      const auto t0 = std::chrono::steady_clock::now();
+      const RenderResult res = method->render(moved, nullptr);
+      wall.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      if (res.stats.extra.contains("gpu_ms_total"))
+        gpu.push_back(res.stats.extra["gpu_ms_total"].get<double>());
+      waits = std::max(waits, res.stats.extra.value("host_waits", 0.0));
+    }
+    Json j = {{"frames", r.sweepSpec->steadyFrames}, {"wall_ms", median(wall)}};
+    if (!gpu.empty()) {
+      j["gpu_ms"] = median(gpu);
+      j["host_waits"] = waits;
+    }
+    return j;
   }
 
   double peakHostMiB() const {

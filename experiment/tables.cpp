@@ -81,6 +81,7 @@ Json RunRecord::toJson() const {
   }
   j["repetitions"] = repetitions;
   j["warmup"] = warmup;
+  if (!steady.is_null()) j["steady"] = steady;
   Json e = Json::object();
   for (std::size_t k = 0; k < errors.size() && k < references.size(); ++k)
     e[references[k]] = errorJson(errors[k]);
@@ -122,6 +123,7 @@ RunRecord RunRecord::fromJson(const Json& j) {
     r.medianRunMs.emplace_back(s, ms.is_number() ? ms.get<double>() : NAN);
   r.repetitions = j.value("repetitions", 0);
   r.warmup = j.value("warmup", 0);
+  r.steady = j.value("steady", Json());
   r.references = j.value("references", std::vector<std::string>{});
   const Json e = j.value("errors", Json::object());
   for (const std::string& ref : r.references)
@@ -234,7 +236,8 @@ std::string csvField(std::string s) {
 void csvHeader(std::ostream& csv, const ResultFacts& facts) {
   csv << "id,sweep,scene,method,registered_method,backend";
   for (const auto& a : facts.axisNames) csv << ",axis_" << a;
-  csv << ",status,samples,width,height,repetitions,total_ms,fps";
+  csv << ",status,samples,width,height,repetitions,total_ms,fps,steady_frames,steady_wall_ms,"
+         "steady_gpu_ms,steady_host_waits";
   for (const auto& s : facts.stages) csv << "," << s << "_ms";
   for (const auto& r : facts.plan.references)
     csv << ",rel_l2_vs_" << r.name << ",rel_l1_vs_" << r.name << ",psnr_vs_" << r.name
@@ -257,6 +260,12 @@ void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
       << (ok ? std::to_string(rec.stats.value("height", 0)) : "") << "," << rec.repetitions << ","
       << (ok ? fmt(rec.totalMs(), "%.2f") : "") << ","
       << (ok ? fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.3f") : "");
+  const auto steady = [&](const char* key, const char* format) {
+    const Json& v = rec.steady.is_object() ? rec.steady.value(key, Json()) : Json();
+    return v.is_number() ? fmt(v.get<double>(), format) : std::string();
+  };
+  csv << "," << steady("frames", "%.0f") << "," << steady("wall_ms", "%.3f") << ","
+      << steady("gpu_ms", "%.3f") << "," << steady("host_waits", "%.0f");
   for (const auto& s : facts.stages) {
     const auto v = ResultFacts::stageMs(rec, s);
     csv << "," << (v ? fmt(*v, "%.2f") : "");

@@ -282,6 +282,50 @@ TEST_F(ExperimentTest, TinySweepEndToEndAndResume) {
   EXPECT_EQ(r.resumed, 4);
 }
 
+/// steady_frames: after the cold repetitions, frames of the method kept between renders with
+/// light 0 moved (issue 33), recorded beside the cold times in the record, results.json and
+/// results.csv; on the CPU no GPU fields. A bad count names the key.
+TEST_F(ExperimentTest, SteadyFramesAreRecordedBesideTheColdOnes) {
+  Json c = tinyConfig();
+  c["steady_frames"] = 3;
+  c["sweeps"] = {{{"name", "res"}, {"axes", {{"resolution", {12}}}}}};
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  const fs::path out = dir / "out";
+  const ExperimentResult r = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  ASSERT_EQ(r.runs.size(), 2u);
+  for (const RunRecord& rec : r.runs) {
+    EXPECT_EQ(rec.status, "ok") << rec.id << ": " << rec.error;
+    ASSERT_TRUE(rec.steady.is_object()) << rec.id;
+    EXPECT_EQ(rec.steady["frames"], 3) << rec.id;
+    EXPECT_GT(rec.steady["wall_ms"].get<double>(), 0.0) << rec.id;
+    EXPECT_FALSE(rec.steady.contains("gpu_ms")) << rec.id;  // CPU
+  }
+  const Json j = readJsonFile((out / "results.json").string());
+  EXPECT_EQ(j["runs"][0]["steady"]["frames"], 3);
+  std::ifstream csv(out / "results.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  EXPECT_NE(header.find(",steady_frames,steady_wall_ms,steady_gpu_ms,steady_host_waits"),
+            std::string::npos)
+      << header;
+  EXPECT_NE(row.find(",3,"), std::string::npos) << row;
+  std::ifstream md(out / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(report.find("| steady wall ms | steady GPU ms | steady host waits |"),
+            std::string::npos);
+  // A resumed run keeps its steady frames.
+  const ExperimentResult again = runExperiment((dir / "exp.json").string(), out.string(), opt);
+  EXPECT_EQ(again.resumed, 2);
+  EXPECT_EQ(again.runs[0].steady, r.runs[0].steady);
+
+  c["steady_frames"] = -1;
+  const std::string e = expectConfigError(c);
+  EXPECT_NE(e.find("steady_frames"), std::string::npos) << e;
+}
+
 TEST_F(ExperimentTest, ShardsMergeIntoTheSingleProcessResults) {
   writeJson(dir / "exp.json", tinyConfig());
   const std::string cfg = (dir / "exp.json").string();
