@@ -183,8 +183,9 @@ TEST(FusedMarch, KernelsMatchThePlainSums) {
   // Random rays (steps of 0.3-1.7 voxels, inside and partly outside the index box, where the
   // lookups clamp) through a random volume: each kernel against the plain march's Grid3
   // lookups and std::exp, and the two kernels against each other; largest relative
-  // difference of L, T, wt over 3000 rays of 40 steps. Measured: vs plain 2.7e-6, avx2 vs
-  // sse2 1.4e-6 (lerp order and FMA); half storage (the same halves) avx2 vs sse2 2.1e-6.
+  // difference of L, T, wt over 3000 rays of 40 steps. Measured (GCC 12): vs plain 2.7e-6, avx2
+  // vs sse2 1.4e-6 (lerp order and FMA); half storage (the same halves) avx2 vs sse2 2.1e-6;
+  // clang 14 (which contracts a * b + c into FMAs where GCC does not): half avx2 vs sse2 6.8e-6.
   const RandomFused g(3);
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-2.0f, 24.0f), step(0.3f, 1.7f), dir(-1.0f, 1.0f);
@@ -212,7 +213,7 @@ TEST(FusedMarch, KernelsMatchThePlainSums) {
     }
     std::printf("half %d: vs plain %.3g, avx2 vs sse2 %.3g\n", int(half), dPlain, dKernels);
     EXPECT_LT(dPlain, 4e-6f) << half;
-    EXPECT_LT(dKernels, 3.2e-6f) << half;
+    EXPECT_LT(dKernels, 1.0e-5f) << half;
   }
 }
 
