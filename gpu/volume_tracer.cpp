@@ -29,6 +29,16 @@ const Program& tracerProgram(const TracerShape& shape, const TracerVariant& v,
   return gpu::program(addShadowVariant(shadows, variant), "volume tracer");
 }
 
+/// Makes `program` current with the tracing inputs, δ2, the points and the results bound.
+void useTracer(const Program& program, const TracingInputs& inputs, float delta2,
+               const Buffer& points, const Buffer& results) {
+  program.use();
+  inputs.apply(program);
+  glUniform1f(program.uniform("uDelta2"), delta2);
+  points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+}
+
 }  // namespace
 
 ProgramVariant tracerProgramVariant(const TracerShape& shape, const TracerVariant& v) {
@@ -50,12 +60,8 @@ void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVar
   if (capacity == 0) return;
   const TracerShape shape = tracerShape(lights, variant.gradients);
   const Program& program = tracerProgram(shape, variant, inputs.shadows(), true);
-  program.use();
-  inputs.apply(program);
+  useTracer(program, inputs, delta2, points, results);
   glUniform1ui(program.uniform("uLevel"), GLuint(level));
-  glUniform1f(program.uniform("uDelta2"), delta2);
-  points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-  results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
   counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
   // The count is known only on the GPU: enough workgroups for the level's capacity, at most
   // 4096 (up to 1.8 M invocations with gradients, several waves of a large GPU); they stride over
@@ -76,12 +82,8 @@ void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buf
       shadows, false);
   TracingInputs inputs(scene, density, delta1_, shadows);
   inputs.skipEmptySpace(timer);
-  program.use();
-  inputs.apply(program);
+  useTracer(program, inputs, delta2_, points, results);
   glUniform1ui(program.uniform("uCount"), GLuint(count));
-  glUniform1f(program.uniform("uDelta2"), delta2_);
-  points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-  results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
   // Workgroups stride over the samples: at most 65535 (GL's least maximum) whatever the count.
   dispatch(kTracerPass, {std::min<GLuint>(groups(count, GLuint(shape.slots)), 65535u), 1, 1},
            timer);
