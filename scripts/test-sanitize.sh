@@ -13,8 +13,8 @@ JOBS=${SCATTERLAB_JOBS:-2}
 # Line tables only (-g1): the sanitizers' stack traces need file and line, not variables, and
 # full -g made this tree the slowest part of CI (media/vdb.cpp 309 s at -O1 -g, 208 s at -O1
 # -g1; docs/reliability.md). The test executables share one precompiled header
-# (tests/CMakeLists.txt). Clang 14, not the Release tree's GCC 12: it builds this tree in 11.9
-# minutes against GCC's 32 (2 cores, cold; docs/reliability.md, "CI's time"), and the suite then runs
+# (tests/CMakeLists.txt). Clang 14, not the Release tree's GCC 12: a cold build of this tree took
+# ~18 minutes in CI against GCC's 32 (2 cores; docs/reliability.md, "CI's time"), and the suite runs
 # under both compilers' rounding (the Release tree's tests are GCC's).
 if ! command -v clang++ >/dev/null; then
   echo "scatterlab test-sanitize: installing clang"
