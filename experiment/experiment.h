@@ -61,9 +61,9 @@ struct SweepSpec {
   std::vector<std::string> methods;  ///< names of MethodSpecs (all when the config gives none)
   std::vector<std::string> scenes;   ///< names of SceneSpecs (all when none)
   int repetitions = 3, warmup = 1;
-  /// Steady frames per run after the cold repetitions (0: none): a Renderer over the run's
-  /// scene, light 0 moved a little each frame, the image left on the device (what an engine
-  /// draws; docs/harness.md).
+  /// Steady frames per run after the cold repetitions (0: none): the run's method kept between
+  /// renders as a Renderer keeps it, light 0 moved a little each frame, the image left on the
+  /// device (what an engine draws; docs/harness.md).
   int steadyFrames = 0;
   std::string baseline;  ///< method name that speed-ups are measured against ("" = none)
   /// method name -> paper value per sweep point (in product order), e.g. Table 2's fps.
@@ -134,8 +134,8 @@ struct RunRecord {
   std::vector<std::pair<std::string, double>> medianRunMs;
   int repetitions = 0, warmup = 0;
   /// The steady frames (SweepSpec::steadyFrames), null when none were drawn: frames, wall_ms
-  /// (median of Renderer::set + render), gpu_ms (median of gpu_ms_total; GPU only),
-  /// host_waits (the most of any frame; GPU only).
+  /// (median of the method's render), gpu_ms (median of gpu_ms_total; GPU only), host_waits
+  /// (the most of any frame; GPU only).
   Json steady;
   std::vector<std::string> references;  ///< names, in order
   std::vector<ImageError> errors;       ///< one per reference
@@ -160,6 +160,8 @@ struct RunRecord {
   Json toJson() const;
   static RunRecord fromJson(const Json& j);
   double totalMs() const;
+  /// steady[key] where the steady frames hold it (not on the CPU for gpu_ms, host_waits).
+  std::optional<double> steadyValue(const char* key) const;
 };
 
 struct ExperimentOptions {

@@ -132,8 +132,8 @@ void sweepTableRow(std::ostream& md, const ResultFacts& facts, const SweepSpec& 
      << " |";
   if (sw.steadyFrames > 0) {
     const auto steady = [&](const char* key, const char* format) {
-      const Json& v = rec.steady.is_object() ? rec.steady.value(key, Json()) : Json();
-      return v.is_number() ? fmt(v.get<double>(), format) : std::string("—");
+      const auto v = rec.steadyValue(key);
+      return v ? fmt(*v, format) : std::string("—");
     };
     md << " " << steady("wall_ms", "%.2f") << " | " << steady("gpu_ms", "%.2f") << " | "
        << steady("host_waits", "%.0f") << " |";

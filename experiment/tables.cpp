@@ -101,6 +101,11 @@ Json RunRecord::toJson() const {
   return j;
 }
 
+std::optional<double> RunRecord::steadyValue(const char* key) const {
+  if (!steady.is_object() || !steady.contains(key) || !steady[key].is_number()) return {};
+  return steady[key].get<double>();
+}
+
 RunRecord RunRecord::fromJson(const Json& j) {
   RunRecord r;
   r.id = j.value("id", "");
@@ -261,8 +266,8 @@ void csvRow(std::ostream& csv, const ResultFacts& facts, const RunRecord& rec) {
       << (ok ? fmt(rec.totalMs(), "%.2f") : "") << ","
       << (ok ? fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.3f") : "");
   const auto steady = [&](const char* key, const char* format) {
-    const Json& v = rec.steady.is_object() ? rec.steady.value(key, Json()) : Json();
-    return v.is_number() ? fmt(v.get<double>(), format) : std::string();
+    const auto v = rec.steadyValue(key);
+    return v ? fmt(*v, format) : std::string();
   };
   csv << "," << steady("frames", "%.0f") << "," << steady("wall_ms", "%.3f") << ","
       << steady("gpu_ms", "%.3f") << "," << steady("host_waits", "%.0f");

@@ -250,8 +250,8 @@ void dispatchOverLevel(const char* pass, const DynamicSamplingWorkspace& w, std:
 enum class Evaluation { Split = 0, Final = 1, FinalNoGradient = 2 };
 
 /// Evaluate level k (its count on the GPU after level 0): S and ∇S by the tracer's pass
-/// (traceLevel), then (dynamic_error.comp.glsl) τ and on level 0 the contributions; unless
-/// final, the probes in groups of kProbeGroup, then E_j. GPU time: "ds evaluate+error".
+/// (traceLevel); unless final, then (dynamic_error.comp.glsl) τ and on level 0 the
+/// contributions, the probes in groups of kProbeGroup, and E_j. GPU time: "ds evaluate+error".
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
                    std::size_t lights, std::size_t k, Evaluation mode, const TracerSteps& steps,
                    const DynamicSamplingSettings& settings, StageTimer* timer) {
@@ -264,6 +264,10 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
   // voxels, as the CPU's gradients = false)
   traceLevel(inputs, lights, valueSpace(steps, mode != Evaluation::FinalNoGradient), steps.delta2,
              l.samples, l.radiance, w.counts, k, l.capacity);
+  if (mode != Evaluation::Split) {  // a final level has S and ∇S, and no E
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    return;
+  }
   {  // pass 1: τ, the contributions
     const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Evaluate, lights);
     program.use();
@@ -273,7 +277,6 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
     glUniform1i(program.uniform("uVisibleTau"), settings.visibleTau ? 1 : 0);
-    glUniform1i(program.uniform("uFinal"), int(mode));
     setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
     l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
     l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
@@ -282,10 +285,6 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     dispatchOverLevel("ds evaluate", w, k, L);
-  }
-  if (mode != Evaluation::Split) {
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    return;
   }
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   {  // pass 2: parallel over (sample, probe, light); a workgroup's y is its group of probes
@@ -509,9 +508,6 @@ void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
       glNamedBufferSubData(l.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)), anc.data());
       const GLuint count = GLuint(m);
       glNamedBufferSubData(w.counts.id(), GLintptr(L * sizeof(GLuint)), sizeof(GLuint), &count);
-      const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
-      glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * L) * sizeof(GLuint)),
-                           sizeof dispatch, dispatch);
       evaluateLevel(w, inputs, density, lights, L,
                     voxels ? Evaluation::FinalNoGradient : Evaluation::Final, steps, settings,
                     timer);

@@ -173,8 +173,8 @@ class Texture : public GlObject<TextureDeleter> {
  public:
   /// What a texture holds when it is handed out. A recycled texture is cleared to zero unless
   /// its maker says the next pass writes every texel (`Overwritten`: an upload, or a compute
-  /// pass with one imageStore per texel): on an H200 the clear of a 256³ RGBA32F volume costs
-  /// ~4 ms that no timer query sees (docs/RESULTS.md, "Steady frames on an H200").
+  /// pass with one imageStore per texel): on an H200 the clear of a 256³ RGBA32F volume cost
+  /// ~5 ms that no timer query saw (docs/RESULTS.md, "GPU frames on an NVIDIA H200").
   enum class Contents { Zeroed, Overwritten };
   Texture() = default;
   /// A 2D texture of `format` (sized internal format).

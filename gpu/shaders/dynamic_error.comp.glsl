@@ -4,10 +4,10 @@
 // invocation after 65535 iterations in all, which 40 probes × 16 lights reached):
 // 0. volume_tracer.comp.glsl (gpu::traceLevel), parallel over (sample, point, light): S and ∇S
 //    of the level's samples into results[];
-// 1. this file without SL_COMBINE, one invocation per sample of the current level: unless
-//    final, τ to the viewer (kept in errors[j] until pass 3) and on level 0 the sample's
-//    contribution R³·mean|S|·D·τ (the scale of a relative ε; with SL_WEIGHT_A |S| times A at
-//    the sample);
+// 1. this file without SL_COMBINE, one invocation per sample of a level that may split (a
+//    final level stops after pass 0): τ to the viewer (kept in errors[j] until pass 3) and on
+//    level 0 the sample's contribution R³·mean|S|·D·τ (the scale of a relative ε; with
+//    SL_WEIGHT_A |S| times A at the sample);
 // 2. volume_tracer.comp.glsl with SL_PROBES, parallel over (sample, probe, light): each group of
 //    kProbeGroup probes' sum of mean_RGB|L̃ − L|·D (with SL_WEIGHT_A mean_RGB(A ⊙ |L̃ − L|)·D, A
 //    at the probe);
@@ -51,7 +51,6 @@ uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1
 uniform float uTauDelta1;       // step of the τ trace
 uniform int uVisibleTau;        // 1: τ = max(τ, τ at the six axis probes) (tau "visible")
 uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU (the six axis probes of uVisibleTau)
-uniform int uFinal;             // 1, 2: a final level (S and ∇S, or S only, traced): E = 0
 
 float viewTransmittance(vec3 x) { return exp(-uSigmaT * opticalDepth(x, uEye, uTauDelta1)); }
 
@@ -62,10 +61,6 @@ void main() {
   vec4 pr = samples[j];
   vec3 x = pr.xyz;
   float R = pr.w;
-  if (uFinal != 0) {
-    errors[j] = 0.0;
-    return;
-  }
   float tau;
   if (uTauMode == 0) {
     tau = viewTransmittance(x);
