@@ -4,11 +4,11 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfIO.h>
-#include <ImfInputFile.h>
 #include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
+#include <openexr.h>
 #include <png.h>
 
 #include <algorithm>
@@ -189,43 +189,163 @@ void checkExrAttributeSizes(const std::string& path) {
 
 }  // namespace
 
+namespace {
+
+// The last message of OpenEXR's core for this thread (its default handler prints to stderr).
+thread_local std::string exrCoreMessage;
+
+/// An OpenEXR core read context, finished on every path.
+class ExrReadContext {
+ public:
+  explicit ExrReadContext(const std::string& path) {
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = [](exr_const_context_t, exr_result_t, const char* message) {
+      exrCoreMessage = message ? message : "";
+    };
+    check(exr_start_read(&ctx_, path.c_str(), &init), "cannot parse the header");
+  }
+  ~ExrReadContext() {
+    if (ctx_) exr_finish(&ctx_);
+  }
+  ExrReadContext(const ExrReadContext&) = delete;
+  ExrReadContext& operator=(const ExrReadContext&) = delete;
+  exr_context_t get() const { return ctx_; }
+
+  /// Throws IoError(`what`: the core's message) unless `r` is EXR_ERR_SUCCESS.
+  static void check(exr_result_t r, const std::string& what) {
+    if (r == EXR_ERR_SUCCESS) return;
+    std::string detail = exrCoreMessage.empty() ? exr_get_default_error_message(r) : exrCoreMessage;
+    exrCoreMessage.clear();
+    // The core prefixes its messages with the file's name, which the caller adds anyway.
+    if (const std::size_t colon = detail.find(": ("); colon != std::string::npos)
+      detail = detail.substr(colon + 2);
+    throw IoError(what + ": " + detail);
+  }
+
+ private:
+  exr_context_t ctx_ = nullptr;
+};
+
+/// One chunk's pixels of the channels R, G, B, A and Z, decoded by OpenEXR's core into `img`
+/// (converted to float; other channels skipped). The core checks every chunk against the
+/// offset table, its size against the lines it covers and the decompressed size against the
+/// expected one: OpenEXR's C++ InputFile left pixels of empty or short chunks as whatever its
+/// line buffer held (issue 37).
+/// (x0, y0): the chunk's first pixel relative to the data window's origin (the core gives a
+/// scanline chunk's first line but a tile's indices).
+void decodeExrChunk(exr_context_t ctx, const exr_chunk_info_t& chunk, exr_decode_pipeline_t& d,
+                    bool first, std::size_t x0, std::size_t y0, Image& img,
+                    const std::string& where) {
+  ExrReadContext::check(
+      first ? exr_decoding_initialize(ctx, 0, &chunk, &d) : exr_decoding_update(ctx, 0, &chunk, &d),
+      where);
+  const std::size_t w = std::size_t(img.width());
+  if (x0 + std::size_t(std::max(chunk.width, 0)) > w ||
+      y0 + std::size_t(std::max(chunk.height, 0)) > std::size_t(img.height()))
+    throw IoError(where + ": the chunk lies outside the data window");
+  const std::size_t origin = y0 * w + x0;
+  for (int c = 0; c < d.channel_count; ++c) {
+    exr_coding_channel_info_t& ch = d.channels[c];
+    const std::string name = ch.channel_name ? ch.channel_name : "";
+    uint8_t* to = nullptr;
+    int32_t stride = sizeof(float);
+    if (name == "R" || name == "G" || name == "B") {
+      to = reinterpret_cast<uint8_t*>(&img.pixels()[origin][name == "R" ? 0 : name == "G" ? 1 : 2]);
+      stride = sizeof(Vec3);
+    } else if (name == "A" && !img.alpha().empty()) {
+      to = reinterpret_cast<uint8_t*>(img.alpha().data() + origin);
+    } else if (name == "Z" && !img.depth().empty()) {
+      to = reinterpret_cast<uint8_t*>(img.depth().data() + origin);
+    }
+    ch.decode_to_ptr = to;
+    ch.user_pixel_stride = stride;
+    ch.user_line_stride = int32_t(stride * w);
+    ch.user_bytes_per_element = sizeof(float);
+    ch.user_data_type = EXR_PIXEL_FLOAT;
+  }
+  ExrReadContext::check(exr_decoding_choose_default_routines(ctx, 0, &d), where);
+  ExrReadContext::check(exr_decoding_run(ctx, 0, &d), where);
+}
+
+}  // namespace
+
 Image readExr(const std::string& path) {
   checkReadableFile(path, "image");
   try {
     checkExrAttributeSizes(path);
-    Imf::InputFile file(path.c_str());
-    const Imath::Box2i dw = file.header().dataWindow();
+    ExrReadContext file(path);
+    exr_context_t ctx = file.get();
+    exr_storage_t storage;
+    ExrReadContext::check(exr_get_storage(ctx, 0, &storage), "cannot read the first part");
+    if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
+      throw IoError("deep images are not supported (the first part holds deep data)");
+    exr_attr_box2i_t dw;
+    ExrReadContext::check(exr_get_data_window(ctx, 0, &dw), "no data window");
     // In 64 bits: a corrupt data window overflows int (fuzz_exr found a 40 GB allocation).
     const std::int64_t w64 = std::int64_t(dw.max.x) - dw.min.x + 1,
                        h64 = std::int64_t(dw.max.y) - dw.min.y + 1;
     if (w64 < 1 || h64 < 1 || w64 > INT_MAX || h64 > INT_MAX)
       throw IoError("invalid data window of " + std::to_string(w64) + "x" + std::to_string(h64) +
                     " pixels");
-    const Imf::ChannelList& ch = file.header().channels();
-    if (!ch.findChannel("R") && !ch.findChannel("G") && !ch.findChannel("B"))
-      throw IoError("no R, G or B channel");
+    const exr_attr_chlist_t* channels = nullptr;
+    ExrReadContext::check(exr_get_channels(ctx, 0, &channels), "no channel list");
+    bool rgb = false, alpha = false, depth = false;
+    for (int i = 0; i < channels->num_channels; ++i) {
+      const exr_attr_chlist_entry_t& e = channels->entries[i];
+      const std::string name(e.name.str, std::size_t(std::max(e.name.length, 0)));
+      const bool used = name == "R" || name == "G" || name == "B" || name == "A" || name == "Z";
+      if (used && (e.x_sampling != 1 || e.y_sampling != 1))
+        throw IoError("channel '" + name + "' is subsampled (" + std::to_string(e.x_sampling) +
+                      "x" + std::to_string(e.y_sampling) + "); only full-resolution R, G, B, A " +
+                      "and Z channels are read");
+      rgb = rgb || name == "R" || name == "G" || name == "B";
+      alpha = alpha || name == "A";
+      depth = depth || name == "Z";
+    }
+    if (!rgb) throw IoError("no R, G or B channel");
     checkMemory(path, "an image of " + std::to_string(w64) + "x" + std::to_string(h64) + " pixels",
                 double(w64) * double(h64) * double(sizeof(Vec3) + sizeof(float)));
     const int w = int(w64), h = int(h64);
-    Image img(w, h);
-    Imf::FrameBuffer fb;
-    // Slice::Make offsets the buffer by the window's origin in integer arithmetic: the origin
-    // may be negative or far from 0, and `base - origin * stride` in unsigned pointer
-    // arithmetic overflowed (UBSan; fuzz_exr found a 1x1 window at (-1, -1)).
-    const char* base = reinterpret_cast<const char*>(img.pixels().data());
-    const size_t xs = sizeof(Vec3), ys = sizeof(Vec3) * w;
-    fb.insert("R", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
-    fb.insert("G", Imf::Slice::Make(Imf::FLOAT, base + sizeof(float), dw, xs, ys));
-    fb.insert("B", Imf::Slice::Make(Imf::FLOAT, base + 2 * sizeof(float), dw, xs, ys));
-    for (const auto& [name, values] :
-         {std::pair<const char*, std::vector<float>*>{"A", &img.alpha()}, {"Z", &img.depth()}}) {
-      if (!ch.findChannel(name)) continue;
-      values->assign(size_t(w) * h, 0.0f);
-      fb.insert(name,
-                Imf::Slice::Make(Imf::FLOAT, values->data(), dw, sizeof(float), sizeof(float) * w));
+    Image img(w, h);  // zero: a channel the file lacks reads as 0
+    if (alpha) img.alpha().assign(std::size_t(w) * h, 0.0f);
+    if (depth) img.depth().assign(std::size_t(w) * h, 0.0f);
+
+    exr_decode_pipeline_t d = EXR_DECODE_PIPELINE_INITIALIZER;
+    struct Pipeline {
+      exr_context_t ctx;
+      exr_decode_pipeline_t& d;
+      ~Pipeline() { exr_decoding_destroy(ctx, &d); }
+    } pipeline{ctx, d};
+    bool first = true;
+    if (storage == EXR_STORAGE_SCANLINE) {
+      int32_t lines = 0;
+      ExrReadContext::check(exr_get_scanlines_per_chunk(ctx, 0, &lines), "no lines per chunk");
+      for (std::int64_t y = dw.min.y; y <= dw.max.y; y += std::max(lines, 1)) {
+        const std::string where = "line " + std::to_string(y) + " (data window lines " +
+                                  std::to_string(dw.min.y) + " to " + std::to_string(dw.max.y) +
+                                  ") has no valid pixel data";
+        exr_chunk_info_t chunk;
+        ExrReadContext::check(exr_read_scanline_chunk_info(ctx, 0, int(y), &chunk), where);
+        decodeExrChunk(ctx, chunk, d, first, 0, std::size_t(chunk.start_y - dw.min.y), img, where);
+        first = false;
+      }
+    } else {
+      int32_t tileW = 0, tileH = 0;
+      ExrReadContext::check(exr_get_tile_sizes(ctx, 0, 0, 0, &tileW, &tileH), "no tile size");
+      if (tileW < 1 || tileH < 1)
+        throw IoError("invalid tile size " + std::to_string(tileW) + "x" + std::to_string(tileH));
+      const std::int64_t tilesX = (w64 + tileW - 1) / tileW, tilesY = (h64 + tileH - 1) / tileH;
+      for (int ty = 0; ty < int(tilesY); ++ty)
+        for (int tx = 0; tx < int(tilesX); ++tx) {
+          const std::string where = "tile (" + std::to_string(tx) + ", " + std::to_string(ty) +
+                                    ") has no valid pixel data";
+          exr_chunk_info_t chunk;
+          ExrReadContext::check(exr_read_tile_chunk_info(ctx, 0, tx, ty, 0, 0, &chunk), where);
+          decodeExrChunk(ctx, chunk, d, first, std::size_t(tx) * tileW, std::size_t(ty) * tileH,
+                         img, where);
+          first = false;
+        }
     }
-    file.setFrameBuffer(fb);
-    file.readPixels(dw.min.y, dw.max.y);
     return img;
   } catch (const IoError& e) {
     throw IoError("cannot read EXR '" + path + "': " + e.what());
