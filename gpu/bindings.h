@@ -71,6 +71,9 @@ inline constexpr GLuint kObjectVertices = 14;
 inline constexpr GLuint kResidualEntries = 0;
 /// double error scale and absolute threshold of dynamic sampling (dynamic_level.comp.glsl).
 inline constexpr GLuint kThreshold = 15;
+/// uint trips and cut of the loop guard (gpu/shaders.h loopIterationLimit(); only where the
+/// driver caps loop iterations), bound once for every program.
+inline constexpr GLuint kLoopGuard = 16;
 /// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (shading/screen_march.h).
 inline constexpr GLuint kJitterTable = 1;
 
@@ -144,6 +147,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_ERRORS", binding::kErrors},
     {"BINDING_LEVEL_COUNTS", binding::kLevelCounts},
     {"BINDING_THRESHOLD", binding::kThreshold},
+    {"BINDING_LOOP_GUARD", binding::kLoopGuard},
     {"BINDING_RESIDUAL_ENTRIES", binding::kResidualEntries},
     {"BINDING_IN_SET", binding::kInSet},
     {"BINDING_VERTEX_ANCESTORS", binding::kVertexAncestors},

@@ -4,6 +4,7 @@
 #include "gpu/dispatch.h"
 #include "gpu/reconstructions.h"
 #include "gpu/records.h"
+#include "gpu/shaders.h"
 #include "gpu/slice_marcher.h"
 #include "gpu/tracing.h"
 #include "gpu/volume_tracer.h"
@@ -26,7 +27,9 @@ void GpuFrame::startCounts() {
 }
 
 void GpuFrame::buildDensity(const Scene& scene) {
-  context();  // current before the first timer query or upload
+  context();             // current before the first timer query or upload
+  loopIterationLimit();  // probed once, before the first program is built
+  resetLoopGuard();
   density = Volume();
   density = gpu::buildDensity(scene, &timer, &splatted_, pipeline_);
   host_.reset();
@@ -85,6 +88,7 @@ void GpuFrame::newRender() {
   image = Texture();
   marks_.clear();
   startCounts();
+  resetLoopGuard();
 }
 
 std::optional<std::array<unsigned, 3>> GpuFrame::deviceImage() const {
@@ -98,8 +102,38 @@ void GpuFrame::sync() {
   marks_.push_back(timer.count());
 }
 
+namespace {
+
+/// The keys that make a pass's loops long, for the loop cap's error (by the program's label).
+std::string loopKeys(const std::string& program) {
+  const auto is = [&](const char* prefix) { return program.rfind(prefix, 0) == 0; };
+  if (is("view march"))
+    return "'render.march_step' (steps per view ray) and, with factored lights, the number of "
+           "lights (every step adds each light's factor)";
+  if (is("jittered march"))
+    return "'render.steps' times the lights times 'render.delta1''s steps to each light";
+  if (is("light-space march")) return "'render.steps' (steps per view ray)";
+  if (is("froxel"))
+    return "'render.froxel_grid' (slices per column) times the lights and their shadow steps";
+  if (is("radial blur")) return "'render.march_step' and 'render.samples'";
+  return "the lights times the steps to each light ('render.delta1'), and the pass's own "
+         "steps";
+}
+
+}  // namespace
+
 void GpuFrame::report(RenderStats& st) {
   const Context& ctx = context();
+  // A driver that caps loop iterations (llvmpipe) ends a long march early and the shader goes on
+  // with a partial sum: refuse the image rather than return it wrong (issue 37).
+  if (const std::string cut = loopGuardCut(); !cut.empty())
+    throw GpuError("the GPU pass '" + cut +
+                   "' needed more loop iterations in one invocation "
+                   "than the driver allows (" +
+                   std::to_string(loopIterationLimit()) + " in all; '" + ctx.info().renderer +
+                   "' ends every loop of a shader invocation there), so "
+                   "its image would be wrong. What makes it long: " +
+                   loopKeys(cut) + "; fewer of them, or --backend cpu, renders it");
   // The frame's waits, before report() itself waits for the queries and the deferred stats.
   const HostWaitCounts waits = hostWaitCounts();
   const PassCounts passes = passCounts();

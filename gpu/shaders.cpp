@@ -2,10 +2,12 @@
 
 #include <cstdio>
 #include <map>
+#include <memory>
 
 #include "core/error.h"
 #include "core/stages.h"
 #include "gpu/bindings.h"
+#include "gpu/context.h"
 
 namespace scatterlab::gpu {
 
@@ -18,19 +20,126 @@ std::string_view shaderSource(std::string_view file) {
   throw GpuError("no embedded shader '" + std::string(file) + "'; embedded: " + known);
 }
 
+namespace {
+
+/// The loop guard of a driver that caps loop iterations (loopIterationLimit()): the buffer the
+/// guarded shaders report to, binding kLoopGuard (uint trips = 2, uint cut = 0 or the serial
+/// of a program whose invocation was cut), and the programs' names by serial.
+struct LoopGuard {
+  int limit = -1;  ///< -1: not probed yet
+  GLuint buffer = 0;
+  std::vector<std::string> programs{""};  ///< serial 0: none
+};
+
+LoopGuard& loopGuard() {
+  static auto* g = new LoopGuard();  // leaked on purpose, as the programs (see shaders.h)
+  return *g;
+}
+
+// One invocation counts to uN (2^20); a driver that ends loops early stops at its cap.
+constexpr const char* kLoopProbe = R"(#version 450 core
+layout(local_size_x = 1) in;
+layout(std430, binding = 0) buffer Count { uint count; };
+uniform uint uN;
+void main() {
+  uint k = 0u;
+  for (uint i = 0u; i < uN; ++i) k += 1u;
+  count = k;
+}
+)";
+constexpr GLuint kLoopProbeTrips = 1u << 20;
+
+// Appended to every compute and fragment stage when the driver caps loops: the stage's main()
+// runs as slGuardedMain(), then a loop of `trips` (2, read from the buffer so that no compiler
+// unrolls it) ends after one trip only if the cap was reached, and the program's serial is
+// recorded. Mesa's cap is one counter per invocation shared by every loop (gallivm's
+// LP_MAX_TGSI_LOOP_ITERATIONS), so this detects a cut anywhere in the invocation.
+std::string loopGuardEpilogue(std::size_t serial) {
+  return "#undef main\n"
+         "layout(std430, binding = BINDING_LOOP_GUARD) buffer SlLoopGuard {\n"
+         "  uint slLoopTrips;\n"
+         "  uint slLoopCut;\n"
+         "};\n"
+         "void main() {\n"
+         "  slGuardedMain();\n"
+         "  uint k = 0u;\n"
+         "  for (uint i = 0u; i < slLoopTrips; ++i) ++k;\n"
+         "  if (k != slLoopTrips) atomicMax(slLoopCut, " +
+         std::to_string(serial) + "u);\n}\n";
+}
+
+}  // namespace
+
+int loopIterationLimit() {
+  LoopGuard& g = loopGuard();
+  if (g.limit >= 0) return g.limit;
+  context();
+  const Shader cs(GL_COMPUTE_SHADER, kLoopProbe, "loop-iteration probe");
+  const Program probe({&cs}, "loop-iteration probe");
+  GLuint count = 0, zero = 0;
+  glCreateBuffers(1, &count);
+  glNamedBufferStorage(count, sizeof zero, &zero, 0);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, count);
+  glUseProgram(probe.id());
+  glUniform1ui(probe.uniform("uN"), kLoopProbeTrips);
+  glDispatchCompute(1, 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  GLuint done = 0;
+  glGetNamedBufferSubData(count, 0, sizeof done, &done);
+  glDeleteBuffers(1, &count);
+  glUseProgram(0);
+  checkGl("loop-iteration probe");
+  g.limit = done > 0 && done < kLoopProbeTrips ? int(done) : 0;
+  if (g.limit > 0) {
+    const GLuint init[2] = {2u, 0u};
+    glCreateBuffers(1, &g.buffer);
+    glNamedBufferStorage(g.buffer, sizeof init, init, GL_DYNAMIC_STORAGE_BIT);
+    glObjectLabel(GL_BUFFER, g.buffer, -1, "loop guard");
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding::kLoopGuard, g.buffer);
+  }
+  return g.limit;
+}
+
+void resetLoopGuard() {
+  LoopGuard& g = loopGuard();
+  if (g.limit <= 0) return;
+  const GLuint zero = 0;
+  glNamedBufferSubData(g.buffer, sizeof(GLuint), sizeof zero, &zero);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding::kLoopGuard, g.buffer);
+}
+
+std::string loopGuardCut() {
+  LoopGuard& g = loopGuard();
+  if (g.limit <= 0) return "";
+  GLuint cut = 0;
+  // Not counted as a host wait: only drivers that cap loops (llvmpipe) have the guard.
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(g.buffer, sizeof(GLuint), sizeof cut, &cut);
+  return cut > 0 && cut < g.programs.size() ? g.programs[cut] : "";
+}
+
 Shader compileShader(GLenum stage, const std::vector<std::string>& files,
-                     const std::vector<std::string>& defines) {
+                     const std::vector<std::string>& defines, std::string_view label) {
+  const bool guarded =
+      (stage == GL_COMPUTE_SHADER || stage == GL_FRAGMENT_SHADER) && loopIterationLimit() > 0;
   std::string src = "#version 450 core\n";
   for (const BindingDefine& b : kBindingDefines)
     src += "#define " + std::string(b.name) + " " + std::to_string(b.value) + "\n";
   for (const std::string& c : sharedConstantDefines()) src += "#define " + c + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
+  if (guarded) src += "#define main slGuardedMain\n";
   std::string names;
   for (size_t i = 0; i < files.size(); ++i) {
     src += "#line 1 " + std::to_string(i + 1) + "\n";
     src += shaderSource(files[i]);
     src += "\n";
     names += (i ? " + " : "") + files[i];
+  }
+  if (guarded) {
+    LoopGuard& g = loopGuard();
+    g.programs.push_back(label.empty() ? names : std::string(label));
+    src += "#line 1 " + std::to_string(files.size() + 1) + "\n" +
+           loopGuardEpilogue(g.programs.size() - 1);
   }
   if (files.size() > 1) {
     names += " (log lines are 'file-index:line' with ";
@@ -48,15 +157,15 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
 
 Program computeProgram(const std::vector<std::string>& files,
                        const std::vector<std::string>& defines, std::string_view label) {
-  const Shader cs = compileShader(GL_COMPUTE_SHADER, files, defines);
+  const Shader cs = compileShader(GL_COMPUTE_SHADER, files, defines, label);
   return Program({&cs}, label);
 }
 
 Program graphicsProgram(const std::vector<std::string>& vertexFiles,
                         const std::vector<std::string>& fragmentFiles,
                         const std::vector<std::string>& defines, std::string_view label) {
-  const Shader vs = compileShader(GL_VERTEX_SHADER, vertexFiles, defines);
-  const Shader fs = compileShader(GL_FRAGMENT_SHADER, fragmentFiles, defines);
+  const Shader vs = compileShader(GL_VERTEX_SHADER, vertexFiles, defines, label);
+  const Shader fs = compileShader(GL_FRAGMENT_SHADER, fragmentFiles, defines, label);
   return Program({&vs, &fs}, label);
 }
 

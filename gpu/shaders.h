@@ -27,10 +27,24 @@ const std::vector<EmbeddedShader>& embeddedShaders();
 /// The text of gpu/shaders/`file`; throws GpuError when there is no such file. No context.
 std::string_view shaderSource(std::string_view file);
 
-/// Compiles one stage from embedded `files` with `defines` ("NAME" or "NAME VALUE").
-/// Needs a current context.
+/// Compiles one stage from embedded `files` with `defines` ("NAME" or "NAME VALUE"); `label`
+/// names the program in a loop guard's report (default: the files). Needs a current context.
 Shader compileShader(GLenum stage, const std::vector<std::string>& files,
-                     const std::vector<std::string>& defines);
+                     const std::vector<std::string>& defines, std::string_view label = {});
+
+/// How many loop iterations in all the driver lets one shader invocation run (0: no cap). Mesa's
+/// llvmpipe ends every loop of an invocation after 65 535 iterations together (gallivm's
+/// LP_MAX_TGSI_LOOP_ITERATIONS) and the shader runs on with what it has: a view march of
+/// march_step 2e-5 came back 88 % dark with no error (issue 37). Measured once per process by a
+/// probe (one invocation counting to 2^20), not assumed from the renderer's name. Where there is
+/// a cap, every compute and fragment stage is built with a guard that records a program whose
+/// invocation reached it (loopGuardCut()). Needs a current context.
+int loopIterationLimit();
+/// Clears the guard's record (at the start of each render). Nothing where there is no cap.
+void resetLoopGuard();
+/// The label of a program an invocation of which reached the loop cap since the last reset
+/// ("" when none did, or there is no cap). Reads 4 bytes back where there is a cap.
+std::string loopGuardCut();
 
 /// A compute program from embedded files. Needs a current context.
 Program computeProgram(const std::vector<std::string>& files,

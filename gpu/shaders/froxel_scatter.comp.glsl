@@ -66,7 +66,7 @@ void main() {
     vec3 x = uEye + dir * (0.5 * (za + zb) / c);
     float D = uSigmaT > 0.0 ? densityAt(x) : 0.0;
     if (D > 0.0) {
-      float a = exp(-uSigmaT * D * (zb - za) / c);
+      float a = stepTransmittance(uSigmaT * D * (zb - za) / c);
 #ifdef SL_TRANSMITTANCE_MAP
       vec3 S = mapSource(x, -dir);
 #else

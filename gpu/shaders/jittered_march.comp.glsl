@@ -40,7 +40,7 @@ void main() {
     for (int k = 0; k < uSteps && T > uMinTransmittance; ++k) {
       float D = densityAtIndex(u0 + float(k) * du);
       if (!(D > 0.0)) continue;
-      float a = exp(-uSigmaT * D * dt);
+      float a = stepTransmittance(uSigmaT * D * dt);
       L += (T * uAlbedo * (1.0 - a)) * sourceRadiance(uEye + dir * (t0 + (float(k) + o) * dt), -dir);
       T *= a;
     }

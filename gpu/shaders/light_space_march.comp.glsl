@@ -95,7 +95,7 @@ void main() {
     for (int i = 0; i < n; ++i) {
       float D = densityAtIndex(u0 + float(i) * du);
       if (D <= 0.0) continue;
-      float a = exp(-uSigmaT * D * dt);
+      float a = stepTransmittance(uSigmaT * D * dt);
       if (i % stride == first) {
         vec3 p = uEye + dir * (t0 + (float(i) + 0.5) * dt);
         L += (T * uAlbedo * (1.0 - a)) * lsmSource(p, -dir);

@@ -75,7 +75,7 @@ void main() {
     for (int i = 0; i < n && T > uMinTransmittance; ++i) {
       float D = densityAtIndex(u0 + float(i) * du);
       if (D <= 0.0) continue;
-      float a = exp(-uSigmaT * D * dt);
+      float a = stepTransmittance(uSigmaT * D * dt);
 #ifdef SL_PREPASS
       vec3 p = uEye + dir * (t0 + (float(i) + 0.5) * dt);
       vec3 toLight;

@@ -54,7 +54,7 @@ void main() {
 #endif
   float D = densityAtIndex(x * uDensityScale + uDensityOffset);
   if (!(D > 0.0)) discard;
-  float alpha = exp(-uSigmaT * D * dt);
+  float alpha = stepTransmittance(uSigmaT * D * dt);
   vec3 S = textureLod(uRadiance, (x * uRadScale + uRadOffset + 0.5) / vec3(uRadDims), 0.0).rgb;
 #ifdef SL_FACTOR_LIGHTS
   S *= lightFactor(x, -dir);  // the volume holds V = S / A

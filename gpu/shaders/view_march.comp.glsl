@@ -97,7 +97,7 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
 #ifdef SL_FACTOR_LIGHTS
           S *= lightFactor(x, -dir);  // the volume holds V = S / A
 #endif
-          float a = exp(-uSigmaT * D * dt);
+          float a = stepTransmittance(uSigmaT * D * dt);
           L += (T * uAlbedo * (1.0 - a)) * S;
           T *= a;
         }
