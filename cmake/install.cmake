@@ -28,6 +28,8 @@ install(TARGETS ${_libs} EXPORT scatterlabTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab)
 install(TARGETS scatterlab_cli EXPORT scatterlabTargets RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The VDB reader program, where the library looks for it relative to bin/ and the Python package.
+install(TARGETS scatterlab_vdb_reader RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/scatterlab)
 foreach(_m IN LISTS _modules)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_m}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab/${_m}
           FILES_MATCHING PATTERN "*.h" PATTERN "shaders" EXCLUDE)

@@ -1,8 +1,11 @@
 #include "media/vdb.h"
 
+#include <malloc.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <algorithm>
 
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
@@ -10,12 +13,19 @@
 #include <openvdb/tools/Count.h>
 #include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Interpolation.h>
+#include <poll.h>
+#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +36,17 @@
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/sanitizers.h"
+#include "core/work_limits.h"
+
+// Where the VDB reader program lies (media/CMakeLists.txt; defaults for builds without CMake,
+// such as scripts/fuzz.sh, which names it by $SCATTERLAB_VDB_READER).
+#ifndef SCATTERLAB_VDB_READER_NAME
+#define SCATTERLAB_VDB_READER_NAME "scatterlab-vdb-reader"
+#define SCATTERLAB_VDB_READER_FROM_BIN "../libexec/scatterlab"
+#define SCATTERLAB_VDB_READER_FROM_PYTHON "../../../../libexec/scatterlab"
+#define SCATTERLAB_VDB_READER_BUILD ""
+#define SCATTERLAB_VDB_READER_INSTALLED "/usr/local/libexec/scatterlab/scatterlab-vdb-reader"
+#endif
 
 namespace scatterlab {
 
@@ -185,63 +206,135 @@ std::uint64_t addressSpaceInUse() {
   return pages * std::uint64_t(::sysconf(_SC_PAGE_SIZE));
 }
 
+/// The grids of `path` as the reader process sends them: "G" + the grids re-serialised by
+/// OpenVDB's writer, or "E" + an error message.
+std::string readerReply(const std::string& path) {
+  try {
+    std::ifstream in(path, std::ios::binary);
+    const openvdb::GridPtrVecPtr grids = readGridsHere(path, in);
+    std::ostringstream os(std::ios::binary);
+    openvdb::io::Stream stream(os);
+    stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
+    stream.write(*grids);
+    return "G" + std::move(os).str();
+  } catch (const std::bad_alloc&) {
+    return "Ecannot read VDB file '" + path + "': corrupt sizes (more memory than the limit of " +
+           formatBytes(double(memoryLimit())) + ")";
+  } catch (const IoError& e) {
+    return std::string("E") + e.what();
+  } catch (const std::exception& e) {
+    return "Ecannot read VDB file '" + path + "' (corrupt?): " + e.what();
+  }
+}
+
+/// An executable file at `p`.
+bool isExecutable(const std::filesystem::path& p) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+}
+
+/// Where the reader executable is: $SCATTERLAB_VDB_READER, else beside the module holding this
+/// code or the process's executable, or where an installed prefix keeps it relative to those
+/// (bin/ -> libexec/scatterlab/, the Python package -> the same), else the build tree's bin/ and
+/// the configured install path. Empty (with what was tried) when none exists.
+std::string findVdbReader(std::string* tried) {
+  if (const char* env = std::getenv("SCATTERLAB_VDB_READER"); env && *env) {
+    *tried = "$SCATTERLAB_VDB_READER = '" + std::string(env) + "'";
+    return isExecutable(env) ? std::string(env) : "";
+  }
+  std::vector<std::filesystem::path> dirs;
+  std::error_code ec;
+  Dl_info info{};
+  if (::dladdr(reinterpret_cast<void*>(&findVdbReader), &info) && info.dli_fname &&
+      info.dli_fname[0] == '/')
+    dirs.push_back(std::filesystem::canonical(info.dli_fname, ec).parent_path());
+  if (const auto exe = std::filesystem::canonical("/proc/self/exe", ec); !ec)
+    dirs.push_back(exe.parent_path());
+  std::vector<std::filesystem::path> candidates;
+  for (const auto& d : dirs) {
+    candidates.push_back(d / SCATTERLAB_VDB_READER_NAME);
+    candidates.push_back(d / SCATTERLAB_VDB_READER_FROM_BIN / SCATTERLAB_VDB_READER_NAME);
+    candidates.push_back(d / SCATTERLAB_VDB_READER_FROM_PYTHON / SCATTERLAB_VDB_READER_NAME);
+  }
+  candidates.push_back(SCATTERLAB_VDB_READER_BUILD);
+  candidates.push_back(SCATTERLAB_VDB_READER_INSTALLED);
+  for (const auto& c : candidates) {
+    if (c.empty()) continue;
+    if (isExecutable(c)) return c.lexically_normal().string();
+    *tried += (tried->empty() ? "" : ", ") + c.lexically_normal().string();
+  }
+  return "";
+}
+
 /// OpenVDB's reader trusts the file: a bit flip in a compressed block made it overflow a heap
-/// buffer (blosc), others make it allocate gigabytes. So a forked child parses the file,
+/// buffer (blosc), others make it allocate gigabytes. So a separate process parses the file,
 /// under an address-space limit of the memory limit (core/limits.h; not under ASan, whose
 /// shadow memory needs the address space), and sends the grids back re-serialised by OpenVDB's
-/// writer through a pipe; the parent parses only that. A crash, abort or allocation failure
-/// in the child is an IoError naming the file; the process goes on.
-openvdb::GridPtrVecPtr readInChild(const std::string& path) {
+/// writer through a pipe; this process parses only that. A crash, abort or allocation failure
+/// there is an IoError naming the file; this process goes on. The reader is a fresh program
+/// (posix_spawn of scatterlab-vdb-reader, apps/vdb_reader.cpp), not a fork: a forked copy of a
+/// process whose other threads held TBB's or the allocator's locks deadlocked inside OpenVDB's
+/// writer (issue 37: Python with two allocating threads, 5 of 5). It dies with this process
+/// (PR_SET_PDEATHSIG), and an answer that does not come in time kills it.
+openvdb::GridPtrVecPtr readInChild(const std::string& path, std::uint64_t fileBytes) {
+  std::string tried;
+  const std::string reader = findVdbReader(&tried);
+  if (reader.empty())
+    throw IoError("cannot read VDB file '" + path +
+                  "': the VDB reader program 'scatterlab-vdb-reader' was not found (tried " +
+                  tried + "); set SCATTERLAB_VDB_READER to its path");
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0)
     throw IoError("cannot read VDB file '" + path + "': pipe: " + std::strerror(errno));
-  const std::uint64_t limit = memoryLimit() + addressSpaceInUse();
+  const std::uint64_t limit = kAddressSanitizer ? 0 : memoryLimit();
+  const std::string limitArg = std::to_string(limit), parentArg = std::to_string(::getpid());
+  std::vector<char*> argv{const_cast<char*>(reader.c_str()), const_cast<char*>(path.c_str()),
+                          const_cast<char*>(limitArg.c_str()), const_cast<char*>(parentArg.c_str()),
+                          nullptr};
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    const int e = errno;
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw IoError("cannot read VDB file '" + path + "': fork: " + std::strerror(e));
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
-    if (!kAddressSanitizer) {
-      const rlimit rl{rlim_t(limit), rlim_t(limit)};
-      ::setrlimit(RLIMIT_AS, &rl);
-    }
-    std::string out;
-    try {
-      std::ifstream in(path, std::ios::binary);
-      const openvdb::GridPtrVecPtr grids = readGridsHere(path, in);
-      std::ostringstream os(std::ios::binary);
-      openvdb::io::Stream stream(os);
-      stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
-      stream.write(*grids);
-      out = "G" + std::move(os).str();
-    } catch (const std::bad_alloc&) {
-      out = "Ecannot read VDB file '" + path + "': corrupt sizes (more memory than the limit of " +
-            formatBytes(double(memoryLimit())) + ")";
-    } catch (const IoError& e) {
-      out = std::string("E") + e.what();
-    } catch (const std::exception& e) {
-      out = "Ecannot read VDB file '" + path + "' (corrupt?): " + e.what();
-    }
-    _exit(writeAll(fds[1], out.data(), out.size()) ? 0 : 3);
-  }
+  pid_t pid = 0;
+  const int spawned = ::posix_spawn(&pid, reader.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
   ::close(fds[1]);
+  if (spawned != 0) {
+    ::close(fds[0]);
+    throw IoError("cannot read VDB file '" + path + "': cannot start '" + reader +
+                  "': " + std::strerror(spawned));
+  }
+  // The reader parses the whole file before it answers: 2 minutes plus a second per 5 MB.
+  const double timeoutS = 120.0 + double(fileBytes) / 5e6;
+  const auto start = std::chrono::steady_clock::now();
   std::string data;
   char buf[1 << 16];
+  bool timedOut = false;
   for (;;) {
+    const double left =
+        timeoutS - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (left <= 0) {
+      timedOut = true;
+      break;
+    }
+    pollfd pfd{fds[0], POLLIN, 0};
+    const int ready = ::poll(&pfd, 1, int(std::min(left, 1.0) * 1000.0) + 1);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready == 0) continue;
     const ssize_t r = ::read(fds[0], buf, sizeof buf);
-    if (r < 0 && errno == EINTR) continue;
+    if (r < 0 && (errno == EINTR || errno == EAGAIN)) continue;
     if (r <= 0) break;
     data.append(buf, std::size_t(r));
   }
   ::close(fds[0]);
+  if (timedOut) ::kill(pid, SIGKILL);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
+  if (timedOut)
+    throw IoError("cannot read VDB file '" + path + "': the reader process gave no answer in " +
+                  formatCount(timeoutS) + " s and was stopped");
   if (WIFSIGNALED(status))
     throw IoError("cannot read VDB file '" + path + "': OpenVDB's reader crashed on it (signal " +
                   std::to_string(WTERMSIG(status)) + ", " + strsignal(WTERMSIG(status)) +
@@ -265,7 +358,7 @@ openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
   const std::uint64_t size = std::filesystem::file_size(path, ec);
   if (ec) throw IoError("cannot read VDB file '" + path + "': " + ec.message());
   VdbLayoutCheck(path, size).run();
-  return readInChild(path);
+  return readInChild(path, size);
 }
 
 std::string className(openvdb::GridClass c) {
@@ -353,6 +446,32 @@ Vec3d toVdb(const Vec3& v) {
 }
 
 }  // namespace
+
+int vdbReaderMain(int argc, char** argv) {
+  if (argc != 4) {
+    std::fprintf(stderr,
+                 "scatterlab-vdb-reader: a helper of scatterlab, not a tool: it reads a VDB file "
+                 "for the process that started it (usage: PATH MEMORY_LIMIT_BYTES PARENT_PID)\n");
+    return 2;
+  }
+  // Die with the process that asked; if it is gone already, there is no one to answer.
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (std::to_string(::getppid()) != argv[3]) return 4;
+  // One thread and one malloc arena: the address-space limit below then bounds the file's data,
+  // not thread stacks and per-thread arenas the reading does not need.
+  ::mallopt(M_ARENA_MAX, 1);
+  tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+  ensureOpenVdbInitialized();
+  const std::string path = argv[1];
+  const std::uint64_t memory = std::strtoull(argv[2], nullptr, 10);
+  if (memory > 0) {
+    const std::uint64_t limit = memory + addressSpaceInUse();
+    const rlimit rl{rlim_t(limit), rlim_t(limit)};
+    ::setrlimit(RLIMIT_AS, &rl);
+  }
+  const std::string out = readerReply(path);
+  return writeAll(STDOUT_FILENO, out.data(), out.size()) ? 0 : 3;
+}
 
 std::vector<VdbGridInfo> inspectVdb(const std::string& path) {
   const openvdb::GridPtrVecPtr grids = readAllGrids(path);

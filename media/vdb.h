@@ -17,6 +17,13 @@ namespace scatterlab {
 /// Calls openvdb::initialize() once (thread-safe). Every function below calls it itself.
 void ensureOpenVdbInitialized();
 
+/// The VDB reader program's main (apps/vdb_reader.cpp; argv: PATH MEMORY_LIMIT_BYTES PARENT_PID):
+/// reads every grid of PATH and writes them to stdout re-serialised by OpenVDB's writer
+/// ("G" + stream) or an error ("E" + message), under an address-space limit of the memory limit
+/// (0: none), dying with the parent. VDB files are parsed in this program, never in the process
+/// that asked (media/vdb.cpp readInChild): OpenVDB's reader trusts the file.
+int vdbReaderMain(int argc, char** argv);
+
 /// What `scatterlab info FILE.vdb` prints about one grid.
 struct VdbGridInfo {
   std::string name;
@@ -39,10 +46,11 @@ struct VdbGridInfo {
 /// when it is missing, not a VDB, truncated or corrupt.
 ///
 /// Untrusted files: the layout (header, metadata, grid descriptors, offsets) is checked in
-/// this process, then OpenVDB parses the file in a forked child process (under an address-space
-/// limit of the memory limit, core/limits.h) that sends the grids back through a pipe, so a
-/// crash or huge allocation inside OpenVDB's reader is an IoError, not the end of the caller
-/// (docs/reliability.md). The child runs only OpenVDB's stream reader and writer (no TBB).
+/// this process, then OpenVDB parses the file in the reader program scatterlab-vdb-reader
+/// (vdbReaderMain; spawned, not forked, so threads of the caller cannot deadlock it; under an
+/// address-space limit of the memory limit, core/limits.h), which sends the grids back through a
+/// pipe, so a crash or huge allocation inside OpenVDB's reader is an IoError, not the end of the
+/// caller (docs/reliability.md). $SCATTERLAB_VDB_READER names the program where a build moved it.
 std::vector<VdbGridInfo> inspectVdb(const std::string& path);
 
 /// Density from a float (or double, converted) grid of a .vdb file. Sampling goes through

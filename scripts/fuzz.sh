@@ -18,6 +18,8 @@ OUT=build-fuzz
 # is set below it, so a size the limit refuses is an error, not a finding.
 export SCATTERLAB_MEMORY_LIMIT=${SCATTERLAB_MEMORY_LIMIT:-64M}
 CLI=${BUILD:-build}/bin/scatterlab
+# .vdb files are parsed in scatterlab's reader program (media/vdb.h), the build tree's.
+export SCATTERLAB_VDB_READER=${SCATTERLAB_VDB_READER:-$PWD/${BUILD:-build}/bin/scatterlab-vdb-reader}
 mkdir -p "$OUT"
 CXX=${CXX_FUZZ:-clang++-14}
 CCACHE=$(command -v ccache || true)
@@ -39,8 +41,8 @@ declare -A SOURCES=(
     experiment/*.cpp)")
 declare -A LIBS=(
   [fuzz_sog]="-ltbb" [fuzz_vdb]="-lopenvdb -ltbb -lImath-3_1"
-  [fuzz_exr]="-lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng"
-  [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 -lpng -lembree3
+  [fuzz_exr]="-lOpenEXR-3_1 -lOpenEXRCore-3_1 -lIex-3_1 -lImath-3_1 -lpng"
+  [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lOpenEXRCore-3_1 -lIex-3_1 -lImath-3_1 -lpng -lembree3
     -ltinyobjloader -lpthread")
 EXR_INCLUDES=(-I/usr/include/OpenEXR -I/usr/include/Imath)
 tmpseeds=$(mktemp -d)

@@ -182,6 +182,22 @@ TEST(VdbCorruption, OpenVdbsBloscHeapOverflowStaysInTheReaderProcess) {
       << m;
 }
 
+// Issue 37: the reader is a program of its own (scatterlab-vdb-reader), found beside the
+// executable in the build tree; where it cannot be found the error says so and how to point to it.
+TEST(VdbReaderProgram, ReadsBesideTheExecutableAndAMissingOneIsAClearError) {
+  testing::TempDir tmp("vdbreader");
+  const std::string p = smallVdb(tmp);
+  EXPECT_EQ(vdbError(p), "");
+  ::setenv("SCATTERLAB_VDB_READER", "/nonexistent/scatterlab-vdb-reader", 1);
+  const std::string m = vdbError(p);
+  ::unsetenv("SCATTERLAB_VDB_READER");
+  EXPECT_EQ(m, "cannot read VDB file '" + p +
+                   "': the VDB reader program 'scatterlab-vdb-reader' was not found (tried "
+                   "$SCATTERLAB_VDB_READER = '/nonexistent/scatterlab-vdb-reader'); set "
+                   "SCATTERLAB_VDB_READER to its path");
+  EXPECT_EQ(vdbError(p), "");
+}
+
 TEST(VdbCorruption, TruncationsAndLyingLengthsAreCaughtBeforeOpenVdbReads) {
   testing::TempDir tmp("vdbcut");
   const std::string good = slurp(smallVdb(tmp));

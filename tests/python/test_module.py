@@ -364,6 +364,30 @@ print("ok", len(images))
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
         self.assertIn("ok 20", p.stdout)
 
+    def test_vdb_loads_while_other_threads_allocate(self):
+        # Issue 37: the .vdb reader was a fork of this process; with two Python threads
+        # allocating, the forked copy hung in OpenVDB's writer on a lock another thread had held
+        # (5 of 5 runs), the parent waited forever. The reader is now a program of its own.
+        code = """
+import sys, threading
+import scatterlab as sl
+stop = threading.Event()
+def churn():
+    while not stop.is_set():
+        _ = [bytearray(1 << 16) for _ in range(64)]
+threads = [threading.Thread(target=churn) for _ in range(2)]
+for t in threads: t.start()
+for _ in range(5):
+    scene = sl.load_scene(sys.argv[1])
+stop.set()
+for t in threads: t.join()
+print("ok")
+"""
+        p = subprocess.run([sys.executable, "-c", code, os.path.join(SOURCE, "data/scenes/smoke.json")],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("ok", p.stdout)
+
     def test_gil_released_while_rendering(self):
         scene = sl.load_scene(box_scene(width=160, height=120, resolution=48))
         done = threading.Event()
