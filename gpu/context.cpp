@@ -281,7 +281,19 @@ bool sharesWithCaller() {
   return gContext && gShareContext != EGL_NO_CONTEXT;
 }
 
+namespace {
+// The API's GPU work, one thread at a time (CallerContextGuard), and each thread's guard depth.
+std::recursive_mutex gUse;
+thread_local int tGuardDepth = 0;
+}  // namespace
+
+bool glContextCurrent() {
+  return eglGetCurrentContext() != EGL_NO_CONTEXT;
+}
+
 CallerContextGuard::CallerContextGuard() {
+  gUse.lock();
+  outermost_ = tGuardDepth++ == 0;
   display_ = eglGetCurrentDisplay();
   context_ = eglGetCurrentContext();
   draw_ = eglGetCurrentSurface(EGL_DRAW);
@@ -290,25 +302,37 @@ CallerContextGuard::CallerContextGuard() {
   // A foreign context is current: scatterlab's (when it exists) becomes current for the work
   // in this scope, so that no GL call of ours (object deletion included) lands in the caller's.
   foreign_ = context_ != EGL_NO_CONTEXT && (!gContext || context_ != gEgl.ctx);
-  if (foreign_ && gContext) eglMakeCurrent(gEgl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, gEgl.ctx);
+  // Ours, made current on this thread (it may have been left on none by another thread's guard).
+  if (gContext && context_ != gEgl.ctx)
+    eglMakeCurrent(gEgl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, gEgl.ctx);
 }
 
 CallerContextGuard::~CallerContextGuard() {
-  if (!foreign_) return;
-  std::lock_guard<std::mutex> lock(gMutex);
-  const bool oursCurrent = gContext && eglGetCurrentContext() == gEgl.ctx;
-  const bool shared = gShareContext == context_;
-  GLsync done = nullptr;
-  if (oursCurrent) {
-    // The caller's context waits for our commands on the GPU (glWaitSync below), not the host.
-    if (shared) done = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-    glFlush();
+  {
+    std::lock_guard<std::mutex> lock(gMutex);
+    const bool oursCurrent = gContext && eglGetCurrentContext() == gEgl.ctx;
+    if (foreign_) {
+      const bool shared = gShareContext == context_;
+      GLsync done = nullptr;
+      if (oursCurrent) {
+        // The caller's context waits for our commands on the GPU (glWaitSync below), not the
+        // host.
+        if (shared) done = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+        glFlush();
+      }
+      eglMakeCurrent(display_, draw_, read_, context_);
+      if (done) {
+        glWaitSync(done, 0, GL_TIMEOUT_IGNORED);
+        glDeleteSync(done);  // deleted once no wait refers to it
+      }
+    } else if (outermost_ && oursCurrent) {
+      // Free for the next thread; releasing a context flushes its commands (no host wait).
+      glFlush();
+      eglMakeCurrent(gEgl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    }
   }
-  eglMakeCurrent(display_, draw_, read_, context_);
-  if (done) {
-    glWaitSync(done, 0, GL_TIMEOUT_IGNORED);
-    glDeleteSync(done);  // deleted once no wait refers to it
-  }
+  --tGuardDepth;
+  gUse.unlock();
 }
 
 Context* tryContext(std::string* why) {

@@ -62,7 +62,16 @@ bool sharesWithCaller();
 /// object deletion included, lands in the caller's context) and the caller's (display,
 /// surfaces, context) is current again at the end; with a shared context, the caller's context
 /// then waits on the GPU for scatterlab's commands (a fence and glWaitSync: no host wait), so
-/// it sees the image. Does nothing when no context or scatterlab's is current on entry.
+/// it sees the image.
+///
+/// Threads (issue 37): an EGL context is current on one thread at a time, and a Renderer made in
+/// one thread and rendered in another aborted the process (libepoxy: no current context, while
+/// a GpuFrame deleted its objects). So the guards of all threads take one process-wide lock for
+/// their scope (GPU work through the API is serialised), scatterlab's context is made current on
+/// the guard's thread at the start, and the outermost guard of a thread leaves it current on no
+/// thread at the end (after a glFlush), free for the next thread. Never throws: where the context
+/// cannot be made current (another thread uses gpu/ directly), context() says so in a GpuError,
+/// and GL objects that die without a current context are left to the driver, not deleted.
 class CallerContextGuard {
  public:
   CallerContextGuard();
@@ -76,6 +85,10 @@ class CallerContextGuard {
   void* draw_ = nullptr;
   void* read_ = nullptr;
   bool foreign_ = false;
+  bool outermost_ = false;
 };
+
+/// Whether a GL context is current on this thread (GL calls without one abort in libepoxy).
+bool glContextCurrent();
 
 }  // namespace scatterlab::gpu

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "gpu/context.h"
 
 namespace scatterlab::gpu {
 
@@ -116,12 +117,18 @@ RecyclingScope::RecyclingScope() {
 RecyclingScope::~RecyclingScope() {
   Recycler& r = recycler();
   if (--r.scopes > 0) return;
-  for (const auto& [key, id] : r.free) deleteObject(key, id);
+  // Without a current context the names are left to the driver (see GlObject's destructor).
+  if (detail::contextCurrent())
+    for (const auto& [key, id] : r.free) deleteObject(key, id);
   r.free.clear();
   r.freeBytes = 0;
 }
 
 namespace detail {
+
+bool contextCurrent() {
+  return glContextCurrent();
+}
 
 GLuint takeRecycled(const ObjectKey& key) {
   Recycler& r = recycler();

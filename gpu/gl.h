@@ -84,6 +84,8 @@ bool recycle(const ObjectKey& key, GLuint id);
 /// Counts an object created / deleted by a wrapper.
 void countCreated();
 void countDeleted();
+/// Whether a GL context is current on this thread.
+bool contextCurrent();
 }  // namespace detail
 
 /// Base of the wrappers: owns one GL name, deleted through Deleter.
@@ -93,7 +95,9 @@ class GlObject {
   GlObject() = default;
   explicit GlObject(GLuint id) : id_(id) {}
   ~GlObject() {
-    if (id_) {
+    // Without a current context (an error unwinding on a thread the context is not current on)
+    // the name is left to the driver: a GL call there would abort the process (libepoxy).
+    if (id_ && detail::contextCurrent()) {
       Deleter{}(id_);
       detail::countDeleted();
     }

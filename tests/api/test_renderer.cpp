@@ -196,6 +196,10 @@ TEST(Renderer, ImageStaysOnTheGpuWhenAsked) {
   EXPECT_EQ(dev.deviceImage->height, 24);
   EXPECT_FALSE(dev.stats.extra["gpu_ms"].contains("read-back")) << dev.stats.extra["gpu_ms"];
   std::vector<float> rgba(32 * 24 * 4);
+  // A render leaves scatterlab's context current on no thread (free for the next thread to
+  // render, issue 37): a caller reading its texture without a shared context makes it current.
+  EXPECT_FALSE(gpu::glContextCurrent());
+  gpu::context();
   glGetTextureImage(dev.deviceImage->texture, 0, GL_RGBA, GL_FLOAT,
                     GLsizei(rgba.size() * sizeof(float)), rgba.data());
   double worst = 0.0;

@@ -388,6 +388,52 @@ print("ok")
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
         self.assertIn("ok", p.stdout)
 
+    def test_gpu_renderer_used_from_other_threads(self):
+        # Issue 37: a GPU Renderer made in one thread and rendered from another aborted the
+        # interpreter (libepoxy: no current EGL context; 3 of 3). The context now moves to the
+        # thread that renders; two Renderers in two threads take turns. In a child interpreter
+        # so that an abort fails this test instead of ending the suite.
+        code = """
+import json, sys, threading
+import numpy as np
+import scatterlab as sl
+doc = json.loads(sys.argv[1])
+try:
+    made = sl.Renderer(sl.load_scene(doc), method="per-voxel", backend="gpu")
+except sl.GpuError as e:
+    print("skip", e)
+    sys.exit(0)
+cpu, _ = sl.render(sl.load_scene(doc), method="per-voxel", backend="cpu")
+results, errors = [], []
+def render(r, n):
+    try:
+        for _ in range(n):
+            results.append(r.render()[0])
+    except Exception as e:
+        errors.append(repr(e))
+t = threading.Thread(target=render, args=(made, 2)); t.start(); t.join()
+render(made, 1)
+other = sl.Renderer(sl.load_scene(doc), method="per-voxel", backend="gpu")
+ts = [threading.Thread(target=render, args=(r, 3)) for r in (made, other)]
+for t in ts: t.start()
+for t in ts: t.join()
+assert not errors, errors
+assert len(results) == 9, len(results)
+worst = max(float(np.abs(img - cpu).max() / cpu.max()) for img in results)
+print("ok", len(results), worst)
+"""
+        p = subprocess.run([sys.executable, "-c", code, json.dumps(box_scene())],
+                           capture_output=True, text=True, timeout=300)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        if p.stdout.startswith("skip"):
+            self.skipTest(p.stdout.strip())
+        self.assertIn("ok 9", p.stdout)
+        # The GPU images are the CPU's: measured on llvmpipe 3.4e-7 of the peak (float
+        # rounding), x1.5 = 5.1e-7, doubled for hardware exp (per-voxel's end-to-end relative L2
+        # was 2x llvmpipe's on the H200, docs/RESULTS.md); not yet run on a GPU.
+        worst = float(p.stdout.split()[-1])
+        self.assertLess(worst, 1.0e-6)
+
     def test_gil_released_while_rendering(self):
         scene = sl.load_scene(box_scene(width=160, height=120, resolution=48))
         done = threading.Event()
