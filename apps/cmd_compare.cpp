@@ -1,6 +1,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
@@ -40,7 +41,19 @@ Action addCompare(CLI::App& app) {
   c->add_option("--diff", o->diff,
                 "Also write a PNG of |image - reference| (per channel), scaled so the largest "
                 "difference is white unless --diff-scale is given");
-  c->add_option("--diff-scale", o->diffScale, "Multiplier for --diff (default: 1/max)");
+  c->add_option("--diff-scale", o->diffScale, "Multiplier for --diff (default: 1/max)")
+      ->check(
+          // Issue 37: nan, -inf, -1, 0 and '' fell back to the default silently, inf saturated
+          // the map: a finite number > 0 (in single precision), or the option left out.
+          [](const std::string& v) -> std::string {
+            char* end = nullptr;
+            const double k = std::strtod(v.c_str(), &end);
+            return end != v.c_str() && *end == 0 && std::isfinite(k) && float(k) > 0 &&
+                           k <= double(std::numeric_limits<float>::max())
+                       ? ""
+                       : "expected a finite multiplier > 0, got '" + v + "'";
+          },
+          "S > 0");
   CLI::Option* scene = c->add_option(
       "--scene", o->scene,
       "The scene the images show (JSON): its camera and point/spot lights give the masked "

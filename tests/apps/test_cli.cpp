@@ -242,6 +242,10 @@ TEST_F(Cli, CompareBadInputs) {
   expectFails("--scene " + scene + " --mask-radius -1", 2,
               {"--mask-radius", "expected a number of pixels >= 0, got '-1'"});
   expectFails("--scene " + scene + " --mask-radius wide", 2, {"--mask-radius", "'wide'"});
+  // Issue 37: these fell back to the default scale silently (inf: a saturated map).
+  for (const char* bad : {"nan", "-inf", "inf", "-1", "0", "1e-300", "''"})
+    expectFails(std::string("--diff-scale ") + bad, 2,
+                {"--diff-scale: expected a finite multiplier > 0, got '"});
   // Bad input: exit 1, one message naming it, no --diff output.
   expectFails("--scene " + out("nope.json"), 1, {"nope.json", "does not exist"});
   expectFails("--scene " + scene + " --set camera.width=20", 1,
