@@ -37,7 +37,17 @@ int printSummary(const ExperimentResult& r, const std::string& out, bool shard) 
         r.runs.size(), r.rendered, r.resumed, r.failed, out.c_str(),
         r.plotsNote.empty() ? ", plots/" : "");
   if (r.failed) {
-    std::fprintf(stderr, "error: %d run(s) failed; see %s/log.txt\n", r.failed, out.c_str());
+    // The tool's prefix and the first failure's reason (issue 37: only a count and the log).
+    const RunRecord* first = nullptr;
+    for (const RunRecord& run : r.runs)
+      if (run.status == "failed") {
+        first = &run;
+        break;
+      }
+    std::fprintf(stderr, "scatterlab: error: %d run%s failed%s%s%s; see %s/log.txt\n", r.failed,
+                 r.failed == 1 ? "" : "s", first ? " (the first, " : "",
+                 first ? (first->id + ": " + first->error).c_str() : "", first ? ")" : "",
+                 out.c_str());
     return 1;
   }
   return 0;
@@ -85,6 +95,14 @@ Action addExperiment(CLI::App& app) {
   m->add_flag("--no-progress", o->noProgress, "No progress bar");
   c->require_subcommand(0, 1);
   return [o, m]() {
+    // Every --set is checked before any work (issue 37: '=' was accepted, every run failed).
+    for (const std::string& a : o->sets) {
+      try {
+        checkOverrideSyntax(a);
+      } catch (const ConfigError& e) {
+        throw UsageError(e.what());
+      }
+    }
     ExperimentOptions opt;
     opt.overrides = o->sets;
     opt.log = o->quiet ? nullptr : stderr;

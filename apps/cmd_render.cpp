@@ -21,7 +21,8 @@ namespace scatterlab::cli {
 
 namespace {
 
-/// "A:B" (inclusive, 0 <= A <= B, at most 100000 frames) -> {A, B}; nullopt when malformed.
+/// "A:B" (inclusive, 0 <= A <= B <= 999999, at most 100000 frames) -> {A, B}; nullopt when
+/// malformed.
 std::optional<std::pair<int, int>> parseFrames(const std::string& text) {
   const auto colon = text.find(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) return std::nullopt;
@@ -145,10 +146,13 @@ Action addRender(CLI::App& app) {
                 "same numbering for --png, --stats and the VDBs)")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
+            // Issue 37: the bound on frame numbers is said too (2147483646:2147483647 is two
+            // frames, refused for its numbers, not its count).
             return parseFrames(v) ? ""
                                   : "'" + v +
                                         "' is not a frame range: expected A:B with integers "
-                                        "0 <= A <= B (at most 100000 frames), e.g. 0:47";
+                                        "0 <= A <= B <= 999999 and at most 100000 frames, "
+                                        "e.g. 0:47";
           },
           "A:B"));
   c->add_option("--fps", o->fps, "Frames per unit of scene time for --frames (default 24)")
@@ -185,10 +189,16 @@ Action addRender(CLI::App& app) {
       throw UsageError("--method: unknown method '" + o->method + "'" +
                        didYouMean(o->method, methods().names()) + "; allowed: " + list);
     }
-    for (const std::string& a : o->sets)
+    for (const std::string& a : o->sets) {
       if (a.find('=') == std::string::npos)
         throw UsageError("--set '" + a + "': expected KEY=VALUE, e.g. --set " +
                          (a.empty() ? std::string("camera.width") : a) + "=640");
+      try {
+        checkOverrideSyntax(a);  // '=', '.x=1', 'a..b=1': a usage error, exit 2 (issue 37)
+      } catch (const ConfigError& e) {
+        throw UsageError(e.what());
+      }
+    }
     if (o->depth && imageFormat(o->out) != "exr")
       throw UsageError("--depth writes a Z channel, which needs an .exr output (-o " + o->out +
                        ")");

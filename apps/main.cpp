@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <string>
 #include <new>
+#include <string>
 #include <vector>
 
 #include "api/scatterlab.h"

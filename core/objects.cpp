@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
+#include <sstream>
+#include <string>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -151,6 +153,29 @@ class CheckedMaterialReader : public tinyobj::MaterialReader {
         4.0 * double(size));
     std::ifstream in(file);
     if (!in) throw IoError("'" + key_ + "': cannot open '" + file.string() + "'");
+    // tinyobjloader reads "inf" or "nan" as 0 without a word: every Kd must be three finite
+    // numbers (their range is checked with the material's name, loadMesh).
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      std::istringstream words(line);
+      std::string tag;
+      if (!(words >> tag) || tag != "Kd") continue;
+      std::string v;
+      int count = 0;
+      bool finite = true;
+      while (words >> v) {
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        finite = finite && end != v.c_str() && *end == 0 && std::isfinite(x);
+        ++count;
+      }
+      if (!finite || count != 3)
+        throw IoError("'" + key_ + "': '" + file.string() + "' line " + std::to_string(n) + ": '" +
+                      line.substr(0, 80) +
+                      "' is not Kd and three finite numbers (an albedo in [0, 1] per channel)");
+    }
+    in.clear();
+    in.seekg(0);
     tinyobj::LoadMtl(matMap, materials, &in, warn, err);
     return true;
   }
@@ -234,6 +259,20 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
                         /*triangulate=*/true, /*default_vcols_fallback=*/false) ||
       !err.empty())
     throw IoError(key + ": malformed OBJ '" + file.string() + "': " + err);
+  // A material's Kd is the triangles' albedo unless the scene gives one: outside [0, 1] or not
+  // finite it is an error naming the material, as a scene albedo would be (issue 37: it was
+  // clamped silently).
+  if (!albedo)
+    for (const tinyobj::material_t& mat : materials)
+      for (int c = 0; c < 3; ++c)
+        if (!(mat.diffuse[c] >= 0.0f && mat.diffuse[c] <= 1.0f)) {
+          char kd[96];
+          std::snprintf(kd, sizeof kd, "%g %g %g", double(mat.diffuse[0]), double(mat.diffuse[1]),
+                        double(mat.diffuse[2]));
+          throw IoError(key + ": material '" + mat.name + "' of '" + file.string() + "' has Kd " +
+                        kd + ", outside [0, 1] per channel (an albedo); fix the .mtl or give '" +
+                        p.keyPath("albedo") + "'");
+        }
   Mesh mesh;
   const std::size_t nv = attrib.vertices.size() / 3;
   mesh.vertices.reserve(nv);
@@ -282,9 +321,8 @@ Mesh loadMesh(Params& p, const std::filesystem::path& baseDir, std::optional<Vec
         const int mat = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
         Vec3 kd(0.8f);
         if (mat >= 0 && std::size_t(mat) < materials.size()) {
-          kd = glm::clamp(
-              Vec3(materials[mat].diffuse[0], materials[mat].diffuse[1], materials[mat].diffuse[2]),
-              Vec3(0.0f), Vec3(1.0f));
+          kd =
+              Vec3(materials[mat].diffuse[0], materials[mat].diffuse[1], materials[mat].diffuse[2]);
           anyMaterial = true;
         }
         perTri.push_back(kd);

@@ -372,19 +372,27 @@ Interval stepRange(float diagonal) {
   return Interval{double(diagonal) * 1e-6, double(diagonal), true, false};
 }
 
-void applyOverride(Json& doc, const std::string& assignment) {
+void checkOverrideSyntax(const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
     throw ConfigError("--set '" + assignment + "': expected key.path=VALUE");
+  const std::string path = assignment.substr(0, eq);
+  if (std::count(path.begin(), path.end(), '.') >= kMaxJsonDepth)
+    throw ConfigError("--set '" + path.substr(0, 60) + "...': key path deeper than " +
+                      std::to_string(kMaxJsonDepth) + " levels");
+  if (path.front() == '.' || path.back() == '.' || path.find("..") != std::string::npos)
+    throw ConfigError("--set '" + assignment + "': empty key in path");
+}
+
+void applyOverride(Json& doc, const std::string& assignment) {
+  checkOverrideSyntax(assignment);
+  const auto eq = assignment.find('=');
   const std::string path = assignment.substr(0, eq), text = assignment.substr(eq + 1);
   // JSON where it parses; text that is not JSON at all is a string; JSON that breaks a rule
   // (too deep, duplicate key, 1e400) is an error rather than silently a string.
   const Json value = Json::accept(text, /*ignore_comments=*/true)
                          ? parseJson(text, "--set " + describeValue(Json(assignment)))
                          : Json(text);
-  if (std::count(path.begin(), path.end(), '.') >= kMaxJsonDepth)
-    throw ConfigError("--set '" + path.substr(0, 60) + "...': key path deeper than " +
-                      std::to_string(kMaxJsonDepth) + " levels");
   Json* node = &doc;
   std::string walked;
   size_t start = 0;

@@ -160,6 +160,12 @@ Json parseJson(std::string_view text, const std::string& origin);
 /// ConfigError naming the path.
 void applyOverride(Json& doc, const std::string& assignment);
 
+/// The part of applyOverride's checks that needs no document: KEY=VALUE with a key path of
+/// non-empty parts, at most kMaxJsonDepth deep. Throws ConfigError naming the assignment; callers
+/// check every override before any work (issue 37: `--set '='` and sweep axes "." or "render."
+/// were accepted, and every render then failed).
+void checkOverrideSyntax(const std::string& assignment);
+
 /// Short printable form of a JSON value for messages (truncated).
 std::string describeValue(const Json& v);
 

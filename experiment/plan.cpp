@@ -47,6 +47,19 @@ std::vector<std::string> stringList(Params& p, const std::string& key) {
   return out;
 }
 
+/// A "set" list: strings, each a KEY=VALUE override (checked before any run: issue 37).
+std::vector<std::string> overrideList(Params& p, const std::string& key) {
+  std::vector<std::string> out = stringList(p, key);
+  for (const std::string& a : out) {
+    try {
+      checkOverrideSyntax(a);
+    } catch (const ConfigError& e) {
+      p.fail(key, e.what());
+    }
+  }
+  return out;
+}
+
 bool safeName(const std::string& s) {
   if (s.empty()) return false;
   for (char c : s)
@@ -73,7 +86,7 @@ MethodSpec parseMethod(const Json& j, const std::string& path, const std::string
     m.method = r.string("method");
     m.name = r.string("name", m.method);
     m.backend = r.choice("backend", {"cpu", "gpu", "auto"}, defBackend);
-    m.sets = stringList(r, "set");
+    m.sets = overrideList(r, "set");
     if (r.has("paper_rel_error"))
       m.paper["rel_error"] = r.number("paper_rel_error", std::nullopt, Interval::atLeast(0));
     else
@@ -151,6 +164,15 @@ Axis parseAxis(Params& ax, const std::string& name) {
     throw ConfigError("'" + key + "': unknown sweep axis '" + name +
                       "'; allowed: resolution, samples, lights, image_size, epsilon, or a dotted "
                       "scene key such as render.sampler.radius_scale");
+  if (!named.count(name)) {
+    try {
+      checkOverrideSyntax(name + "=0");
+    } catch (const ConfigError&) {
+      throw ConfigError("'" + key + "': sweep axis '" + name +
+                        "' is not a dotted scene key (an empty part, or deeper than " +
+                        std::to_string(kMaxJsonDepth) + " levels)");
+    }
+  }
   Axis a;
   a.name = name;
   for (const Json& v : vals)
@@ -179,7 +201,7 @@ void parseScenes(Params& p, const fs::path& base, ExperimentPlan& plan) {
       sc.file = resolve(s.string("file"));
       sc.name = s.string("name", fileSafe(fs::path(sc.file).stem().string()));
       checkName(s, "name", sc.name);
-      sc.sets = stringList(s, "set");
+      sc.sets = overrideList(s, "set");
       s.finish();
       plan.scenes.push_back(sc);
     }
@@ -486,7 +508,7 @@ ExperimentPlan parseExperiment(const std::string& configPath,
   plan.title = p.string("title", std::string("experiment"));
   plan.description = p.string("description", std::string());
   parseScenes(p, fs::path(configPath).parent_path(), plan);
-  std::vector<std::string> globalSets = stringList(p, "set");
+  std::vector<std::string> globalSets = overrideList(p, "set");
   globalSets.insert(globalSets.end(), overrides.begin(), overrides.end());
   const std::string defBackend = p.choice("backend", {"cpu", "gpu", "auto"}, std::string("cpu"));
   plan.exposure = p.real("exposure", 0.0);

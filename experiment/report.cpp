@@ -34,11 +34,32 @@ std::string machineLine(const Json& m) {
   return s;
 }
 
+namespace {
+
+/// `text` with HTML's special characters as entities: Markdown passes raw HTML through, and a
+/// config's title or description must read as text (issue 37; report.html escapes them too).
+std::string markdownText(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else
+      out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
 void reportHeader(std::ostream& md, const ExperimentResult& res, const std::string& configPath,
                   const std::string& memoryMethod) {
   const ExperimentPlan& plan = res.plan;
-  md << "# " << plan.title << "\n\n";
-  if (!plan.description.empty()) md << plan.description << "\n\n";
+  md << "# " << markdownText(plan.title) << "\n\n";
+  if (!plan.description.empty()) md << markdownText(plan.description) << "\n\n";
   md << "Config `" << configPath << "`; " << res.runs.size() << " runs (" << res.rendered
      << " rendered now, " << res.resumed << " resumed from `runs/`, " << res.failed
      << " failed). Written " << nowIso() << ".\n\n"

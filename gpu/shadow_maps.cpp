@@ -38,7 +38,15 @@ ShadowMaps::ShadowMaps(const Scene& scene, const ObjectGeometry& geometry,
   }
   const std::vector<ShadowLayer>& layers = proj.layers;
   layers_ = int(layers.size());
-  maps_ = Texture::make2DArray(GL_RG32F, res, res, std::max(layers_, 1), "shadow maps");
+  try {
+    maps_ = Texture::make2DArray(GL_RG32F, res, res, std::max(layers_, 1), "shadow maps");
+  } catch (const GpuError& e) {
+    // The keys behind the size (issue 37: the error named only the texture).
+    throw GpuError("'render.shadow_map.resolution' = " + std::to_string(res) + " with " +
+                   std::to_string(layers_) + " shadow-map layer" + (layers_ == 1 ? "" : "s") +
+                   " (one per directional or spot light, six per point light): " + e.what() +
+                   "; use a lower resolution or fewer lights");
+  }
   lights_ = Buffer(records.size() * sizeof(GpuShadowLight), records.data(), 0, "shadow lights");
   std::vector<glm::mat4> matrices;
   for (const ShadowLayer& l : layers) matrices.push_back(l.viewProj);

@@ -15,6 +15,8 @@
 #include <optional>
 
 #include "api/scatterlab.h"
+#include "core/image.h"
+#include "core/limits.h"
 #include "core/quick_look.h"
 #include "core/stages.h"
 
@@ -126,6 +128,11 @@ Image arrayImage(const py::array& any, const char* what, bool rgba = false) {
     throw ConfigError(std::string(what) + ": expected a float array (linear radiance) of shape " +
                       shapes + ", got dtype " + py::str(any.dtype()).cast<std::string>() +
                       "; convert an 8-bit image to linear floats first");
+  if (any.ndim() == 3)
+    checkMemory(what,
+                "a float copy of an array of " + std::to_string(any.shape(1)) + "x" +
+                    std::to_string(any.shape(0)) + " pixels",
+                double(any.size()) * sizeof(float));
   const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(any);
   std::string shape;
   for (py::ssize_t d = 0; d < any.ndim(); ++d)
@@ -134,6 +141,12 @@ Image arrayImage(const py::array& any, const char* what, bool rgba = false) {
       a.shape(1) < 1)
     throw ConfigError(std::string(what) + ": expected a float array of shape " + shapes +
                       ", got shape (" + shape + ")");
+  // The copy is bounded by SCATTERLAB_MEMORY_LIMIT as every image scatterlab makes (issue 37:
+  // 6.2 GB resident under a 512 MiB limit).
+  checkMemory(
+      what,
+      "an image of " + std::to_string(a.shape(1)) + "x" + std::to_string(a.shape(0)) + " pixels",
+      double(a.shape(0)) * double(a.shape(1)) * double(sizeof(Vec3) + sizeof(float)));
   Image img(int(a.shape(1)), int(a.shape(0)));
   const float* in = a.data();
   const size_t channels = size_t(a.shape(2)), n = img.pixels().size();
@@ -142,6 +155,28 @@ Image arrayImage(const py::array& any, const char* what, bool rgba = false) {
     img.pixels()[i] = Vec3(in[channels * i], in[channels * i + 1], in[channels * i + 2]);
     if (channels == 4) img.alpha()[i] = in[channels * i + 3];
   }
+  return img;
+}
+
+/// `path` as a file name, or ConfigError: a Python str may hold NUL, which the C library reads
+/// as its end (issue 37: write_exr(img, 'new\0.exr') wrote 'new', past the extension check).
+const std::string& checkedPath(const std::string& path, const char* what) {
+  if (path.find('\0') != std::string::npos) {
+    std::string shown = path.substr(0, 200);
+    for (char& c : shown)
+      if (c == '\0') c = '?';
+    throw ConfigError(std::string(what) + ": the path '" + shown +
+                      "' holds a NUL character ('?' here); a file name cannot");
+  }
+  return path;
+}
+
+/// An image to write holds only finite values, or ConfigError (issue 37: NaN and inf pixels,
+/// float64 1e300 among them, were written silently).
+const Image& finiteImage(const Image& img, const char* what) {
+  if (const NonFiniteValues bad = countNonFinite(img, /*withAlpha=*/true); bad.any())
+    throw ConfigError(std::string(what) + ": the image has " + bad.describe() +
+                      " (float32 after conversion); nothing was written");
   return img;
 }
 
@@ -251,12 +286,14 @@ PYBIND11_MODULE(_core, m) {
           Json doc = toJson(source);
           for (const auto& a : sets) applyOverride(doc, a);
           const std::filesystem::path base =
-              baseDir.is_none() ? std::filesystem::current_path()
-                                : std::filesystem::path(py::str(baseDir).cast<std::string>());
+              baseDir.is_none()
+                  ? std::filesystem::current_path()
+                  : std::filesystem::path(
+                        checkedPath(py::str(baseDir).cast<std::string>(), "load_scene: base_dir"));
           py::gil_scoped_release unlocked;
           return makeScene(std::move(doc), base, "");
         }
-        const std::string path = py::str(source);
+        const std::string path = checkedPath(py::str(source), "load_scene");
         py::gil_scoped_release unlocked;
         Json doc = readSceneDocument(path);
         for (const auto& a : sets) applyOverride(doc, a);
@@ -377,14 +414,16 @@ PYBIND11_MODULE(_core, m) {
 
   m.def(
       "read_exr",
-      [](const std::string& path, bool rgba) { return imageArray(readExr(path), rgba); },
+      [](const std::string& path, bool rgba) {
+        return imageArray(readExr(checkedPath(path, "read_exr")), rgba);
+      },
       py::arg("path"), py::arg("rgba") = false,
       "R, G, B of an OpenEXR file as float32 (H, W, 3); with rgba=True (H, W, 4) with A");
   m.def(
       "write_exr",
       [](const py::array& img, const std::string& path) {
-        requireExtension(path, ".exr", "write_exr");
-        writeExr(arrayImage(img, "write_exr: image", true), path);
+        requireExtension(checkedPath(path, "write_exr"), ".exr", "write_exr");
+        writeExr(finiteImage(arrayImage(img, "write_exr: image", true), "write_exr"), path);
       },
       py::arg("image"), py::arg("path"),
       "Writes a float (H, W, 3) array, or (H, W, 4) with A, as OpenEXR (path: *.exr)");
@@ -392,9 +431,10 @@ PYBIND11_MODULE(_core, m) {
       "write_png",
       [](const py::array& img, const std::string& path, float exposure,
          const std::string& tonemap) {
-        requireExtension(path, ".png", "write_png");
+        requireExtension(checkedPath(path, "write_png"), ".png", "write_png");
         const ToneCurve curve = parseToneCurve(tonemap, "tonemap");
         Image rgb = arrayImage(img, "write_png: image", true);
+        finiteImage(rgb, "write_png");
         rgb.alpha().clear();  // the PNG is the RGB (premultiplied: the fog over black)
         writePng(rgb, path, exposure, curve);
       },

@@ -374,6 +374,27 @@ TEST_F(Cli, ExperimentShardAndMergeBadInputs) {
           " --list");
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("bogus"), std::string::npos) << r.output;
+  // Issue 37: overrides and sweep axes are checked before anything runs (they were accepted by
+  // --list, and every run failed): a --set is a usage error (2), a config's a config error (1).
+  for (const char* bad : {"=", "=1", ".x=1", "camera..width=8", "camera.=8"}) {
+    r = run("experiment " + cfg + " --list --set '" + bad + "'");
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find("scatterlab: error: --set '"), std::string::npos) << r.output;
+    r = run("render " + write("s.json", tinyScene().dump()) + " -o " + out("x.exr") + " --set '" +
+            bad + "'");
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    EXPECT_FALSE(fs::exists(out("x.exr")));
+  }
+  for (const char* axis : {".", "render.", ".render"}) {
+    r = run("experiment " +
+            write("axis.json", Json{{"scene", "scene.json"},
+                                    {"methods", {"per-voxel"}},
+                                    {"sweeps", {{{"name", "a"}, {"axes", {{axis, {1, 2}}}}}}}}
+                                   .dump()) +
+            " --list");
+    EXPECT_EQ(r.code, 1) << axis << ": " << r.output;
+    EXPECT_NE(r.output.find("is not a dotted scene key"), std::string::npos) << r.output;
+  }
   // Shard 2 of 2 has no run (one run, one reference group): its manifest still completes the set.
   r = run("experiment " + cfg + " -o " + out("s2") + " --shard 2/2 -q --no-plots");
   ASSERT_EQ(r.code, 0) << r.output;

@@ -79,6 +79,46 @@ TEST(SceneObjects, HitsAndOcclusion) {
   EXPECT_FALSE(s.objects->occluded(Vec3(0), Vec3(1, 0, 0), 0.0f, kInfinity));
 }
 
+// Issue 37: a .mtl Kd outside [0, 1] (or not a number) was clamped silently; it is an error
+// naming the material, unless the scene gives the albedo itself.
+TEST(SceneObjects, MaterialAlbedoOutsideTheUnitRangeIsAnError) {
+  scatterlab::testing::TempDir dir("objects_kd");
+  std::ofstream(dir.file("t.obj"))
+      << "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n";
+  for (const char* kd : {"1.5 0.2 0.2", "-0.1 0.2 0.2"}) {
+    std::ofstream(dir.file("t.mtl")) << "newmtl hot\nKd " << kd << "\n";
+    Json doc = baseDoc();
+    doc["objects"] = Json::array({{{"type", "mesh"}, {"file", dir.file("t.obj")}}});
+    try {
+      scatterlab::testing::sceneFromJson(doc);
+      ADD_FAILURE() << "Kd " << kd << " was accepted";
+    } catch (const IoError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("'objects[0].file': material 'hot' of '"), std::string::npos) << m;
+      EXPECT_NE(m.find("outside [0, 1] per channel (an albedo); fix the .mtl or give "
+                       "'objects[0].albedo'"),
+                std::string::npos)
+          << m;
+    }
+    doc["objects"][0]["albedo"] = 0.5;  // the scene's albedo: the Kd is not used
+    EXPECT_NO_THROW(scatterlab::testing::sceneFromJson(doc)) << kd;
+  }
+  // Not numbers at all (tinyobjloader read them as 0): an error naming the line, albedo or not.
+  for (const char* kd : {"inf 0 0", "nan 0.5 0.5", "0.5 0.5"}) {
+    std::ofstream(dir.file("t.mtl")) << "newmtl hot\nKd " << kd << "\n";
+    Json doc = baseDoc();
+    doc["objects"] = Json::array({{{"type", "mesh"}, {"file", dir.file("t.obj")}}});
+    try {
+      scatterlab::testing::sceneFromJson(doc);
+      ADD_FAILURE() << "Kd " << kd << " was accepted";
+    } catch (const IoError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("t.mtl' line 2: 'Kd "), std::string::npos) << m;
+      EXPECT_NE(m.find("' is not Kd and three finite numbers"), std::string::npos) << m;
+    }
+  }
+}
+
 TEST(SceneObjects, ShapesHandTheSurfacesToRasterisers) {
   // shapes() (the GPU's input) holds what the BVH was built from, by object index: a sphere's
   // centre and radius, a box's 8 corners and 12 triangles, a mesh's transformed vertices and

@@ -248,6 +248,7 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
     // The image, read after the frame, equals a fresh render's (which reads its image back).
     const RenderResult::DeviceImage& d = *res.deviceImage;
     std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
+    gpu::context();  // a Renderer call leaves scatterlab's context current on no thread
     glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
                       rgba.data());
     gpu::checkGl("device image read-back");

@@ -287,6 +287,53 @@ class Errors(unittest.TestCase):
         self.assertTrue(issubclass(sl.Error, RuntimeError))
 
 
+class Hardening(unittest.TestCase):
+    # Issue 37's Python classes: paths with NUL, non-finite pixels, the memory limit.
+    def test_paths_with_nul_are_refused(self):
+        img = np.zeros((2, 3, 3), np.float32)
+        with tempfile.TemporaryDirectory() as d:
+            for call, what in ((lambda p: sl.write_exr(img, p), "write_exr"),
+                               (lambda p: sl.write_png(img, p), "write_png"),
+                               (lambda p: sl.read_exr(p), "read_exr"),
+                               (lambda p: sl.load_scene(p), "load_scene")):
+                p = os.path.join(d, "new\0.exr" if what != "write_png" else "new\0.png")
+                with self.assertRaisesRegex(sl.ConfigError, what + ": the path .* holds a NUL"):
+                    call(p)
+            self.assertEqual(os.listdir(d), [])
+
+    def test_non_finite_pixels_are_not_written(self):
+        with tempfile.TemporaryDirectory() as d:
+            for bad in (np.nan, np.inf, 1e300):
+                img = np.zeros((2, 3, 3), np.float64)
+                img[1, 2, 0] = bad
+                with self.assertRaisesRegex(sl.ConfigError, r"write_exr: the image has 1 non-finite"):
+                    sl.write_exr(img, os.path.join(d, "a.exr"))
+                with self.assertRaisesRegex(sl.ConfigError, r"write_png: the image has 1 non-finite"):
+                    sl.write_png(img, os.path.join(d, "a.png"))
+            self.assertEqual(os.listdir(d), [])
+
+    def test_images_from_arrays_respect_the_memory_limit(self):
+        code = """
+import numpy as np, scatterlab as sl
+big = np.zeros((4000, 4000, 3), np.float32)
+for call in (lambda: sl.write_exr(big, "/nonexistent/x.exr"), lambda: sl.compare(big, big)):
+    try:
+        call()
+        print("no error")
+    except sl.LimitError as e:
+        print("limit", e)
+"""
+        env = dict(os.environ, SCATTERLAB_MEMORY_LIMIT="64M")
+        p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                           timeout=120)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        lines = p.stdout.splitlines()
+        self.assertEqual(len(lines), 2, p.stdout)
+        for line in lines:
+            self.assertTrue(line.startswith("limit"), line)
+            self.assertIn("of 4000x4000 pixels needs about", line)
+
+
 class RendererObject(unittest.TestCase):
     def test_moving_light_reuses_density_and_equals_a_fresh_render(self):
         scene = sl.load_scene(box_scene(resolution=24))
