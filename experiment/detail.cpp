@@ -11,7 +11,10 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <sstream>
+#include <tuple>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -37,7 +40,32 @@ std::string readText(const std::string& path) {
   return s.str();
 }
 
-std::string sceneHash(const std::string& sceneFile) {
+namespace {
+
+/// stableHash of a file's bytes, cached while its size and modification time stay the same.
+std::string fileHash(const fs::path& file) {
+  static std::mutex mutex;
+  static std::map<std::string, std::tuple<std::uintmax_t, fs::file_time_type, std::string>> cache;
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(file, ec);
+  const fs::file_time_type time = ec ? fs::file_time_type() : fs::last_write_time(file, ec);
+  if (!ec) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto it = cache.find(file.string());
+    if (it != cache.end() && std::get<0>(it->second) == size && std::get<1>(it->second) == time)
+      return std::get<2>(it->second);
+  }
+  const std::string h = stableHash(readText(file.string()));
+  if (!ec) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    cache[file.string()] = {size, time, h};
+  }
+  return h;
+}
+
+}  // namespace
+
+std::string sceneHash(const std::string& sceneFile, const std::vector<std::string>& sets) {
   const std::string text = readText(sceneFile);
   std::string key = text;
   Json doc;
@@ -45,6 +73,13 @@ std::string sceneHash(const std::string& sceneFile) {
     doc = parseJson(text, "'" + sceneFile + "'");
   } catch (const Error&) {
     return stableHash(key);  // the run reports the error
+  }
+  // The run's overrides, where they apply (one that does not is the run's error to report).
+  for (const std::string& a : sets) {
+    try {
+      applyOverride(doc, a);
+    } catch (const Error&) {
+    }
   }
   const fs::path dir = fs::path(sceneFile).parent_path();
   std::vector<std::string> names;
@@ -65,14 +100,13 @@ std::string sceneHash(const std::string& sceneFile) {
     const fs::path file = fs::path(name).is_absolute() ? fs::path(name) : dir / name;
     std::error_code ec;
     const bool regular = fs::is_regular_file(file, ec);
-    const std::string bytes = regular ? readText(file.string()) : std::string();
     key += '\n';
     key += name;
     key += ':';
-    key += regular ? stableHash(bytes) : std::string("missing");
+    key += regular ? fileHash(file) : std::string("missing");
     // An OBJ's material libraries, relative to the OBJ.
     if (!regular || file.extension() != ".obj") continue;
-    std::istringstream lines(bytes);
+    std::istringstream lines(readText(file.string()));
     for (std::string line; std::getline(lines, line);) {
       if (line.rfind("mtllib", 0) != 0 || line.size() < 7 || !std::isspace((unsigned char)line[6]))
         continue;

@@ -29,8 +29,11 @@ std::string readText(const std::string& path);
 /// The hash of a scene file and of every file it names (medium.density.file and .frames,
 /// objects[i].file and each OBJ's `mtllib`s, resolved from the scene's directory): a run or
 /// reference keyed by it is redone when a mesh, volume or model changes, not only the JSON.
-/// A file that cannot be read hashes as "missing" (the run itself then reports it).
-std::string sceneHash(const std::string& sceneFile);
+/// A file that cannot be read hashes as "missing" (the run itself then reports it). With
+/// `sets` (a run's overrides), the files are those of the scene after them: a file named only
+/// through a sweep's or a method's `set` is hashed too (issue 37: editing it resumed stale
+/// results, 258 % off). File hashes are cached by path, size and modification time.
+std::string sceneHash(const std::string& sceneFile, const std::vector<std::string>& sets = {});
 
 /// Writes atomically, so that an interrupted run never leaves a truncated table or record.
 void writeText(const std::string& path, const std::string& text);

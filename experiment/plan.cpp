@@ -420,6 +420,16 @@ void expandRuns(ExperimentPlan& plan, const std::vector<std::string>& globalSets
           std::find(sw.scenes.begin(), sw.scenes.end(), sc.name) == sw.scenes.end())
         continue;
       const std::string sceneHash = detail::sceneHash(sc.file);
+      // A run whose overrides name a file (medium.density.file, objects.0.file, ...) hashes
+      // the scene as they leave it.
+      const auto namesFiles = [](const std::vector<std::string>& sets) {
+        for (const std::string& a : sets) {
+          const std::string path = a.substr(0, a.find('='));
+          if (path.find("file") != std::string::npos || path.find("frames") != std::string::npos)
+            return true;
+        }
+        return false;
+      };
       for (std::size_t pt = 0; pt < points; ++pt) {
         std::vector<const AxisValue*> vals(sw.axes.size());
         std::size_t rest = pt;
@@ -434,7 +444,8 @@ void expandRuns(ExperimentPlan& plan, const std::vector<std::string>& globalSets
           RunSpec r = makeRun(plan, sw, sc, pt, vals, m, globalSets);
           if (!ids.insert(r.id).second)
             throw ConfigError("two runs get the id '" + r.id + "'; give methods distinct names");
-          r.hash = runHash(plan, r, sceneHash);
+          r.hash =
+              runHash(plan, r, namesFiles(r.sets) ? detail::sceneHash(sc.file, r.sets) : sceneHash);
           plan.runs.push_back(std::move(r));
         }
       }

@@ -13,7 +13,9 @@ namespace scatterlab::detail {
 namespace fs = std::filesystem;
 
 Reference& ReferenceCache::get(const RunSpec& r, const MethodSpec& ref, const RenderResult* seed) {
-  Json key = {{"scene", sceneHash(r.sceneSpec->file)},
+  std::vector<std::string> sets = r.refSets;  // the files the reference's scene names
+  sets.insert(sets.end(), ref.sets.begin(), ref.sets.end());
+  Json key = {{"scene", sceneHash(r.sceneSpec->file, sets)},
               {"sets", r.refSets},
               {"lights", r.refLights ? Json(*r.refLights) : Json()},
               {"method", ref.method},

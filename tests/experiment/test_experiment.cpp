@@ -651,6 +651,39 @@ TEST_F(ExperimentTest, EditingAFileTheSceneNamesRedoesTheRunsAndTheReference) {
   EXPECT_EQ(references, 3);
 }
 
+// Issue 37: a file named only through a method's `set` was not hashed; editing it resumed the
+// old result (258 % off, exit 0).
+TEST_F(ExperimentTest, EditingAFileNamedOnlyByAMethodsSetRedoesTheRun) {
+  const auto mesh = [&](double y) {
+    std::ofstream(dir / "set.obj")
+        << "v 0 " << y << " 0\nv 1 " << y << " 0\nv 0.5 " << y << " 1\nf 1 2 3\n";
+  };
+  mesh(0.3);
+  Json scene = Json::parse(std::ifstream(dir / "scene.json"));
+  scene["objects"] = Json::array({{{"type", "mesh"}, {"file", "tri.obj"}}});
+  writeJson(dir / "scene.json", scene);
+  std::ofstream(dir / "tri.obj") << "v 0 0.2 0\nv 1 0.2 0\nv 0.5 0.2 1\nf 1 2 3\n";
+  Json c = tinyConfig();
+  c.erase("sweeps");
+  c["methods"] =
+      Json::array({{{"name", "pv"}, {"method", "per-voxel"}, {"set", {"objects.0.file=set.obj"}}}});
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const auto runIt = [&] {
+    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  };
+  const ExperimentResult first = runIt();
+  ASSERT_EQ(first.runs.size(), 1u);
+  ASSERT_EQ(first.runs[0].status, "ok") << first.runs[0].error;
+  EXPECT_EQ(runIt().resumed, 1);  // nothing changed: resumed
+  mesh(0.7);                      // the file only the method's set names moves
+  const ExperimentResult moved = runIt();
+  EXPECT_EQ(moved.resumed, 0);
+  EXPECT_NE(moved.runs[0].hash, first.runs[0].hash);
+}
+
 }  // namespace scatterlab
 
 namespace scatterlab {
