@@ -34,6 +34,9 @@ std::string percent(double v, const char* format) {
 }
 
 std::string readText(const std::string& path) {
+  // Only regular files: opening a FIFO would block (issue 37); the caller reports what is wrong.
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return "";
   std::ifstream f(path, std::ios::binary);
   std::ostringstream s;
   s << f.rdbuf();

@@ -148,7 +148,15 @@ class Runner {
   /// A finished run with the same configuration hash is not rendered again: true when the
   /// record in DIR/runs/ was taken.
   bool resume(const RunSpec& r, const std::string& recordPath) {
-    if (!fs::exists(recordPath)) return false;
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(recordPath, ec))) return false;
+    if (!fs::is_regular_file(recordPath, ec)) {
+      // A FIFO there blocked the resume forever (issue 37), and a record written to it would
+      // block too (outputs write through special files): not a record, removed and redone.
+      out_.log(r.id + ": runs/" + r.id + ".json is not a regular file; removed, redoing it");
+      fs::remove(recordPath, ec);
+      return false;
+    }
     try {
       RunRecord old = RunRecord::fromJson(readJsonFile(recordPath));
       if (old.hash == r.hash && old.status == "ok") {

@@ -2,6 +2,7 @@
 // end, resume, failing runs, light replication.
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -649,6 +650,29 @@ TEST_F(ExperimentTest, EditingAFileTheSceneNamesRedoesTheRunsAndTheReference) {
   for (const auto& e : fs::directory_iterator(dir / "out" / "references"))
     references += e.path().extension() == ".exr";
   EXPECT_EQ(references, 3);
+}
+
+// Issue 37: a FIFO in place of runs/ID.json blocked the resume forever; it is redone instead.
+TEST_F(ExperimentTest, ARecordThatIsAFifoIsRedoneNotWaitedOn) {
+  Json c = tinyConfig();
+  c.erase("sweeps");
+  c["methods"] = {"per-voxel"};
+  writeJson(dir / "exp.json", c);
+  ExperimentOptions opt;
+  opt.progress = false;
+  opt.plots = false;
+  const auto runIt = [&] {
+    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  };
+  const ExperimentResult first = runIt();
+  ASSERT_EQ(first.runs.size(), 1u);
+  const fs::path record = dir / "out" / "runs" / (first.runs[0].id + ".json");
+  fs::remove(record);
+  ASSERT_EQ(::mkfifo(record.c_str(), 0600), 0);
+  const ExperimentResult again = runIt();
+  EXPECT_EQ(again.resumed, 0);
+  EXPECT_EQ(again.rendered, 1);
+  EXPECT_TRUE(fs::is_regular_file(record));  // the new record replaced the FIFO
 }
 
 // Issue 37: a file named only through a method's `set` was not hashed; editing it resumed the
