@@ -21,11 +21,27 @@ float readTime(Params& p) {
   return p.real("time", 0.0);
 }
 
+/// `value` + `rate`·`time` in double, or a ConfigError naming the keys when it leaves single
+/// precision (issue 37: it became inf, then an empty medium, black with exit 0, or NaN).
+float densityAtTime(Params& p, const char* key, float value, float rate, float time) {
+  const double v = double(value) + double(rate) * double(time);
+  if (!(std::abs(v) <= double(FLT_MAX))) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "'%s' + rate x time = %g at time %g is beyond single precision; use a smaller "
+                  "rate or an earlier time",
+                  key, v, double(time));
+    p.fail("rate", buf);
+  }
+  return float(v);
+}
+
 std::unique_ptr<DensityModel> makeUniform(Params& p, const LoadContext&) {
   const float value = p.real("value", std::nullopt, kNonNegative);
   const float rate = p.real("rate", 0.0);  // density change per unit time
   const float time = readTime(p);
-  return std::make_unique<UniformDensity>(std::max(0.0f, value + rate * time));
+  return std::make_unique<UniformDensity>(
+      std::max(0.0f, densityAtTime(p, "value", value, rate, time)));
 }
 
 std::unique_ptr<DensityModel> makeGaussians(Params& p, const LoadContext&) {
@@ -62,8 +78,10 @@ std::unique_ptr<DensityModel> makeHeight(Params& p, const LoadContext& ctx) {
   const float rate = p.real("rate", 0.0);  // added to both ends per unit time
   const float time = readTime(p);
   if (!ctx.mediumBounds) p.fail("type", "'height' needs medium.bounds");
-  return std::make_unique<HeightDensity>(*ctx.mediumBounds, std::max(0.0f, bottom + rate * time),
-                                         std::max(0.0f, top + rate * time));
+  const float bottomNow = densityAtTime(p, "bottom", bottom, rate, time);
+  const float topNow = densityAtTime(p, "top", top, rate, time);
+  return std::make_unique<HeightDensity>(*ctx.mediumBounds, std::max(0.0f, bottomNow),
+                                         std::max(0.0f, topNow));
 }
 
 std::unique_ptr<DensityModel> makeDustyRoom(Params& p, const LoadContext& ctx) {
@@ -76,6 +94,16 @@ std::unique_ptr<DensityModel> makeDustyRoom(Params& p, const LoadContext& ctx) {
   d.seed = std::uint32_t(p.integer("seed", 0, Interval::closed(0, 4294967295.0)));
   d.time = readTime(p);
   d.wind = p.vec3("wind", d.wind);
+  // The noise is looked up at x − wind·time: beyond the coordinate bound it is NaN or inf.
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(double(d.wind[a]) * double(d.time)) <= kMaxCoordinate)) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "wind x time = %g at time %g is beyond the coordinate bound of +-%g (the "
+                    "noise would be NaN); use a smaller wind or an earlier time",
+                    double(d.wind[a]) * double(d.time), double(d.time), kMaxCoordinate);
+      p.fail("wind", buf);
+    }
   if (!ctx.mediumBounds)
     p.fail("type", "'dusty-room' needs medium.bounds (floor = min.y, ceiling = max.y)");
   return std::make_unique<DustyRoomDensity>(*ctx.mediumBounds, d);

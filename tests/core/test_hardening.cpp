@@ -437,3 +437,26 @@ TEST(BinaryInputs, ExrTiledHalfFilesReadEveryPixelInPlace) {
       EXPECT_EQ(img.alpha()[std::size_t(y) * w + x], 0.5f);
     }
 }
+
+// Issue 37: a procedural density whose value + rate·time leaves single precision rendered an
+// empty medium (black, exit 0) or NaN; the time at which it overflows is refused, naming keys.
+TEST(FiniteValues, DensityThatOverflowsAtTheSceneTimeNamesTheRate) {
+  std::string m =
+      sceneError({R"(medium.density={"type": "uniform", "value": 1, "rate": 1e38, "time": 100})"});
+  EXPECT_TRUE(has(m,
+                  "'medium.density.rate': 'value' + rate x time = 1e+40 at time 100 is "
+                  "beyond single precision"))
+      << m;
+  m = sceneError({R"(medium.density={"type": "height", "bottom": 0, "top": 1, "rate": -1e38,
+                     "time": 10})"});
+  EXPECT_TRUE(has(m, "'medium.density.rate': 'bottom' + rate x time = -1e+39")) << m;
+  m = sceneError({R"(medium.density={"type": "dusty-room", "wind": [0, 1e30, 0], "time": 1e10})"});
+  EXPECT_TRUE(has(m,
+                  "'medium.density.wind': wind x time = 1e+40 at time 1e+10 is beyond the "
+                  "coordinate bound"))
+      << m;
+  // At a time where it stays finite, the same densities load.
+  EXPECT_EQ(
+      sceneError({R"(medium.density={"type": "uniform", "value": 1, "rate": 1e38, "time": 1})"}),
+      "");
+}
