@@ -1,5 +1,6 @@
 #include "core/image.h"
 
+#include <IexBaseExc.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -12,6 +13,7 @@
 #include <png.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -34,14 +36,35 @@ class ExrOStream : public Imf::OStream {
  public:
   ExrOStream(std::ostream& os, const std::string& name) : Imf::OStream(name.c_str()), os_(os) {}
   void write(const char c[], int n) override {
-    if (!os_.write(c, n)) throw IoError("write failed");
+    errno = 0;
+    if (!os_.write(c, n)) failed("write");
+    pos_ += uint64_t(n);
   }
-  uint64_t tellp() override { return uint64_t(os_.tellp()); }
+  // Never throws: ~OutputFile calls it outside its try block. After a failed write (a full
+  // disk) the stream has no position, and OpenEXR said "Cannot determine current file
+  // position" (issue 37); the position is kept here, and the write's own error is reported.
+  uint64_t tellp() override {
+    const std::streampos p = os_.tellp();
+    return p < 0 ? pos_ : uint64_t(p);
+  }
   void seekp(uint64_t pos) override {
-    if (!os_.seekp(std::streamoff(pos))) throw IoError("seek failed");
+    errno = 0;
+    if (!os_.seekp(std::streamoff(pos))) failed("seek");
+    pos_ = pos;
   }
 
  private:
+  // Iex::IoExc, not IoError: OpenEXR's destructors (which write the offset table) catch only
+  // Iex's exceptions, and any other one escaping them ends the process (std::terminate). The
+  // writer's catch turns it into an IoError naming the file.
+  [[noreturn]] static void failed(const char* what) {
+    const int e = errno;
+    throw Iex::IoExc(std::string(what) + " failed" +
+                     (e == ENOSPC ? std::string(": no space left on the device")
+                      : e != 0    ? ": " + std::string(std::strerror(e))
+                                  : std::string()));
+  }
+  uint64_t pos_ = 0;
   std::ostream& os_;
 };
 

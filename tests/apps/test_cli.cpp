@@ -534,6 +534,34 @@ TEST_F(Cli, FullDiskDuringVdbExportExits1AndLeavesNothing) {
     EXPECT_EQ(e.path().filename().string(), "scene.json") << "left behind: " << e.path();
 }
 
+// Issue 37: the EXR writer's message on a full disk was OpenEXR's "Cannot determine current
+// file position"; it names the write's failure now (EFBIG here, ENOSPC on a full disk), and
+// nothing is left behind.
+TEST_F(Cli, FullDiskDuringExrWriteNamesTheWriteFailure) {
+  Json doc = tinyScene();
+  doc["camera"]["width"] = 160;
+  doc["camera"]["height"] = 120;
+  const std::string scene = writeScene(doc);
+  const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f 8; exec " +
+                          std::string(SCATTERLAB_CLI) + " render " + scene + " -q -o " +
+                          out("o.exr") + " --method per-voxel\" 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), p)) output.append(buf.data(), n);
+  const int status = pclose(p);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+  // Where the limit is hit decides the wording: inside OpenEXR ("cannot write EXR '...': ...
+  // write failed: File too large") or at the final flush ("cannot write '...': File too large").
+  EXPECT_NE(output.find("cannot write"), std::string::npos) << output;
+  EXPECT_NE(output.find(out("o.exr") + "'"), std::string::npos) << output;
+  EXPECT_NE(output.find("File too large"), std::string::npos) << output;
+  EXPECT_EQ(output.find("Cannot determine"), std::string::npos) << output;
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string(), "scene.json") << "left behind: " << e.path();
+}
+
 TEST_F(Cli, InfoCountsNonFinitePixelsInsteadOfPrintingNanMeans) {
   scatterlab::Image img(2, 1);
   img.pixels()[0] = scatterlab::Vec3(1.0f, 2.0f, 3.0f);
