@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <vector>
 
 #include "core/error.h"
 #include "core/grid.h"
+#include "core/objects.h"
 #include "core/scene.h"
 
 namespace scatterlab {
@@ -61,7 +63,29 @@ Json quickLookScene(const std::string& path, const std::string& densityType) {
   const float r = 0.5f * glm::length(box.extent());
   const float fov = 40.0f;
   const float distance = r / std::sin(glm::radians(fov / 2)) * 1.05f;
-  doc["medium"]["sigma_t"] = chooseSigmaT(*medium.density, box);
+  // What the file makes impossible is said of the file, not of keys the user never wrote
+  // (issue 37: denormal densities gave "'medium.sigma_t': value 2.14e+45 is beyond single
+  // precision", a box of +-1e15 "'camera.position' ...").
+  const auto g = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return std::string(b);
+  };
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(double(c[a])) + double(distance) <= kMaxCoordinate / 10))
+      throw IoError("'" + path + "': its volume spans [" + g(box.min.x) + ", " + g(box.max.x) +
+                    "] x [" + g(box.min.y) + ", " + g(box.max.y) + "] x [" + g(box.min.z) + ", " +
+                    g(box.max.z) +
+                    "] in world units: too far out or too large to frame (a camera must stay "
+                    "within +-1e14); write a scene for it with its own camera");
+  const double sigmaT = chooseSigmaT(*medium.density, box);
+  if (!(sigmaT <= 1e30))
+    throw IoError("'" + path +
+                  "': its densities are too small to render (the thick columns' "
+                  "optical depth is " +
+                  g(kTargetDepth / sigmaT) + " per unit of sigma_t, which would need sigma_t " +
+                  g(sigmaT) + "); scale the grid's values, or write a scene with medium.sigma_t");
+  doc["medium"]["sigma_t"] = sigmaT;
   doc["lights"] = Json::array({{{"type", "directional"},
                                 {"direction", vec(glm::normalize(Vec3(0.45f, -1.0f, 0.6f)))},
                                 {"irradiance", {12.0, 11.2, 10.0}}}});

@@ -89,6 +89,19 @@ TEST_F(QuickLook, TheDensityScaleOfTheFileDoesNotChangeThePicture) {
   EXPECT_LT(e.relL2, 1.2e-7);
 }
 
+// Issue 37: odd but valid volumes were refused naming keys the user never set ('medium.sigma_t'
+// for denormal densities, 'camera.position' for a box of +-1e15); the message names the file.
+TEST_F(QuickLook, WhatTheFileMakesImpossibleIsSaidOfTheFile) {
+  const std::string faint = volume("faint.vdb", 1e-44);
+  RunResult r = run("render " + faint + " -q -o " + out("f.exr") + " --backend cpu");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("'" + faint + "': its densities are too small to render"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("medium.sigma_t'"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out("f.exr")));
+}
+
 TEST_F(QuickLook, ANonVolumeFileKeepsItsMessage) {
   const std::string png = write("image.png", "not a png at all");
   const RunResult r = run("render " + png + " -q -o " + out("o.exr"));
