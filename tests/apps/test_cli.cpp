@@ -510,23 +510,32 @@ TEST_F(Cli, ThreadsBoundsTheWorkerPool) {
   }
 }
 
-TEST_F(Cli, FullDiskDuringVdbExportExits1AndLeavesNothing) {
-  // bash's `ulimit -f 64` (KiB) fails write(2) with EFBIG like a full disk fails it with ENOSPC;
-  // SIGXFSZ is ignored so the write fails instead of killing the process. The density volume
-  // (64^3 floats) exceeds the limit; the EXR and stats would fit.
-  Json doc = tinyScene();
-  doc["medium"]["resolution"] = 64;
-  doc["render"]["method"] = "per-voxel";
-  const std::string scene = writeScene(doc);
-  const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f 64; exec " +
-                          std::string(SCATTERLAB_CLI) + " render " + scene + " -q -o " +
-                          out("o.exr") + " --stats " + out("s.json") + " --density-vdb " +
-                          out("d.vdb") + "\" 2>&1";
+namespace {
+
+/// Runs the tool with `args` under a file-size limit of `kib` KiB (bash's `ulimit -f`), which
+/// fails write(2) with EFBIG as a full disk fails it with ENOSPC; SIGXFSZ is ignored so that the
+/// write fails instead of killing the process. Returns the exit status and the output.
+std::pair<int, std::string> runWithFileSizeLimit(int kib, const std::string& args) {
+  const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f " + std::to_string(kib) + "; exec " +
+                          std::string(SCATTERLAB_CLI) + " " + args + "\" 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string output;
   std::array<char, 4096> buf;
   while (size_t n = fread(buf.data(), 1, buf.size(), p)) output.append(buf.data(), n);
-  const int status = pclose(p);
+  return {pclose(p), output};
+}
+
+}  // namespace
+
+TEST_F(Cli, FullDiskDuringVdbExportExits1AndLeavesNothing) {
+  // The density volume (64^3 floats) exceeds the limit of 64 KiB; the EXR and stats would fit.
+  Json doc = tinyScene();
+  doc["medium"]["resolution"] = 64;
+  doc["render"]["method"] = "per-voxel";
+  const std::string scene = writeScene(doc);
+  const auto [status, output] =
+      runWithFileSizeLimit(64, "render " + scene + " -q -o " + out("o.exr") + " --stats " +
+                                   out("s.json") + " --density-vdb " + out("d.vdb"));
   ASSERT_TRUE(WIFEXITED(status)) << output;
   EXPECT_EQ(WEXITSTATUS(status), 1) << output;
   EXPECT_NE(output.find("cannot write '" + out("d.vdb") + "'"), std::string::npos) << output;
@@ -542,14 +551,8 @@ TEST_F(Cli, FullDiskDuringExrWriteNamesTheWriteFailure) {
   doc["camera"]["width"] = 160;
   doc["camera"]["height"] = 120;
   const std::string scene = writeScene(doc);
-  const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f 8; exec " +
-                          std::string(SCATTERLAB_CLI) + " render " + scene + " -q -o " +
-                          out("o.exr") + " --method per-voxel\" 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) output.append(buf.data(), n);
-  const int status = pclose(p);
+  const auto [status, output] =
+      runWithFileSizeLimit(8, "render " + scene + " -q -o " + out("o.exr") + " --method per-voxel");
   ASSERT_TRUE(WIFEXITED(status)) << output;
   EXPECT_EQ(WEXITSTATUS(status), 1) << output;
   // Where the limit is hit decides the wording: inside OpenEXR ("cannot write EXR '...': ...
