@@ -73,6 +73,21 @@ std::vector<std::string> assignments(const py::object& overrides) {
   return out;
 }
 
+/// The GIL released for a scope, as py::gil_scoped_release, but with a destructor that may
+/// throw: a daemon thread still rendering when the interpreter exits is ended by pthread_exit
+/// while it takes the GIL back (a forced unwind), and unwinding through a noexcept destructor
+/// printed "terminate called without an active exception" and aborted the process (issue 37).
+class GilReleased {
+ public:
+  GilReleased() : state_(PyEval_SaveThread()) {}
+  ~GilReleased() noexcept(false) { PyEval_RestoreThread(state_); }
+  GilReleased(const GilReleased&) = delete;
+  GilReleased& operator=(const GilReleased&) = delete;
+
+ private:
+  PyThreadState* state_;
+};
+
 /// A scene document, validated: what load_scene returns and Renderer/render take.
 struct PyScene {
   Json doc;
@@ -290,11 +305,11 @@ PYBIND11_MODULE(_core, m) {
                   ? std::filesystem::current_path()
                   : std::filesystem::path(
                         checkedPath(py::str(baseDir).cast<std::string>(), "load_scene: base_dir"));
-          py::gil_scoped_release unlocked;
+          GilReleased unlocked;
           return makeScene(std::move(doc), base, "");
         }
         const std::string path = checkedPath(py::str(source), "load_scene");
-        py::gil_scoped_release unlocked;
+        GilReleased unlocked;
         Json doc = readSceneDocument(path);
         for (const auto& a : sets) applyOverride(doc, a);
         return makeScene(std::move(doc), std::filesystem::path(path).parent_path(), path);
@@ -311,7 +326,7 @@ PYBIND11_MODULE(_core, m) {
          bool rgba) {
         RenderResult r;
         {
-          py::gil_scoped_release unlocked;
+          GilReleased unlocked;
           Renderer renderer(s.doc, s.baseDir, method, backend);
           r = renderer.render(nullptr);
         }
@@ -328,7 +343,7 @@ PYBIND11_MODULE(_core, m) {
                          "share between threads: calls take a lock, so set() or time= during "
                          "render() waits for that render to finish")
       .def(py::init([](const PyScene& s, const std::string& method, const std::string& backend) {
-             py::gil_scoped_release unlocked;
+             GilReleased unlocked;
              return std::make_unique<PyRenderer>(Renderer(s.doc, s.baseDir, method, backend));
            }),
            py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto")
@@ -336,7 +351,7 @@ PYBIND11_MODULE(_core, m) {
           "set",
           [](PyRenderer& r, const std::string& key, const py::object& value) {
             const std::string a = key + "=" + dumps(value, "Renderer.set('" + key + "')");
-            py::gil_scoped_release unlocked;
+            GilReleased unlocked;
             const std::lock_guard<std::mutex> hold(r.lock);
             r.renderer.set(a);
           },
@@ -349,7 +364,7 @@ PYBIND11_MODULE(_core, m) {
             if (assignment.find('=') == std::string::npos)
               throw ConfigError("Renderer.set('" + assignment +
                                 "'): expected set(key, value) or set('key=VALUE')");
-            py::gil_scoped_release unlocked;
+            GilReleased unlocked;
             const std::lock_guard<std::mutex> hold(r.lock);
             r.renderer.set(assignment);
           },
@@ -357,12 +372,12 @@ PYBIND11_MODULE(_core, m) {
       .def_property(
           "time",
           [](PyRenderer& r) {
-            py::gil_scoped_release unlocked;
+            GilReleased unlocked;
             const std::lock_guard<std::mutex> hold(r.lock);
             return r.renderer.time();
           },
           [](PyRenderer& r, double t) {
-            py::gil_scoped_release unlocked;
+            GilReleased unlocked;
             const std::lock_guard<std::mutex> hold(r.lock);
             r.renderer.setTime(t);
           },
@@ -373,7 +388,7 @@ PYBIND11_MODULE(_core, m) {
             RenderResult res;
             Box bounds;
             {
-              py::gil_scoped_release unlocked;
+              GilReleased unlocked;
               const std::lock_guard<std::mutex> hold(r.lock);
               res = r.renderer.render(nullptr);
               bounds = r.renderer.scene().medium.bounds;
@@ -388,7 +403,7 @@ PYBIND11_MODULE(_core, m) {
       [](const PyScene& s) {
         DensityGrid g;
         {
-          py::gil_scoped_release unlocked;
+          GilReleased unlocked;
           g = buildDensityVolume(s.parsed);
         }
         return densityArray(g);
@@ -403,7 +418,7 @@ PYBIND11_MODULE(_core, m) {
                     ref = arrayImage(b, "compare: reference");
         ImageError e;
         {
-          py::gil_scoped_release unlocked;
+          GilReleased unlocked;
           e = compareImages(img, ref);
         }
         return errorDict(e);

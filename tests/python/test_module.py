@@ -334,6 +334,33 @@ for call in (lambda: sl.write_exr(big, "/nonexistent/x.exr"), lambda: sl.compare
             self.assertIn("of 4000x4000 pixels needs about", line)
 
 
+class InterpreterExit(unittest.TestCase):
+    def test_daemon_threads_rendering_at_exit_do_not_abort(self):
+        # Issue 37: daemon threads still rendering when the interpreter exits printed "terminate
+        # called without an active exception" and aborted (pthread_exit's forced unwind through
+        # the GIL guard's noexcept destructor).
+        code = """
+import json, sys, threading, time
+import scatterlab as sl
+doc = json.loads(sys.argv[1])
+s = sl.load_scene(doc)
+started = threading.Event()
+def work():
+    while True:
+        started.set()
+        sl.render(s, method="exact", backend="cpu")
+for _ in range(2):
+    threading.Thread(target=work, daemon=True).start()
+started.wait()
+time.sleep(0.3)
+print("exiting")
+"""
+        p = subprocess.run([sys.executable, "-c", code, json.dumps(box_scene(width=160, height=120))],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertNotIn("terminate", p.stderr)
+
+
 class RendererObject(unittest.TestCase):
     def test_moving_light_reuses_density_and_equals_a_fresh_render(self):
         scene = sl.load_scene(box_scene(resolution=24))
