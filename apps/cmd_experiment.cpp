@@ -95,14 +95,7 @@ Action addExperiment(CLI::App& app) {
   m->add_flag("--no-progress", o->noProgress, "No progress bar");
   c->require_subcommand(0, 1);
   return [o, m]() {
-    // Every --set is checked before any work (issue 37: '=' was accepted, every run failed).
-    for (const std::string& a : o->sets) {
-      try {
-        checkOverrideSyntax(a);
-      } catch (const ConfigError& e) {
-        throw UsageError(e.what());
-      }
-    }
+    checkSetOptions(o->sets);
     ExperimentOptions opt;
     opt.overrides = o->sets;
     opt.log = o->quiet ? nullptr : stderr;

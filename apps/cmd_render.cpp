@@ -189,16 +189,7 @@ Action addRender(CLI::App& app) {
       throw UsageError("--method: unknown method '" + o->method + "'" +
                        didYouMean(o->method, methods().names()) + "; allowed: " + list);
     }
-    for (const std::string& a : o->sets) {
-      if (a.find('=') == std::string::npos)
-        throw UsageError("--set '" + a + "': expected KEY=VALUE, e.g. --set " +
-                         (a.empty() ? std::string("camera.width") : a) + "=640");
-      try {
-        checkOverrideSyntax(a);  // '=', '.x=1', 'a..b=1': a usage error, exit 2 (issue 37)
-      } catch (const ConfigError& e) {
-        throw UsageError(e.what());
-      }
-    }
+    checkSetOptions(o->sets);
     if (o->depth && imageFormat(o->out) != "exr")
       throw UsageError("--depth writes a Z channel, which needs an .exr output (-o " + o->out +
                        ")");

@@ -11,6 +11,9 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.h"
+#include "core/params.h"
+
 namespace scatterlab::cli {
 
 using Action = std::function<int()>;
@@ -56,6 +59,21 @@ inline void checkDistinctPaths(const std::vector<std::pair<std::string, std::str
         throw UsageError(otherOption + " and " + option + " name the same file '" + path +
                          "'; give each output its own path");
     seen.emplace_back(option, canon);
+  }
+}
+
+/// Throws UsageError unless every `--set` is KEY=VALUE with a well-formed key path
+/// (checkOverrideSyntax), before any work (issue 37: '=' was accepted, then every render failed).
+inline void checkSetOptions(const std::vector<std::string>& sets) {
+  for (const std::string& a : sets) {
+    if (a.find('=') == std::string::npos)
+      throw UsageError("--set '" + a + "': expected KEY=VALUE, e.g. --set " +
+                       (a.empty() ? std::string("camera.width") : a) + "=640");
+    try {
+      checkOverrideSyntax(a);  // '=', '.x=1', 'a..b=1'
+    } catch (const ConfigError& e) {
+      throw UsageError(e.what());
+    }
   }
 }
 

@@ -63,6 +63,21 @@ class ExperimentTest : public ::testing::Test {
               {{"name", "res"}, {"axes", {{"resolution", {12, 16}}}}, {"baseline", "per-voxel"}}}}};
   }
 
+  /// tinyConfig() without its sweeps and with `methods`, written as exp.json: one run each.
+  void writeOneRunConfig(const Json& methods) {
+    Json c = tinyConfig();
+    c.erase("sweeps");
+    c["methods"] = methods;
+    writeJson(dir / "exp.json", c);
+  }
+  /// Runs (or resumes) exp.json into out/, quietly and without plots.
+  ExperimentResult runQuietly() {
+    ExperimentOptions opt;
+    opt.progress = false;
+    opt.plots = false;
+    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
+  }
+
   std::string expectConfigError(const Json& cfg) {
     writeJson(dir / "bad.json", cfg);
     try {
@@ -624,27 +639,18 @@ TEST_F(ExperimentTest, EditingAFileTheSceneNamesRedoesTheRunsAndTheReference) {
   };
   mesh(0.3);
   std::ofstream(dir / "tri.mtl") << "newmtl m\nKd 0.8 0.8 0.8\n";
-  Json c = tinyConfig();
-  c.erase("sweeps");
-  c["methods"] = {"per-voxel"};
-  writeJson(dir / "exp.json", c);
-  ExperimentOptions opt;
-  opt.progress = false;
-  opt.plots = false;
-  const auto runIt = [&] {
-    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
-  };
-  const ExperimentResult first = runIt();
+  writeOneRunConfig({"per-voxel"});
+  const ExperimentResult first = runQuietly();
   ASSERT_EQ(first.runs.size(), 1u);
   ASSERT_EQ(first.runs[0].status, "ok") << first.runs[0].error;
-  EXPECT_EQ(runIt().resumed, 1);  // nothing changed: resumed
-  mesh(0.7);                      // the mesh moves
-  const ExperimentResult moved = runIt();
+  EXPECT_EQ(runQuietly().resumed, 1);  // nothing changed: resumed
+  mesh(0.7);                           // the mesh moves
+  const ExperimentResult moved = runQuietly();
   EXPECT_EQ(moved.resumed, 0);
   ASSERT_EQ(moved.runs[0].status, "ok") << moved.runs[0].error;
   EXPECT_NE(moved.runs[0].hash, first.runs[0].hash);
   std::ofstream(dir / "tri.mtl") << "newmtl m\nKd 0.1 0.1 0.1\n";  // and its material changes
-  EXPECT_EQ(runIt().resumed, 0);
+  EXPECT_EQ(runQuietly().resumed, 0);
   // Two reference files: the first mesh's and the moved one's (the material change a third).
   int references = 0;
   for (const auto& e : fs::directory_iterator(dir / "out" / "references"))
@@ -654,22 +660,13 @@ TEST_F(ExperimentTest, EditingAFileTheSceneNamesRedoesTheRunsAndTheReference) {
 
 // Issue 37: a FIFO in place of runs/ID.json blocked the resume forever; it is redone instead.
 TEST_F(ExperimentTest, ARecordThatIsAFifoIsRedoneNotWaitedOn) {
-  Json c = tinyConfig();
-  c.erase("sweeps");
-  c["methods"] = {"per-voxel"};
-  writeJson(dir / "exp.json", c);
-  ExperimentOptions opt;
-  opt.progress = false;
-  opt.plots = false;
-  const auto runIt = [&] {
-    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
-  };
-  const ExperimentResult first = runIt();
+  writeOneRunConfig({"per-voxel"});
+  const ExperimentResult first = runQuietly();
   ASSERT_EQ(first.runs.size(), 1u);
   const fs::path record = dir / "out" / "runs" / (first.runs[0].id + ".json");
   fs::remove(record);
   ASSERT_EQ(::mkfifo(record.c_str(), 0600), 0);
-  const ExperimentResult again = runIt();
+  const ExperimentResult again = runQuietly();
   EXPECT_EQ(again.resumed, 0);
   EXPECT_EQ(again.rendered, 1);
   EXPECT_TRUE(fs::is_regular_file(record));  // the new record replaced the FIFO
@@ -687,23 +684,14 @@ TEST_F(ExperimentTest, EditingAFileNamedOnlyByAMethodsSetRedoesTheRun) {
   scene["objects"] = Json::array({{{"type", "mesh"}, {"file", "tri.obj"}}});
   writeJson(dir / "scene.json", scene);
   std::ofstream(dir / "tri.obj") << "v 0 0.2 0\nv 1 0.2 0\nv 0.5 0.2 1\nf 1 2 3\n";
-  Json c = tinyConfig();
-  c.erase("sweeps");
-  c["methods"] =
-      Json::array({{{"name", "pv"}, {"method", "per-voxel"}, {"set", {"objects.0.file=set.obj"}}}});
-  writeJson(dir / "exp.json", c);
-  ExperimentOptions opt;
-  opt.progress = false;
-  opt.plots = false;
-  const auto runIt = [&] {
-    return runExperiment((dir / "exp.json").string(), (dir / "out").string(), opt);
-  };
-  const ExperimentResult first = runIt();
+  writeOneRunConfig(Json::array(
+      {{{"name", "pv"}, {"method", "per-voxel"}, {"set", {"objects.0.file=set.obj"}}}}));
+  const ExperimentResult first = runQuietly();
   ASSERT_EQ(first.runs.size(), 1u);
   ASSERT_EQ(first.runs[0].status, "ok") << first.runs[0].error;
-  EXPECT_EQ(runIt().resumed, 1);  // nothing changed: resumed
-  mesh(0.7);                      // the file only the method's set names moves
-  const ExperimentResult moved = runIt();
+  EXPECT_EQ(runQuietly().resumed, 1);  // nothing changed: resumed
+  mesh(0.7);                           // the file only the method's set names moves
+  const ExperimentResult moved = runQuietly();
   EXPECT_EQ(moved.resumed, 0);
   EXPECT_NE(moved.runs[0].hash, first.runs[0].hash);
 }
