@@ -161,9 +161,18 @@ float viewTransmittance(const Scene& scene, const DensityGrid& density, const Ve
 }  // namespace
 
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount) {
-  if (settings.maxSamples == kAutoBudget)
-    return std::min(kBudgetPerInitial * (long long)initialCount, kBudgetCap);
-  return std::max(settings.maxSamples, 0LL);
+  long long budget = 0;  // 0: none
+  if (settings.costShare > 0.0) {
+    const IVec3 v = settings.voxelDims;
+    const double voxels = double(std::max(v.x, 0)) * std::max(v.y, 0) * std::max(v.z, 0);
+    const double samples = settings.costShare * voxels / (7.0 + settings.probes);
+    budget = std::max({(long long)std::min(samples, 9e15), (long long)initialCount, 1LL});
+  }
+  long long count = std::max(settings.maxSamples, 0LL);
+  if (settings.maxSamples == kAutoBudget && settings.costShare <= 0.0)
+    count = std::min(kBudgetPerInitial * (long long)initialCount, kBudgetCap);
+  if (count > 0) budget = budget > 0 ? std::min(budget, count) : count;
+  return budget;
 }
 
 SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
@@ -580,6 +589,8 @@ void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& lev
   st.extra["error"] = settings.relative ? "relative" : "absolute";
   st.extra["threshold"] = levelStats.empty() ? settings.epsilon : levelStats[0].threshold;
   if (settings.relative && !levelStats.empty()) st.extra["error_scale"] = levelStats[0].errorScale;
+  if (settings.costShare > 0.0)
+    st.extra["budget_share"] = settings.costShare;  // the `budget` key: a share of per-voxel
   if (settings.maxSamples == kAutoBudget)
     st.extra["max_samples"] = "auto";
   else
@@ -648,6 +659,13 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "most samples in the final set: each level splits its largest errors first within an "
        "equal share of the budget left (one pass)",
        "100"},
+      {"budget", "number", "0: none (the max_samples rule alone; no budget with paper)",
+       "0…1000 (not with paper)",
+       "the samples' budget as a share of per-voxel's cost on the same scene: at most "
+       "budget × radiance voxels / (7 + probes) final samples (each sample costs S, its six "
+       "central differences and its probes; per-voxel one S per voxel); with max_samples "
+       "given too the smaller of the two caps, absent max_samples no count cap",
+       "0.5"},
       {"split", "string", R"("cell" ("sphere" with paper))", "cell, sphere (not with paper)",
        "what a split sample is replaced by: the vertices of the next grid in its cell (the cube "
        "of edge R around it: 8 when the grid doubles) or, the paper, every vertex inside its "
@@ -685,6 +703,9 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
     p.allow("max_samples");
     s.maxSamples = paper ? 0 : kAutoBudget;
   }
+  if (paper && p.has("budget"))
+    p.fail("budget", "is an extension; it cannot be set with render.paper = true");
+  s.costShare = p.number("budget", 0.0, Interval::closed(0.0, 1000.0));
   if (paper && p.has("fallback"))
     p.fail("fallback", "is an extension; it cannot be set with render.paper = true");
   s.voxelFallback = p.boolean("fallback", false);

@@ -83,6 +83,15 @@ struct DynamicSamplingSettings {
   /// Most samples in the final set (0: no cap; kAutoBudget: sampleBudget() of the initial
   /// count): see budgetedSplit().
   long long maxSamples = 0;
+  /// The budget as a cost (extension, issue 35; key `budget`; 0: none): the final samples may cost
+  /// costShare × what per-voxel's radiance stage costs on the same scene, counted in S evaluations
+  /// (each traces every light): per-voxel evaluates S once per radiance voxel (voxelDims), a sample
+  /// of dynamic sampling 1 + 6 (its ∇S by central differences) + probes times. So the most final
+  /// samples are costShare · voxels / (7 + probes) (sampleBudget()): many on a large volume, where
+  /// per-voxel is dear, few on a small one, and fewer the more probes each sample has. With
+  /// costShare > 0 kAutoBudget sets no count cap; an explicit maxSamples > 0 caps the count as
+  /// well.
+  double costShare = 0.0;
   /// Per-voxel fallback (extension, issue 24; key `fallback`): after `levels` one more split
   /// grid, the voxels of the radiance volume (voxelDims per axis). The finest of `levels` is then
   /// probed like the others, and a cell of it that fails the error test is replaced by S
@@ -247,7 +256,8 @@ double relativeErrorScale(const std::vector<float>& contributions);
 inline constexpr int kMaxProbes = 40;
 /// Probes summed together before the groups' sums are added (localShadingError): the GPU's probe
 /// pass sums one group per workgroup row set (gpu/shaders/volume_tracer.comp.glsl, SL_PROBES),
-/// and both sum in this order so that they agree to rounding. Eq. 5's six probes are one group, summed as the paper's sum.
+/// and both sum in this order so that they agree to rounding. Eq. 5's six probes are one group,
+/// summed as the paper's sum.
 inline constexpr int kProbeGroup = 8;
 
 /// The probe offsets of a unit sphere at the origin, in probePoints() order: the 6 axis
@@ -285,8 +295,10 @@ inline constexpr long long kBudgetPerInitial = 4;
 /// ... and at most this many (issue 24: ≤ 8000 samples on every scene at defaults).
 inline constexpr long long kBudgetCap = 8000;
 
-/// The budget applied to `initialCount` initial samples: 0 (none) for maxSamples 0,
-/// min(kBudgetPerInitial · initialCount, kBudgetCap) for kAutoBudget, else maxSamples.
+/// The budget applied to `initialCount` initial samples (0: none): the smaller of the cost cap,
+/// costShare · voxels / (7 + probes) when costShare > 0 (at least the initial count: never 0,
+/// which would mean no cap), and the count cap: maxSamples when > 0, for kAutoBudget without a
+/// cost share min(kBudgetPerInitial · initialCount, kBudgetCap), else none.
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount);
 
 /// The split decisions of one level under a budget (see the header comment): which samples

@@ -299,6 +299,23 @@ TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   EXPECT_EQ(sampleBudget(parse({{"max_samples", 0}}, false), 2000), 0);
   EXPECT_EQ(sampleBudget(parse({{"max_samples", 123.7}}, false), 2000), 123);
   EXPECT_EQ(parse({{"max_samples", 4000}}, false).maxSamples, 4000);
+  // The budget as a cost (issue 35): budget × radiance voxels / (7 + probes) final samples,
+  // never fewer than the initial ones; one of budget and max_samples; not with paper.
+  DynamicSamplingSettings cost = parse({{"budget", 0.5}}, false);
+  EXPECT_EQ(cost.costShare, 0.5);
+  cost.voxelDims = IVec3(128);
+  EXPECT_EQ(sampleBudget(cost, 2000), 22310);  // 0.5 · 128³ / (7 + 40) = 22310.1
+  cost.probes = 14;
+  EXPECT_EQ(sampleBudget(cost, 2000), 49932);  // 0.5 · 128³ / 21 = 49932.2
+  cost.voxelDims = IVec3(16);
+  EXPECT_EQ(sampleBudget(cost, 2000), 2000);  // 97.5 < the initial count
+  DynamicSamplingSettings both = parse({{"budget", 0.5}, {"max_samples", 3000}}, false);
+  both.voxelDims = IVec3(128);
+  EXPECT_EQ(sampleBudget(both, 2000), 3000);  // the smaller cap
+  both.maxSamples = 0;
+  EXPECT_EQ(sampleBudget(both, 2000), 22310);  // no count cap: the cost's
+  EXPECT_THROW(parse({{"budget", 0.5}}, true), ConfigError);
+  EXPECT_THROW(parse({{"budget", -0.5}}, false), ConfigError);
   EXPECT_THROW(parse({{"max_samples", -1}}, false), ConfigError);
   EXPECT_THROW(parse({{"probes", 32}}, false), ConfigError);
 }
