@@ -161,18 +161,17 @@ float viewTransmittance(const Scene& scene, const DensityGrid& density, const Ve
 }  // namespace
 
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount) {
-  long long budget = 0;  // 0: none
+  long long cost = 0;  // the cost cap (0: none)
   if (settings.costShare > 0.0) {
     const IVec3 v = settings.voxelDims;
     const double voxels = double(std::max(v.x, 0)) * std::max(v.y, 0) * std::max(v.z, 0);
     const double samples = settings.costShare * voxels / (7.0 + settings.probes);
-    budget = std::max({(long long)std::min(samples, 9e15), (long long)initialCount, 1LL});
+    cost = std::max((long long)std::min(samples, 9e15), 1LL);
   }
-  long long count = std::max(settings.maxSamples, 0LL);
-  if (settings.maxSamples == kAutoBudget && settings.costShare <= 0.0)
-    count = std::min(kBudgetPerInitial * (long long)initialCount, kBudgetCap);
-  if (count > 0) budget = budget > 0 ? std::min(budget, count) : count;
-  return budget;
+  if (settings.maxSamples == kAutoBudget)
+    return std::max(std::min(kBudgetPerInitial * (long long)initialCount, kBudgetCap), cost);
+  const long long count = std::max(settings.maxSamples, 0LL);
+  return count > 0 && cost > 0 ? std::min(count, cost) : std::max(count, cost);
 }
 
 SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
@@ -654,17 +653,17 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
        "R/2",
        "6"},
-      {"max_samples", "int", "auto: 4 × the initial count, at most 8000 (no cap with paper)",
+      {"max_samples", "int",
+       "auto: 4 × the initial count, at most 8000, or more by budget (no cap with paper)",
        ">= 0 (non-integers rounded down; 0: no cap; not with paper)",
        "most samples in the final set: each level splits its largest errors first within an "
        "equal share of the budget left (one pass)",
        "100"},
-      {"budget", "number", "0: none (the max_samples rule alone; no budget with paper)",
-       "0…1000 (not with paper)",
-       "the samples' budget as a share of per-voxel's cost on the same scene: at most "
-       "budget × radiance voxels / (7 + probes) final samples (each sample costs S, its six "
-       "central differences and its probes; per-voxel one S per voxel); with max_samples "
-       "given too the smaller of the two caps, absent max_samples no count cap",
+      {"budget", "number", "0.5 (0 with max_samples given or paper)", "0…1000 (not with paper)",
+       "the samples' budget as a share of per-voxel's cost on the same scene, B = budget × "
+       "radiance voxels / (7 + probes) (a sample costs S, its six central differences and its "
+       "probes; per-voxel one S per voxel): the final set may grow to max(max_samples' auto "
+       "rule, B); with max_samples given, to the smaller of the two (0 on either side: the other)",
        "0.5"},
       {"split", "string", R"("cell" ("sphere" with paper))", "cell, sphere (not with paper)",
        "what a split sample is replaced by: the vertices of the next grid in its cell (the cube "
@@ -705,7 +704,9 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   }
   if (paper && p.has("budget"))
     p.fail("budget", "is an extension; it cannot be set with render.paper = true");
-  s.costShare = p.number("budget", 0.0, Interval::closed(0.0, 1000.0));
+  // The cost share: its default with the max_samples rule (auto), none beside an explicit count.
+  s.costShare = p.number("budget", paper || p.has("max_samples") ? 0.0 : kBudgetCostShare,
+                         Interval::closed(0.0, 1000.0));
   if (paper && p.has("fallback"))
     p.fail("fallback", "is an extension; it cannot be set with render.paper = true");
   s.voxelFallback = p.boolean("fallback", false);

@@ -83,14 +83,13 @@ struct DynamicSamplingSettings {
   /// Most samples in the final set (0: no cap; kAutoBudget: sampleBudget() of the initial
   /// count): see budgetedSplit().
   long long maxSamples = 0;
-  /// The budget as a cost (extension, issue 35; key `budget`; 0: none): the final samples may cost
-  /// costShare × what per-voxel's radiance stage costs on the same scene, counted in S evaluations
-  /// (each traces every light): per-voxel evaluates S once per radiance voxel (voxelDims), a sample
-  /// of dynamic sampling 1 + 6 (its ∇S by central differences) + probes times. So the most final
-  /// samples are costShare · voxels / (7 + probes) (sampleBudget()): many on a large volume, where
-  /// per-voxel is dear, few on a small one, and fewer the more probes each sample has. With
-  /// costShare > 0 kAutoBudget sets no count cap; an explicit maxSamples > 0 caps the count as
-  /// well.
+  /// The budget as a cost (extension, issue 35; key `budget`; 0: none; default kBudgetCostShare):
+  /// the final samples may cost costShare × what per-voxel's radiance stage costs on the same
+  /// scene, counted in S evaluations (each traces every light): per-voxel evaluates S once per
+  /// radiance voxel (voxelDims), a sample of dynamic sampling 1 + 6 (its ∇S by central differences)
+  /// + probes times. So the most final samples are costShare · voxels / (7 + probes)
+  /// (sampleBudget()): many on a large volume, where per-voxel is dear, few on a small one, and
+  /// fewer the more probes each sample has. How it combines with maxSamples: sampleBudget().
   double costShare = 0.0;
   /// Per-voxel fallback (extension, issue 24; key `fallback`): after `levels` one more split
   /// grid, the voxels of the radiance volume (voxelDims per axis). The finest of `levels` is then
@@ -295,10 +294,14 @@ inline constexpr long long kBudgetPerInitial = 4;
 /// ... and at most this many (issue 24: ≤ 8000 samples on every scene at defaults).
 inline constexpr long long kBudgetCap = 8000;
 
-/// The budget applied to `initialCount` initial samples (0: none): the smaller of the cost cap,
-/// costShare · voxels / (7 + probes) when costShare > 0 (at least the initial count: never 0,
-/// which would mean no cap), and the count cap: maxSamples when > 0, for kAutoBudget without a
-/// cost share min(kBudgetPerInitial · initialCount, kBudgetCap), else none.
+/// Default of the cost share (key `budget`, issue 35): chosen on the population of scenes
+/// (docs/fidelity.md, "Population of scenes").
+inline constexpr double kBudgetCostShare = 0.5;
+
+/// The budget applied to `initialCount` initial samples (0: none). The cost cap C =
+/// costShare · voxels / (7 + probes) when costShare > 0 (at least 1). For kAutoBudget
+/// max(min(kBudgetPerInitial · initialCount, kBudgetCap), C): the count rule's floor, raised where
+/// per-voxel is dear; else the smaller of maxSamples and C, where one of them is 0 the other.
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount);
 
 /// The split decisions of one level under a budget (see the header comment): which samples

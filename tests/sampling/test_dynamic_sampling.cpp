@@ -291,29 +291,35 @@ TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   EXPECT_EQ(ext.epsilon, 0.05);
   EXPECT_EQ(ext.probes, 40);
   EXPECT_EQ(ext.maxSamples, kAutoBudget);
-  // The default budget: 4 × the initial count, at most 8000; none with paper or max_samples 0.
+  // The default budget: 4 × the initial count, at most 8000, or C below where larger; none with
+  // paper or max_samples 0.
   EXPECT_EQ(sampleBudget(ext, 2000), 8000);
-  EXPECT_EQ(sampleBudget(ext, 541), 2164);
+  EXPECT_EQ(sampleBudget(ext, 541), 2788);  // 4 × 541 = 2164 < C = 0.5 · 64³ / 47 = 2788.8
   EXPECT_EQ(sampleBudget(ext, 100000), 8000);
   EXPECT_EQ(sampleBudget(paper, 2000), 0);
   EXPECT_EQ(sampleBudget(parse({{"max_samples", 0}}, false), 2000), 0);
   EXPECT_EQ(sampleBudget(parse({{"max_samples", 123.7}}, false), 2000), 123);
   EXPECT_EQ(parse({{"max_samples", 4000}}, false).maxSamples, 4000);
-  // The budget as a cost (issue 35): budget × radiance voxels / (7 + probes) final samples,
-  // never fewer than the initial ones; one of budget and max_samples; not with paper.
+  // The budget as a cost (issue 35): C = budget × radiance voxels / (7 + probes). Absent
+  // max_samples the count rule's min(4 × initial, 8000), raised to C where C is larger; with
+  // max_samples given the smaller of the two (budget then 0 unless given); not with paper.
+  EXPECT_EQ(ext.costShare, kBudgetCostShare);
   DynamicSamplingSettings cost = parse({{"budget", 0.5}}, false);
   EXPECT_EQ(cost.costShare, 0.5);
   cost.voxelDims = IVec3(128);
-  EXPECT_EQ(sampleBudget(cost, 2000), 22310);  // 0.5 · 128³ / (7 + 40) = 22310.1
+  EXPECT_EQ(sampleBudget(cost, 2000), 22310);  // 0.5 · 128³ / (7 + 40) = 22310.1 > 8000
   cost.probes = 14;
   EXPECT_EQ(sampleBudget(cost, 2000), 49932);  // 0.5 · 128³ / 21 = 49932.2
-  cost.voxelDims = IVec3(16);
-  EXPECT_EQ(sampleBudget(cost, 2000), 2000);  // 97.5 < the initial count
+  cost.voxelDims = IVec3(64);
+  EXPECT_EQ(sampleBudget(cost, 2000), 8000);  // C = 6241 < the count rule's 8000
+  EXPECT_EQ(sampleBudget(cost, 1000), 6241);  // C > the count rule's 4000
+  EXPECT_EQ(parse({{"max_samples", 3000}}, false).costShare, 0.0);
   DynamicSamplingSettings both = parse({{"budget", 0.5}, {"max_samples", 3000}}, false);
   both.voxelDims = IVec3(128);
   EXPECT_EQ(sampleBudget(both, 2000), 3000);  // the smaller cap
   both.maxSamples = 0;
-  EXPECT_EQ(sampleBudget(both, 2000), 22310);  // no count cap: the cost's
+  EXPECT_EQ(sampleBudget(both, 2000), 22310);                          // no count cap: the cost's
+  EXPECT_EQ(sampleBudget(parse({{"budget", 0}}, false), 2000), 8000);  // the count rule alone
   EXPECT_THROW(parse({{"budget", 0.5}}, true), ConfigError);
   EXPECT_THROW(parse({{"budget", -0.5}}, false), ConfigError);
   EXPECT_THROW(parse({{"max_samples", -1}}, false), ConfigError);
