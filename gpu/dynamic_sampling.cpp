@@ -699,7 +699,8 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
   DynamicSamplingWorkspace local;
   DynamicSamplingWorkspace& w = workspace ? *workspace : local;
   if (errorsOut) errorsOut->clear();
-  return splitOnceGpu(scene, density, inputs, initial, steps, settings, timer, errorsOut, w);
+  const DynamicSamplingSettings s = forInitialSamples(settings, scene.medium.bounds, initial);
+  return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut, w);
 }
 
 }  // namespace scatterlab::gpu

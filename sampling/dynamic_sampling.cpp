@@ -42,6 +42,19 @@ std::vector<LevelGrid> levelGrids(const DynamicSamplingSettings& s) {
   return g;
 }
 
+DynamicSamplingSettings forInitialSamples(DynamicSamplingSettings s, const Box& bounds,
+                                          const std::vector<RadianceSample>& initial) {
+  if (!s.autoLevels || initial.empty()) return s;
+  float r0 = 0.0f;
+  for (const RadianceSample& x : initial) r0 = std::max(r0, x.radius);
+  const Vec3 ext = bounds.max - bounds.min;
+  const float longest = std::max(ext.x, std::max(ext.y, ext.z));
+  std::erase_if(s.levels, [&](int n) { return !(longest / float(n) < r0); });
+  const float last = s.levels.empty() ? longest / r0 : float(s.levels.back());
+  if (float(s.finestLevel) >= 1.5f * last) s.levels.push_back(s.finestLevel);
+  return s;
+}
+
 Vec3 GridInfoBuffer::vertex(std::size_t linear) const {
   const int i = int(linear % dims.x), j = int((linear / dims.x) % dims.y),
             k = int(linear / (std::size_t(dims.x) * dims.y));
@@ -549,7 +562,8 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
                                       std::vector<RadianceSample> initial,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings) {
-  return splitOnce(frame, scene, std::move(initial), evaluator, settings);
+  const DynamicSamplingSettings s = forInitialSamples(settings, scene.medium.bounds, initial);
+  return splitOnce(frame, scene, std::move(initial), evaluator, s);
 }
 
 DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,
@@ -637,7 +651,9 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "split a sample when its error E_j (Eq. 5) is above epsilon · the mean R³|S|Dτ of the "
        "initial samples (relative), or, with paper, above epsilon itself (the paper's ε)",
        "0.5"},
-      {"levels", "array of int", "[16, 32, 64] (those <= half the medium resolution)",
+      {"levels", "array of int",
+       "[16, 32, 64]: those <= half the medium resolution and (not with paper) finer than the "
+       "initial samples",
        "increasing, each 2…1024, finest <= half the medium resolution",
        "vertices per axis of the split grids G1, G2, …", "[2]"},
       {"tau", "string", "visible (ancestor with paper)",
@@ -728,6 +744,8 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
     }
   } else {
     p.allow("levels");
+    s.autoLevels = !paper;
+    s.finestLevel = finestAllowed;
     s.levels.clear();
     for (int l : {16, 32, 64})
       if (l <= finestAllowed) s.levels.push_back(l);

@@ -274,6 +274,34 @@ TEST(DynamicSampling, SettingsAreValidated) {
   }
 }
 
+TEST(DynamicSampling, DefaultLevelsAreFinerThanTheInitialSamplesAndReachTheFinestAllowed) {
+  // Issue 35: a level no finer than the initial samples cannot refine them (a split there marks
+  // at most one vertex in the sample's cell), so with the default levels it is dropped; the
+  // finest level allowed (half the medium resolution) is added where it is 1.5 × the last.
+  const Box unit{Vec3(0.0f), Vec3(1.0f)};
+  const auto levelsFor = [&](int finest, float r0, bool autoLevels = true) {
+    DynamicSamplingSettings s;
+    s.levels.clear();
+    for (int l : {16, 32, 64})
+      if (l <= finest) s.levels.push_back(l);
+    s.autoLevels = autoLevels;
+    s.finestLevel = finest;
+    std::vector<RadianceSample> initial(3);
+    for (auto& x : initial) x.radius = r0;
+    return forInitialSamples(s, unit, initial).levels;
+  };
+  using L = std::vector<int>;
+  EXPECT_EQ(levelsFor(64, 1.0f / 12), (L{16, 32, 64}));  // 128³, a dense medium: unchanged
+  EXPECT_EQ(levelsFor(64, 1.0f / 40), (L{64}));          // sparse: 16 and 32 are coarser
+  EXPECT_EQ(levelsFor(64, 1.0f / 32), (L{64}));          // 32 is as fine: dropped too
+  EXPECT_EQ(levelsFor(56, 1.0f / 12), (L{16, 32, 56}));  // 112³: 56 ≥ 1.5 × 32
+  EXPECT_EQ(levelsFor(48, 1.0f / 12), (L{16, 32, 48}));  // 96³
+  EXPECT_EQ(levelsFor(40, 1.0f / 12), (L{16, 32}));      // 80³: 40 < 48
+  EXPECT_EQ(levelsFor(36, 1.0f / 60), (L{}));            // finer than every level allowed
+  EXPECT_EQ(levelsFor(64, 1.0f / 20), (L{32, 64}));
+  EXPECT_EQ(levelsFor(56, 1.0f / 40, false), (L{16, 32}));  // levels given, or paper: as given
+}
+
 TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   const Scene scene = spotScene();
   const auto parse = [&](const Json& j, bool paper) {
@@ -291,6 +319,9 @@ TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   EXPECT_EQ(ext.epsilon, 0.05);
   EXPECT_EQ(ext.probes, 40);
   EXPECT_EQ(ext.maxSamples, kAutoBudget);
+  EXPECT_TRUE(ext.autoLevels);  // resolution 64: [16, 32], the finest allowed 32
+  EXPECT_EQ(ext.finestLevel, 32);
+  EXPECT_FALSE(paper.autoLevels);
   // The default budget: 4 × the initial count, at most 8000, or C below where larger; none with
   // paper or max_samples 0.
   EXPECT_EQ(sampleBudget(ext, 2000), 8000);
