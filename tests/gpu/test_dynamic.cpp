@@ -534,6 +534,35 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
 }
 INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuAdaptiveMethod, ::testing::Bool());
 
+/// The default levels (issue 35, forInitialSamples()): one decision for both backends. At 56³
+/// the finest allowed, 28, is added after 16; at 64³ with 6000 initial samples (18 per axis)
+/// 16 is dropped, no finer than them.
+TEST(GpuAdaptiveMethod, DefaultLevelsFollowTheInitialSamplesAsOnCpu) {
+  SCATTERLAB_REQUIRE_GPU();
+  struct Case {
+    int resolution, count;
+    std::vector<int> grids;  // the stats' grid per level: 0 for the initial samples
+  };
+  for (const Case& c : {Case{56, 64, {0, 16, 28}}, Case{64, 6000, {0, 32}}}) {
+    Scene scene = spotScene(24, 18);
+    scene.medium.resolution = IVec3(c.resolution);
+    const Json render{{"method", "adaptive"}, {"sampler", {{"type", "grid"}, {"count", c.count}}}};
+    const RenderResult cpu = renderWith(scene, render, "cpu");
+    const RenderResult gpu = renderWith(scene, render, "gpu");
+    expectNoGlError();
+    std::vector<int> grids;
+    for (const Json& l : cpu.stats.extra["levels"]) grids.push_back(l["grid"].get<int>());
+    EXPECT_EQ(grids, c.grids) << c.resolution;
+    EXPECT_EQ(gpu.stats.extra["samples_per_level"], cpu.stats.extra["samples_per_level"]);
+    const double err = relL2(gpu.image, cpu.image);
+    std::printf("%d³, %d initial: %lld samples, gpu vs cpu relative L2 %.3g\n", c.resolution,
+                c.count, *gpu.stats.samples, err);
+    // Measured on llvmpipe 2026-11-28: 4.1e-7 (56³), 1.5e-6 (64³); not yet on hardware, so the
+    // bound of EndToEndMatchesCpuMethod's extensions, whose H200 figure (3.3e-5) it carries.
+    EXPECT_LT(err, 5.0e-5);
+  }
+}
+
 /// The glow scene (a point light inside the medium) at 32³, 80×60: the compute march and the
 /// raster slice marcher with ray-step layers are within 0.5% of the CPU's image; view planes
 /// are not (0.53%).
