@@ -1,5 +1,5 @@
 # Install rules and the CMake package (find_package(scatterlab 0.2)), a pkg-config file, the
-# tool, the headers under include/scatterlab/ and the Python helper scripts under
+# tool, the headers under include/scatterlab/ (included as <scatterlab/…>) and the Python helper scripts under
 # share/scatterlab/. Every installed path is relative to the prefix (relocatable).
 include(CMakePackageConfigHelpers)
 
@@ -26,16 +26,19 @@ set_target_properties(scatterlab_cli PROPERTIES EXPORT_NAME tool)  # scatterlab:
 
 install(TARGETS ${_libs} EXPORT scatterlabTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab)
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS scatterlab_cli EXPORT scatterlabTargets RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The VDB reader program, where the library looks for it relative to bin/ and the Python package.
 install(TARGETS scatterlab_vdb_reader RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/scatterlab)
-foreach(_m IN LISTS _modules)
-  install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_m}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab/${_m}
-          FILES_MATCHING PATTERN "*.h" PATTERN "shaders" EXCLUDE)
-endforeach()
-# The top-level header <scatterlab/scatterlab.h> (forwards to api/scatterlab.h).
-install(FILES ${PROJECT_SOURCE_DIR}/scatterlab.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scatterlab)
+# The headers, the top-level <scatterlab/scatterlab.h> (it forwards to api/scatterlab.h) and
+# every module's, each including the others as <scatterlab/MODULE/…> (cmake/install_headers.cmake):
+# only include/ goes on a consumer's path.
+install(CODE "
+  set(SCATTERLAB_SOURCE_DIR \"${PROJECT_SOURCE_DIR}\")
+  set(SCATTERLAB_STAGE_DIR \"${PROJECT_BINARY_DIR}/installed-headers\")
+  set(SCATTERLAB_HEADER_MODULES \"${_modules}\")
+  set(SCATTERLAB_INCLUDE_DEST \"${CMAKE_INSTALL_INCLUDEDIR}\")
+  include(\"${PROJECT_SOURCE_DIR}/cmake/install_headers.cmake\")")
 install(FILES ${PROJECT_SOURCE_DIR}/experiment/plots.py ${PROJECT_SOURCE_DIR}/scripts/results_md.py
         DESTINATION ${SCATTERLAB_DATA_INSTALL_DIR})
 # The demo scenes with the data they read beside them (data/vdb, data/meshes; sources and

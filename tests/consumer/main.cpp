@@ -5,9 +5,13 @@
 
 #include <cstdio>
 
+#include "core/scene.h"  // the consumer's own (engine::Scene), first on its include path
+
 int main() {
   using namespace scatterlab;
   initialize();
+  const engine::Scene own;  // the engine's Scene beside scatterlab::Scene
+  if (own.entities != 3) return 1;
   // A homogeneous unit box with a point light above it, 24x18 pixels.
   const Json doc = {
       {"medium",

@@ -20,6 +20,16 @@ foreach(f bin/scatterlab include/scatterlab/scatterlab.h include/scatterlab/api/
   endif()
 endforeach()
 
+# The installed headers include each other as <scatterlab/…> only (cmake/install_headers.cmake):
+# none by the source tree's quoted "core/…" paths, which a consumer's own headers could shadow.
+file(GLOB_RECURSE installed_headers ${P}/include/scatterlab/*.h)
+foreach(h IN LISTS installed_headers)
+  file(STRINGS ${h} quoted REGEX "#include \"(api|core|cpu|experiment|gpu|media|methods|sampling|shading)/")
+  if(quoted)
+    message(FATAL_ERROR "${h} includes a scatterlab header by a quoted path: ${quoted}")
+  endif()
+endforeach()
+
 # Every scene of the source tree is installed and loads from the moved prefix (the installed
 # tool parses it, reads its files, VDB volumes and meshes included, and validates its method).
 file(GLOB installed_scenes ${P}/share/scatterlab/scenes/*.json)
@@ -54,7 +64,7 @@ if(NOT rc EQUAL 0)
 endif()
 separate_arguments(flags UNIX_COMMAND "${flags}")
 # No -std here: the .pc's Cflags must carry it (g++ 12 defaults to C++17).
-run(${CXX} -O1 ${SOURCE_DIR}/main.cpp -o ${WORK_DIR}/consumer_pc ${flags})
+run(${CXX} -O1 -I${SOURCE_DIR} ${SOURCE_DIR}/main.cpp -o ${WORK_DIR}/consumer_pc ${flags})
 run(${WORK_DIR}/consumer_pc)
 
 # Python: the module from the prefix, one PYTHONPATH.
