@@ -40,12 +40,12 @@
 /// first across the levels, split while the count fits, their children evaluated in one batch
 /// without probes (they stay final). So the pass evaluates each level once, plus at most one
 /// batch of top-up children: never a re-run. Default budget (render.max_samples absent):
-/// kBudgetPerInitial × the initial count, at most kBudgetCap (sampleBudget()); scale-free like the
-/// relative ε. The error left is reported: per level the candidates left unsplit
-/// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft; /
-/// threshold > 1: the budget stopped the refinement there). The finest level is not probed, so its
-/// errors are not known (with voxelFallback the finest of `levels` is probed, and the voxel
-/// level, exact at its voxels, is the one not probed).
+/// kBudgetPerInitial × the initial count, at most kBudgetCap, raised where per-voxel is dear to
+/// a share of its cost (costShare, key `budget`, issue 35; sampleBudget()). The error left is
+/// reported: per level the candidates left unsplit (LevelStats::capped) and the largest E of a
+/// sample left unsplit (LevelStats::maxLeft; / threshold > 1: the budget stopped the refinement
+/// there). The finest level is not probed, so its errors are not known (with voxelFallback the
+/// finest of `levels` is probed, and the voxel level, exact at its voxels, is the one not probed).
 ///
 /// Issue 24 (docs/fidelity.md §8): the allocation between levels was measured against other
 /// shares (top-up as a share, shares growing per level, greedy) and kept; what bound the budget
