@@ -248,6 +248,34 @@ py::dict errorDict(const ImageError& e) {
   return d;
 }
 
+constexpr const char* kLoadSceneDoc =
+    "Scene from a JSON file path, a volume file (.vdb, .sog: framed automatically, as "
+    "`scatterlab render smoke.vdb`) or a dict; overrides: {'camera.width': 64} or ['k=v'] as "
+    "--set; base_dir: where a dict's relative file names resolve (default: the working "
+    "directory)";
+
+/// load_scene and Scene(...): a scene from a JSON file, a volume file or a dict, with --set
+/// style overrides (the one way both take).
+PyScene loadScene(const py::object& source, const py::object& overrides, const py::object& baseDir,
+                  const char* what, const char* baseWhat) {
+  const std::vector<std::string> sets = assignments(overrides);
+  if (py::isinstance<py::dict>(source)) {
+    Json doc = toJson(source);
+    for (const auto& a : sets) applyOverride(doc, a);
+    const std::filesystem::path base =
+        baseDir.is_none()
+            ? std::filesystem::current_path()
+            : std::filesystem::path(checkedPath(py::str(baseDir).cast<std::string>(), baseWhat));
+    GilReleased unlocked;
+    return makeScene(std::move(doc), base, "");
+  }
+  const std::string path = checkedPath(py::str(source), what);
+  GilReleased unlocked;
+  Json doc = readSceneDocument(path);
+  for (const auto& a : sets) applyOverride(doc, a);
+  return makeScene(std::move(doc), std::filesystem::path(path).parent_path(), path);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -277,7 +305,13 @@ PYBIND11_MODULE(_core, m) {
     }
   });
 
-  py::class_<PyScene>(m, "Scene", "A validated scene document (load_scene)")
+  py::class_<PyScene>(m, "Scene", "A validated scene document: Scene(source) or load_scene")
+      .def(py::init([](const py::object& source, const py::object& overrides,
+                       const py::object& baseDir) {
+             return loadScene(source, overrides, baseDir, "Scene", "Scene: base_dir");
+           }),
+           py::arg("source"), py::arg("overrides") = py::none(), py::arg("base_dir") = py::none(),
+           kLoadSceneDoc)
       .def_property_readonly("width", [](const PyScene& s) { return s.parsed.camera.width; })
       .def_property_readonly("height", [](const PyScene& s) { return s.parsed.camera.height; })
       .def_property_readonly("lights", [](const PyScene& s) { return s.parsed.lights.size(); })
@@ -296,29 +330,10 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "load_scene",
       [](const py::object& source, const py::object& overrides, const py::object& baseDir) {
-        const std::vector<std::string> sets = assignments(overrides);
-        if (py::isinstance<py::dict>(source)) {
-          Json doc = toJson(source);
-          for (const auto& a : sets) applyOverride(doc, a);
-          const std::filesystem::path base =
-              baseDir.is_none()
-                  ? std::filesystem::current_path()
-                  : std::filesystem::path(
-                        checkedPath(py::str(baseDir).cast<std::string>(), "load_scene: base_dir"));
-          GilReleased unlocked;
-          return makeScene(std::move(doc), base, "");
-        }
-        const std::string path = checkedPath(py::str(source), "load_scene");
-        GilReleased unlocked;
-        Json doc = readSceneDocument(path);
-        for (const auto& a : sets) applyOverride(doc, a);
-        return makeScene(std::move(doc), std::filesystem::path(path).parent_path(), path);
+        return loadScene(source, overrides, baseDir, "load_scene", "load_scene: base_dir");
       },
       py::arg("source"), py::arg("overrides") = py::none(), py::arg("base_dir") = py::none(),
-      "Scene from a JSON file path, a volume file (.vdb, .sog: framed automatically, as "
-      "`scatterlab render smoke.vdb`) or a dict; overrides: {'camera.width': 64} or ['k=v'] as "
-      "--set; base_dir: where a dict's relative file names resolve (default: the working "
-      "directory)");
+      kLoadSceneDoc);
 
   m.def(
       "render",

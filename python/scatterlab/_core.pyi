@@ -18,6 +18,12 @@ Image = npt.NDArray[np.float32]
 Stats = dict[str, Any]
 
 class Scene:
+    def __init__(
+        self,
+        source: Union[str, PathLike[str], Mapping[str, Any]],
+        overrides: Overrides = None,
+        base_dir: Union[None, str, PathLike[str]] = None,
+    ) -> None: ...
     @property
     def width(self) -> int: ...
     @property

@@ -37,6 +37,18 @@ class LoadAndRender(unittest.TestCase):
                               overrides=["camera.width=20"])
         self.assertEqual(scene.width, 20)
 
+    def test_scene_constructor_takes_what_load_scene_takes(self):
+        # Scene(path) as docs/scene-format.md shows (issue 36: 'No constructor defined!' before):
+        # a JSON file with overrides, a volume file framed automatically, a dict.
+        scene = sl.Scene(os.path.join(SOURCE, "data/scenes/glow.json"),
+                         overrides={"camera.width": 40, "camera.height": 30})
+        self.assertEqual((scene.width, scene.height), (40, 30))
+        vdb = sl.Scene(os.path.join(SOURCE, "data/vdb/smoke1.vdb"))
+        self.assertEqual(vdb.document, sl.load_scene(os.path.join(SOURCE, "data/vdb/smoke1.vdb")).document)
+        self.assertEqual(sl.Scene(box_scene(width=8, height=6, value=0.5)).width, 8)
+        with self.assertRaises(sl.IoError):
+            sl.Scene(os.path.join(SOURCE, "data/scenes/no_such_scene.json"))
+
     def test_render_matches_the_tool(self):
         # The module and `scatterlab render` run the same code: the exact reference (per-pixel,
         # deterministic) must agree bit for bit.
