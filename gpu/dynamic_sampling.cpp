@@ -125,9 +125,10 @@ std::size_t dispatchSlot(std::size_t L) {
   return L + 3;
 }
 
-/// Sums per sample of the probe pass: the groups of kProbeGroup probes.
-int probeGroups(const DynamicSamplingSettings& settings) {
-  return (settings.probes + kProbeGroup - 1) / kProbeGroup;
+/// Sums per sample of the probe pass: the groups of kProbeGroup probes (`probes`: the most of
+/// any level, the buffer's size; a level's own count: levelProbes()).
+int probeGroups(int probes) {
+  return (probes + kProbeGroup - 1) / kProbeGroup;
 }
 
 /// The passes of a level after the tracer's (gpu/shaders/dynamic_error.comp.glsl): evaluation,
@@ -209,7 +210,7 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
   ensure(w.rootTau, n0 * sizeof(float), "dynamic sampling root tau");
   std::size_t probed = 0;  // the largest level that is probed (all but the last)
   for (std::size_t k = 0; k < L; ++k) probed = std::max(probed, w.levels[k].capacity);
-  ensure(w.probeSums, probed * std::size_t(probeGroups(settings)) * sizeof(float),
+  ensure(w.probeSums, probed * std::size_t(probeGroups(settings.probes)) * sizeof(float),
          "dynamic sampling probe sums");
   const std::size_t words = dispatchSlot(L) + 3 * (L + 1);
   ensure(w.counts, words * sizeof(GLuint), "dynamic sampling counts");
@@ -257,8 +258,11 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
                    const DynamicSamplingSettings& settings, StageTimer* timer) {
   const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
   const DynamicSamplingWorkspace::Level& l = w.levels[k];
-  const std::size_t L = levelGrids(settings).size();
-  const GLint groupsPerSample = probeGroups(settings);
+  const std::vector<LevelGrid> grids = levelGrids(settings);
+  const std::size_t L = grids.size();
+  // The level's probes: fewer on the level the per-voxel fallback follows (levelProbes()).
+  const int probes = k < L ? levelProbes(settings, grids[k]) : settings.probes;
+  const GLint groupsPerSample = probeGroups(probes);
   ScopedGpuTimer t(timer, "ds evaluate+error");
   // pass 0: S and ∇S, parallel over (sample, point, light) (∇S = 0 for the per-voxel fallback's
   // voxels, as the CPU's gradients = false)
@@ -292,7 +296,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     program.use();
     inputs.apply(program);
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
-    glUniform1i(program.uniform("uProbes"), settings.probes);
+    glUniform1i(program.uniform("uProbes"), probes);
     glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
     if (settings.space.bounds)
       glUniform2f(program.uniform("uTaylorBounds"), settings.space.bounds->lo,
@@ -313,7 +317,7 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     const Program& program = errorProgram(inputs, steps, settings, ErrorPass::Combine, lights);
     program.use();
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
-    glUniform1i(program.uniform("uProbes"), settings.probes);
+    glUniform1i(program.uniform("uProbes"), probes);
     glUniform1i(program.uniform("uProbeGroups"), groupsPerSample);
     l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
     l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);

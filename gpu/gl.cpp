@@ -202,20 +202,31 @@ void checkGl(std::string_view pass) {
   if (!errors.empty()) throw GpuError("OpenGL error after " + std::string(pass) + ": " + errors);
 }
 
-Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view name)
-    : size_(bytes), flags_(flags | GL_DYNAMIC_STORAGE_BIT) {
+std::size_t Buffer::storageFor(std::size_t bytes) {
   // Zero-sized storage is an error in GL; keep one word so empty sets still bind.
-  const GLsizeiptr stored = GLsizeiptr(bytes ? bytes : 4);
+  if (bytes < 4) return 4;
+  if (bytes <= 256) return bytes;
+  std::size_t p = 128;
+  while (p * 2 < bytes) p *= 2;  // p < bytes <= 2p
+  const std::size_t step = p <= (std::size_t(1) << 20) ? p / 4 : p / 8;
+  return (bytes + step - 1) / step * step;
+}
+
+Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view name)
+    : size_(bytes), storage_(storageFor(bytes)), flags_(flags | GL_DYNAMIC_STORAGE_BIT) {
   id_ = detail::takeRecycled(key());
   if (id_) {
+    // A recycled buffer is cleared where no data is given (its bytes past size() as well).
     if (bytes && data)
-      glNamedBufferSubData(id_, 0, stored, data);
+      glNamedBufferSubData(id_, 0, GLsizeiptr(bytes), data);
     else
       glClearNamedBufferData(id_, GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
   } else {
     glCreateBuffers(1, &id_);
     detail::countCreated();
-    glNamedBufferStorage(id_, stored, bytes ? data : nullptr, flags_);
+    const bool whole = bytes && data && storage_ == bytes;
+    glNamedBufferStorage(id_, GLsizeiptr(storage_), whole ? data : nullptr, flags_);
+    if (bytes && data && !whole) glNamedBufferSubData(id_, 0, GLsizeiptr(bytes), data);
   }
   label(GL_BUFFER, id_, name);
 }

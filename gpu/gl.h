@@ -152,13 +152,22 @@ class Buffer : public GlObject<BufferDeleter> {
   /// data).
   Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view label);
   ~Buffer() { release(key()); }
-  Buffer(Buffer&& o) noexcept : GlObject(std::move(o)), size_(o.size_), flags_(o.flags_) {}
+  Buffer(Buffer&& o) noexcept
+      : GlObject(std::move(o)), size_(o.size_), storage_(o.storage_), flags_(o.flags_) {}
   Buffer& operator=(Buffer&& o) noexcept {
     GlObject::operator=(std::move(o));
     std::swap(size_, o.size_);
+    std::swap(storage_, o.storage_);
     std::swap(flags_, o.flags_);
     return *this;
   }
+  /// The storage a buffer of `bytes` gets: `bytes` up to 256 bytes, above that rounded up to the
+  /// next quarter of its power of two (at most 25 % more; above 1 MiB the next eighth, 12.5 %). A
+  /// recycled buffer is taken over by a request of the same storage, so a set whose size changes a
+  /// little from frame to frame (the samples of adaptive with the per-voxel fallback as a light
+  /// moves) reuses its buffers instead of creating new ones (tests/gpu/test_resident.cpp,
+  /// GpuRendererReuse).
+  static std::size_t storageFor(std::size_t bytes);
   std::size_t size() const { return size_; }
   /// Copies bytes [offset, offset + n) back to host memory.
   void read(void* dst, std::size_t n, std::size_t offset = 0) const;
@@ -166,9 +175,10 @@ class Buffer : public GlObject<BufferDeleter> {
 
  private:
   detail::ObjectKey key() const {
-    return {detail::ObjectKind::Buffer, 0, 0, 0, 0, 0, size_, flags_};
+    return {detail::ObjectKind::Buffer, 0, 0, 0, 0, 0, storage_, flags_};
   }
-  std::size_t size_ = 0;
+  std::size_t size_ = 0;     ///< the bytes asked for (size())
+  std::size_t storage_ = 0;  ///< the bytes stored: storageFor(size_)
   GLbitfield flags_ = 0;
 };
 

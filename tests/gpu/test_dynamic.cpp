@@ -541,9 +541,10 @@ TEST(GpuAdaptiveMethod, DefaultLevelsFollowTheInitialSamplesAsOnCpu) {
   SCATTERLAB_REQUIRE_GPU();
   struct Case {
     int resolution, count;
-    std::vector<int> grids;  // the stats' grid per level: 0 for the initial samples
+    std::vector<int> grids;  // the stats' grid per level: 0 for the initial samples, last the
+                             // per-voxel fallback's voxels (on by default)
   };
-  for (const Case& c : {Case{56, 64, {0, 16, 28}}, Case{64, 6000, {0, 32}}}) {
+  for (const Case& c : {Case{56, 64, {0, 16, 28, 56}}, Case{64, 6000, {0, 32, 64}}}) {
     Scene scene = spotScene(24, 18);
     scene.medium.resolution = IVec3(c.resolution);
     const Json render{{"method", "adaptive"}, {"sampler", {{"type", "grid"}, {"count", c.count}}}};

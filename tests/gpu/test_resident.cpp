@@ -150,6 +150,19 @@ TEST(GpuRecycling, SameDescriptionTakesTheNameOverOnlyInsideAScope) {
   gpu::checkGl("recycling");
 }
 
+TEST(GpuBuffers, StorageIsASizeClassSoNearSizesShareRecycledBuffers) {
+  // Exact up to 256 bytes; then the next quarter of the power of two below (eighths above
+  // 1 MiB): a set that grows by a few samples between frames fits the buffer it had.
+  EXPECT_EQ(gpu::Buffer::storageFor(0), 4u);
+  EXPECT_EQ(gpu::Buffer::storageFor(100), 100u);
+  EXPECT_EQ(gpu::Buffer::storageFor(256), 256u);
+  EXPECT_EQ(gpu::Buffer::storageFor(257), 320u);      // 256 + 64
+  EXPECT_EQ(gpu::Buffer::storageFor(9600), 10240u);   // 300 samples of 32 B: 8192 + 2048
+  EXPECT_EQ(gpu::Buffer::storageFor(10240), 10240u);  // 320 samples: the same storage
+  EXPECT_EQ(gpu::Buffer::storageFor(3u << 20), 3u << 20);
+  EXPECT_EQ(gpu::Buffer::storageFor((3u << 20) + 1), (3u << 20) + (1u << 18));
+}
+
 /// The blob scene with its spot light moved per frame.
 Json frameDoc(int frame) {
   Json doc = blobSceneDoc(16, 32, 24);

@@ -856,7 +856,14 @@ TEST(DynamicSampling, CellSplitAndFallbackKeysParsed) {
   EXPECT_TRUE(ext.visibleTau);
   EXPECT_FALSE(parse({{"tau", "ancestor"}}, false).visibleTau);
   EXPECT_TRUE(ext.splitCells);
-  EXPECT_FALSE(ext.voxelFallback);
+  EXPECT_TRUE(ext.voxelFallback);  // on by default since issue 35, the finest level at 6 probes
+  EXPECT_EQ(ext.fallbackProbes, 6);
+  EXPECT_EQ(levelProbes(ext, {IVec3(32), false, true}), 40);
+  EXPECT_EQ(levelProbes(ext, {IVec3(64), true, true}), 6);
+  EXPECT_EQ(parse({{"fallback_probes", 14}}, false).fallbackProbes, 14);
+  EXPECT_THROW(parse({{"fallback_probes", 7}}, false), ConfigError);
+  EXPECT_THROW(parse({{"fallback_probes", 6}}, true), ConfigError);
+  EXPECT_FALSE(parse({{"fallback", false}}, false).voxelFallback);
   EXPECT_FALSE(parse({{"split", "sphere"}}, false).splitCells);
   EXPECT_THROW(parse({{"split", "box"}}, false), ConfigError);
   EXPECT_THROW(parse({{"fallback", 3}}, false), ConfigError);
