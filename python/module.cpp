@@ -7,12 +7,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <atomic>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <thread>
 
 #include "api/scatterlab.h"
 #include "core/image.h"
@@ -73,20 +76,54 @@ std::vector<std::string> assignments(const py::object& overrides) {
   return out;
 }
 
-/// The GIL released for a scope, as py::gil_scoped_release, but with a destructor that may
-/// throw: a daemon thread still rendering when the interpreter exits is ended by pthread_exit
-/// while it takes the GIL back (a forced unwind), and unwinding through a noexcept destructor
-/// printed "terminate called without an active exception" and aborted the process (issue 37).
+/// Native work in flight on any thread (GilReleased scopes), and whether the interpreter is on
+/// its way out (set by the module's atexit hook, waitForNativeWork()).
+std::atomic<int> nativeWork{0};
+std::atomic<bool> exiting{false};
+
+/// Parks the calling thread for good: the process is exiting, and its exit ends the thread.
+[[noreturn]] void park() {
+  for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+}
+
+/// The GIL released for a scope, as py::gil_scoped_release, for the native work of a call.
+/// Daemon threads still rendering when the interpreter exits (issue 37): Python ends such a
+/// thread by pthread_exit when it takes the GIL back during finalization, a forced unwind through
+/// pybind11's frames, whose handles are then released without the GIL (abort:
+/// "PyThreadState_Get: the function must be called with the GIL held", 1 exit in 30 measured
+/// 2026-11-28, once in CI), and native work still running while the process's static objects
+/// are destroyed crashed it (1 in 60). So the module's atexit hook, which runs before
+/// finalization, marks the exit and waits (GIL released) for the work in flight to end; a scope
+/// that opens after the mark, or closes during finalization, parks its thread instead of
+/// reentering Python. Callers let their own locks go before this destructor runs.
 class GilReleased {
  public:
-  GilReleased() : state_(PyEval_SaveThread()) {}
-  ~GilReleased() noexcept(false) { PyEval_RestoreThread(state_); }
+  GilReleased() : state_(PyEval_SaveThread()) {
+    ++nativeWork;
+    if (exiting) {
+      --nativeWork;
+      park();
+    }
+  }
+  ~GilReleased() noexcept(false) {
+    --nativeWork;
+    if (exiting) park();
+    PyEval_RestoreThread(state_);
+  }
   GilReleased(const GilReleased&) = delete;
   GilReleased& operator=(const GilReleased&) = delete;
 
  private:
   PyThreadState* state_;
 };
+
+/// The atexit hook: no native work starts after it, and the work in flight ends first (at most
+/// one render per thread).
+void waitForNativeWork() {
+  exiting = true;
+  py::gil_scoped_release released;
+  while (nativeWork > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+}
 
 /// A scene document, validated: what load_scene returns and Renderer/render take.
 struct PyScene {
@@ -280,6 +317,8 @@ PyScene loadScene(const py::object& source, const py::object& overrides, const p
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "scatterlab: real-time single-scattering participating media (C++ core)";
+  // Before finalization: no native work of daemon threads outlives the interpreter (GilReleased).
+  py::module_::import("atexit").attr("register")(py::cpp_function(&waitForNativeWork));
   initialize();
   m.attr("__version__") = version();
 
