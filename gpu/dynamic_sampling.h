@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "gpu/records.h"
+#include "gpu/scan.h"
 #include "gpu/timer.h"
 #include "gpu/tracing.h"
 #include "gpu/volume.h"
@@ -49,7 +50,7 @@ struct DynamicSamplingWorkspace {
   Buffer rootTau;    ///< float τ per level-0 sample
   Buffer probeSums;  ///< float per sample and group of kProbeGroup probes (the probe pass)
   Buffer inSet, vertexAncestors, offsets;  ///< grid information buffer of G_{k+1}, its scan
-  std::vector<Buffer> scanSums;            ///< block sums per recursion depth of the scan
+  ScanScratch scanSums;                    ///< block sums per recursion depth of the scan
   std::size_t vertices = 0;                ///< capacity of inSet / vertexAncestors / offsets
   /// Most samples a level above 0 may hold (tests lower it to reach the overflow report).
   std::size_t maxLevelSamples = kMaxLevelSamples;
@@ -75,11 +76,5 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
                                          std::vector<std::vector<float>>* errors = nullptr,
                                          const ShadowMaps* shadows = nullptr,
                                          DynamicSamplingWorkspace* workspace = nullptr);
-
-/// Exclusive scan of 0/1 flags by compute shader (the scan used by dynamicSamplingGpu, on host
-/// data: upload, scan, read back), for comparison with scatterlab::exclusiveScan. Returns the
-/// total.
-std::uint32_t exclusiveScanGpu(std::span<const std::uint8_t> flags,
-                               std::span<std::uint32_t> offsets);
 
 }  // namespace scatterlab::gpu
