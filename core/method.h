@@ -21,7 +21,10 @@ struct RenderResult {
   Image image;
   RenderStats stats;
   /// The radiance samples a sample-based method used (positions, radii, levels, S, ∇S);
-  /// empty for methods without samples. For pictures of the sampling and for tests.
+  /// empty for methods without samples. For pictures of the sampling and for tests. On the GPU
+  /// with Method::imageOnDevice (compute pipeline) the samples stay on the device too: S and
+  /// ∇S are not read back (gradient), and `adaptive`'s final samples are not read at all
+  /// (empty; stats.samples and the levels' stats are read after the frame).
   std::vector<RadianceSample> samples;
   /// The volumes the method built, for export (`render --density-vdb / --radiance-vdb`) and
   /// tests: the density volume (CPU methods), the source-radiance volume S (CPU methods that
@@ -65,7 +68,8 @@ class Method {
   /// engine that draws it, or a frame timed without the read-back. Where the integrator cannot
   /// (the CPU backend, the raster slice marcher, the screen-space competitors) the image is
   /// read back as usual and deviceImage stays empty. Needs retainDensity (the texture lives in
-  /// the kept frame).
+  /// the kept frame). The frame then waits for nothing before the image is asked for (issue 33:
+  /// stats host_waits); RenderResult::samples says what stays on the device.
   bool imageOnDevice = false;
 };
 

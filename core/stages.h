@@ -214,6 +214,13 @@ inline constexpr float kSingularEps = 1e-9f;
 /// measurement among 0.25, 0.5, 1, 2, 4, 8 (docs/fidelity.md §8).
 inline constexpr float kLampDepth = 2.0f;
 
+/// Dynamic sampling's error groups (sampling/dynamic_sampling.h errorBin(): a sample budget
+/// splits worst group first): the bits of E's float below these are dropped (the exponent and 6
+/// mantissa bits stay: 1/64 of an octave per group), and a group is counted from the threshold's,
+/// at most kErrorBins − 1. The GPU's histograms have kErrorBins entries.
+inline constexpr int kErrorBinShift = 17;
+inline constexpr int kErrorBins = 4096;
+
 /// The physics constants the shaders share with the CPU, by the #define the GPU programs see
 /// them under (gpu/shaders.h injects each one, so that no shader copies a number by hand).
 struct SharedConstant {
@@ -225,6 +232,8 @@ inline constexpr SharedConstant kSharedConstants[] = {
     {"SL_SINGULAR_EPS", kSingularEps},
     {"SL_LAMP_DEPTH", kLampDepth},
     {"SL_BLOCK", float(MaxDensityGrid::kBlock)},  // voxels per edge of an empty-space block
+    {"SL_ERROR_BIN_SHIFT", float(kErrorBinShift)},
+    {"SL_ERROR_BINS", float(kErrorBins)},
 };
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted

@@ -74,6 +74,12 @@ inline constexpr GLuint kThreshold = 15;
 /// uint trips and cut of the loop guard (gpu/shaders.h loopIterationLimit(); only where the
 /// driver caps loop iterations), bound once for every program.
 inline constexpr GLuint kLoopGuard = 16;
+/// Dynamic sampling's budget (dynamic_budget.comp.glsl): per vertex of G_{k+1} 1 + the error
+/// group of its worst marking candidate, and the group histograms of every split level.
+inline constexpr GLuint kVertexKeys = 17;
+inline constexpr GLuint kGroupHistograms = 18;
+/// GpuRadianceRecord[] of the final sample list (dynamic sampling's assembly output).
+inline constexpr GLuint kNextRadiance = 19;
 /// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (shading/screen_march.h).
 inline constexpr GLuint kJitterTable = 1;
 
@@ -153,6 +159,9 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_VERTEX_ANCESTORS", binding::kVertexAncestors},
     {"BINDING_OFFSETS", binding::kOffsets},
     {"BINDING_NEXT_SAMPLES", binding::kNextSamples},
+    {"BINDING_VERTEX_KEYS", binding::kVertexKeys},
+    {"BINDING_GROUP_HISTOGRAMS", binding::kGroupHistograms},
+    {"BINDING_NEXT_RADIANCE", binding::kNextRadiance},
     {"BINDING_NEXT_ANCESTORS", binding::kNextAncestors},
     {"BINDING_PROBE_SUMS", binding::kProbeSums},
     {"BINDING_SCAN_IN", binding::kScanIn},

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "gpu/records.h"
+#include "gpu/scan.h"
 
 namespace scatterlab::gpu {
 
@@ -10,7 +11,8 @@ bool DeviceSamples::setPoints(std::span<const RadianceSample> samples) {
   std::vector<glm::vec4> now;
   now.reserve(samples.size());
   for (const RadianceSample& s : samples) now.emplace_back(s.position, s.radius);
-  if (points && now == spheres) return false;
+  if (points && now == spheres && !onDevice) return false;
+  onDevice.reset();
   spheres = std::move(now);
   std::vector<GpuSamplePoint> packed;
   packed.reserve(spheres.size());
@@ -24,8 +26,34 @@ bool DeviceSamples::setPoints(std::span<const RadianceSample> samples) {
   return true;
 }
 
+void DeviceSamples::reserveOnDevice(std::size_t capacity, std::size_t binItems) {
+  spheres.clear();
+  bins_.reset();
+  radianceCurrent = false;
+  if (!onDevice) onDevice.emplace();
+  ensure(points, capacity * sizeof(GpuSamplePoint), "sample positions (on device)");
+  ensure(radiance, capacity * sizeof(GpuRadianceRecord), "sample S and grad S (on device)");
+  ensure(onDevice->count, sizeof(GLuint), "sample count (on device)");
+  onDevice->capacity = capacity;
+  onDevice->binItems = binItems;
+}
+
 const BinBuffers& DeviceSamples::binsFor(const Box& bounds, IVec3 dims, IVec3* binCount,
                                          const char* pass) {
+  if (onDevice) {
+    // TEMPORARY (until the GPU builds the bins): the list read back and binned on the host.
+    GLuint n = 0;
+    onDevice->count.read(&n, sizeof n);
+    std::vector<GpuSamplePoint> pts(n);
+    if (n) points.read(pts.data(), n * sizeof(GpuSamplePoint));
+    std::vector<glm::vec4> sph;
+    for (const GpuSamplePoint& p : pts) sph.emplace_back(p.position, p.radius);
+    bins_.reset();
+    const SphereBins b = binSpheres(sph, bounds, dims, pass);
+    bins_.emplace(b);
+    *binCount = b.bins;
+    return *bins_;
+  }
   if (!bins_ || binBounds_.min != bounds.min || binBounds_.max != bounds.max || binDims_ != dims) {
     bins_.reset();
     const SphereBins b = binSpheres(spheres, bounds, dims, pass);

@@ -21,13 +21,26 @@ struct DeviceSamples {
   Buffer points;                   ///< GpuSamplePoint[spheres.size()]
   Buffer radiance;                 ///< GpuRadianceRecord[spheres.size()]
   bool radianceCurrent = false;    ///< `radiance` was written by this render's tracer
+  /// A list whose count only the GPU knows (dynamic sampling's resident pass, issue 33):
+  /// `points` and `radiance` hold at most `capacity` samples, the count is the uint in `count`,
+  /// and the bins are built on the GPU from it (binItems: an upper bound on their entries).
+  struct OnDevice {
+    Buffer count;
+    std::size_t capacity = 0;
+    std::size_t binItems = 0;
+  };
+  std::optional<OnDevice> onDevice;
 
   /// Uploads the samples' positions and radii unless the same ones are uploaded already
   /// (compared on the host: no GPU wait); a new set drops the bins and S. Sizes `radiance`.
-  /// Returns whether it uploaded. Needs the context.
+  /// Returns whether it uploaded. Ends an onDevice list. Needs the context.
   bool setPoints(std::span<const RadianceSample> samples);
+  /// Makes `points` and `radiance` hold at least `capacity` samples for an onDevice list (their
+  /// contents undefined), drops the bins. Needs the context.
+  void reserveOnDevice(std::size_t capacity, std::size_t binItems);
   /// The bins of the points over the voxel centres of (bounds, dims): the kept ones when they
-  /// were built for this grid, else binned on the host and uploaded (once per sample set).
+  /// were built for this grid, else binned on the host and uploaded (once per sample set); an
+  /// onDevice list is binned on the GPU (every time: its samples change with the light).
   const BinBuffers& binsFor(const Box& bounds, IVec3 dims, IVec3* binCount, const char* pass);
   std::size_t size() const { return spheres.size(); }
 

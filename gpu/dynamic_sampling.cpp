@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "gpu/bindings.h"
 #include "gpu/context.h"
+#include "gpu/device_samples.h"
 #include "gpu/dispatch.h"
 #include "gpu/empty_space.h"
 #include "gpu/scan.h"
@@ -52,15 +53,29 @@ std::string levelLabel(const char* what, std::size_t level) {
   return std::string("dynamic sampling ") + what + " (level " + std::to_string(level) + ")";
 }
 
-/// Layout of DynamicSamplingWorkspace::counts for L split levels: [0, L] the levels' sample
-/// counts, [L + 1] the largest count a level asked for beyond its capacity, [L + 2] that level,
-/// then from dispatchSlot(L) three uints (x, 1, 1) per level: its evaluate/split dispatch.
-std::size_t overflowSlot(std::size_t L) {
-  return L + 1;
-}
-std::size_t dispatchSlot(std::size_t L) {
-  return L + 3;
-}
+/// Layout of DynamicSamplingWorkspace::counts for L split levels (uints): [0, L] the levels'
+/// sample counts, [L + 1] the largest count a level asked for beyond its capacity, [L + 2] that
+/// level, then three uints (x, 1, 1) per level: its evaluate/split dispatch; then the final
+/// list's end, where its top-up children begin and where the fallback's children begin, the
+/// budget's running kept count, count after a cut and top-up cut, the final list's overflow, the
+/// cut of each split level, the samples each level keeps and the top-up children of each split
+/// level.
+struct CountSlots {
+  std::size_t L;
+  std::size_t overflow() const { return L + 1; }
+  std::size_t dispatch(std::size_t k) const { return L + 3 + 3 * k; }
+  std::size_t end() const { return L + 3 + 3 * (L + 1); }
+  std::size_t keptEnd() const { return end() + 1; }
+  std::size_t gradEnd() const { return end() + 2; }
+  std::size_t kept() const { return end() + 3; }
+  std::size_t budgetCount() const { return end() + 4; }
+  std::size_t topCut() const { return end() + 5; }
+  std::size_t finalOverflow() const { return end() + 6; }
+  std::size_t cut(std::size_t k) const { return end() + 7 + k; }
+  std::size_t keptOf(std::size_t k) const { return end() + 7 + L + k; }
+  std::size_t childrenOf(std::size_t k) const { return end() + 8 + 2 * L + k; }
+  std::size_t words() const { return end() + 8 + 3 * L; }
+};
 
 /// Sums per sample of the probe pass: the groups of kProbeGroup probes (`probes`: the most of
 /// any level, the buffer's size; a level's own count: levelProbes()).
@@ -114,29 +129,55 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
                                                                   : "dynamic sampling evaluate");
 }
 
+/// `v` with errorGroup() (dynamic_groups.glsl: sampling/dynamic_sampling.h errorBin()).
+ProgramVariant withGroups(ProgramVariant v) {
+  v.compute.insert(v.compute.begin(), "dynamic_groups.glsl");
+  return v;
+}
+
+// dynamic_budget.comp.glsl's cut: 1024 invocations of 4 groups each.
+static_assert(kErrorBins == 1024 * 4);
+
+/// Vertices of split grid k (G_{k+1}).
+std::size_t gridVertices(const std::vector<LevelGrid>& grids, std::size_t k) {
+  const IVec3 d = grids[k].dims;
+  return std::size_t(d.x) * std::size_t(d.y) * std::size_t(d.z);
+}
+
 /// Sizes the workspace for `n0` initial samples and `levels`, and uploads level 0 (positions,
-/// radii, each sample its own ancestor) and the counts (n0, zeros).
-void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSample>& initial,
-                      const DynamicSamplingSettings& settings) {
+/// radii, each sample its own ancestor) and the counts (n0, zeros; the top-up's cut: none).
+/// Returns the final list's capacity: every level's capacity (and with a budget the top-up's
+/// children), at most max(budget, n0) with a budget (a cut never ends above the larger of the
+/// two).
+std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
+                             const std::vector<RadianceSample>& initial,
+                             const DynamicSamplingSettings& settings, long long budget) {
   const std::vector<LevelGrid> grids = levelGrids(settings);
-  const auto gridVertices = [&](std::size_t k) {
-    const IVec3 d = grids[k].dims;
-    return std::size_t(d.x) * std::size_t(d.y) * std::size_t(d.z);
-  };
   const std::size_t L = grids.size(), n0 = initial.size();
+  const CountSlots slots{L};
   if (w.levels.size() < L + 1) w.levels.resize(L + 1);
+  std::size_t finalCapacity = 0;
   for (std::size_t k = 0; k <= L; ++k) {
     std::size_t cap = n0;
-    if (k > 0) cap = std::min(gridVertices(k - 1), w.maxLevelSamples);
+    if (k > 0) cap = std::min(gridVertices(grids, k - 1), w.maxLevelSamples);
     DynamicSamplingWorkspace::Level& l = w.levels[k];
     l.capacity = cap;
+    finalCapacity += cap;
     ensure(l.samples, cap * sizeof(GpuSamplePoint), levelLabel("samples", k));
     ensure(l.ancestors, cap * sizeof(std::int32_t), levelLabel("ancestors", k));
     ensure(l.radiance, cap * sizeof(GpuRadianceRecord), levelLabel("S", k));
     ensure(l.errors, (k == 0 ? 2 : 1) * cap * sizeof(float), levelLabel("E", k));
+    if (budget > 0 && k < L) {
+      ensure(l.vertexKeys, gridVertices(grids, k) * sizeof(GLuint), levelLabel("error keys", k));
+      finalCapacity += gridVertices(grids, k);  // the top-up's children
+    }
   }
-  std::size_t vertices = 0;
-  for (std::size_t k = 0; k < L; ++k) vertices = std::max(vertices, gridVertices(k));
+  if (budget > 0) finalCapacity = std::min(finalCapacity, std::max(std::size_t(budget), n0));
+  // The grid information buffer, and the final assembly's flags and offsets over a level's
+  // samples or a grid's vertices.
+  std::size_t vertices = n0;
+  for (std::size_t k = 0; k < L; ++k)
+    vertices = std::max({vertices, gridVertices(grids, k), w.levels[k + 1].capacity});
   if (vertices > w.vertices) {
     ensure(w.inSet, vertices * sizeof(GLuint), "grid info: in set");
     ensure(w.vertexAncestors, vertices * sizeof(std::int32_t), "grid info: ancestor");
@@ -145,15 +186,18 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
   }
   ensure(w.threshold, 2 * sizeof(double), "dynamic sampling threshold");
   ensure(w.rootTau, n0 * sizeof(float), "dynamic sampling root tau");
+  if (budget > 0)
+    ensure(w.histograms, std::max<std::size_t>(L, 1) * 2 * kErrorBins * sizeof(GLuint),
+           "dynamic sampling error-group histograms");
   std::size_t probed = 0;  // the largest level that is probed (all but the last)
   for (std::size_t k = 0; k < L; ++k) probed = std::max(probed, w.levels[k].capacity);
   ensure(w.probeSums, probed * std::size_t(probeGroups(settings.probes)) * sizeof(float),
          "dynamic sampling probe sums");
-  const std::size_t words = dispatchSlot(L) + 3 * (L + 1);
-  ensure(w.counts, words * sizeof(GLuint), "dynamic sampling counts");
-  std::vector<GLuint> counts(words, 0u);
+  ensure(w.counts, slots.words() * sizeof(GLuint), "dynamic sampling counts");
+  std::vector<GLuint> counts(slots.words(), 0u);
   counts[0] = GLuint(n0);
-  glNamedBufferSubData(w.counts.id(), 0, GLsizeiptr(words * sizeof(GLuint)), counts.data());
+  counts[slots.topCut()] = GLuint(kErrorBins);
+  glNamedBufferSubData(w.counts.id(), 0, GLsizeiptr(counts.size() * sizeof(GLuint)), counts.data());
   std::vector<GpuSamplePoint> points;
   points.reserve(n0);
   std::vector<std::int32_t> anc(n0);
@@ -168,6 +212,7 @@ void prepareWorkspace(DynamicSamplingWorkspace& w, const std::vector<RadianceSam
                          anc.data());
   }
   checkGl("dynamic sampling: upload level 0");
+  return finalCapacity;
 }
 
 /// One invocation per sample of level k: level 0's size is known on the host (its capacity);
@@ -179,7 +224,7 @@ void dispatchOverLevel(const char* pass, const DynamicSamplingWorkspace& w, std:
     return;
   }
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
-  dispatchIndirect(pass, GLintptr((dispatchSlot(L) + 3 * k) * sizeof(GLuint)));
+  dispatchIndirect(pass, GLintptr(CountSlots{L}.dispatch(k) * sizeof(GLuint)));
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
 }
 
@@ -283,12 +328,102 @@ void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-/// Split level k into the grid information buffer of G_{k+1} (cleared first). GPU time:
-/// "ds split".
+/// The budget's cut of level k (budgetedSplit's error groups, on the GPU): the keys pass (each
+/// candidate raises its vertices of G_{k+1} to 1 + its group, and counts itself), the vertices'
+/// histogram, and the one-workgroup cut, which leaves the level's cut, the count after it and
+/// the samples kept so far in w.counts. GPU time: "ds budget".
+void budgetLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k,
+                 std::size_t L, long long budget, StageTimer* timer) {
+  const CountSlots slots{L};
+  const std::size_t nv = grid.vertices();
+  const GLuint zero = 0;
+  const GLuint histBase = GLuint(k * 2 * kErrorBins);
+  const DynamicSamplingWorkspace::Level& l = w.levels[k];
+  ScopedGpuTimer t(timer, "ds budget");
+  glClearNamedBufferSubData(l.vertexKeys.id(), GL_R32UI, 0, GLsizeiptr(nv * sizeof(GLuint)),
+                            GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glClearNamedBufferSubData(w.histograms.id(), GL_R32UI, GLintptr(histBase * sizeof(GLuint)),
+                            GLsizeiptr(2 * kErrorBins * sizeof(GLuint)), GL_RED_INTEGER,
+                            GL_UNSIGNED_INT, &zero);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  {
+    const Program& keys = gpu::program(
+        withGroups({.compute = {"dynamic_split.comp.glsl"}, .defines = {"SL_BUDGET_KEYS"}}),
+        "dynamic sampling budget keys");
+    keys.use();
+    glUniform1ui(keys.uniform("uLevel"), GLuint(k));
+    setGridUniforms(keys, grid);
+    glUniform1i(keys.uniform("uCell"), grid.voxels || grid.cells ? 1 : 0);
+    glUniform1i(keys.uniform("uVoxels"), grid.voxels ? 1 : 0);
+    glUniform1ui(keys.uniform("uHistogramBase"), histBase);
+    l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
+    l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
+    w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
+    dispatchOverLevel("ds budget keys", w, k, L);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+  {
+    const Program& vertices =
+        gpu::program({.compute = {"dynamic_budget.comp.glsl"}, .defines = {"SL_VERTEX_GROUPS"}},
+                     "dynamic sampling budget vertices");
+    vertices.use();
+    glUniform1ui(vertices.uniform("uVertexCount"), GLuint(nv));
+    glUniform1ui(vertices.uniform("uHistogramBase"), histBase);
+    l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
+    w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
+    dispatch("ds budget vertices", {groups(nv, 256), 1, 1});
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+  const Program& cut =
+      gpu::program({.compute = {"dynamic_budget.comp.glsl"}}, "dynamic sampling budget cut");
+  cut.use();
+  glUniform1ui(cut.uniform("uLevel"), GLuint(k));
+  glUniform1ui(cut.uniform("uSplitLevels"), GLuint(L));
+  glUniform1i(cut.uniform("uTopUp"), 0);
+  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget, INT_MAX)));
+  glUniform1ui(cut.uniform("uKeptSlot"), GLuint(slots.kept()));
+  glUniform1ui(cut.uniform("uCountSlot"), GLuint(slots.budgetCount()));
+  glUniform1ui(cut.uniform("uCutSlot"), GLuint(slots.cut(k)));
+  glUniform1ui(cut.uniform("uCutsSlot"), GLuint(slots.cut(0)));
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
+  dispatch("ds budget cut", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+/// The top-up's cut (budgetTopUp's, on the GPU): every split level's histograms below its cut,
+/// against the budget; leaves the cut in w.counts. GPU time: "ds budget".
+void budgetTopUpCut(DynamicSamplingWorkspace& w, std::size_t L, long long budget,
+                    StageTimer* timer) {
+  const CountSlots slots{L};
+  ScopedGpuTimer t(timer, "ds budget");
+  const Program& cut =
+      gpu::program({.compute = {"dynamic_budget.comp.glsl"}}, "dynamic sampling budget cut");
+  cut.use();
+  glUniform1ui(cut.uniform("uLevel"), GLuint(L));
+  glUniform1ui(cut.uniform("uSplitLevels"), GLuint(L));
+  glUniform1i(cut.uniform("uTopUp"), 1);
+  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget, INT_MAX)));
+  glUniform1ui(cut.uniform("uKeptSlot"), GLuint(slots.kept()));
+  glUniform1ui(cut.uniform("uCountSlot"), GLuint(slots.budgetCount()));
+  glUniform1ui(cut.uniform("uCutSlot"), GLuint(slots.topCut()));
+  glUniform1ui(cut.uniform("uCutsSlot"), GLuint(slots.cut(0)));
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
+  dispatch("ds budget cut", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
+/// Split level k into the grid information buffer of G_{k+1} (cleared first): every candidate,
+/// or with a budget those of the groups at or above the level's cut. GPU time: "ds split".
 void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k, std::size_t L,
-                StageTimer* timer) {
-  const Program& program =
-      gpu::program({.compute = {"dynamic_split.comp.glsl"}}, "dynamic sampling split");
+                bool budgeted, StageTimer* timer) {
+  ProgramVariant variant{.compute = {"dynamic_split.comp.glsl"}};
+  if (budgeted) variant = withGroups(variant.define("SL_BUDGET"));
+  const Program& program = gpu::program(variant, "dynamic sampling split");
   const std::size_t nv = grid.vertices();
   const GLuint zero = 0;
   const GLint none = INT_MAX;
@@ -303,6 +438,7 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size
   glUniform1ui(program.uniform("uLevel"), GLuint(k));
   setGridUniforms(program, grid);
   glUniform1i(program.uniform("uCell"), grid.voxels || grid.cells ? 1 : 0);
+  if (budgeted) glUniform1ui(program.uniform("uCutSlot"), GLuint(CountSlots{L}.cut(k)));
   l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
   l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
   l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
@@ -331,8 +467,8 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
     glUniform1ui(count.uniform("uVertexCount"), GLuint(nv));
     glUniform1ui(count.uniform("uLevel"), GLuint(next));
     glUniform1ui(count.uniform("uCapacity"), GLuint(l.capacity));
-    glUniform1ui(count.uniform("uOverflowSlot"), GLuint(overflowSlot(L)));
-    glUniform1ui(count.uniform("uDispatchSlot"), GLuint(dispatchSlot(L)));
+    glUniform1ui(count.uniform("uOverflowSlot"), GLuint(CountSlots{L}.overflow()));
+    glUniform1ui(count.uniform("uDispatchSlot"), GLuint(CountSlots{L}.dispatch(0)));
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
@@ -354,278 +490,329 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-/// What one level's evaluation left on the GPU, read back once the pass is done.
-struct LevelReadBack {
-  std::vector<GpuSamplePoint> samples;
-  std::vector<GpuRadianceRecord> radiance;
-  std::vector<float> errors;
+/// The final list's destination: the buffers and their capacity.
+struct FinalList {
+  const Buffer& points;
+  const Buffer& radiance;
+  std::size_t capacity;
 };
 
-/// A level's budgeted split decided on the host (budgetedSplit(), the CPU's function): E of the
-/// level is read back, and the next level's samples and ancestors are uploaded with its count and
-/// dispatch size. `points`/`anc`: the level's samples as the host holds them (level 0: the
-/// initial ones; later: those uploaded here), replaced by the next level's.
-BudgetLevel budgetedSplitGpu(DynamicSamplingWorkspace& w, const Scene& scene, std::size_t k,
-                             std::size_t L, const std::vector<LevelGrid>& grids, double threshold,
-                             long long kept, long long budget, std::vector<GpuSamplePoint>& points,
-                             std::vector<std::int32_t>& anc) {
-  const std::size_t n = points.size();
-  std::vector<float> errors(n);
-  if (n) w.levels[k].errors.read(errors.data(), n * sizeof(float));
-  std::vector<Vec3> centres(n);
-  std::vector<float> radii(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    centres[j] = points[j].position;
-    radii[j] = points[j].radius;
-  }
-  BudgetLevel bl;
-  bl.decision = budgetedSplit(scene.medium.bounds, grids[k], centres, radii, anc, errors, threshold,
-                              kept + (long long)n, budget, L - k);
-  bl.grid = grids[k];
-  bl.centres = std::move(centres);
-  bl.radii = std::move(radii);
-  bl.anc = anc;
-  bl.errors = std::move(errors);
-  const SplitDecision& d = bl.decision;
-  const GridGeometry grid(scene.medium.bounds, grids[k]);
-  const std::size_t m = d.vertices.size();
-  DynamicSamplingWorkspace::Level& next = w.levels[k + 1];
-  if (m > next.capacity)
-    throw GpuError("dynamic sampling: level " + std::to_string(k + 1) + " (grid " +
-                   std::to_string(grids[k].dims.x) + "^3) has " + std::to_string(m) +
-                   " samples, more than the " + std::to_string(next.capacity) +
-                   " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
-                   "larger epsilon");
-  points.resize(m);
-  const float R = grid.radius();
-  for (std::size_t i = 0; i < m; ++i) {
-    const std::size_t v = d.vertices[i];
-    const IVec3 c(int(v % std::size_t(grid.dims.x)),
-                  int((v / std::size_t(grid.dims.x)) % std::size_t(grid.dims.y)),
-                  int(v / (std::size_t(grid.dims.x) * std::size_t(grid.dims.y))));
-    points[i] = {grid.bounds.min + (Vec3(c) + 0.5f) * grid.interval, R};
-  }
-  anc = d.ancestors;
-  if (m) {
-    glNamedBufferSubData(next.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)),
-                         points.data());
-    glNamedBufferSubData(next.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)), anc.data());
-  }
-  const GLuint count = GLuint(m);
-  glNamedBufferSubData(w.counts.id(), GLintptr((k + 1) * sizeof(GLuint)), sizeof(GLuint), &count);
-  const GLuint dispatch[3] = {groups(m, 64), 1u, 1u};
-  glNamedBufferSubData(w.counts.id(), GLintptr((dispatchSlot(L) + 3 * (k + 1)) * sizeof(GLuint)),
-                       sizeof dispatch, dispatch);
-  checkGl("dynamic sampling: budgeted split of level " + std::to_string(k));
-  return bl;
+/// One part of the final list (dynamic_assemble.comp.glsl): `flags` (a program that writes a
+/// flag per invocation into w.inSet, its uniforms set and inputs bound by `bindFlags`) over `n`
+/// invocations, their scan, the scatter (`scatter`, bound by `bindScatter`), and the advance of
+/// the list's end, the part's total into counts[partSlot].
+template <class BindFlags, class BindScatter>
+void assemblePart(DynamicSamplingWorkspace& w, const CountSlots& slots, const FinalList& out,
+                  std::size_t n, const char* what, const Program& flags, const BindFlags& bindFlags,
+                  const Program& scatter, const BindScatter& bindScatter, std::size_t partSlot) {
+  if (n == 0) return;
+  const auto common = [&](const Program& p) {
+    p.use();
+    glUniform1ui(p.uniform("uCount"), GLuint(n));
+    glUniform1ui(p.uniform("uEndSlot"), GLuint(slots.end()));
+    glUniform1ui(p.uniform("uCapacity"), GLuint(out.capacity));
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+  };
+  common(flags);
+  bindFlags(flags);
+  dispatch(what, {groups(n, 256), 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  scanBuffer(w.inSet, w.offsets, GLuint(n), true, w.scanSums);
+  common(scatter);
+  bindScatter(scatter);
+  out.points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
+  out.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextRadiance);
+  dispatch(what, {groups(n, 256), 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  const Program& advance = gpu::program(
+      {.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_ADVANCE"}}, "ds assemble end");
+  common(advance);
+  glUniform1ui(advance.uniform("uPartSlot"), GLuint(partSlot));
+  glUniform1ui(advance.uniform("uOverflowSlot"), GLuint(slots.finalOverflow()));
+  dispatch("ds assemble end", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-/// S and ∇S of the top-up's children (budgetTopUp) on the GPU: uploaded into the last level's
-/// buffers in chunks of its capacity and evaluated there as a final level (no probes).
-void evaluateTopUpGpu(DynamicSamplingWorkspace& w, const TracingInputs& inputs,
-                      const Volume& density, std::size_t lights, const TracerSteps& steps,
-                      const DynamicSamplingSettings& settings, TopUp& t, StageTimer* timer) {
-  const std::vector<LevelGrid> grids = levelGrids(settings);
+/// The copy of counts[from] into counts[to] (a one-uint GPU copy).
+void copyCount(const Buffer& counts, std::size_t from, const Buffer& to, std::size_t at) {
+  glCopyNamedBufferSubData(counts.id(), to.id(), GLintptr(from * sizeof(GLuint)),
+                           GLintptr(at * sizeof(GLuint)), sizeof(GLuint));
+}
+
+/// The final list in the CPU's order: the samples each level keeps, level by level, then the
+/// top-up's children (with ∇S, then the fallback's voxels without), their S traced in place.
+/// GPU time: "ds assemble" (the children's tracing: "ds evaluate+error").
+void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std::size_t lights,
+                   const Scene& scene, const std::vector<LevelGrid>& grids, long long budget,
+                   const TracerSteps& steps, const FinalList& out, StageTimer* timer) {
   const std::size_t L = grids.size();
-  DynamicSamplingWorkspace::Level& l = w.levels[L];
-  // Two batches, as on the CPU (evaluateTopUp): with ∇S, then the voxel grid's without.
-  for (const bool voxels : {false, true}) {
-    std::vector<std::size_t> idx;
-    for (std::size_t i = 0; i < t.children.size(); ++i) {
-      const std::size_t lv = std::size_t(t.children[i].level);
-      if (lv >= 1 && lv <= L && grids[lv - 1].voxels == voxels) idx.push_back(i);
+  const CountSlots slots{L};
+  const Program& keepFlags = gpu::program(
+      withGroups({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_KEEP_FLAGS"}}),
+      "ds assemble: kept samples");
+  const Program& keepScatter =
+      gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_KEEP_SCATTER"}},
+                   "ds assemble: copy kept samples");
+  {
+    ScopedGpuTimer t(timer, "ds assemble");
+    for (std::size_t k = 0; k <= L; ++k) {
+      const DynamicSamplingWorkspace::Level& l = w.levels[k];
+      const bool keepAll = k == L || grids[k].voxels;
+      assemblePart(
+          w, slots, out, l.capacity, "ds assemble", keepFlags,
+          [&](const Program& p) {
+            glUniform1ui(p.uniform("uLevel"), GLuint(k));
+            glUniform1i(p.uniform("uKeepAll"), keepAll ? 1 : 0);
+            glUniform1i(p.uniform("uBudget"), budget > 0 ? 1 : 0);
+            glUniform1ui(p.uniform("uCutSlot"), GLuint(slots.cut(std::min(k, L - (L > 0)))));
+            glUniform1ui(p.uniform("uTopCutSlot"), GLuint(slots.topCut()));
+            l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+            w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
+          },
+          keepScatter,
+          [&](const Program&) {
+            l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+            l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+          },
+          slots.keptOf(k));
     }
-    for (std::size_t first = 0; first < idx.size(); first += l.capacity) {
-      const std::size_t m = std::min(l.capacity, idx.size() - first);
-      std::vector<GpuSamplePoint> points(m);
-      std::vector<std::int32_t> anc(m);
-      for (std::size_t i = 0; i < m; ++i) {
-        const RadianceSample& c = t.children[idx[first + i]];
-        points[i] = {c.position, c.radius};
-        anc[i] = t.ancestors[idx[first + i]];
-      }
-      glNamedBufferSubData(l.samples.id(), 0, GLsizeiptr(m * sizeof(GpuSamplePoint)),
-                           points.data());
-      glNamedBufferSubData(l.ancestors.id(), 0, GLsizeiptr(m * sizeof(std::int32_t)), anc.data());
-      const GLuint count = GLuint(m);
-      glNamedBufferSubData(w.counts.id(), GLintptr(L * sizeof(GLuint)), sizeof(GLuint), &count);
-      evaluateLevel(w, inputs, density, lights, L,
-                    voxels ? Evaluation::FinalNoGradient : Evaluation::Final, steps, settings,
-                    timer);
-      std::vector<GpuRadianceRecord> radiance(m);
-      l.radiance.read(radiance.data(), m * sizeof(GpuRadianceRecord));
-      for (std::size_t i = 0; i < m; ++i) unpackRadiance(radiance[i], t.children[idx[first + i]]);
-    }
+    copyCount(w.counts, slots.end(), w.counts, slots.keptEnd());
   }
-  checkGl("dynamic sampling: top-up");
+  if (budget <= 0 || L == 0) {
+    copyCount(w.counts, slots.end(), w.counts, slots.gradEnd());
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    return;
+  }
+  const Program& childFlags =
+      gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_CHILD_FLAGS"}},
+                   "ds assemble: top-up children");
+  const Program& childScatter =
+      gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_CHILD_SCATTER"}},
+                   "ds assemble: place top-up children");
+  std::size_t children[2] = {0, 0};  // capacity of the two batches: with ∇S, the voxels
+  {
+    ScopedGpuTimer t(timer, "ds assemble");
+    for (const bool voxels : {false, true}) {
+      for (std::size_t k = 0; k < L; ++k) {
+        if (grids[k].voxels != voxels) continue;
+        const GridGeometry grid(scene.medium.bounds, grids[k]);
+        const std::size_t nv = grid.vertices();
+        children[voxels] += nv;
+        const DynamicSamplingWorkspace::Level& l = w.levels[k];
+        assemblePart(
+            w, slots, out, nv, "ds assemble", childFlags,
+            [&](const Program& p) {
+              glUniform1ui(p.uniform("uCutSlot"), GLuint(slots.cut(k)));
+              glUniform1ui(p.uniform("uTopCutSlot"), GLuint(slots.topCut()));
+              l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
+            },
+            childScatter,
+            [&](const Program& p) {
+              setGridUniforms(p, grid);
+              glUniform1f(p.uniform("uRadius"), grid.radius());
+            },
+            slots.childrenOf(k));
+      }
+      if (!voxels) copyCount(w.counts, slots.end(), w.counts, slots.gradEnd());
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+  // The children's S (final samples: no probes), in place: ∇S for those of the split grids,
+  // none for the fallback's voxels (as the voxel level itself).
+  ScopedGpuTimer t(timer, "ds evaluate+error");
+  if (children[0] > 0)
+    traceLevel(inputs, lights, valueSpace(steps, true), steps.delta2, out.points, out.radiance,
+               w.counts, slots.gradEnd(), std::min(children[0], out.capacity), slots.keptEnd());
+  if (children[1] > 0)
+    traceLevel(inputs, lights, valueSpace(steps, false), steps.delta2, out.points, out.radiance,
+               w.counts, slots.end(), std::min(children[1], out.capacity), slots.gradEnd());
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-/// One splitting pass on the GPU. Without a budget every level is enqueued without a read-back;
-/// the result is read once at the end. With one, each split level's E is read back and the
-/// split decided on the host (budgetedSplitGpu), as on the CPU.
-DynamicSamplingResult splitOnceGpu(const Scene& scene, const Volume& density,
-                                   const TracingInputs& inputs,
-                                   const std::vector<RadianceSample>& initial, TracerSteps steps,
-                                   const DynamicSamplingSettings& settings, StageTimer* timer,
-                                   std::vector<std::vector<float>>* errorsOut,
-                                   DynamicSamplingWorkspace& w) {
+/// One splitting pass on the GPU, enqueued without a wait (the budget's decisions included);
+/// the final list goes to `out`. Records the pass in w.pass for readDynamicSamplingGpu.
+void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs& inputs,
+                  const std::vector<RadianceSample>& initial, TracerSteps steps,
+                  const DynamicSamplingSettings& settings, StageTimer* timer,
+                  DynamicSamplingWorkspace& w, DeviceSamples* resident) {
   using Clock = std::chrono::steady_clock;
   const std::vector<LevelGrid> grids = levelGrids(settings);
   const std::size_t L = grids.size();
-  DynamicSamplingResult result;
-  std::vector<double> enqueueMs(L + 1, 0.0);
   const long long budget = sampleBudget(settings, initial.size());
-  std::vector<BudgetLevel> decisions;  // the budget's split levels (empty without one)
-  if (!initial.empty()) {
-    prepareWorkspace(w, initial, settings);
-    std::vector<GpuSamplePoint> points;  // the budget's host copy of the level's samples
-    std::vector<std::int32_t> anc;
-    long long kept = 0;  // samples of the coarser levels that stay
-    double hostThreshold = 0.0;
-    if (budget > 0)
-      for (std::size_t i = 0; i < initial.size(); ++i) {
-        points.push_back({initial[i].position, initial[i].radius});
-        anc.push_back(std::int32_t(i));
-      }
-    for (std::size_t k = 0; k <= L; ++k) {
-      const auto t0 = Clock::now();
-      const bool final = k == L;
-      evaluateLevel(w, inputs, density, scene.lights.size(), k,
-                    !final                         ? Evaluation::Split
-                    : k > 0 && grids[k - 1].voxels ? Evaluation::FinalNoGradient
-                                                   : Evaluation::Final,
-                    steps, settings, timer);
-      if (!final) {
-        if (k == 0) computeThreshold(w, settings, timer);
-        if (budget > 0) {
-          if (k == 0) {
-            double thr[2] = {0.0, 0.0};
-            w.threshold.read(thr, sizeof thr);
-            hostThreshold = thr[1];
-          }
-          const long long n = (long long)points.size();
-          decisions.push_back(
-              budgetedSplitGpu(w, scene, k, L, grids, hostThreshold, kept, budget, points, anc));
-          kept += n - decisions.back().decision.splits;
-        } else {
-          const GridGeometry grid(scene.medium.bounds, grids[k]);
-          splitLevel(w, grid, k, L, timer);
-          compactLevel(w, grid, k + 1, L, timer);
-        }
-      }
-      checkGl("dynamic sampling: level " + std::to_string(k));
-      enqueueMs[k] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    }
+  DynamicSamplingWorkspace::Pass& pass = w.pass;
+  pass = {};
+  pass.settings = settings;
+  pass.initial = initial.size();
+  pass.budget = budget;
+  pass.enqueueMs.assign(L + 1, 0.0);
+  if (initial.empty()) return;
+  const std::size_t finalCapacity = prepareWorkspace(w, initial, settings, budget);
+  pass.finalCapacity = finalCapacity;
+  if (resident) {
+    // An upper bound on the gather's bin entries: every sample with the bins its sphere can
+    // reach (its radius, one voxel of margin each side and rounding, over kBinVoxels).
+    resident->reserveOnDevice(finalCapacity, 0);
+    pass.finalPoints = &resident->points;
+    pass.finalRadiance = &resident->radiance;
+  } else {
+    ensure(w.finalPoints, finalCapacity * sizeof(GpuSamplePoint), "dynamic sampling final list");
+    ensure(w.finalRadiance, finalCapacity * sizeof(GpuRadianceRecord), "dynamic sampling final S");
+    pass.finalPoints = &w.finalPoints;
+    pass.finalRadiance = &w.finalRadiance;
   }
-  // The one read-back of the pass: the counts (this waits for the GPU), then the levels.
-  {  // the read-back's GPU time ends before the top-up's evaluation begins
-    ScopedGpuTimer readTime(timer, "ds read-back");
-    std::vector<GLuint> counts(dispatchSlot(L), 0u);
-    double thr[2] = {0.0, 0.0};
-    if (!initial.empty()) {
-      w.counts.read(counts.data(), counts.size() * sizeof(GLuint));
-      if (counts[overflowSlot(L)] > 0) {
-        const std::size_t k = counts[overflowSlot(L) + 1];
-        throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
-                       std::to_string(grids[k - 1].dims.x) + "^3) has " +
-                       std::to_string(counts[overflowSlot(L)]) + " samples, more than the " +
-                       std::to_string(w.levels[k].capacity) +
-                       " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
-                       "larger epsilon");
-      }
-      if (L > 0) w.threshold.read(thr, sizeof thr);
+  for (std::size_t k = 0; k <= L; ++k) {
+    const auto t0 = Clock::now();
+    const bool final = k == L;
+    evaluateLevel(w, inputs, density, scene.lights.size(), k,
+                  !final                         ? Evaluation::Split
+                  : k > 0 && grids[k - 1].voxels ? Evaluation::FinalNoGradient
+                                                 : Evaluation::Final,
+                  steps, settings, timer);
+    if (!final) {
+      if (k == 0) computeThreshold(w, settings, timer);
+      const GridGeometry grid(scene.medium.bounds, grids[k]);
+      if (budget > 0) budgetLevel(w, grid, k, L, budget, timer);
+      splitLevel(w, grid, k, L, budget > 0, timer);
+      compactLevel(w, grid, k + 1, L, timer);
     }
-    const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
-    for (std::size_t k = 0; k <= L; ++k) {
-      LevelStats ls;
-      ls.resolution = k == 0 ? 0 : grids[k - 1].dims.x;
-      ls.voxels = k > 0 && grids[k - 1].voxels;
-      const std::size_t n = counts[k];
-      ls.samples = (long long)n;
-      ls.ms = enqueueMs[k];
-      const bool final = k == L || n == 0;
-      if (n > 0) {
-        const DynamicSamplingWorkspace::Level& l = w.levels[k];
-        LevelReadBack rb;
-        rb.samples.resize(n);
-        rb.radiance.resize(n);
-        l.samples.read(rb.samples.data(), n * sizeof(GpuSamplePoint));
-        l.radiance.read(rb.radiance.data(), n * sizeof(GpuRadianceRecord));
-        std::vector<std::uint8_t> split(n, 0);
-        if (!final) {
-          rb.errors.resize(n);
-          l.errors.read(rb.errors.data(), n * sizeof(float));
-          ls.threshold = threshold;
-          ls.errorScale = errorScale;
-          if (k < decisions.size()) {
-            split = decisions[k].decision.split;  // the budget's host decisions
-            ls.capped = decisions[k].decision.capped;
-            decisions[k].offset = result.samples.size();
-          } else {
-            // In double against the double threshold, as the CPU variant and the split pass
-            // compare.
-            for (std::size_t j = 0; j < n; ++j) split[j] = double(rb.errors[j]) > threshold;
-          }
-          for (std::size_t j = 0; j < n; ++j) {
-            ls.split += split[j];
-            if (!split[j]) ls.maxLeft = std::max(ls.maxLeft, rb.errors[j]);
-          }
-          ls.maxError = *std::max_element(rb.errors.begin(), rb.errors.end());
-          ls.p90Error = quantile(rb.errors, 0.9);
-        }
-        // The samples that stay (all of them on the final level, and those the per-voxel
-        // fallback splits), in evaluation order: the CPU's.
-        const bool keepSplit = !final && grids[k].voxels;
-        for (std::size_t j = 0; j < n; ++j) {
-          if (split[j] && !keepSplit) continue;
-          RadianceSample s;
-          s.position = rb.samples[j].position;
-          s.radius = rb.samples[j].radius;
-          s.level = int(k);
-          unpackRadiance(rb.radiance[j], s);
-          result.samples.push_back(s);
-        }
-        if (!final && errorsOut) errorsOut->push_back(std::move(rb.errors));
-      }
-      result.levels.push_back(ls);
-      if (n == 0) {
-        for (std::size_t l = k + 1; l <= L; ++l) {
-          LevelStats e;
-          e.resolution = grids[l - 1].dims.x;
-          e.voxels = grids[l - 1].voxels;
-          result.levels.push_back(e);
-        }
-        break;
-      }
-    }
+    checkGl("dynamic sampling: level " + std::to_string(k));
+    pass.enqueueMs[k] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
-  if (!decisions.empty()) {
-    // The top-up, decided on the host as on the CPU; the children evaluated on the GPU.
-    TopUp t = budgetTopUp(scene.medium.bounds, decisions, (long long)result.samples.size(), budget);
-    if (!t.children.empty())
-      evaluateTopUpGpu(w, inputs, density, scene.lights.size(), steps, settings, t, timer);
-    applyTopUp(result, decisions, std::move(t));
+  const auto t0 = Clock::now();
+  if (budget > 0 && L > 0) budgetTopUpCut(w, L, budget, timer);
+  assembleFinal(w, inputs, scene.lights.size(), scene, grids, budget, steps,
+                {*pass.finalPoints, *pass.finalRadiance, finalCapacity}, timer);
+  if (resident) {
+    copyCount(w.counts, CountSlots{L}.end(), resident->onDevice->count, 0);
+    resident->radianceCurrent = true;
   }
-  if (!result.levels.empty()) result.levels[0].budget = budget;
-  return result;
+  checkGl("dynamic sampling: final list");
+  pass.enqueueMs[L] += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
 }  // namespace
+
+DynamicSamplingResult readDynamicSamplingGpu(const DynamicSamplingWorkspace& w, bool samples,
+                                             std::vector<std::vector<float>>* errorsOut) {
+  const DynamicSamplingWorkspace::Pass& pass = w.pass;
+  const DynamicSamplingSettings& settings = pass.settings;
+  const std::vector<LevelGrid> grids = levelGrids(settings);
+  const std::size_t L = grids.size();
+  const CountSlots slots{L};
+  const long long budget = pass.budget;
+  if (errorsOut) errorsOut->clear();
+  DynamicSamplingResult result;
+  std::vector<GLuint> counts(slots.words(), 0u);
+  double thr[2] = {0.0, 0.0};
+  if (pass.initial > 0) {
+    context();
+    w.counts.read(counts.data(), counts.size() * sizeof(GLuint));  // waits for the pass
+    if (counts[slots.overflow()] > 0) {
+      const std::size_t k = counts[slots.overflow() + 1];
+      throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
+                     std::to_string(grids[k - 1].dims.x) + "^3) has " +
+                     std::to_string(counts[slots.overflow()]) + " samples, more than the " +
+                     std::to_string(w.levels[k].capacity) +
+                     " the GPU holds per level (kMaxLevelSamples); use coarser levels or a "
+                     "larger epsilon");
+    }
+    if (counts[slots.finalOverflow()] > 0)
+      throw GpuError("dynamic sampling: the final list asked for " +
+                     std::to_string(counts[slots.finalOverflow()]) + " samples, more than its " +
+                     std::to_string(pass.finalCapacity) + " (an internal bound; a bug)");
+    if (L > 0) w.threshold.read(thr, sizeof thr);
+  }
+  const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
+  const int topCut = budget > 0 ? int(counts[slots.topCut()]) : kErrorBins;
+  for (std::size_t k = 0; k <= L; ++k) {
+    LevelStats ls;
+    ls.resolution = k == 0 ? 0 : grids[k - 1].dims.x;
+    ls.voxels = k > 0 && grids[k - 1].voxels;
+    const std::size_t n = counts[k];
+    ls.samples = (long long)n + (k > 0 && budget > 0 ? counts[slots.childrenOf(k - 1)] : 0);
+    ls.ms = k < pass.enqueueMs.size() ? pass.enqueueMs[k] : 0.0;
+    if (k < L && n > 0) {
+      std::vector<float> errors(n);
+      w.levels[k].errors.read(errors.data(), n * sizeof(float));
+      ls.threshold = threshold;
+      ls.errorScale = errorScale;
+      const int cut = budget > 0 ? int(counts[slots.cut(k)]) : 0;
+      long long candidates = 0;
+      for (std::size_t j = 0; j < n; ++j) {
+        const bool candidate = double(errors[j]) > threshold;
+        const int g = candidate ? errorBin(errors[j], threshold) : -1;
+        candidates += candidate;
+        if (candidate && g >= cut) {
+          ++ls.split;
+        } else if (candidate && g >= topCut) {
+          ++ls.split;
+          ++ls.toppedUp;
+        } else {
+          ls.maxLeft = std::max(ls.maxLeft, errors[j]);
+        }
+      }
+      ls.capped = budget > 0 ? candidates - ls.split : 0;
+      ls.maxError = *std::max_element(errors.begin(), errors.end());
+      ls.p90Error = quantile(errors, 0.9);
+      if (errorsOut) errorsOut->push_back(std::move(errors));
+    }
+    result.levels.push_back(ls);
+  }
+  if (!result.levels.empty()) result.levels[0].budget = budget;
+  result.finalPerLevel.assign(L + 1, 0);
+  for (std::size_t k = 0; k <= L && pass.initial > 0; ++k) {
+    result.finalPerLevel[k] += counts[slots.keptOf(k)];
+    if (k > 0 && budget > 0) result.finalPerLevel[k] += counts[slots.childrenOf(k - 1)];
+  }
+  if (samples && pass.initial > 0) {
+    const std::size_t total = counts[slots.end()];
+    std::vector<GpuSamplePoint> points(total);
+    std::vector<GpuRadianceRecord> radiance(total);
+    if (total) {
+      pass.finalPoints->read(points.data(), total * sizeof(GpuSamplePoint));
+      pass.finalRadiance->read(radiance.data(), total * sizeof(GpuRadianceRecord));
+    }
+    // The levels of the list's parts: each level's kept samples, then the top-up's children.
+    std::vector<int> level;
+    level.reserve(total);
+    for (std::size_t k = 0; k <= L; ++k) level.insert(level.end(), counts[slots.keptOf(k)], int(k));
+    if (budget > 0)
+      for (std::size_t k = 0; k < L; ++k)
+        level.insert(level.end(), counts[slots.childrenOf(k)], int(k + 1));
+    result.samples.resize(total);
+    for (std::size_t i = 0; i < total; ++i) {
+      RadianceSample& s = result.samples[i];
+      s.position = points[i].position;
+      s.radius = points[i].radius;
+      s.level = i < level.size() ? level[i] : int(L);
+      unpackRadiance(radiance[i], s);
+    }
+  }
+  return result;
+}
 
 DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& density,
                                          std::vector<RadianceSample> initial, TracerSteps steps,
                                          const DynamicSamplingSettings& settings, StageTimer* timer,
                                          std::vector<std::vector<float>>* errorsOut,
                                          const ShadowMaps* shadows,
-                                         DynamicSamplingWorkspace* workspace) {
+                                         DynamicSamplingWorkspace* workspace,
+                                         DeviceSamples* resident) {
   context();
+  if (resident && !workspace)
+    throw GpuError("dynamicSamplingGpu: a resident pass needs a workspace to be read from");
   TracingInputs inputs(scene, density, steps.delta1, shadows);
   inputs.skipEmptySpace(timer);
   DynamicSamplingWorkspace local;
   DynamicSamplingWorkspace& w = workspace ? *workspace : local;
   if (errorsOut) errorsOut->clear();
   const DynamicSamplingSettings s = forInitialSamples(settings, scene.medium.bounds, initial);
-  return splitOnceGpu(scene, density, inputs, initial, steps, s, timer, errorsOut, w);
+  splitOnceGpu(scene, density, inputs, initial, steps, s, timer, w, resident);
+  if (resident) return {};
+  ScopedGpuTimer readTime(timer, "ds read-back");
+  return readDynamicSamplingGpu(w, true, errorsOut);
 }
 
 }  // namespace scatterlab::gpu

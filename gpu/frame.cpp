@@ -157,7 +157,7 @@ void GpuFrame::report(RenderStats& st) {
   Json invocations = perPass(passes.invocations, passes0_.invocations);
   if (invocations.contains(kTracerPass)) st.extra["tracer_invocations"] = invocations[kTracerPass];
   st.extra["invocations"] = std::move(invocations);
-  for (const auto& read : deferred_) read(st.extra);
+  for (const auto& read : deferred_) read(st);
   deferred_.clear();
   st.backend = "gpu";
   st.device = ctx.info().renderer;
@@ -234,10 +234,10 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
                            counter.get());
   // Read after the frame (GpuFrame::report), not inside it.
   lampScene_ = nullptr;
-  f.deferStats([counter](Json& extra) {
+  f.deferStats([counter](RenderStats& st) {
     GLuint n = 0;
     counter->read(&n, sizeof n);
-    extra["uncovered_voxels"] = n;
+    st.extra["uncovered_voxels"] = n;
   });
   return st;
 }
@@ -253,11 +253,11 @@ ReconstructionStats PerVoxelGpu::reconstruct(Frame& frame, const Scene& scene,
   f.radiance =
       build(scene, f.density, scene.medium.bounds, dims, &st, &f.timer, shadows, counters.get());
   // Read after the frame (GpuFrame::report), not inside it.
-  f.deferStats([counters](Json& extra) {
+  f.deferStats([counters](RenderStats& st) {
     GpuPerVoxelCounters n;  // one read for both counts
     counters->read(&n, sizeof n);
-    extra["traced_voxels"] = n.traced;
-    extra["empty_voxels"] = n.skipped;
+    st.extra["traced_voxels"] = n.traced;
+    st.extra["empty_voxels"] = n.skipped;
   });
   return st;
 }

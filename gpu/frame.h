@@ -47,8 +47,8 @@ class GpuFrame : public Frame {
   void report(RenderStats& stats) override;
 
   /// Statistics that would make the host wait if read now (counts the GPU writes): `read`
-  /// fills them into the stats' extra in report(), after the frame.
-  void deferStats(std::function<void(Json& extra)> read) { deferred_.push_back(std::move(read)); }
+  /// fills them into the stats in report(), after the frame.
+  void deferStats(std::function<void(RenderStats&)> read) { deferred_.push_back(std::move(read)); }
 
   /// The scene objects' triangles and shadow maps, built by the first stage that needs them
   /// (SceneShadows::build; "shadow maps" in the timings).
@@ -80,7 +80,7 @@ class GpuFrame : public Frame {
   /// The counters at the start of this render (host_waits, dispatches are differences).
   HostWaitCounts waits0_;
   PassCounts passes0_;
-  std::vector<std::function<void(Json&)>> deferred_;
+  std::vector<std::function<void(RenderStats&)>> deferred_;
   void startCounts();
 };
 

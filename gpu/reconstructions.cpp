@@ -59,7 +59,8 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
       packed.push_back({{s.position, s.radius}, packRadiance(s)});
     packedSamples =
         Buffer(packed.size() * sizeof(GpuSplatSample), packed.data(), 0, "radiance samples");
-  } else if (resident && resident->radianceCurrent && resident->size() == samples.size()) {
+  } else if (resident && resident->radianceCurrent &&
+             (resident->onDevice || resident->size() == samples.size())) {
     gathered = resident;
   } else {
     DeviceSamples& d = resident ? *resident : uploaded;

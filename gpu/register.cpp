@@ -21,7 +21,9 @@ namespace {
 
 /// "dynamic" on the GPU: dynamicSamplingGpu's passes on the frame's density (the pipeline's
 /// evaluator is not used: the passes trace S, ∇S and the probes themselves), in buffers kept
-/// from one frame to the next.
+/// from one frame to the next. A frame whose image stays on the device with the compute gather
+/// (a Renderer's, issue 33) keeps the final samples there too: the gather reads them where the
+/// pass left them, and the levels' statistics are read after the frame.
 class GpuRefiner : public SampleRefiner {
  public:
   GpuRefiner(DynamicSamplingSettings s, TracerSteps steps, ShadowMapSettings shadowMap)
@@ -30,8 +32,21 @@ class GpuRefiner : public SampleRefiner {
                                std::vector<RadianceSample> initial, RadianceEvaluator&) override {
     GpuFrame& f = static_cast<GpuFrame&>(frame);
     const ShadowMaps* shadows = f.shadowMaps(scene, shadowMap_);
-    return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer, nullptr,
-                              shadows, &workspace_);
+    if (!(f.imageOnDevice && f.pipeline() == GpuPipeline::Compute))
+      return dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer, nullptr,
+                                shadows, &workspace_);
+    dynamicSamplingGpu(scene, f.density, std::move(initial), steps_, s_, &f.timer, nullptr, shadows,
+                       &workspace_, &f.samples);
+    f.deferStats([this](RenderStats& st) {
+      const DynamicSamplingResult r = readDynamicSamplingGpu(workspace_, false);
+      addDynamicSamplingStats(st, r, s_);
+      long long n = 0;
+      for (const long long c : r.finalPerLevel) n += c;
+      st.samples = n;
+    });
+    DynamicSamplingResult r;
+    r.onDevice = true;
+    return r;
   }
 
  private:

@@ -15,11 +15,11 @@ Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
   auto counters = std::make_shared<Buffer>();
   // Read after the frame (GpuFrame::report), not inside it.
-  f.deferStats([counters](Json& extra) {
+  f.deferStats([counters](RenderStats& st) {
     GpuMarchCounters n;
     counters->read(&n, sizeof n);
-    extra["march_steps"] = GpuMarchCounters::join(n.looked);
-    extra["march_steps_skipped"] = GpuMarchCounters::join(n.skipped);
+    st.extra["march_steps"] = GpuMarchCounters::join(n.looked);
+    st.extra["march_steps_skipped"] = GpuMarchCounters::join(n.skipped);
   });
   if (!f.imageOnDevice)
     return integrate(scene, f.density, f.radiance, &f.timer, nullptr, counters.get());

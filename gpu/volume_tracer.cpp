@@ -56,12 +56,14 @@ ProgramVariant tracerProgramVariant(const TracerShape& shape, const TracerVarian
 
 void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
                 float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,
-                std::size_t level, std::size_t capacity) {
+                std::size_t level, std::size_t capacity, std::size_t firstSlot) {
   if (capacity == 0) return;
   const TracerShape shape = tracerShape(lights, variant.gradients);
   const Program& program = tracerProgram(shape, variant, inputs.shadows(), true);
   useTracer(program, inputs, delta2, points, results);
   glUniform1ui(program.uniform("uLevel"), GLuint(level));
+  glUniform1ui(program.uniform("uFirstSlot"),
+               firstSlot == kFromZero ? 0xffffffffu : GLuint(firstSlot));
   counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
   // The count is known only on the GPU: enough workgroups for the level's capacity, at most
   // 4096 (up to 1.8 M invocations with gradients, several waves of a large GPU); they stride over

@@ -56,14 +56,18 @@ struct TracerVariant {
   bool gradients = true, factorLights = false, lampModel = false, logSpace = false;
 };
 
+/// traceLevel's firstSlot when the samples start at 0.
+inline constexpr std::size_t kFromZero = std::size_t(-1);
+
 /// The tracer's pass over level `level` of dynamic sampling (gpu/dynamic_sampling.cpp): S and
-/// ∇S of the first counts[level] points of `points` into `results`, the count read on the GPU
-/// from `counts` (binding::kLevelCounts: no read-back), at most `capacity`; parallel over
-/// (sample, point, light) as the evaluator's pass. `inputs` applied (TracingInputs), pass name
-/// "ds trace", timed by the caller's scope.
+/// ∇S of the first counts[level] points of `points` into `results` (from counts[firstSlot] on,
+/// unless kFromZero), the counts read on the GPU from `counts` (binding::kLevelCounts: no
+/// read-back), at most `capacity` samples; parallel over (sample, point, light) as the
+/// evaluator's pass. `inputs` applied (TracingInputs), pass name "ds trace", timed by the
+/// caller's scope.
 void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
                 float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,
-                std::size_t level, std::size_t capacity);
+                std::size_t level, std::size_t capacity, std::size_t firstSlot = kFromZero);
 
 /// How the tracer's workgroups are laid out (volume_tracer.comp.glsl): `lanes` invocations split
 /// the lights of each of a sample's `rows` points (7 with gradients: x and x ± δ2·e_a), `slots`

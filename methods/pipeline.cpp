@@ -136,9 +136,11 @@ class PipelineMethod : public Method {
       DynamicSamplingResult ds;
       stage("dynamic_sampling",
             [&] { ds = refiner->refine(*frame, scene, std::move(samples), *evaluator); });
+      // A resident GPU pass (ds.onDevice) reports its levels and count after the frame.
+      samplesOnDevice_ = ds.onDevice;
+      if (!ds.onDevice)
+        addDynamicSamplingStats(st, ds, settings_.refinerKeys.get<DynamicSamplingSettings>());
       samples = std::move(ds.samples);
-      addDynamicSamplingStats(st, ds.levels, samples,
-                              settings_.refinerKeys.get<DynamicSamplingSettings>());
     } else if (sampler) {
       stage("evaluation",
             [&] { evaluator->evaluate(*frame, scene, samples, reconstruction->needsGradients()); });
@@ -195,7 +197,7 @@ class PipelineMethod : public Method {
       for (const std::string& k : unused) st.extra["unused_keys"].push_back(k);
     }
     if (sampler) {
-      st.samples = (long long)samples.size();
+      if (!samplesOnDevice_) st.samples = (long long)samples.size();
       st.extra["sampler"] = samplerType;
       // The extensions as resolved for this scene (their defaults depend on it).
       st.extra["factor_lights"] = settings_.factorLights;
@@ -223,6 +225,9 @@ class PipelineMethod : public Method {
   }
 
   std::unique_ptr<Frame> frame_;  ///< kept between renders when retainDensity
+  /// The refiner left the final samples on the device (RenderResult::samples is empty; the
+  /// backend's report counts them).
+  bool samplesOnDevice_ = false;
   /// The sampler's output for frame_'s density (positions, radii, weights; S and ∇S zero).
   std::optional<std::vector<RadianceSample>> keptSamples_;
   Medium kept_;  ///< the medium frame_'s density was built from

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -191,6 +192,32 @@ long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t init
   return count > 0 && cost > 0 ? std::min(count, cost) : std::max(count, cost);
 }
 
+int errorBin(float e, double threshold) {
+  const auto key = [](float x) { return int(std::bit_cast<std::uint32_t>(x) >> kErrorBinShift); };
+  return std::clamp(key(e) - key(float(threshold)), 0, kErrorBins - 1);
+}
+
+namespace {
+
+/// The worst-first cut of a budget: with run(h) = count + Σ_{g >= h} delta[g] (the count after
+/// splitting every group from the worst down to h), the lowest group g such that run(h) <= limit
+/// for every h >= g, i.e. one above the highest group that does not fit (kErrorBins: none fits;
+/// 0: all do). `count` receives run(cut). The GPU's cut pass computes the same (a suffix scan
+/// and the highest failing group).
+int worstFirstCut(const std::vector<long long>& delta, long long& count, long long limit) {
+  long long run = count;
+  int cut = kErrorBins;
+  for (int g = kErrorBins - 1; g >= 0; --g) {
+    run += delta[std::size_t(g)];
+    if (run > limit) break;
+    cut = g;
+    count = run;
+  }
+  return cut;
+}
+
+}  // namespace
+
 SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
                             const std::vector<Vec3>& centres, const std::vector<float>& radii,
                             const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
@@ -200,43 +227,50 @@ SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
   SplitDecision d;
   d.split.assign(n, 0);
   d.count = countBefore;
-  // Candidates worst first; ties (and so the whole order) by index: deterministic.
-  std::vector<std::uint32_t> order;
-  for (std::size_t j = 0; j < n; ++j)
-    if (double(errors[j]) > threshold) order.push_back(std::uint32_t(j));
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::uint32_t a, std::uint32_t b) { return errors[a] > errors[b]; });
-  // This level's allotment: an equal share of the headroom among the split levels left.
-  const long long headroom = std::max(0LL, budget - countBefore);
-  long long limit = countBefore + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
+  d.threshold = threshold;
+  d.candidates.assign(kErrorBins, 0);
+  d.vertexGroups.assign(kErrorBins, 0);
   GridInfoBuffer next(bounds, grid);
-  std::size_t stop = order.size();
-  for (std::size_t r = 0; r < order.size(); ++r) {
-    const std::uint32_t j = order[r];
-    long long fresh = next.voxels ? 1 : 0;  // a fallback keeps its sample
-    next.forEachChild(centres[j], radii[j], [&](std::size_t v) { fresh += !next.inSet[v]; });
-    if (d.count + fresh - 1 > limit) {
-      stop = r;  // worst first: no smaller error splits once a larger one did not fit
-      break;
-    }
-    d.count += fresh - 1;
-    d.split[j] = 1;
-    ++d.splits;
+  d.vertexKey.assign(next.vertexCount(), 0);
+  // The histograms: candidates per group, and each vertex under its worst marking candidate.
+  std::vector<int> group(n, -1);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!(double(errors[j]) > threshold)) continue;
+    const int g = group[j] = errorBin(errors[j], threshold);
+    if (!next.voxels) ++d.candidates[std::size_t(g)];  // a fallback keeps its sample
     next.forEachChild(centres[j], radii[j], [&](std::size_t v) {
-      next.inSet[v] = 1;
-      if (next.ancestor[v] < 0 || anc[j] < next.ancestor[v]) next.ancestor[v] = anc[j];
+      d.vertexKey[v] = std::max(d.vertexKey[v], std::uint32_t(g + 1));
     });
   }
-  d.capped = (long long)(order.size() - stop);
-  d.cappedOrder.assign(order.begin() + std::ptrdiff_t(stop), order.end());
+  for (const std::uint32_t k : d.vertexKey)
+    if (k > 0) ++d.vertexGroups[k - 1];
+  // This level's allotment: an equal share of the headroom among the split levels left.
+  const long long headroom = std::max(0LL, budget - countBefore);
+  const long long limit =
+      countBefore + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
+  std::vector<long long> delta(kErrorBins);
+  for (std::size_t g = 0; g < delta.size(); ++g)
+    delta[g] = (long long)d.vertexGroups[g] - (long long)d.candidates[g];
+  d.cut = worstFirstCut(delta, d.count, limit);
   for (std::size_t j = 0; j < n; ++j) {
-    if (!d.split[j]) d.maxLeft = std::max(d.maxLeft, errors[j]);
-    if (!(double(errors[j]) > threshold)) d.maxBelow = std::max(d.maxBelow, errors[j]);
+    if (group[j] >= d.cut) {
+      d.split[j] = 1;
+      ++d.splits;
+      next.forEachChild(centres[j], radii[j], [&](std::size_t v) {
+        next.inSet[v] = 1;
+        if (next.ancestor[v] < 0 || anc[j] < next.ancestor[v]) next.ancestor[v] = anc[j];
+      });
+    } else {
+      d.maxLeft = std::max(d.maxLeft, errors[j]);
+      if (group[j] >= 0)
+        ++d.capped;
+      else
+        d.maxBelow = std::max(d.maxBelow, errors[j]);
+    }
   }
   d.vertices = compactFlags(next.inSet);
   d.ancestors.resize(d.vertices.size());
   for (std::size_t i = 0; i < d.vertices.size(); ++i) d.ancestors[i] = next.ancestor[d.vertices[i]];
-  d.marked = std::move(next.inSet);
   return d;
 }
 
@@ -245,73 +279,47 @@ TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long
   TopUp t;
   t.toppedUp.assign(levels.size(), 0);
   if (budget <= 0 || count >= budget) return t;
-  struct Candidate {
-    float e;
-    std::size_t level;
-    std::uint32_t j;
-  };
-  std::vector<Candidate> cands;
-  for (std::size_t k = 0; k < levels.size(); ++k)
-    for (std::uint32_t j : levels[k].decision.cappedOrder)
-      cands.push_back({levels[k].errors[j], k, j});
-  if (cands.empty()) return t;
-  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
-    if (a.e != b.e) return a.e > b.e;
-    if (a.level != b.level) return a.level < b.level;
-    return a.j < b.j;
-  });
-  // Per level: its grid G_{k+1} with the membership of the pass, and each sample's rank among
-  // the level's kept samples (its place in the result) before the top-up.
-  std::vector<GridInfoBuffer> grids;
-  std::vector<std::vector<std::size_t>> rank(levels.size());
+  // The levels' histograms below their cuts: the capped candidates and the unmarked vertices.
+  std::vector<long long> delta(kErrorBins, 0);
+  for (const BudgetLevel& L : levels)
+    for (int g = 0; g < L.decision.cut && g < kErrorBins; ++g)
+      delta[std::size_t(g)] += (long long)L.decision.vertexGroups[std::size_t(g)] -
+                               (long long)L.decision.candidates[std::size_t(g)];
+  long long after = count;
+  t.cut = worstFirstCut(delta, after, budget);
   for (std::size_t k = 0; k < levels.size(); ++k) {
-    grids.emplace_back(bounds, levels[k].grid);
-    grids.back().inSet.swap(levels[k].decision.marked);
-    const std::vector<std::uint8_t>& split = levels[k].decision.split;
-    rank[k].resize(split.size());
-    std::size_t r = 0;
-    for (std::size_t j = 0; j < split.size(); ++j) {
-      rank[k][j] = r;
-      r += split[j] && !levels[k].grid.voxels ? 0 : 1;
+    BudgetLevel& L = levels[k];
+    SplitDecision& d = L.decision;
+    if (t.cut >= d.cut) continue;  // nothing of this level is topped up
+    // The parents, in the result's order (their level's kept samples, by index).
+    std::size_t rank = 0;
+    for (std::size_t j = 0; j < d.split.size(); ++j) {
+      if (d.split[j] && !L.grid.voxels) continue;  // split in the pass: not in the result
+      const bool candidate = double(L.errors[j]) > d.threshold;
+      if (!d.split[j] && candidate && errorBin(L.errors[j], d.threshold) >= t.cut) {
+        if (!L.grid.voxels) t.removed.push_back(L.offset + rank);
+        d.split[j] = 1;
+        ++d.splits;
+        --d.capped;
+        ++t.toppedUp[k];
+      }
+      ++rank;
     }
-  }
-  for (const Candidate& c : cands) {
-    BudgetLevel& L = levels[c.level];
-    GridInfoBuffer& g = grids[c.level];
-    const Vec3 centre = L.centres[c.j];
-    const float radius = L.radii[c.j];
-    long long fresh = g.voxels ? 1 : 0;  // a fallback keeps its sample
-    g.forEachChild(centre, radius, [&](std::size_t v) { fresh += !g.inSet[v]; });
-    if (count + fresh - 1 > budget) break;  // worst first across the levels
-    count += fresh - 1;
+    // The children: unmarked vertices whose worst marking candidate is topped up, ascending.
+    const GridInfoBuffer g(bounds, L.grid);
     const float R = g.radius();
-    g.forEachChild(centre, radius, [&](std::size_t v) {
-      if (g.inSet[v]) return;
-      g.inSet[v] = 1;
+    for (std::size_t v = 0; v < d.vertexKey.size(); ++v) {
+      const int key = int(d.vertexKey[v]) - 1;
+      if (key < t.cut || key >= d.cut) continue;
       RadianceSample child;
       child.position = g.vertex(v);
       child.radius = R;
-      child.level = int(c.level) + 1;
+      child.level = int(k) + 1;
       t.children.push_back(child);
-      t.ancestors.push_back(L.anc[c.j]);
-    });
-    if (!g.voxels) t.removed.push_back(L.offset + rank[c.level][c.j]);
-    L.decision.split[c.j] = 1;
-    ++L.decision.splits;
-    --L.decision.capped;
-    ++t.toppedUp[c.level];
-  }
-  for (std::size_t k = 0; k < levels.size(); ++k) {
-    SplitDecision& d = levels[k].decision;
-    std::vector<std::uint32_t> left;
+    }
     d.maxLeft = d.maxBelow;
-    for (std::uint32_t j : d.cappedOrder)
-      if (!d.split[j]) {
-        left.push_back(j);
-        d.maxLeft = std::max(d.maxLeft, levels[k].errors[j]);
-      }
-    d.cappedOrder = std::move(left);
-    d.marked.swap(grids[k].inSet);
+    for (std::size_t j = 0; j < d.split.size(); ++j)
+      if (!d.split[j]) d.maxLeft = std::max(d.maxLeft, L.errors[j]);
   }
   return t;
 }
@@ -578,12 +586,16 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
   return dynamicSampling(frame, scene, std::move(initial), evaluator, settings);
 }
 
-void addDynamicSamplingStats(RenderStats& st, const std::vector<LevelStats>& levelStats,
-                             const std::vector<RadianceSample>& samples,
+void addDynamicSamplingStats(RenderStats& st, const DynamicSamplingResult& result,
                              const DynamicSamplingSettings& settings) {
-  std::vector<long long> perLevel(levelStats.size(), 0);
-  for (const auto& s : samples)
-    if (std::size_t(s.level) < perLevel.size()) ++perLevel[std::size_t(s.level)];
+  const std::vector<LevelStats>& levelStats = result.levels;
+  std::vector<long long> perLevel = result.finalPerLevel;
+  if (perLevel.empty()) {
+    perLevel.assign(levelStats.size(), 0);
+    for (const auto& s : result.samples)
+      if (std::size_t(s.level) < perLevel.size()) ++perLevel[std::size_t(s.level)];
+  }
+  perLevel.resize(levelStats.size(), 0);
   Json levels = Json::array();
   for (std::size_t l = 0; l < levelStats.size(); ++l) {
     const LevelStats& ls = levelStats[l];

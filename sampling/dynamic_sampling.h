@@ -22,30 +22,35 @@
 /// (budgetedSplit(); never a re-run). Splitting level k reveals the errors of level k + 1 only
 /// once they are evaluated, but what a split costs is known before: the vertices of G_{k+1}
 /// it marks (strictly inside its sphere, or with splitCells in its cell: forEachChild) that no
-/// earlier split of the level marked (shared vertices count once), minus the sample itself
-/// (not on the per-voxel fallback's grid, where the sample stays). So each split level (1) orders
-/// its candidates (E_j > threshold) by E_j, worst first (ties: lower index first), (2) accepts them
-/// in that order while the final count (kept samples of the coarser levels + this level's unsplit
-/// samples + the next level's marked vertices) stays within the level's allotment, and stops at the
-/// first that does not fit, so a split never goes to a smaller error while a larger one waits. The
-/// allotment: the headroom left, B − count, shared equally by the split levels still to come
-/// (level k of L split levels may use 1/(L − k) of it); what a level does not use passes to
-/// the finer ones. A plain worst-first greedy (allotment 1 on every level) spends the whole
-/// budget on the coarsest level, whose errors are the largest because E ∝ R³, and leaves
-/// nothing for the edges that only the finer levels resolve (docs/dynamic-sampling.md measured
-/// it 3× worse than a uniform threshold); equal shares keep room for them without guessing
-/// the errors not yet seen. A finer level may need less than its share (lamps32: 8 candidates
-/// on the last split level); what the pass leaves unused then goes to the top-up
-/// (budgetTopUp()): after the last level the capped candidates of every split level, worst
-/// first across the levels, split while the count fits, their children evaluated in one batch
-/// without probes (they stay final). So the pass evaluates each level once, plus at most one
-/// batch of top-up children: never a re-run. Default budget (render.max_samples absent):
-/// kBudgetPerInitial × the initial count, at most kBudgetCap, raised where per-voxel is dear to
-/// a share of its cost (costShare, key `budget`, issue 35; sampleBudget()). The error left is
-/// reported: per level the candidates left unsplit (LevelStats::capped) and the largest E of a
-/// sample left unsplit (LevelStats::maxLeft; / threshold > 1: the budget stopped the refinement
-/// there). The finest level is not probed, so its errors are not known (with voxelFallback the
-/// finest of `levels` is probed, and the voxel level, exact at its voxels, is the one not probed).
+/// other split of the level marks (shared vertices count once), minus the sample itself (not on
+/// the per-voxel fallback's grid, where the sample stays). Each split level splits its candidates
+/// (E_j > threshold) worst first, in groups of nearly equal E (errorBin(): 1/64 of an octave,
+/// 1.1 % of E), and stops at the first group that does not fit the level's allotment: a split
+/// never goes to a smaller error while a larger one waits. A group's cost is exact, read from two
+/// histograms over the groups (issue 33: the GPU decides the cut with the same histograms, in
+/// one pass and without the host): the candidates per group, and G_{k+1}'s vertices per group
+/// of the worst candidate that marks them; splitting every group from the worst down to g adds
+/// the vertices of groups ≥ g and removes the candidates of groups ≥ g. (Until issue 33 the
+/// order was sample by sample, ties by index; groups change which samples split only within the
+/// last group's 1.1 % of E.) The allotment: the headroom left, B − count, shared equally by the
+/// split levels still to come (level k of L split levels may use 1/(L − k) of it); what a level
+/// does not use passes to the finer ones. A plain worst-first greedy (allotment 1 on every
+/// level) spends the whole budget on the coarsest level, whose errors are the largest because
+/// E ∝ R³, and leaves nothing for the edges that only the finer levels resolve
+/// (docs/dynamic-sampling.md measured it 3× worse than a uniform threshold); equal shares keep
+/// room for them without guessing the errors not yet seen. A finer level may need less than its
+/// share (lamps32: 8 candidates on the last split level); what the pass leaves unused then goes
+/// to the top-up (budgetTopUp()): after the last level the capped candidates of every split
+/// level, worst group first across the levels, split while the count fits, their children
+/// evaluated in one batch without probes (they stay final). So the pass evaluates each level
+/// once, plus at most one batch of top-up children: never a re-run. Default budget
+/// (render.max_samples absent): kBudgetPerInitial × the initial count, at most kBudgetCap, raised
+/// where per-voxel is dear to a share of its cost (costShare, key `budget`, issue 35;
+/// sampleBudget()). The error left is reported: per level the candidates left unsplit
+/// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft;
+/// / threshold > 1: the budget stopped the refinement there). The finest level is not probed,
+/// so its errors are not known (with voxelFallback the finest of `levels` is probed, and the
+/// voxel level, exact at its voxels, is the one not probed).
 ///
 /// Issue 24 (docs/fidelity.md §8): the allocation between levels was measured against other
 /// shares (top-up as a share, shares growing per level, greedy) and kept; what bound the budget
@@ -265,6 +270,12 @@ float quantile(std::vector<float> v, double q);
 struct DynamicSamplingResult {
   std::vector<RadianceSample> samples;  ///< ∪_k Q^k minus the split ones; S and dS evaluated
   std::vector<LevelStats> levels;       ///< [0] = initial set, then one per grid level
+  /// The final samples stay on the device (a resident GPU pass, issue 33): `samples` and
+  /// `levels` are empty; the backend reports them after the frame.
+  bool onDevice = false;
+  /// Final samples per level where `samples` does not hold them (a GPU pass read without its
+  /// samples); empty: counted from `samples`.
+  std::vector<long long> finalPerLevel;
 };
 
 /// Contribution of one sample to the image, in the units of E_j (Eq. 5 with the error replaced
@@ -334,19 +345,33 @@ inline constexpr double kBudgetCostShare = 0.5;
 /// per-voxel is dear; else the smaller of maxSamples and C, where one of them is 0 the other.
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount);
 
+/// The group of an error E > threshold for the budget's worst-first order (see the header
+/// comment): its float's bits above the lowest kErrorBinShift (the exponent and 6 mantissa bits:
+/// 1/64 of an octave) counted from the threshold's, at most kErrorBins − 1 (64 octaves above the
+/// threshold; core/stages.h). Integer arithmetic on the float bits: the GPU computes the same
+/// groups (dynamic_groups.glsl).
+int errorBin(float e, double threshold);
+
 /// The split decisions of one level under a budget (see the header comment): which samples
 /// split, and the vertices of G_{k+1} they mark (ascending, as the scan compaction orders them)
 /// with their level-0 ancestors (the smallest among the marking spheres, as markSphere()).
 struct SplitDecision {
-  std::vector<std::uint8_t> split;         ///< per sample of level k
-  std::vector<std::uint32_t> vertices;     ///< linear indices of G_{k+1}, ascending
-  std::vector<std::int32_t> ancestors;     ///< per vertex
-  long long count = 0;                     ///< final count after these splits (see countBefore)
-  long long splits = 0, capped = 0;        ///< split; candidates left unsplit by the allotment
-  float maxLeft = 0.0f;                    ///< largest E of a sample left unsplit
-  float maxBelow = 0.0f;                   ///< largest E of a non-candidate (E <= threshold)
-  std::vector<std::uint32_t> cappedOrder;  ///< the capped candidates, worst first
-  std::vector<std::uint8_t> marked;        ///< G_{k+1}'s membership after the splits
+  std::vector<std::uint8_t> split;      ///< per sample of level k
+  std::vector<std::uint32_t> vertices;  ///< linear indices of G_{k+1}, ascending
+  std::vector<std::int32_t> ancestors;  ///< per vertex
+  long long count = 0;                  ///< final count after these splits (see countBefore)
+  long long splits = 0, capped = 0;     ///< split; candidates left unsplit by the allotment
+  float maxLeft = 0.0f;                 ///< largest E of a sample left unsplit
+  float maxBelow = 0.0f;                ///< largest E of a non-candidate (E <= threshold)
+  double threshold = 0.0;  ///< the absolute threshold the groups count from (errorBin())
+  /// The lowest group split (kErrorBins: none): candidates of groups >= cut split.
+  int cut = kErrorBins;
+  /// Per group: the candidates (none on the fallback's grid, where a split keeps its sample),
+  /// and the vertices of G_{k+1} whose worst marking candidate is of that group.
+  std::vector<std::uint32_t> candidates, vertexGroups;
+  /// Per vertex of G_{k+1}: 1 + the group of its worst marking candidate (0: none marks it).
+  /// Marked by the splits: vertexKey − 1 >= cut.
+  std::vector<std::uint32_t> vertexKey;
 };
 
 /// One split level as the top-up reads it: its decision, its samples, and where its unsplit
@@ -363,13 +388,15 @@ struct BudgetLevel {
 
 /// The top-up of a budgeted pass: the budget a level's share left unused (a finer level needed
 /// fewer splits than its share) goes, after the last level, to the capped candidates of every
-/// split level, worst first across the levels (ties: coarser level, then index), each while the
-/// count fits the budget, stopping at the first that does not. Their children (fresh vertices
-/// of G_{k+1}) are evaluated once, with ∇S and no probes (they are final), and appended.
+/// split level, worst group first across the levels (the levels' histograms below their cuts,
+/// summed), each group while the count fits the budget, stopping at the first that does not.
+/// Their children (the vertices of G_{k+1} no split of the pass marked, whose worst marking
+/// candidate is topped up) are evaluated once, with ∇S and no probes (they are final), and
+/// appended level by level, each in ascending vertex order.
 struct TopUp {
+  int cut = kErrorBins;                  ///< the lowest group topped up (kErrorBins: none)
   std::vector<std::size_t> removed;      ///< indices into the result of the split parents
   std::vector<RadianceSample> children;  ///< position, radius, level; S to be evaluated
-  std::vector<std::int32_t> ancestors;   ///< per child: its parent's level-0 ancestor
   std::vector<long long> toppedUp;       ///< per split level: its splits made here
 };
 
@@ -384,10 +411,10 @@ TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long
 void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& levels,
                 TopUp&& topUp);
 
-/// The budgeted split of level k, shared by the CPU and GPU variants (the GPU reads E back and
-/// uploads the next level). centres/radii/anc/errors: the level's samples; `threshold`: the
-/// absolute one; countBefore: kept samples of the coarser levels + this level's count; budget;
-/// splitLevelsLeft: L − k (this level included). Deterministic.
+/// The budgeted split of level k on the CPU (the GPU's dynamic_budget.comp.glsl decides the same
+/// cut from the same histograms). centres/radii/anc/errors: the level's samples; `threshold`:
+/// the absolute one; countBefore: kept samples of the coarser levels + this level's count;
+/// budget; splitLevelsLeft: L − k (this level included). Deterministic.
 SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
                             const std::vector<Vec3>& centres, const std::vector<float>& radii,
                             const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
@@ -438,8 +465,7 @@ DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineS
 /// (the key: "auto" or a number), and with a budget: budget (the one applied), budget_runs (1),
 /// capped (candidates left unsplit, all levels), error_left (largest E left unsplit / threshold;
 /// above 1 where the budget stopped the refinement); tau, probes.
-void addDynamicSamplingStats(RenderStats& stats, const std::vector<LevelStats>& levels,
-                             const std::vector<RadianceSample>& samples,
+void addDynamicSamplingStats(RenderStats& stats, const DynamicSamplingResult& result,
                              const DynamicSamplingSettings& settings);
 
 /// Reads the dynamic-sampling keys of the render object (table in dynamic_sampling.cpp):

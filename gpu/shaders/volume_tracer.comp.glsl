@@ -34,9 +34,14 @@ layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRe
 uniform float uDelta2;
 #endif
 #if defined(SL_LEVEL_COUNT) || defined(SL_PROBES)
-// Dynamic sampling's level uLevel (gpu::traceLevel): its count is written on the GPU.
+// Dynamic sampling's level uLevel (gpu::traceLevel): its count is written on the GPU; with
+// SL_LEVEL_COUNT the samples from counts[uFirstSlot] on (0xffffffff: from 0), the top-up's
+// children at the end of the final list.
 layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
 uniform uint uLevel;
+#ifdef SL_LEVEL_COUNT
+uniform uint uFirstSlot;
+#endif
 #else
 uniform uint uCount;
 #endif
@@ -83,8 +88,13 @@ void main() {
 #else
   const uint count = uCount;
 #endif
+#ifdef SL_LEVEL_COUNT
+  const uint first = uFirstSlot == 0xffffffffu ? 0u : counts[uFirstSlot];
+#else
+  const uint first = 0u;
+#endif
   // The loop's bounds are the workgroup's: every barrier is reached by all its invocations.
-  for (uint base = gl_WorkGroupID.x * uint(SL_SLOTS); base < count; base += stride) {
+  for (uint base = first + gl_WorkGroupID.x * uint(SL_SLOTS); base < count; base += stride) {
     const uint i = base + slot;
     const bool live = i < count;
 #ifdef SL_PROBES

@@ -597,7 +597,7 @@ TEST(DynamicSampling, BudgetStatKeysAreDocumented) {
   st.relative = true;
   st.maxSamples = kAutoBudget;
   RenderStats rs;
-  addDynamicSamplingStats(rs, levels, {}, st);
+  addDynamicSamplingStats(rs, {.levels = levels}, st);
   EXPECT_EQ(rs.extra["budget"], 100);
   EXPECT_EQ(rs.extra["capped"], 8);
   EXPECT_DOUBLE_EQ(rs.extra["error_left"].get<double>(), 2.5);
