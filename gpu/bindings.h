@@ -61,6 +61,13 @@ inline constexpr GLuint kScanScannedSums = 3;
 /// storage-buffer bindings per compute shader); no pass that bins also uses ancestors or counters.
 inline constexpr GLuint kBinOffsets = 2;
 inline constexpr GLuint kBinItems = 3;
+/// The passes that build the bins on the GPU (gpu::binSpheresGpu, sphere_bins.comp.glsl), with
+/// the spheres at kSamples and the lists at kBinOffsets / kBinItems: the uint buffer holding the
+/// sphere count (the caller's counts[], read at a slot), uint per bin (its list's length, counted
+/// down again as the fill takes slots), and the overflow word (the entries needed, or 0).
+inline constexpr GLuint kBinSphereCount = 4;
+inline constexpr GLuint kBinCounts = 5;
+inline constexpr GLuint kBinOverflow = 6;
 /// GpuShadowLight[] per scene light (shadow.glsl, gpu/shadow_maps.h).
 inline constexpr GLuint kShadowLights = 12;
 /// mat4 world -> clip per shadow-map layer (shadow.glsl).
@@ -192,6 +199,9 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_OUTPUT_IMAGE", binding::kOutputImage},
     {"BINDING_BIN_OFFSETS", binding::kBinOffsets},
     {"BINDING_BIN_ITEMS", binding::kBinItems},
+    {"BINDING_BIN_SPHERE_COUNT", binding::kBinSphereCount},
+    {"BINDING_BIN_COUNTS", binding::kBinCounts},
+    {"BINDING_BIN_OVERFLOW", binding::kBinOverflow},
     {"BINDING_FROXEL_IMAGE", binding::kFroxelImage},
     {"BINDING_TRANSMITTANCE_MAP_IMAGE", binding::kTransmittanceMapImage},
     {"BINDING_RESIDUAL_IMAGE", binding::kResidualImage},

@@ -6,6 +6,8 @@
 
 #include "core/error.h"
 #include "gpu/bindings.h"
+#include "gpu/dispatch.h"
+#include "gpu/shaders.h"
 
 namespace scatterlab::gpu {
 
@@ -28,6 +30,42 @@ void binRange(float c, float r, float min, float cell, int dims, int& lo, int& h
 
 std::string mib(std::size_t bytes) {
   return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB";
+}
+
+/// Throws GpuError naming `pass` when `entries` list entries (`what`: whose) do not fit one
+/// storage buffer of the device (GL_MAX_SHADER_STORAGE_BLOCK_SIZE) or 32-bit offsets.
+void checkListSize(std::size_t entries, const std::string& what, const char* pass) {
+  GLint64 maxBlock = 0;
+  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxBlock);
+  const std::size_t itemBytes = entries * sizeof(GLuint);
+  if (entries > 0xffffffffu || (maxBlock > 0 && itemBytes > std::size_t(maxBlock)))
+    throw GpuError(std::string(pass) + ": " + what + " need " + mib(itemBytes) +
+                   " in one storage buffer; the device allows " +
+                   mib(std::size_t(std::max<GLint64>(maxBlock, 0))) +
+                   " (GL_MAX_SHADER_STORAGE_BLOCK_SIZE, 32-bit offsets); use fewer or smaller "
+                   "spheres (samples), a coarser volume, or render.gpu_pipeline = raster");
+}
+
+/// A pass of sphere_bins.comp.glsl (SL_BINS_COUNT, SL_BINS_FILL or SL_BINS_SORT).
+const Program& binsProgram(const char* variant, const char* label) {
+  return program({.compute = {"sphere_bins.comp.glsl"}, .defines = {variant}}, label);
+}
+
+/// The count and fill passes' inputs: the spheres and their count, the grid, the per-bin counts.
+void bindSpherePass(const Program& p, const Buffer& points, const Buffer& counts, GLuint countSlot,
+                    std::size_t capacity, const Box& bounds, IVec3 dims, IVec3 bins,
+                    const Buffer& binCounts) {
+  p.use();
+  glUniform1ui(p.uniform("uCountSlot"), countSlot);
+  glUniform1ui(p.uniform("uCapacity"), GLuint(std::min<std::size_t>(capacity, 0xffffffffu)));
+  setVec3(p, "uGridMin", bounds.min);
+  setVec3(p, "uGridCell", bounds.extent() / Vec3(dims));  // binSpheres' cell, to the bit
+  setIVec3(p, "uGridDims", dims);
+  setIVec3(p, "uBins", bins);
+  glUniform1i(p.uniform("uBinVoxels"), kBinVoxels);
+  points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinSphereCount);
+  binCounts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinCounts);
 }
 
 }  // namespace
@@ -55,16 +93,7 @@ SphereBins binSpheres(std::span<const glm::vec4> spheres, const Box& bounds, IVe
     total += std::size_t(r.hi.x - r.lo.x + 1) * (r.hi.y - r.lo.y + 1) * (r.hi.z - r.lo.z + 1);
   }
   // The device's limit on one storage buffer, before the lists are allocated.
-  GLint64 maxBlock = 0;
-  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxBlock);
-  const std::size_t itemBytes = total * sizeof(GLuint);
-  if (total > 0xffffffffu || (maxBlock > 0 && itemBytes > std::size_t(maxBlock)))
-    throw GpuError(std::string(pass) + ": the bin lists of " + std::to_string(spheres.size()) +
-                   " spheres need " + mib(itemBytes) +
-                   " in one storage buffer; the device allows " +
-                   mib(std::size_t(std::max<GLint64>(maxBlock, 0))) +
-                   " (GL_MAX_SHADER_STORAGE_BLOCK_SIZE, 32-bit offsets); use fewer or smaller "
-                   "spheres (samples), a coarser volume, or render.gpu_pipeline = raster");
+  checkListSize(total, "the bin lists of " + std::to_string(spheres.size()) + " spheres", pass);
   std::vector<std::size_t> counts(nBins + 1, 0);
   for (const Range& r : ranges)
     for (int z = r.lo.z; z <= r.hi.z; ++z)
@@ -98,6 +127,63 @@ BinBuffers::BinBuffers(const SphereBins& bins)
 void BinBuffers::bind() const {
   offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinOffsets);
   items.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinItems);
+}
+
+GLuint GpuBins::readOverflow() const {
+  GLuint words = 0;
+  overflow.read(&words, sizeof words);
+  return words;
+}
+
+GpuBins binSpheresGpu(const Buffer& points, const Buffer& counts, GLuint countSlot,
+                      std::size_t capacity, const Box& bounds, IVec3 dims, std::size_t itemCapacity,
+                      ScanScratch& scratch, const char* pass) {
+  checkListSize(itemCapacity,
+                "the bin lists' capacity of " + std::to_string(itemCapacity) + " entries", pass);
+  GpuBins out;
+  out.bins = (dims + IVec3(kBinVoxels - 1)) / kBinVoxels;
+  const std::size_t nBins = std::size_t(out.bins.x) * out.bins.y * out.bins.z;
+  const GLuint zero = 0;
+  out.offsets = Buffer((nBins + 1) * sizeof(GLuint), nullptr, 0, "bin offsets");
+  out.items = Buffer(itemCapacity * sizeof(GLuint), nullptr, 0, "bin lists");
+  out.overflow = Buffer(sizeof(GLuint), &zero, 0, "bin overflow");
+  // Per bin the entries counted, then the slots the fill has yet to take; one more, left at 0,
+  // so that the scan's last offset is the total.
+  Buffer binCounts((nBins + 1) * sizeof(GLuint), nullptr, 0, "bin counts");
+  glClearNamedBufferData(binCounts.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+
+  // One invocation per sphere slot up to the capacity (those past the count return), the
+  // workgroups in 2D past GL's least limit of 65535 per axis.
+  const GLuint sphereGroups = groups(capacity, 64);
+  const UVec3 perSphere = sphereGroups <= 65535u ? UVec3(sphereGroups, 1, 1)
+                                                 : UVec3(65535u, groups(sphereGroups, 65535u), 1);
+  const Program& count = binsProgram("SL_BINS_COUNT", "sphere bins (count)");
+  bindSpherePass(count, points, counts, countSlot, capacity, bounds, dims, out.bins, binCounts);
+  dispatch("sphere bins (count)", perSphere);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+
+  scanBuffer(binCounts, out.offsets, GLuint(nBins + 1), false, scratch);
+
+  const Program& fill = binsProgram("SL_BINS_FILL", "sphere bins (fill)");
+  bindSpherePass(fill, points, counts, countSlot, capacity, bounds, dims, out.bins, binCounts);
+  glUniform1ui(fill.uniform("uItemCapacity"), GLuint(itemCapacity));
+  out.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinOffsets);
+  out.items.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinItems);
+  out.overflow.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinOverflow);
+  dispatch("sphere bins (fill)", perSphere);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+
+  // One workgroup per bin.
+  const Program& sort = binsProgram("SL_BINS_SORT", "sphere bins (sort)");
+  sort.use();
+  glUniform1ui(sort.uniform("uItemCapacity"), GLuint(itemCapacity));
+  setIVec3(sort, "uBins", out.bins);
+  out.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinOffsets);
+  out.items.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinItems);
+  dispatch("sphere bins (sort)", UVec3(out.bins));
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  return out;
 }
 
 }  // namespace scatterlab::gpu

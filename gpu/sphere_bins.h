@@ -6,12 +6,14 @@
 /// its voxel centres, in ascending sphere order, so a voxel sums its spheres in the order the
 /// rasterised splat blends them (deterministic, and the same sums). Built on the host, where
 /// the samples and blobs are, in O(spheres + list entries); uploaded as two storage buffers.
+/// Or built on the GPU (binSpheresGpu, sphere_bins.comp.glsl), from spheres the GPU wrote.
 
 #include <span>
 #include <vector>
 
 #include "core/math.h"
 #include "gpu/gl.h"
+#include "gpu/scan.h"
 
 namespace scatterlab::gpu {
 
@@ -36,8 +38,37 @@ SphereBins binSpheres(std::span<const glm::vec4> spheres, const Box& bounds, IVe
 /// The two buffers of `bins` bound at binding::kBinOffsets and kBinItems while they live.
 struct BinBuffers {
   Buffer offsets, items;
+  BinBuffers() = default;
   explicit BinBuffers(const SphereBins& bins);
   void bind() const;
 };
+
+/// Bins built on the GPU (binSpheresGpu): the lists as BinBuffers (offsets: bins + 1 uints;
+/// items: the caller's item capacity of uints, the first offsets[bins] of them used), the bins
+/// per axis, and the overflow word.
+struct GpuBins : BinBuffers {
+  IVec3 bins{0};  ///< bins per axis: ceil(dims / kBinVoxels)
+  /// One uint: 0, or the list entries the spheres needed when that was more than the item
+  /// capacity (the lists are then cut there: every offset clamped to the capacity, so a gather
+  /// reads within them, but their sums are wrong).
+  Buffer overflow;
+  /// The overflow word, read back (a host wait: after the frame).
+  GLuint readOverflow() const;
+};
+
+/// Bins on the GPU the first counts[countSlot] spheres of `points` (GpuSamplePoint[], at most
+/// `capacity`; the count is read on the GPU, never by the host) over the voxel centres of
+/// (bounds, dims): the same lists as binSpheres() (same bin ranges, each list in ascending
+/// sphere order). `itemCapacity`: the most list entries the caller allows (an upper bound it
+/// computed); entries past it are dropped and the overflow is recorded in the returned buffers'
+/// `overflow` word (read it after the frame; non-zero = the needed total). Enqueued only: no host
+/// wait; the lists are ready for storage-buffer reads (and the words for read-back) after the
+/// barrier it ends with. Throws GpuError naming `pass` when `itemCapacity` entries exceed what
+/// the device can bind, before any work. Uses the bindings of binding::kSamples, kBinOffsets,
+/// kBinItems, kBinSphereCount, kBinCounts and kBinOverflow, and the scan's; the caller binds
+/// the gather's buffers afterwards (GpuBins::bind). Needs the context.
+GpuBins binSpheresGpu(const Buffer& points, const Buffer& counts, GLuint countSlot,
+                      std::size_t capacity, const Box& bounds, IVec3 dims, std::size_t itemCapacity,
+                      ScanScratch& scratch, const char* pass);
 
 }  // namespace scatterlab::gpu
