@@ -1,6 +1,7 @@
 #include "gpu/device_samples.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "gpu/records.h"
 #include "gpu/scan.h"
@@ -26,33 +27,57 @@ bool DeviceSamples::setPoints(std::span<const RadianceSample> samples) {
   return true;
 }
 
-void DeviceSamples::reserveOnDevice(std::size_t capacity, std::size_t binItems) {
+namespace {
+
+/// The most bins one sphere of radius r can be listed in (binSpheres' range: the voxel centres
+/// within r, one voxel of margin each side, and the rounding of floor and ceil, at most
+/// 2r / cell + 4 voxels apart per axis), at most the grid's bins.
+std::size_t binsPerSphere(float r, const Vec3& cell, IVec3 bins) {
+  std::size_t n = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double span = 2.0 * double(r) / double(cell[a]) + 4.0;
+    const double perAxis = std::floor(span / kBinVoxels) + 2.0;
+    n *= std::size_t(std::min(perAxis, double(bins[a])));
+  }
+  return n;
+}
+
+}  // namespace
+
+void DeviceSamples::reserveOnDevice(std::size_t capacity,
+                                    std::vector<std::pair<std::size_t, float>> radii) {
   spheres.clear();
   bins_.reset();
+  deviceBins_.reset();
   radianceCurrent = false;
   if (!onDevice) onDevice.emplace();
   ensure(points, capacity * sizeof(GpuSamplePoint), "sample positions (on device)");
   ensure(radiance, capacity * sizeof(GpuRadianceRecord), "sample S and grad S (on device)");
   ensure(onDevice->count, sizeof(GLuint), "sample count (on device)");
   onDevice->capacity = capacity;
-  onDevice->binItems = binItems;
+  onDevice->radii = std::move(radii);
 }
 
 const BinBuffers& DeviceSamples::binsFor(const Box& bounds, IVec3 dims, IVec3* binCount,
                                          const char* pass) {
   if (onDevice) {
-    // TEMPORARY (until the GPU builds the bins): the list read back and binned on the host.
-    GLuint n = 0;
-    onDevice->count.read(&n, sizeof n);
-    std::vector<GpuSamplePoint> pts(n);
-    if (n) points.read(pts.data(), n * sizeof(GpuSamplePoint));
-    std::vector<glm::vec4> sph;
-    for (const GpuSamplePoint& p : pts) sph.emplace_back(p.position, p.radius);
+    // Binned on the GPU from the count the GPU holds (the samples change every frame). The
+    // lists' room: each part of the list with the bins its spheres can reach.
+    const Vec3 cell = bounds.extent() / Vec3(dims);
+    const IVec3 nBins = (dims + IVec3(kBinVoxels - 1)) / kBinVoxels;
+    std::size_t items = 0, most = 0;
+    float largest = 0.0f;
+    for (const auto& [count, radius] : onDevice->radii) {
+      items += count * binsPerSphere(radius, cell, nBins);
+      largest = std::max(largest, radius);
+    }
+    most = onDevice->capacity * binsPerSphere(largest, cell, nBins);
     bins_.reset();
-    const SphereBins b = binSpheres(sph, bounds, dims, pass);
-    bins_.emplace(b);
-    *binCount = b.bins;
-    return *bins_;
+    deviceBins_.reset();
+    deviceBins_.emplace(binSpheresGpu(points, onDevice->count, 0, onDevice->capacity, bounds, dims,
+                                      std::min(items, most), scratch_, pass));
+    *binCount = deviceBins_->bins;
+    return *deviceBins_;
   }
   if (!bins_ || binBounds_.min != bounds.min || binBounds_.max != bounds.max || binDims_ != dims) {
     bins_.reset();

@@ -12,6 +12,7 @@
 
 #include "core/stages.h"
 #include "gpu/gl.h"
+#include "gpu/scan.h"
 #include "gpu/sphere_bins.h"
 
 namespace scatterlab::gpu {
@@ -23,11 +24,12 @@ struct DeviceSamples {
   bool radianceCurrent = false;    ///< `radiance` was written by this render's tracer
   /// A list whose count only the GPU knows (dynamic sampling's resident pass, issue 33):
   /// `points` and `radiance` hold at most `capacity` samples, the count is the uint in `count`,
-  /// and the bins are built on the GPU from it (binItems: an upper bound on their entries).
+  /// and the bins are built on the GPU from it. `radii`: (most samples, largest radius) per part
+  /// of the list, from which binsFor() bounds the bins' entries.
   struct OnDevice {
     Buffer count;
     std::size_t capacity = 0;
-    std::size_t binItems = 0;
+    std::vector<std::pair<std::size_t, float>> radii;
   };
   std::optional<OnDevice> onDevice;
 
@@ -37,15 +39,19 @@ struct DeviceSamples {
   bool setPoints(std::span<const RadianceSample> samples);
   /// Makes `points` and `radiance` hold at least `capacity` samples for an onDevice list (their
   /// contents undefined), drops the bins. Needs the context.
-  void reserveOnDevice(std::size_t capacity, std::size_t binItems);
+  void reserveOnDevice(std::size_t capacity, std::vector<std::pair<std::size_t, float>> radii);
   /// The bins of the points over the voxel centres of (bounds, dims): the kept ones when they
   /// were built for this grid, else binned on the host and uploaded (once per sample set); an
   /// onDevice list is binned on the GPU (every time: its samples change with the light).
   const BinBuffers& binsFor(const Box& bounds, IVec3 dims, IVec3* binCount, const char* pass);
   std::size_t size() const { return spheres.size(); }
+  /// The overflow word of the last GPU-built bins (null: none; read it after the frame).
+  const GpuBins* deviceBins() const { return deviceBins_ ? &*deviceBins_ : nullptr; }
 
  private:
   std::optional<BinBuffers> bins_;
+  std::optional<GpuBins> deviceBins_;  ///< an onDevice list's, built each frame
+  ScanScratch scratch_;                ///< the GPU binning's scan scratch
   Box binBounds_;
   IVec3 binDims_{0}, binCount_{0};
 };

@@ -651,9 +651,18 @@ void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs
   const std::size_t finalCapacity = prepareWorkspace(w, initial, settings, budget);
   pass.finalCapacity = finalCapacity;
   if (resident) {
-    // An upper bound on the gather's bin entries: every sample with the bins its sphere can
-    // reach (its radius, one voxel of margin each side and rounding, over kBinVoxels).
-    resident->reserveOnDevice(finalCapacity, 0);
+    // Per part of the list its most samples and their radius, for the bound on the gather's
+    // bin entries: the initial samples, each level, and the top-up's children of each grid.
+    std::vector<std::pair<std::size_t, float>> radii;
+    float r0 = 0.0f;
+    for (const RadianceSample& s : initial) r0 = std::max(r0, s.radius);
+    radii.emplace_back(std::min(initial.size(), finalCapacity), r0);
+    for (std::size_t k = 0; k < L; ++k) {
+      const float R = GridGeometry(scene.medium.bounds, grids[k]).radius();
+      radii.emplace_back(std::min(w.levels[k + 1].capacity, finalCapacity), R);
+      if (budget > 0) radii.emplace_back(std::min(gridVertices(grids, k), finalCapacity), R);
+    }
+    resident->reserveOnDevice(finalCapacity, std::move(radii));
     pass.finalPoints = &resident->points;
     pass.finalRadiance = &resident->radiance;
   } else {

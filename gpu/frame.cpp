@@ -234,10 +234,16 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
                            counter.get());
   // Read after the frame (GpuFrame::report), not inside it.
   lampScene_ = nullptr;
-  f.deferStats([counter](RenderStats& st) {
+  const GpuBins* deviceBins = f.samples.deviceBins();
+  f.deferStats([counter, deviceBins](RenderStats& st) {
     GLuint n = 0;
     counter->read(&n, sizeof n);
     st.extra["uncovered_voxels"] = n;
+    // The bound on the GPU-built bins' entries is an upper bound: an overflow is a bug.
+    if (deviceBins)
+      if (const GLuint need = deviceBins->readOverflow())
+        throw GpuError("radiance gather: the sample bins needed " + std::to_string(need) +
+                       " entries, more than the bound computed for them (a bug)");
   });
   return st;
 }

@@ -170,10 +170,10 @@ Json frameDoc(int frame) {
   return doc;
 }
 
-Image freshRender(const Json& doc, const std::string& method) {
+RenderResult freshRender(const Json& doc, const std::string& method) {
   initialize();
   const Scene s = parseScene(doc, ".");
-  return createMethod(s, method, "gpu")->render(s, nullptr).image;
+  return createMethod(s, method, "gpu")->render(s, nullptr);
 }
 
 class GpuRendererReuse : public ::testing::TestWithParam<const char*> {};
@@ -182,7 +182,7 @@ TEST_P(GpuRendererReuse, FramesEqualFreshRendersAndCreateNoGlObjects) {
   SCATTERLAB_REQUIRE_GPU();
   const std::string method = GetParam();
   std::vector<Image> fresh;
-  for (int f = 0; f < 3; ++f) fresh.push_back(freshRender(frameDoc(f), method));
+  for (int f = 0; f < 3; ++f) fresh.push_back(freshRender(frameDoc(f), method).image);
   Renderer r(frameDoc(0), ".", method, "gpu");
   std::vector<long long> created, held;
   long long reusedBefore = gpu::glObjectCounts().reused;
@@ -228,7 +228,10 @@ INSTANTIATE_TEST_SUITE_P(Methods, GpuRendererReuse,
 /// image left on the device — makes the host wait for nothing between the frame's start and the
 /// moment someone reads the image: no read-back of S and ∇S (the gather reads them where the
 /// tracer wrote them), no count read inside the frame (deferred to the report), no density
-/// read for the lamps' Taylor bound (computed on the GPU). Its image equals a fresh render's.
+/// read for the lamps' Taylor bound (computed on the GPU); for adaptive, no E read per level
+/// (the budget's cut decided on the GPU), the final samples assembled and binned on the GPU, and
+/// the levels' stats read after the frame. Its image equals a fresh render's (which reads the
+/// samples back and bins them on the host: the same lists, the same sums).
 class GpuSteadyFrame : public ::testing::TestWithParam<std::tuple<const char*, bool>> {};
 
 TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
@@ -266,7 +269,21 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
                       rgba.data());
     gpu::checkGl("device image read-back");
     Json freshDoc = doc(f);
-    const Image fresh = freshRender(freshDoc, method);
+    const RenderResult freshResult = freshRender(freshDoc, method);
+    const Image& fresh = freshResult.image;
+    if (std::string(method) == "adaptive") {
+      // The count and the levels' stats, read after the frame, are the fresh render's.
+      ASSERT_TRUE(res.stats.samples.has_value());
+      EXPECT_EQ(*res.stats.samples, *freshResult.stats.samples);
+      EXPECT_EQ(res.stats.extra.at("samples_per_level"),
+                freshResult.stats.extra.at("samples_per_level"));
+      for (const char* key : {"evaluated", "split", "capped", "topped_up", "kept"})
+        for (std::size_t l = 0; l < freshResult.stats.extra.at("levels").size(); ++l)
+          EXPECT_EQ(res.stats.extra.at("levels")[l].at(key),
+                    freshResult.stats.extra.at("levels")[l].at(key))
+              << key << " of level " << l;
+      EXPECT_TRUE(res.samples.empty());  // left on the device
+    }
     double worst = 0.0;
     for (std::size_t i = 0; i < fresh.pixels().size(); ++i)
       for (int c = 0; c < 3; ++c)
@@ -282,7 +299,9 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
 INSTANTIATE_TEST_SUITE_P(Methods, GpuSteadyFrame,
                          ::testing::Values(std::make_tuple("gradient", true),
                                            std::make_tuple("gradient", false),
-                                           std::make_tuple("per-voxel", false)),
+                                           std::make_tuple("per-voxel", false),
+                                           std::make_tuple("adaptive", true),
+                                           std::make_tuple("adaptive", false)),
                          [](const auto& info) {
                            std::string name = std::get<0>(info.param);
                            for (char& c : name)
