@@ -1,5 +1,7 @@
 #include "core/stages.h"
 
+#include <algorithm>
+
 namespace scatterlab {
 
 const char* backendName(Backend b) {
@@ -53,6 +55,46 @@ StageRegistry<ReconstructionMaker>& reconstructions() {
 StageRegistry<IntegratorMaker>& integrators() {
   static StageRegistry<IntegratorMaker> r("integrator");
   return r;
+}
+
+std::vector<int> voxelCells(int voxels, int cells) {
+  std::vector<int> c(std::size_t(std::max(voxels, 0)));
+  for (int u = 0; u < voxels; ++u)
+    c[std::size_t(u)] = std::min(cells - 1, int((u + 0.5f) / voxels * cells));
+  return c;
+}
+
+std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims) {
+  const std::size_t n = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+  std::vector<char> used(n, 0);
+  const IVec3 nd = g.dims();
+  const std::vector<int> ci = voxelCells(nd.x, dims.x), cj = voxelCells(nd.y, dims.y),
+                         ck = voxelCells(nd.z, dims.z);
+  const float* d = g.data().data();
+  for (int k = 0; k < nd.z; ++k)
+    for (int j = 0; j < nd.y; ++j) {
+      const std::size_t rowCell =
+          std::size_t(dims.x) *
+          (std::size_t(cj[std::size_t(j)]) + std::size_t(dims.y) * std::size_t(ck[std::size_t(k)]));
+      for (int i = 0; i < nd.x; ++i, ++d)
+        if (*d > 0.0f) used[rowCell + std::size_t(ci[std::size_t(i)])] = 1;
+    }
+  std::vector<int> out;
+  for (std::size_t c = 0; c < n; ++c)
+    if (used[c]) out.push_back(int(c));
+  return out;
+}
+
+std::vector<RadianceSample> Sampler::generate(Frame& frame, const Scene& scene) {
+  static const DensityGrid kNoDensity;
+  return generate(scene, readsDensity() ? frame.hostDensity() : kNoDensity);
+}
+
+long long Frame::occupiedCells(IVec3 dims, std::vector<int>* list) {
+  std::vector<int> cells = scatterlab::occupiedCells(hostDensity(), dims);
+  const long long n = (long long)cells.size();
+  if (list) *list = std::move(cells);
+  return n;
 }
 
 }  // namespace scatterlab

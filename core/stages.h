@@ -282,7 +282,21 @@ class Frame {
   /// The image an integrator left on the device in this render, if any: (GL texture name,
   /// width, height).
   virtual std::optional<std::array<unsigned, 3>> deviceImage() const { return std::nullopt; }
+  /// How many cells of a regular `dims` grid over the density's box hold a voxel centre with
+  /// D > 0 (scatterlab::occupiedCells), and with `list` which, ascending: the cell samplers'
+  /// occupancy. From hostDensity() here; a GPU frame counts on the device from its own density
+  /// volume (a few bytes read back, not the volume: issue 33).
+  virtual long long occupiedCells(IVec3 dims, std::vector<int>* list);
 };
+
+/// The voxel-centre → cell map of one axis of occupiedCells(): voxel centre u of `voxels` lies
+/// in cell min(cells − 1, int((u + 0.5) / voxels · cells)) (float arithmetic as written; the GPU
+/// pass looks the maps up instead of recomputing them).
+std::vector<int> voxelCells(int voxels, int cells);
+
+/// The cells of a regular `dims` grid over `g`'s box that hold a voxel centre with D > 0 (linear
+/// indices i + nx·(j + ny·k), ascending).
+std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims);
 
 /// The CPU backend's frame: the volumes as host grids. No GL context.
 class HostFrame : public Frame {
@@ -333,6 +347,11 @@ class Sampler {
   /// lights, camera or objects): a method that keeps its density between renders
   /// (Method::retainDensity) keeps the samples with it.
   virtual std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid& density) = 0;
+  /// The same in a render's frame (what the pipeline calls): by default generate() on the
+  /// frame's hostDensity() where the sampler reads the density; a sampler that only needs the
+  /// density's occupancy asks the frame for it (Frame::occupiedCells), which a GPU frame counts
+  /// without reading the volume back.
+  virtual std::vector<RadianceSample> generate(Frame& frame, const Scene& scene);
   /// About how many samples generate() will make for `scene` (the medium the sampler was made
   /// for): what the render's plan counts (memory, tracing work) before anything is built.
   virtual long long plannedCount(const Scene& scene) const = 0;

@@ -1,5 +1,6 @@
 #include "gpu/frame.h"
 
+#include "gpu/bindings.h"
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
 #include "gpu/reconstructions.h"
@@ -78,6 +79,55 @@ const DensityGrid& GpuFrame::hostDensity() {
     host_ = readDensity(density);
   }
   return *host_;
+}
+
+long long GpuFrame::occupiedCells(IVec3 dims, std::vector<int>* list) {
+  context();
+  const std::size_t cells = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+  const IVec3 nd = density.dims;
+  if (cells == 0 || nd.x <= 0 || nd.y <= 0 || nd.z <= 0) {
+    if (list) list->clear();
+    return 0;
+  }
+  if (!cellStamps_ || cellStamps_.size() < cells * sizeof(GLuint)) {
+    cellStamps_ = Buffer();
+    std::vector<GLuint> zeros(cells, 0u);  // tokens start at 1
+    cellStamps_ = Buffer(cells * sizeof(GLuint), zeros.data(), 0, "cell occupancy stamps");
+    cellToken_ = 0;
+  }
+  const GLuint token = ++cellToken_;
+  std::vector<GLint> maps;
+  for (const auto& [voxels, n] : {std::pair{nd.x, dims.x}, {nd.y, dims.y}, {nd.z, dims.z}})
+    for (const int c : voxelCells(voxels, n)) maps.push_back(c);
+  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
+  const GLuint zero = 0;
+  const Buffer count(sizeof zero, &zero, 0, "occupied cells");
+  const Program& p = program({.compute = {"cell_occupancy.comp.glsl"}}, "cell samplers' occupancy");
+  {
+    ScopedGpuTimer t(&timer, "cell occupancy");
+    p.use();
+    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    mapBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    cellStamps_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    count.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+    setIVec3(p, "uVoxels", nd);
+    setIVec3(p, "uCells", dims);
+    glUniform1ui(p.uniform("uToken"), token);
+    dispatch("cell occupancy", {groups(nd.x, 4), groups(nd.y, 4), groups(nd.z, 4)});
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+  GLuint n = 0;
+  count.read(&n, sizeof n);  // a host wait of 4 bytes (a cold frame's sampler only)
+  if (list) {
+    std::vector<GLuint> stamps(cells);
+    cellStamps_.read(stamps.data(), cells * sizeof(GLuint));
+    list->clear();
+    list->reserve(n);
+    for (std::size_t c = 0; c < cells; ++c)
+      if (stamps[c] == token) list->push_back(int(c));
+  }
+  checkGl("cell occupancy");
+  return n;
 }
 
 void GpuFrame::newRender() {

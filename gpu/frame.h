@@ -56,6 +56,10 @@ class GpuFrame : public Frame {
     return objects.build(scene, settings, &timer);
   }
 
+  /// Counted on the GPU from `density` (cell_occupancy.comp.glsl): a 4-byte read per call, and
+  /// for `list` the grid's stamps; the volume is not read back.
+  long long occupiedCells(IVec3 dims, std::vector<int>* list) override;
+
   void keepImageOnDevice(bool on) override { imageOnDevice = on; }
   std::optional<std::array<unsigned, 3>> deviceImage() const override;
 
@@ -77,6 +81,8 @@ class GpuFrame : public Frame {
   bool splatted_ = false;
   std::vector<std::size_t> marks_;  ///< timer.count() at each sync() of this render
   std::optional<DensityGrid> host_;
+  Buffer cellStamps_;  ///< occupiedCells: uint per cell, the last call's token
+  std::uint32_t cellToken_ = 0;
   /// The counters at the start of this render (host_waits, dispatches are differences).
   HostWaitCounts waits0_;
   PassCounts passes0_;

@@ -122,11 +122,7 @@ class PipelineMethod : public Method {
       samples = *keptSamples_;
       st.extra["samples_reused"] = true;
     } else if (sampler) {
-      static const DensityGrid kNoDensity;
-      stage("sampling", [&] {
-        samples =
-            sampler->generate(scene, sampler->readsDensity() ? frame->hostDensity() : kNoDensity);
-      });
+      stage("sampling", [&] { samples = sampler->generate(*frame, scene); });
       if (retainDensity) {
         keptSamples_ = samples;
         st.extra["samples_reused"] = false;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <map>
 #include <numeric>
 
 #include "core/error.h"
@@ -18,31 +19,16 @@ IVec3 dimsForLongAxis(const Vec3& ext, int nLong) {
   return d;
 }
 
-std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims, bool skipEmpty) {
+/// The occupancy the cell samplers count: from the frame (Frame::occupiedCells), or every cell
+/// without skip_empty.
+long long cellCount(Frame& frame, IVec3 dims, bool skipEmpty, std::vector<int>* list) {
+  if (skipEmpty) return frame.occupiedCells(dims, list);
   const int n = dims.x * dims.y * dims.z;
-  std::vector<int> out;
-  if (!skipEmpty) {
-    out.resize(std::size_t(n));
-    std::iota(out.begin(), out.end(), 0);
-    return out;
+  if (list) {
+    list->resize(std::size_t(n));
+    std::iota(list->begin(), list->end(), 0);
   }
-  std::vector<char> used(std::size_t(n), 0);
-  const IVec3 nd = g.dims();
-  // Voxel centre index u maps to cell floor((u + 0.5) / nd * dims).
-  std::vector<int> ci(std::size_t(nd.x)), cj(std::size_t(nd.y)), ck(std::size_t(nd.z));
-  for (int i = 0; i < nd.x; ++i) ci[i] = std::min(dims.x - 1, int((i + 0.5f) / nd.x * dims.x));
-  for (int j = 0; j < nd.y; ++j) cj[j] = std::min(dims.y - 1, int((j + 0.5f) / nd.y * dims.y));
-  for (int k = 0; k < nd.z; ++k) ck[k] = std::min(dims.z - 1, int((k + 0.5f) / nd.z * dims.z));
-  const float* d = g.data().data();
-  for (int k = 0; k < nd.z; ++k)
-    for (int j = 0; j < nd.y; ++j) {
-      const int rowCell = dims.x * (cj[j] + dims.y * ck[k]);
-      for (int i = 0; i < nd.x; ++i, ++d)
-        if (*d > 0.0f) used[std::size_t(rowCell + ci[i])] = 1;
-    }
-  for (int c = 0; c < n; ++c)
-    if (used[std::size_t(c)]) out.push_back(c);
-  return out;
+  return n;
 }
 
 std::uint64_t splitmix64(std::uint64_t x) {
@@ -113,10 +99,18 @@ class CellSampler : public Sampler {
   /// The cells chosen come as close to `count` as the grid allows, or with at_most the most
   /// that do not exceed it (chooseSampleCells).
   long long plannedCount(const Scene&) const override { return count_; }
-  std::vector<RadianceSample> generate(const Scene&, const DensityGrid& density) override {
-    const SampleCells cells = chooseSampleCells(density, count_, skipEmpty_, atMost_);
+  /// Only the occupancy is read (Frame::occupiedCells): a GPU frame reads no density back.
+  bool readsDensity() const override { return false; }
+  std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid& density) override {
+    HostFrame frame(density);
+    return generate(frame, scene);
+  }
+  std::vector<RadianceSample> generate(Frame& frame, const Scene& scene) override {
+    const Box& box = scene.medium.bounds;
+    const SampleCells cells = chooseSampleCells(frame, box.extent(), scene.medium.resolution,
+                                                count_, skipEmpty_, atMost_);
     const float R = scale_ * std::max({cells.cell.x, cells.cell.y, cells.cell.z});
-    const Vec3 lo = density.bounds().min;
+    const Vec3 lo = box.min;
     std::vector<RadianceSample> out(cells.occupied.size());
     for (std::size_t n = 0; n < out.size(); ++n) {
       const int c = cells.occupied[n];
@@ -182,14 +176,15 @@ double sampleSetBytes(double count) {
   return count * double(sizeof(RadianceSample) + 2 * sizeof(std::int64_t));
 }
 
-SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty,
-                              bool atMost) {
-  const Vec3 ext = density.bounds().extent();
-  const IVec3 nd = density.dims();
+SampleCells chooseSampleCells(Frame& frame, const Vec3& ext, IVec3 nd, long long count,
+                              bool skipEmpty, bool atMost) {
   // Cells no smaller than a voxel: below that, occupancy by voxel centres is meaningless.
   const int maxLong = std::max({nd.x, nd.y, nd.z});
+  std::map<int, long long> known;  // occupancy per nLong: each grid counted once
   const auto occ = [&](int nLong) {
-    return (long long)occupiedCells(density, dimsForLongAxis(ext, nLong), skipEmpty).size();
+    const auto it = known.find(nLong);
+    if (it != known.end()) return it->second;
+    return known[nLong] = cellCount(frame, dimsForLongAxis(ext, nLong), skipEmpty, nullptr);
   };
   int lo = 1, hi = maxLong;  // smallest nLong with occ >= count, by bisection
   if (occ(hi) < count) {
@@ -212,8 +207,15 @@ SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool 
   SampleCells c;
   c.dims = dimsForLongAxis(ext, best);
   c.cell = ext / Vec3(c.dims);
-  c.occupied = occupiedCells(density, c.dims, skipEmpty);
+  cellCount(frame, c.dims, skipEmpty, &c.occupied);
   return c;
+}
+
+SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty,
+                              bool atMost) {
+  HostFrame frame(density);
+  return chooseSampleCells(frame, density.bounds().extent(), density.dims(), count, skipEmpty,
+                           atMost);
 }
 
 void registerSamplers() {

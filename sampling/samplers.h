@@ -41,8 +41,13 @@ struct SampleCells {
   std::vector<int> occupied;  ///< linear indices (i + nx·(j + ny·k)) of the cells used, ascending
 };
 
-/// Chooses the cells for about `count` samples over `density`'s box (see file comment); with
-/// `atMost` the finest grid with at most `count` occupied cells (1 cell if none has so few).
+/// Chooses the cells for about `count` samples over a density volume's box of extent `ext` and
+/// `nd` voxels (see file comment), the occupancy counted by `frame` (Frame::occupiedCells: a
+/// GPU frame counts on the device, one small read per grid tried); with `atMost` the finest
+/// grid with at most `count` occupied cells (1 cell if none has so few).
+SampleCells chooseSampleCells(Frame& frame, const Vec3& ext, IVec3 nd, long long count,
+                              bool skipEmpty, bool atMost = false);
+/// The same over a host density volume (tests).
 SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty,
                               bool atMost = false);
 

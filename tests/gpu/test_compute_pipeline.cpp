@@ -455,9 +455,10 @@ TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {
   EXPECT_EQ(r.stats.extra["unused_keys"], Json::array({"render.slicing"}));
 }
 
-// No host round trip for a sampler that does not read the density (gaussian-centres): the frame
-// reads nothing back; a jittered sampler (skips empty cells: reads it) does.
-TEST(GpuComputePipeline, DensityIsReadBackOnlyForASamplerThatReadsIt) {
+// Issue 33: no sampler reads the density back. gaussian-centres reads nothing; the cell samplers
+// (jittered, grid: they skip empty cells) count the occupancy on the GPU (pass "cell occupancy",
+// a few bytes read per grid tried), and their samples are the CPU sampler's.
+TEST(GpuComputePipeline, NoSamplerReadsTheDensityBack) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
   Json doc = blobSceneDoc(16, 16, 12);
@@ -466,10 +467,42 @@ TEST(GpuComputePipeline, DensityIsReadBackOnlyForASamplerThatReadsIt) {
   const RenderResult a = createMethod(centres, "", "gpu")->render(centres, nullptr);
   EXPECT_FALSE(a.stats.extra["gpu_ms"].contains("density read-back")) << a.stats.extra["gpu_ms"];
   EXPECT_EQ(*a.stats.samples, 4);
-  doc["render"]["sampler"] = {{"type", "jittered"}, {"count", 32}};
-  const Scene jittered = parseScene(doc, ".");
-  const RenderResult b = createMethod(jittered, "", "gpu")->render(jittered, nullptr);
-  EXPECT_TRUE(b.stats.extra["gpu_ms"].contains("density read-back")) << b.stats.extra["gpu_ms"];
+  for (const char* type : {"jittered", "grid"}) {
+    doc["render"]["sampler"] = {{"type", type}, {"count", 32}};
+    const Scene s = parseScene(doc, ".");
+    const RenderResult g = createMethod(s, "", "gpu")->render(s, nullptr);
+    const RenderResult c = createMethod(s, "", "cpu")->render(s, nullptr);
+    EXPECT_FALSE(g.stats.extra["gpu_ms"].contains("density read-back")) << g.stats.extra["gpu_ms"];
+    EXPECT_TRUE(g.stats.extra["gpu_ms"].contains("cell occupancy")) << g.stats.extra["gpu_ms"];
+    ASSERT_EQ(g.samples.size(), c.samples.size()) << type;
+    for (std::size_t i = 0; i < c.samples.size(); ++i) {
+      EXPECT_EQ(g.samples[i].position, c.samples[i].position) << type << " sample " << i;
+      EXPECT_EQ(g.samples[i].radius, c.samples[i].radius) << type << " sample " << i;
+    }
+  }
+}
+
+// The GPU's occupancy is the CPU's, cell for cell: a density with empty and occupied voxels
+// (zeros, tiny positives, negatives), grids that divide its dims and grids that do not.
+TEST(GpuComputePipeline, CellOccupancyEqualsTheCpus) {
+  SCATTERLAB_REQUIRE_GPU();
+  DensityGrid d(Box{Vec3(-1.0f, 0.0f, 2.0f), Vec3(2.0f, 1.5f, 3.0f)}, IVec3(23, 17, 9));
+  std::uint32_t h = 12345u;
+  for (float& v : d.data()) {
+    h = h * 1664525u + 1013904223u;
+    const std::uint32_t r = h >> 24;
+    v = r < 150 ? 0.0f : r < 160 ? 1e-30f : r < 170 ? -0.5f : float(r) / 255.0f;
+  }
+  gpu::GpuFrame frame(d);
+  for (const IVec3 dims :
+       {IVec3(1), IVec3(4, 3, 2), IVec3(23, 17, 9), IVec3(7, 11, 5), IVec3(46, 5, 13)}) {
+    const std::vector<int> cpu = occupiedCells(d, dims);
+    std::vector<int> gpu;
+    EXPECT_EQ(frame.occupiedCells(dims, nullptr), (long long)cpu.size());
+    EXPECT_EQ(frame.occupiedCells(dims, &gpu), (long long)cpu.size());
+    EXPECT_EQ(gpu, cpu) << dims.x << "x" << dims.y << "x" << dims.z;
+  }
+  gpu::checkGl("cell occupancy");
 }
 
 }  // namespace
