@@ -497,6 +497,27 @@ struct FinalList {
   std::size_t capacity;
 };
 
+/// Moves the final list's end by a part's total (its scan's, or counts[countSlot] unless
+/// kFromZero) and records the total in counts[partSlot].
+void advanceEnd(DynamicSamplingWorkspace& w, const CountSlots& slots, const FinalList& out,
+                std::size_t n, std::size_t partSlot, std::size_t countSlot) {
+  const Program& advance = gpu::program(
+      {.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_ADVANCE"}}, "ds assemble end");
+  advance.use();
+  glUniform1ui(advance.uniform("uCount"), GLuint(n));
+  glUniform1ui(advance.uniform("uEndSlot"), GLuint(slots.end()));
+  glUniform1ui(advance.uniform("uCapacity"), GLuint(out.capacity));
+  glUniform1ui(advance.uniform("uPartSlot"), GLuint(partSlot));
+  glUniform1ui(advance.uniform("uOverflowSlot"), GLuint(slots.finalOverflow()));
+  glUniform1ui(advance.uniform("uCountSlot"),
+               countSlot == kFromZero ? 0xffffffffu : GLuint(countSlot));
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+  w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+  dispatch("ds assemble end", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
 /// One part of the final list (dynamic_assemble.comp.glsl): `flags` (a program that writes a
 /// flag per invocation into w.inSet, its uniforms set and inputs bound by `bindFlags`) over `n`
 /// invocations, their scan, the scatter (`scatter`, bound by `bindScatter`), and the advance of
@@ -526,13 +547,7 @@ void assemblePart(DynamicSamplingWorkspace& w, const CountSlots& slots, const Fi
   out.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextRadiance);
   dispatch(what, {groups(n, 256), 1, 1});
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  const Program& advance = gpu::program(
-      {.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_ADVANCE"}}, "ds assemble end");
-  common(advance);
-  glUniform1ui(advance.uniform("uPartSlot"), GLuint(partSlot));
-  glUniform1ui(advance.uniform("uOverflowSlot"), GLuint(slots.finalOverflow()));
-  dispatch("ds assemble end", {1, 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  advanceEnd(w, slots, out, n, partSlot, kFromZero);
 }
 
 /// The copy of counts[from] into counts[to] (a one-uint GPU copy).
@@ -557,16 +572,35 @@ void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std
                    "ds assemble: copy kept samples");
   {
     ScopedGpuTimer t(timer, "ds assemble");
+    const Program& keepCopy =
+        gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_KEEP_COPY"}},
+                     "ds assemble: copy a whole level");
     for (std::size_t k = 0; k <= L; ++k) {
       const DynamicSamplingWorkspace::Level& l = w.levels[k];
-      const bool keepAll = k == L || grids[k].voxels;
+      if (k == L || grids[k].voxels) {
+        // Every sample stays: a copy, no flags or scan.
+        if (l.capacity == 0) continue;
+        keepCopy.use();
+        glUniform1ui(keepCopy.uniform("uCount"), GLuint(l.capacity));
+        glUniform1ui(keepCopy.uniform("uEndSlot"), GLuint(slots.end()));
+        glUniform1ui(keepCopy.uniform("uCapacity"), GLuint(out.capacity));
+        glUniform1ui(keepCopy.uniform("uLevel"), GLuint(k));
+        w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+        l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+        l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+        out.points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
+        out.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextRadiance);
+        dispatch("ds assemble", {groups(l.capacity, 256), 1, 1});
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        advanceEnd(w, slots, out, l.capacity, slots.keptOf(k), k);
+        continue;
+      }
       assemblePart(
           w, slots, out, l.capacity, "ds assemble", keepFlags,
           [&](const Program& p) {
             glUniform1ui(p.uniform("uLevel"), GLuint(k));
-            glUniform1i(p.uniform("uKeepAll"), keepAll ? 1 : 0);
             glUniform1i(p.uniform("uBudget"), budget > 0 ? 1 : 0);
-            glUniform1ui(p.uniform("uCutSlot"), GLuint(slots.cut(std::min(k, L - (L > 0)))));
+            glUniform1ui(p.uniform("uCutSlot"), GLuint(slots.cut(k)));
             glUniform1ui(p.uniform("uTopCutSlot"), GLuint(slots.topCut()));
             l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
             w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
