@@ -37,6 +37,29 @@ class LoadAndRender(unittest.TestCase):
                               overrides=["camera.width=20"])
         self.assertEqual(scene.width, 20)
 
+    def test_scene_lights_are_the_lights(self):
+        # Scene.lights lists the lights with the scene format's keys (issue 36: it was a count).
+        doc = box_scene()
+        doc["lights"] = [
+            {"type": "point", "position": [0.5, 1.3, 0.5], "intensity": [3, 2, 1]},
+            {"type": "spot", "position": [0.5, 2.0, 0.5], "direction": [0, -2, 0],
+             "intensity": 5, "outer_deg": 30, "inner_deg": 10},
+            {"type": "directional", "direction": [0, 0, 3], "irradiance": [1, 1, 1]},
+        ]
+        lights = sl.Scene(doc).lights
+        self.assertEqual([l["type"] for l in lights], ["point", "spot", "directional"])
+        np.testing.assert_allclose(lights[0]["position"], [0.5, 1.3, 0.5], rtol=1e-7)
+        np.testing.assert_allclose(lights[0]["intensity"], [3, 2, 1])
+        np.testing.assert_allclose(lights[1]["direction"], [0, -1, 0])  # normalised
+        np.testing.assert_allclose(lights[1]["intensity"], [5, 5, 5])
+        self.assertAlmostEqual(lights[1]["outer_deg"], 30.0, places=4)
+        self.assertAlmostEqual(lights[1]["inner_deg"], 10.0, places=4)
+        np.testing.assert_allclose(lights[2]["direction"], [0, 0, 1])
+        np.testing.assert_allclose(lights[2]["irradiance"], [1, 1, 1])
+        # What it lists is what renders: the lights of a scene made from it are the same.
+        again = dict(doc, lights=lights)
+        self.assertEqual(sl.Scene(again).lights, lights)
+
     def test_scene_constructor_takes_what_load_scene_takes(self):
         # Scene(path) as docs/scene-format.md shows (issue 36: 'No constructor defined!' before):
         # a JSON file with overrides, a volume file framed automatically, a dict.
