@@ -193,7 +193,11 @@ class PipelineMethod : public Method {
       for (const std::string& k : unused) st.extra["unused_keys"].push_back(k);
     }
     if (sampler) {
-      if (!samplesOnDevice_) st.samples = (long long)samples.size();
+      if (!samplesOnDevice_)
+        st.samples = (long long)samples.size();
+      else if (!st.samples && deviceSampleCount_ >= 0)
+        st.samples = deviceSampleCount_;  // the radiance reused: the count of the render it is from
+      if (samplesOnDevice_ && st.samples) deviceSampleCount_ = *st.samples;
       st.extra["sampler"] = samplerType;
       // The extensions as resolved for this scene (their defaults depend on it).
       st.extra["factor_lights"] = settings_.factorLights;
@@ -224,6 +228,7 @@ class PipelineMethod : public Method {
   /// The refiner left the final samples on the device (RenderResult::samples is empty; the
   /// backend's report counts them).
   bool samplesOnDevice_ = false;
+  long long deviceSampleCount_ = -1;  ///< their count, as the report of their render read it
   /// The sampler's output for frame_'s density (positions, radii, weights; S and ∇S zero).
   std::optional<std::vector<RadianceSample>> keptSamples_;
   Medium kept_;  ///< the medium frame_'s density was built from
