@@ -328,13 +328,33 @@ void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
+/// dynamic_budget.comp.glsl's cut of level k (or, with topUp, the top-up's after level L = k).
+void dispatchCut(DynamicSamplingWorkspace& w, std::size_t k, std::size_t L, long long budget,
+                 bool topUp) {
+  const CountSlots slots{L};
+  const Program& cut =
+      gpu::program({.compute = {"dynamic_budget.comp.glsl"}}, "dynamic sampling budget cut");
+  cut.use();
+  glUniform1ui(cut.uniform("uLevel"), GLuint(k));
+  glUniform1ui(cut.uniform("uSplitLevels"), GLuint(L));
+  glUniform1i(cut.uniform("uTopUp"), topUp ? 1 : 0);
+  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget, INT_MAX)));
+  glUniform1ui(cut.uniform("uKeptSlot"), GLuint(slots.kept()));
+  glUniform1ui(cut.uniform("uCountSlot"), GLuint(slots.budgetCount()));
+  glUniform1ui(cut.uniform("uCutSlot"), GLuint(topUp ? slots.topCut() : slots.cut(k)));
+  glUniform1ui(cut.uniform("uCutsSlot"), GLuint(slots.cut(0)));
+  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+  w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
+  dispatch("ds budget cut", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
 /// The budget's cut of level k (budgetedSplit's error groups, on the GPU): the keys pass (each
 /// candidate raises its vertices of G_{k+1} to 1 + its group, and counts itself), the vertices'
 /// histogram, and the one-workgroup cut, which leaves the level's cut, the count after it and
 /// the samples kept so far in w.counts. GPU time: "ds budget".
 void budgetLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k,
                  std::size_t L, long long budget, StageTimer* timer) {
-  const CountSlots slots{L};
   const std::size_t nv = grid.vertices();
   const GLuint zero = 0;
   const GLuint histBase = GLuint(k * 2 * kErrorBins);
@@ -377,44 +397,15 @@ void budgetLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::siz
     dispatch("ds budget vertices", {groups(nv, 256), 1, 1});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
-  const Program& cut =
-      gpu::program({.compute = {"dynamic_budget.comp.glsl"}}, "dynamic sampling budget cut");
-  cut.use();
-  glUniform1ui(cut.uniform("uLevel"), GLuint(k));
-  glUniform1ui(cut.uniform("uSplitLevels"), GLuint(L));
-  glUniform1i(cut.uniform("uTopUp"), 0);
-  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget, INT_MAX)));
-  glUniform1ui(cut.uniform("uKeptSlot"), GLuint(slots.kept()));
-  glUniform1ui(cut.uniform("uCountSlot"), GLuint(slots.budgetCount()));
-  glUniform1ui(cut.uniform("uCutSlot"), GLuint(slots.cut(k)));
-  glUniform1ui(cut.uniform("uCutsSlot"), GLuint(slots.cut(0)));
-  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-  w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
-  dispatch("ds budget cut", {1, 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  dispatchCut(w, k, L, budget, false);
 }
 
 /// The top-up's cut (budgetTopUp's, on the GPU): every split level's histograms below its cut,
 /// against the budget; leaves the cut in w.counts. GPU time: "ds budget".
 void budgetTopUpCut(DynamicSamplingWorkspace& w, std::size_t L, long long budget,
                     StageTimer* timer) {
-  const CountSlots slots{L};
   ScopedGpuTimer t(timer, "ds budget");
-  const Program& cut =
-      gpu::program({.compute = {"dynamic_budget.comp.glsl"}}, "dynamic sampling budget cut");
-  cut.use();
-  glUniform1ui(cut.uniform("uLevel"), GLuint(L));
-  glUniform1ui(cut.uniform("uSplitLevels"), GLuint(L));
-  glUniform1i(cut.uniform("uTopUp"), 1);
-  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget, INT_MAX)));
-  glUniform1ui(cut.uniform("uKeptSlot"), GLuint(slots.kept()));
-  glUniform1ui(cut.uniform("uCountSlot"), GLuint(slots.budgetCount()));
-  glUniform1ui(cut.uniform("uCutSlot"), GLuint(slots.topCut()));
-  glUniform1ui(cut.uniform("uCutsSlot"), GLuint(slots.cut(0)));
-  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-  w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
-  dispatch("ds budget cut", {1, 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  dispatchCut(w, L, L, budget, true);
 }
 
 /// Split level k into the grid information buffer of G_{k+1} (cleared first): every candidate,
