@@ -17,21 +17,23 @@
 
 namespace scatterlab::gpu {
 
+/// A sample list whose count only the GPU knows (dynamic sampling's resident pass, issue 33):
+/// DeviceSamples' `points` and `radiance` hold at most `capacity` samples, the count is the uint
+/// in `count`, and the bins are built on the GPU from it. `radii`: (most samples, largest
+/// radius) per part of the list, from which DeviceSamples::binsFor() bounds the bins' entries.
+struct DeviceSampleList {
+  Buffer count;
+  std::size_t capacity = 0;
+  std::vector<std::pair<std::size_t, float>> radii;
+};
+
 struct DeviceSamples {
   std::vector<glm::vec4> spheres;  ///< what `points` holds (xyz, radius), to see a change
   Buffer points;                   ///< GpuSamplePoint[spheres.size()]
   Buffer radiance;                 ///< GpuRadianceRecord[spheres.size()]
   bool radianceCurrent = false;    ///< `radiance` was written by this render's tracer
-  /// A list whose count only the GPU knows (dynamic sampling's resident pass, issue 33):
-  /// `points` and `radiance` hold at most `capacity` samples, the count is the uint in `count`,
-  /// and the bins are built on the GPU from it. `radii`: (most samples, largest radius) per part
-  /// of the list, from which binsFor() bounds the bins' entries.
-  struct OnDevice {
-    Buffer count;
-    std::size_t capacity = 0;
-    std::vector<std::pair<std::size_t, float>> radii;
-  };
-  std::optional<OnDevice> onDevice;
+  /// A list whose count only the GPU knows (DeviceSampleList).
+  std::optional<DeviceSampleList> onDevice;
 
   /// Uploads the samples' positions and radii unless the same ones are uploaded already
   /// (compared on the host: no GPU wait); a new set drops the bins and S. Sizes `radiance`.
