@@ -314,7 +314,9 @@ TEST(GpuSteadyFrame, AdaptiveUnderABindingBudgetAsAFreshRender) {
   for (int f = 0; f < 3; ++f) {
     if (f > 0) r.set("lights.1.position=" + doc(f)["lights"][1]["position"].dump());
     const RenderResult res = r.render();
-    if (f > 0) EXPECT_EQ(res.stats.extra.at("host_waits").get<long long>(), 0) << "frame " << f;
+    if (f > 0) {
+      EXPECT_EQ(res.stats.extra.at("host_waits").get<long long>(), 0) << "frame " << f;
+    }
     ASSERT_TRUE(res.deviceImage.has_value());
     const RenderResult fresh = freshRender(doc(f), "adaptive");
     ASSERT_TRUE(res.stats.samples.has_value());
