@@ -90,11 +90,15 @@ std::vector<RadianceSample> Sampler::generate(Frame& frame, const Scene& scene) 
   return generate(scene, readsDensity() ? frame.hostDensity() : kNoDensity);
 }
 
-long long Frame::occupiedCells(IVec3 dims, std::vector<int>* list) {
-  std::vector<int> cells = scatterlab::occupiedCells(hostDensity(), dims);
-  const long long n = (long long)cells.size();
-  if (list) *list = std::move(cells);
+std::vector<long long> Frame::countOccupiedCells(std::span<const IVec3> grids) {
+  std::vector<long long> n;
+  for (const IVec3& dims : grids)
+    n.push_back((long long)scatterlab::occupiedCells(hostDensity(), dims).size());
   return n;
+}
+
+std::vector<int> Frame::occupiedCellList(IVec3 dims) {
+  return scatterlab::occupiedCells(hostDensity(), dims);
 }
 
 }  // namespace scatterlab

@@ -282,11 +282,18 @@ class Frame {
   /// The image an integrator left on the device in this render, if any: (GL texture name,
   /// width, height).
   virtual std::optional<std::array<unsigned, 3>> deviceImage() const { return std::nullopt; }
-  /// How many cells of a regular `dims` grid over the density's box hold a voxel centre with
-  /// D > 0 (scatterlab::occupiedCells), and with `list` which, ascending: the cell samplers'
-  /// occupancy. From hostDensity() here; a GPU frame counts on the device from its own density
-  /// volume (a few bytes read back, not the volume: issue 33).
-  virtual long long occupiedCells(IVec3 dims, std::vector<int>* list);
+  /// How many cells of each regular grid of `grids` (their dims) over the density's box hold a
+  /// voxel centre with D > 0 (scatterlab::occupiedCells): the cell samplers' occupancy. From
+  /// hostDensity() here, grid by grid; a GPU frame counts every grid of the call in one pass on
+  /// the device from its own density volume and reads back 4 bytes per grid, not the volume
+  /// (issue 33).
+  virtual std::vector<long long> countOccupiedCells(std::span<const IVec3> grids);
+  /// The occupied cells of a `dims` grid (as countOccupiedCells), ascending. A GPU frame reads
+  /// them from its last count when that counted `dims` (no new pass).
+  virtual std::vector<int> occupiedCellList(IVec3 dims);
+  /// Whether countOccupiedCells counts several grids for about the price of one (a GPU frame:
+  /// one pass and one wait for all), so that a search may ask for grids it may not need.
+  virtual bool countsGridsTogether() const { return false; }
 };
 
 /// The voxel-centre → cell map of one axis of occupiedCells(): voxel centre u of `voxels` lies

@@ -1,5 +1,9 @@
 #include "gpu/frame.h"
 
+#include <algorithm>
+#include <bit>
+#include <limits>
+
 #include "gpu/bindings.h"
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
@@ -34,6 +38,7 @@ void GpuFrame::buildDensity(const Scene& scene) {
   density = Volume();
   density = gpu::buildDensity(scene, &timer, &splatted_, pipeline_);
   host_.reset();
+  forgetOccupancy();
 }
 
 namespace {
@@ -81,53 +86,90 @@ const DensityGrid& GpuFrame::hostDensity() {
   return *host_;
 }
 
-long long GpuFrame::occupiedCells(IVec3 dims, std::vector<int>* list) {
+std::vector<long long> GpuFrame::countOccupiedCells(std::span<const IVec3> grids) {
   context();
-  const std::size_t cells = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
   const IVec3 nd = density.dims;
-  if (cells == 0 || nd.x <= 0 || nd.y <= 0 || nd.z <= 0) {
-    if (list) list->clear();
-    return 0;
-  }
-  if (!cellStamps_ || cellStamps_.size() < cells * sizeof(GLuint)) {
-    cellStamps_ = Buffer();
-    std::vector<GLuint> zeros(cells, 0u);  // tokens start at 1
-    cellStamps_ = Buffer(cells * sizeof(GLuint), zeros.data(), 0, "cell occupancy stamps");
-    cellToken_ = 0;
-  }
-  const GLuint token = ++cellToken_;
+  std::vector<long long> out(grids.size(), 0);
+  if (grids.empty() || nd.x <= 0 || nd.y <= 0 || nd.z <= 0) return out;
+  // Each grid's bits after those of the grids counted before in this render (kept, so that
+  // occupiedCellList reads the chosen grid's without a new pass).
+  std::vector<GLint> table;  // per grid: dims, first word
   std::vector<GLint> maps;
-  for (const auto& [voxels, n] : {std::pair{nd.x, dims.x}, {nd.y, dims.y}, {nd.z, dims.z}})
-    for (const int c : voxelCells(voxels, n)) maps.push_back(c);
-  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
+  std::vector<CountedGrid> added;
+  std::size_t words = cellWords_;
+  for (const IVec3& dims : grids) {
+    const std::size_t cells = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+    added.push_back({dims, words});
+    table.insert(table.end(), {dims.x, dims.y, dims.z, GLint(words)});
+    words += (cells + 31) / 32;
+    for (const auto& [voxels, n] : {std::pair{nd.x, dims.x}, {nd.y, dims.y}, {nd.z, dims.z}})
+      for (const int c : voxelCells(voxels, n)) maps.push_back(c);
+  }
+  if (words > std::size_t(std::numeric_limits<GLint>::max()))
+    throw LimitError("the cell samplers' occupancy: " + std::to_string(words) +
+                     " words of cell bits are more than a GPU buffer index reaches; a smaller "
+                     "'render.sampler.count' or density resolution");
+  countedGrids_.insert(countedGrids_.end(), added.begin(), added.end());
+  if (cellBits_.size() < words * sizeof(GLuint)) {
+    Buffer grown(Buffer::storageFor(words * sizeof(GLuint)), nullptr, 0, "cell occupancy bits");
+    if (cellWords_ > 0)
+      glCopyNamedBufferSubData(cellBits_.id(), grown.id(), 0, 0,
+                               GLsizeiptr(cellWords_ * sizeof(GLuint)));
+    cellBits_ = std::move(grown);
+  }
   const GLuint zero = 0;
-  const Buffer count(sizeof zero, &zero, 0, "occupied cells");
+  glClearNamedBufferSubData(cellBits_.id(), GL_R32UI, GLintptr(cellWords_ * sizeof(GLuint)),
+                            GLsizeiptr((words - cellWords_) * sizeof(GLuint)), GL_RED_INTEGER,
+                            GL_UNSIGNED_INT, &zero);
+  cellWords_ = words;
+  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
+  const Buffer tableBuffer(table.size() * sizeof(GLint), table.data(), 0, "cell occupancy grids");
+  const std::vector<GLuint> zeros(grids.size(), 0u);
+  const Buffer counts(zeros.size() * sizeof(GLuint), zeros.data(), 0, "occupied cells");
   const Program& p = program({.compute = {"cell_occupancy.comp.glsl"}}, "cell samplers' occupancy");
   {
     ScopedGpuTimer t(&timer, "cell occupancy");
     p.use();
     glBindTextureUnit(binding::kDensityTexture, density.texture.id());
     mapBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-    cellStamps_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
-    count.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+    tableBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+    cellBits_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     setIVec3(p, "uVoxels", nd);
-    setIVec3(p, "uCells", dims);
-    glUniform1ui(p.uniform("uToken"), token);
+    glUniform1i(p.uniform("uGrids"), GLint(grids.size()));
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     dispatch("cell occupancy", {groups(nd.x, 4), groups(nd.y, 4), groups(nd.z, 4)});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
-  GLuint n = 0;
-  count.read(&n, sizeof n);  // a host wait of 4 bytes (a cold frame's sampler only)
-  if (list) {
-    std::vector<GLuint> stamps(cells);
-    cellStamps_.read(stamps.data(), cells * sizeof(GLuint));
-    list->clear();
-    list->reserve(n);
-    for (std::size_t c = 0; c < cells; ++c)
-      if (stamps[c] == token) list->push_back(int(c));
-  }
+  std::vector<GLuint> n(grids.size());
+  counts.read(n.data(), n.size() * sizeof(GLuint));  // one host wait (a cold frame's sampler)
   checkGl("cell occupancy");
-  return n;
+  for (std::size_t g = 0; g < n.size(); ++g) out[g] = n[g];
+  return out;
+}
+
+std::vector<int> GpuFrame::occupiedCellList(IVec3 dims) {
+  context();
+  const auto counted = [&] {
+    return std::find_if(countedGrids_.rbegin(), countedGrids_.rend(),
+                        [&](const CountedGrid& g) { return g.dims == dims; });
+  };
+  if (counted() == countedGrids_.rend()) countOccupiedCells(std::span(&dims, 1));
+  const CountedGrid& grid = *counted();
+  const std::size_t cells = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+  std::vector<GLuint> bits((cells + 31) / 32);
+  std::vector<int> list;
+  if (bits.empty()) return list;
+  cellBits_.read(bits.data(), bits.size() * sizeof(GLuint), grid.word * sizeof(GLuint));
+  for (std::size_t w = 0; w < bits.size(); ++w)
+    for (GLuint b = bits[w]; b != 0; b &= b - 1)
+      list.push_back(int(w * 32 + std::size_t(std::countr_zero(b))));
+  return list;
+}
+
+void GpuFrame::forgetOccupancy() {
+  countedGrids_.clear();
+  cellWords_ = 0;
 }
 
 void GpuFrame::newRender() {
@@ -136,6 +178,7 @@ void GpuFrame::newRender() {
   objects = SceneShadows();
   samples.radianceCurrent = false;  // the positions and bins stay for a steady frame
   image = Texture();
+  forgetOccupancy();
   marks_.clear();
   startCounts();
   resetLoopGuard();

@@ -56,9 +56,13 @@ class GpuFrame : public Frame {
     return objects.build(scene, settings, &timer);
   }
 
-  /// Counted on the GPU from `density` (cell_occupancy.comp.glsl): a 4-byte read per call, and
-  /// for `list` the grid's stamps; the volume is not read back.
-  long long occupiedCells(IVec3 dims, std::vector<int>* list) override;
+  /// Counted on the GPU from `density` (cell_occupancy.comp.glsl): every grid of a call in one
+  /// pass and one read of 4 bytes per grid; each grid's bit set is kept for occupiedCellList
+  /// until the next render or density. The volume is not read back.
+  std::vector<long long> countOccupiedCells(std::span<const IVec3> grids) override;
+  /// The grid's bits read back (cells / 8 bytes), counted first if this render has not.
+  std::vector<int> occupiedCellList(IVec3 dims) override;
+  bool countsGridsTogether() const override { return true; }
 
   void keepImageOnDevice(bool on) override { imageOnDevice = on; }
   std::optional<std::array<unsigned, 3>> deviceImage() const override;
@@ -81,8 +85,16 @@ class GpuFrame : public Frame {
   bool splatted_ = false;
   std::vector<std::size_t> marks_;  ///< timer.count() at each sync() of this render
   std::optional<DensityGrid> host_;
-  Buffer cellStamps_;  ///< occupiedCells: uint per cell, the last call's token
-  std::uint32_t cellToken_ = 0;
+  /// countOccupiedCells: the grids counted in this render, each with its first word of bits in
+  /// cellBits_ (one bit per cell; cellWords_ in use).
+  struct CountedGrid {
+    IVec3 dims;
+    std::size_t word;
+  };
+  std::vector<CountedGrid> countedGrids_;
+  Buffer cellBits_;
+  std::size_t cellWords_ = 0;
+  void forgetOccupancy();
   /// The counters at the start of this render (host_waits, dispatches are differences).
   HostWaitCounts waits0_;
   PassCounts passes0_;

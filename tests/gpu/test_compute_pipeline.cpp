@@ -457,7 +457,10 @@ TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {
 
 // Issue 33: no sampler reads the density back. gaussian-centres reads nothing; the cell samplers
 // (jittered, grid: they skip empty cells) count the occupancy on the GPU (pass "cell occupancy",
-// a few bytes read per grid tried), and their samples are the CPU sampler's.
+// 4 bytes read per grid tried), and their samples are the CPU sampler's. Every grid the search
+// may try is counted ahead in one pass: with 16 voxels along the longest axis, all of them
+// (the bisection's 4 steps) in one, and the chosen grid's cells read from its bits without
+// another (before: a pass and a wait per grid tried, then one more for the chosen one).
 TEST(GpuComputePipeline, NoSamplerReadsTheDensityBack) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
@@ -474,6 +477,7 @@ TEST(GpuComputePipeline, NoSamplerReadsTheDensityBack) {
     const RenderResult c = createMethod(s, "", "cpu")->render(s, nullptr);
     EXPECT_FALSE(g.stats.extra["gpu_ms"].contains("density read-back")) << g.stats.extra["gpu_ms"];
     EXPECT_TRUE(g.stats.extra["gpu_ms"].contains("cell occupancy")) << g.stats.extra["gpu_ms"];
+    EXPECT_EQ(g.stats.extra["dispatches_by_pass"]["cell occupancy"], 1) << type;
     ASSERT_EQ(g.samples.size(), c.samples.size()) << type;
     for (std::size_t i = 0; i < c.samples.size(); ++i) {
       EXPECT_EQ(g.samples[i].position, c.samples[i].position) << type << " sample " << i;
@@ -493,15 +497,29 @@ TEST(GpuComputePipeline, CellOccupancyEqualsTheCpus) {
     const std::uint32_t r = h >> 24;
     v = r < 150 ? 0.0f : r < 160 ? 1e-30f : r < 170 ? -0.5f : float(r) / 255.0f;
   }
+  const std::vector<IVec3> grids = {IVec3(1), IVec3(4, 3, 2), IVec3(23, 17, 9), IVec3(7, 11, 5),
+                                    IVec3(46, 5, 13)};
+  // All counted in one call and one pass, then one more grid alone (its bits after theirs), then
+  // every grid's list from the bits kept.
   gpu::GpuFrame frame(d);
-  for (const IVec3 dims :
-       {IVec3(1), IVec3(4, 3, 2), IVec3(23, 17, 9), IVec3(7, 11, 5), IVec3(46, 5, 13)}) {
+  const long long dispatches0 = gpu::passCounts().dispatches;
+  const std::vector<long long> counts = frame.countOccupiedCells(grids);
+  EXPECT_EQ(gpu::passCounts().dispatches - dispatches0, 1);
+  const IVec3 alone(64, 1, 3);
+  EXPECT_EQ(frame.countOccupiedCells(std::span(&alone, 1)),
+            std::vector<long long>{(long long)occupiedCells(d, alone).size()});
+  const long long dispatches1 = gpu::passCounts().dispatches;
+  for (std::size_t g = 0; g <= grids.size(); ++g) {
+    const IVec3 dims = g < grids.size() ? grids[g] : alone;
     const std::vector<int> cpu = occupiedCells(d, dims);
-    std::vector<int> gpu;
-    EXPECT_EQ(frame.occupiedCells(dims, nullptr), (long long)cpu.size());
-    EXPECT_EQ(frame.occupiedCells(dims, &gpu), (long long)cpu.size());
-    EXPECT_EQ(gpu, cpu) << dims.x << "x" << dims.y << "x" << dims.z;
+    if (g < grids.size()) {
+      EXPECT_EQ(counts[g], (long long)cpu.size());
+    }
+    EXPECT_EQ(frame.occupiedCellList(dims), cpu) << dims.x << "x" << dims.y << "x" << dims.z;
   }
+  EXPECT_EQ(gpu::passCounts().dispatches, dispatches1);  // the lists need no new pass
+  // A grid not counted yet is counted for its list.
+  EXPECT_EQ(frame.occupiedCellList(IVec3(5, 5, 5)), occupiedCells(d, IVec3(5, 5, 5)));
   gpu::checkGl("cell occupancy");
 }
 
