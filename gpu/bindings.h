@@ -87,6 +87,9 @@ inline constexpr GLuint kVertexKeys = 17;
 inline constexpr GLuint kGroupHistograms = 18;
 /// GpuRadianceRecord[] of the final sample list (dynamic sampling's assembly output).
 inline constexpr GLuint kNextRadiance = 19;
+/// uvec4 per part of dynamic sampling's final list (its first flag, its flags, its total's
+/// counts slot, its group: dynamic_assemble.comp.glsl's SL_PART_ENDS; meets no kSamples there).
+inline constexpr GLuint kAssembleParts = 1;
 /// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (shading/screen_march.h).
 inline constexpr GLuint kJitterTable = 1;
 
@@ -169,6 +172,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_VERTEX_KEYS", binding::kVertexKeys},
     {"BINDING_GROUP_HISTOGRAMS", binding::kGroupHistograms},
     {"BINDING_NEXT_RADIANCE", binding::kNextRadiance},
+    {"BINDING_ASSEMBLE_PARTS", binding::kAssembleParts},
     {"BINDING_NEXT_ANCESTORS", binding::kNextAncestors},
     {"BINDING_PROBE_SUMS", binding::kProbeSums},
     {"BINDING_SCAN_IN", binding::kScanIn},

@@ -149,6 +149,41 @@ std::size_t gridVertices(const std::vector<LevelGrid>& grids, std::size_t k) {
 /// Returns the final list's capacity: every level's capacity (and with a budget the top-up's
 /// children), at most max(budget, n0) with a budget (a cut never ends above the larger of the
 /// two).
+/// One part of the final list (assembleFinal): level `level`'s kept samples (group 0; keepAll:
+/// the final level and a level split into the fallback's voxels, where every sample stays), or
+/// the top-up's children of grid `level` (group 1: with ∇S; 2: the fallback's voxels). Its
+/// flags are [base, base + n) of w.inSet.
+struct AssemblyPart {
+  std::size_t level = 0, base = 0, n = 0;
+  unsigned group = 0;
+  bool keepAll = false;
+};
+
+/// The final list's parts in its order, for the capacities of `w.levels` (set first).
+std::vector<AssemblyPart> assemblyParts(const DynamicSamplingWorkspace& w,
+                                        const std::vector<LevelGrid>& grids, long long budget) {
+  const std::size_t L = grids.size();
+  std::vector<AssemblyPart> parts;
+  std::size_t base = 0;
+  const auto add = [&](std::size_t level, std::size_t n, unsigned group, bool keepAll) {
+    parts.push_back({level, base, n, group, keepAll});
+    base += n;
+  };
+  for (std::size_t k = 0; k <= L; ++k) add(k, w.levels[k].capacity, 0, k == L || grids[k].voxels);
+  if (budget > 0)
+    for (const bool voxels : {false, true})
+      for (std::size_t k = 0; k < L; ++k)
+        if (grids[k].voxels == voxels) add(k, gridVertices(grids, k), voxels ? 2 : 1, false);
+  return parts;
+}
+
+/// The flags of every part of the final list together.
+std::size_t assemblyFlags(const DynamicSamplingWorkspace& w, const std::vector<LevelGrid>& grids,
+                          long long budget) {
+  const std::vector<AssemblyPart> parts = assemblyParts(w, grids, budget);
+  return parts.empty() ? 0 : parts.back().base + parts.back().n;
+}
+
 std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
                              const std::vector<RadianceSample>& initial,
                              const DynamicSamplingSettings& settings, long long budget) {
@@ -178,6 +213,7 @@ std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
   std::size_t vertices = n0;
   for (std::size_t k = 0; k < L; ++k)
     vertices = std::max({vertices, gridVertices(grids, k), w.levels[k + 1].capacity});
+  vertices = std::max(vertices, assemblyFlags(w, grids, budget));
   if (vertices > w.vertices) {
     ensure(w.inSet, vertices * sizeof(GLuint), "grid info: in set");
     ensure(w.vertexAncestors, vertices * sizeof(std::int32_t), "grid info: ancestor");
@@ -447,8 +483,8 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
                   std::size_t L, StageTimer* timer) {
   const Program& count =
       gpu::program({.compute = {"dynamic_level.comp.glsl"}}, "dynamic sampling count");
-  const Program& program =
-      gpu::program({.compute = {"compact.comp.glsl"}}, "dynamic sampling compact");
+  const Program& program = gpu::program({.compute = {"grid_vertex.glsl", "compact.comp.glsl"}},
+                                        "dynamic sampling compact");
   const std::size_t nv = grid.vertices();
   const DynamicSamplingWorkspace::Level& l = w.levels[next];
   {
@@ -488,59 +524,6 @@ struct FinalList {
   std::size_t capacity;
 };
 
-/// Moves the final list's end by a part's total (its scan's, or counts[countSlot] unless
-/// kFromZero) and records the total in counts[partSlot].
-void advanceEnd(DynamicSamplingWorkspace& w, const CountSlots& slots, const FinalList& out,
-                std::size_t n, std::size_t partSlot, std::size_t countSlot) {
-  const Program& advance = gpu::program(
-      {.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_ADVANCE"}}, "ds assemble end");
-  advance.use();
-  glUniform1ui(advance.uniform("uCount"), GLuint(n));
-  glUniform1ui(advance.uniform("uEndSlot"), GLuint(slots.end()));
-  glUniform1ui(advance.uniform("uCapacity"), GLuint(out.capacity));
-  glUniform1ui(advance.uniform("uPartSlot"), GLuint(partSlot));
-  glUniform1ui(advance.uniform("uOverflowSlot"), GLuint(slots.finalOverflow()));
-  glUniform1ui(advance.uniform("uCountSlot"),
-               countSlot == kFromZero ? 0xffffffffu : GLuint(countSlot));
-  w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-  w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
-  w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
-  dispatch("ds assemble end", {1, 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-}
-
-/// One part of the final list (dynamic_assemble.comp.glsl): `flags` (a program that writes a
-/// flag per invocation into w.inSet, its uniforms set and inputs bound by `bindFlags`) over `n`
-/// invocations, their scan, the scatter (`scatter`, bound by `bindScatter`), and the advance of
-/// the list's end, the part's total into counts[partSlot].
-template <class BindFlags, class BindScatter>
-void assemblePart(DynamicSamplingWorkspace& w, const CountSlots& slots, const FinalList& out,
-                  std::size_t n, const char* what, const Program& flags, const BindFlags& bindFlags,
-                  const Program& scatter, const BindScatter& bindScatter, std::size_t partSlot) {
-  if (n == 0) return;
-  const auto common = [&](const Program& p) {
-    p.use();
-    glUniform1ui(p.uniform("uCount"), GLuint(n));
-    glUniform1ui(p.uniform("uEndSlot"), GLuint(slots.end()));
-    glUniform1ui(p.uniform("uCapacity"), GLuint(out.capacity));
-    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-    w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
-    w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
-  };
-  common(flags);
-  bindFlags(flags);
-  dispatch(what, {groups(n, 256), 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  scanBuffer(w.inSet, w.offsets, GLuint(n), true, w.scanSums);
-  common(scatter);
-  bindScatter(scatter);
-  out.points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
-  out.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextRadiance);
-  dispatch(what, {groups(n, 256), 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  advanceEnd(w, slots, out, n, partSlot, kFromZero);
-}
-
 /// The copy of counts[from] into counts[to] (a one-uint GPU copy).
 void copyCount(const Buffer& counts, std::size_t from, const Buffer& to, std::size_t at) {
   glCopyNamedBufferSubData(counts.id(), to.id(), GLintptr(from * sizeof(GLuint)),
@@ -548,102 +531,116 @@ void copyCount(const Buffer& counts, std::size_t from, const Buffer& to, std::si
 }
 
 /// The final list in the CPU's order: the samples each level keeps, level by level, then the
-/// top-up's children (with ∇S, then the fallback's voxels without), their S traced in place.
+/// top-up's children (with ∇S, then the fallback's voxels without), their S traced in place. The
+/// parts' flags lie one after the other in w.inSet (assemblyParts), one scan over all of them
+/// gives every sample its slot, and one pass the parts' totals and the list's ends.
 /// GPU time: "ds assemble" (the children's tracing: "ds evaluate+error").
 void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std::size_t lights,
                    const Scene& scene, const std::vector<LevelGrid>& grids, long long budget,
                    const TracerSteps& steps, const FinalList& out, StageTimer* timer) {
   const std::size_t L = grids.size();
   const CountSlots slots{L};
+  const std::vector<AssemblyPart> parts = assemblyParts(w, grids, budget);
   const Program& keepFlags = gpu::program(
       withGroups({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_KEEP_FLAGS"}}),
       "ds assemble: kept samples");
   const Program& keepScatter =
       gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_KEEP_SCATTER"}},
                    "ds assemble: copy kept samples");
-  {
-    ScopedGpuTimer t(timer, "ds assemble");
-    const Program& keepCopy =
-        gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_KEEP_COPY"}},
-                     "ds assemble: copy a whole level");
-    for (std::size_t k = 0; k <= L; ++k) {
-      const DynamicSamplingWorkspace::Level& l = w.levels[k];
-      if (k == L || grids[k].voxels) {
-        // Every sample stays: a copy, no flags or scan.
-        if (l.capacity == 0) continue;
-        keepCopy.use();
-        glUniform1ui(keepCopy.uniform("uCount"), GLuint(l.capacity));
-        glUniform1ui(keepCopy.uniform("uEndSlot"), GLuint(slots.end()));
-        glUniform1ui(keepCopy.uniform("uCapacity"), GLuint(out.capacity));
-        glUniform1ui(keepCopy.uniform("uLevel"), GLuint(k));
-        w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-        l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-        l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
-        out.points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
-        out.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextRadiance);
-        dispatch("ds assemble", {groups(l.capacity, 256), 1, 1});
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        advanceEnd(w, slots, out, l.capacity, slots.keptOf(k), k);
-        continue;
-      }
-      assemblePart(
-          w, slots, out, l.capacity, "ds assemble", keepFlags,
-          [&](const Program& p) {
-            glUniform1ui(p.uniform("uLevel"), GLuint(k));
-            glUniform1i(p.uniform("uBudget"), budget > 0 ? 1 : 0);
-            glUniform1ui(p.uniform("uCutSlot"), GLuint(slots.cut(k)));
-            glUniform1ui(p.uniform("uTopCutSlot"), GLuint(slots.topCut()));
-            l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
-            w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
-          },
-          keepScatter,
-          [&](const Program&) {
-            l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-            l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
-          },
-          slots.keptOf(k));
-    }
-    copyCount(w.counts, slots.end(), w.counts, slots.keptEnd());
-  }
-  if (budget <= 0 || L == 0) {
-    copyCount(w.counts, slots.end(), w.counts, slots.gradEnd());
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    return;
-  }
   const Program& childFlags =
       gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_CHILD_FLAGS"}},
                    "ds assemble: top-up children");
   const Program& childScatter =
-      gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_CHILD_SCATTER"}},
+      gpu::program({.compute = {"grid_vertex.glsl", "dynamic_assemble.comp.glsl"},
+                    .defines = {"SL_CHILD_SCATTER"}},
                    "ds assemble: place top-up children");
+  const Program& ends =
+      gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_PART_ENDS"}},
+                   "ds assemble: the parts' ends");
+  const std::size_t total = parts.empty() ? 0 : parts.back().base + parts.back().n;
   std::size_t children[2] = {0, 0};  // capacity of the two batches: with ∇S, the voxels
   {
     ScopedGpuTimer t(timer, "ds assemble");
-    for (const bool voxels : {false, true}) {
-      for (std::size_t k = 0; k < L; ++k) {
-        if (grids[k].voxels != voxels) continue;
-        const GridGeometry grid(scene.medium.bounds, grids[k]);
-        const std::size_t nv = grid.vertices();
-        children[voxels] += nv;
-        const DynamicSamplingWorkspace::Level& l = w.levels[k];
-        assemblePart(
-            w, slots, out, nv, "ds assemble", childFlags,
-            [&](const Program& p) {
-              glUniform1ui(p.uniform("uCutSlot"), GLuint(slots.cut(k)));
-              glUniform1ui(p.uniform("uTopCutSlot"), GLuint(slots.topCut()));
-              l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
-            },
-            childScatter,
-            [&](const Program& p) {
-              setGridUniforms(p, grid);
-              glUniform1f(p.uniform("uRadius"), grid.radius());
-            },
-            slots.childrenOf(k));
+    const auto common = [&](const Program& p, const AssemblyPart& part) {
+      p.use();
+      glUniform1ui(p.uniform("uCount"), GLuint(part.n));
+      glUniform1ui(p.uniform("uBase"), GLuint(part.base));
+      glUniform1ui(p.uniform("uCapacity"), GLuint(out.capacity));
+      w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+      w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+      w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+    };
+    // Every part's flags, then one scan.
+    for (const AssemblyPart& part : parts) {
+      if (part.n == 0) continue;
+      const DynamicSamplingWorkspace::Level& l = w.levels[part.level];
+      if (part.group == 0) {
+        common(keepFlags, part);
+        glUniform1ui(keepFlags.uniform("uLevel"), GLuint(part.level));
+        glUniform1i(keepFlags.uniform("uKeepAll"), part.keepAll ? 1 : 0);
+        glUniform1i(keepFlags.uniform("uBudget"), budget > 0 ? 1 : 0);
+        glUniform1ui(keepFlags.uniform("uCutSlot"),
+                     GLuint(part.level < L ? slots.cut(part.level) : slots.topCut()));
+        glUniform1ui(keepFlags.uniform("uTopCutSlot"), GLuint(slots.topCut()));
+        l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
+        w.threshold.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kThreshold);
+      } else {
+        common(childFlags, part);
+        glUniform1ui(childFlags.uniform("uCutSlot"), GLuint(slots.cut(part.level)));
+        glUniform1ui(childFlags.uniform("uTopCutSlot"), GLuint(slots.topCut()));
+        l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
       }
-      if (!voxels) copyCount(w.counts, slots.end(), w.counts, slots.gradEnd());
+      dispatch("ds assemble", {groups(part.n, 256), 1, 1});
     }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    if (total > 0) scanBuffer(w.inSet, w.offsets, GLuint(total), true, w.scanSums);
+    // Every part's scatter.
+    for (const AssemblyPart& part : parts) {
+      if (part.n == 0) continue;
+      const DynamicSamplingWorkspace::Level& l = w.levels[part.level];
+      if (part.group == 0) {
+        common(keepScatter, part);
+        l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+        l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+        out.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextRadiance);
+      } else {
+        const GridGeometry grid(scene.medium.bounds, grids[part.level]);
+        children[part.group - 1] += part.n;
+        common(childScatter, part);
+        setGridUniforms(childScatter, grid);
+        glUniform1f(childScatter.uniform("uRadius"), grid.radius());
+      }
+      out.points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
+      dispatch("ds assemble", {groups(part.n, 256), 1, 1});
+    }
+    // The parts' totals and the list's ends.
+    std::vector<GLuint> table;
+    for (const AssemblyPart& part : parts)
+      table.insert(table.end(), {GLuint(part.base), GLuint(part.n),
+                                 GLuint(part.group == 0 ? slots.keptOf(part.level)
+                                                        : slots.childrenOf(part.level)),
+                                 GLuint(part.group)});
+    ensure(w.parts, std::max<std::size_t>(table.size(), 4) * sizeof(GLuint),
+           "dynamic sampling final list's parts");
+    if (!table.empty())
+      glNamedBufferSubData(w.parts.id(), 0, GLsizeiptr(table.size() * sizeof(GLuint)),
+                           table.data());
+    ends.use();
+    glUniform1ui(ends.uniform("uParts"), GLuint(parts.size()));
+    glUniform1ui(ends.uniform("uCapacity"), GLuint(out.capacity));
+    glUniform1ui(ends.uniform("uKeptEndSlot"), GLuint(slots.keptEnd()));
+    glUniform1ui(ends.uniform("uGradEndSlot"), GLuint(slots.gradEnd()));
+    glUniform1ui(ends.uniform("uEndSlot"), GLuint(slots.end()));
+    glUniform1ui(ends.uniform("uOverflowSlot"), GLuint(slots.finalOverflow()));
+    w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+    w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+    w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+    w.parts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAssembleParts);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    dispatch("ds assemble end", {1, 1, 1});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
+  if (children[0] == 0 && children[1] == 0) return;
   // The children's S (final samples: no probes), in place: ∇S for those of the split grids,
   // none for the fallback's voxels (as the voxel level itself).
   ScopedGpuTimer t(timer, "ds evaluate+error");

@@ -60,10 +60,13 @@ struct DynamicSamplingWorkspace {
   Buffer rootTau;     ///< float τ per level-0 sample
   Buffer probeSums;   ///< float per sample and group of kProbeGroup probes (the probe pass)
   Buffer histograms;  ///< budget: per split level, uint candidates then vertices per error group
-  Buffer inSet, vertexAncestors, offsets;  ///< grid information buffer of G_{k+1}, its scan
-  ScanScratch scanSums;                    ///< block sums per recursion depth of the scan
-  std::size_t vertices = 0;                ///< capacity of inSet / vertexAncestors / offsets
-  Buffer finalPoints, finalRadiance;       ///< the final list when no DeviceSamples takes it
+  /// Grid information buffer of G_{k+1} and its scan; inSet / offsets also the flags of every
+  /// part of the final list and their scan.
+  Buffer inSet, vertexAncestors, offsets;
+  ScanScratch scanSums;               ///< block sums per recursion depth of the scan
+  std::size_t vertices = 0;           ///< capacity of inSet / vertexAncestors / offsets
+  Buffer finalPoints, finalRadiance;  ///< the final list when no DeviceSamples takes it
+  Buffer parts;  ///< uvec4 per part of the final list (dynamic_assemble.comp.glsl's SL_PART_ENDS)
   /// Most samples a level above 0 may hold (tests lower it to reach the overflow report).
   std::size_t maxLevelSamples = kMaxLevelSamples;
   /// What the last pass enqueued, for reading it (readDynamicSamplingGpu).

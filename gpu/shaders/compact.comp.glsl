@@ -1,6 +1,7 @@
 // Dynamic sampling, compaction: every vertex of G_{k+1} in the set goes to slot offsets[v]
 // (exclusive scan of inSet) of the next level's sample list, with its position (the vertex,
-// as GridInfoBuffer::vertex), the level's valid radius and its ancestor. Ascending vertex order.
+// gridVertex of grid_vertex.glsl), the level's valid radius and its ancestor. Ascending vertex
+// order.
 // Slots at or past the level's capacity are dropped (the count pass of dynamic_level.comp.glsl records the overflow).
 layout(local_size_x = 256) in;
 
@@ -11,20 +12,14 @@ layout(std430, binding = BINDING_NEXT_SAMPLES) writeonly buffer NextSamples { ve
 layout(std430, binding = BINDING_NEXT_ANCESTORS) writeonly buffer NextAncestors { int nextAncestors[]; };
 
 uniform uint uVertexCount;
-uniform vec3 uGridMin;
-uniform vec3 uGridInterval;
-uniform ivec3 uGridDims;
 uniform float uRadius;
 uniform uint uCapacity;
 
 void main() {
   uint v = gl_GlobalInvocationID.x;
   if (v >= uVertexCount || inSet[v] == 0u) return;
-  uint nx = uint(uGridDims.x), ny = uint(uGridDims.y);
-  uint i = v % nx, j = (v / nx) % ny, k = v / (nx * ny);
-  precise vec3 q = uGridMin + (vec3(float(i), float(j), float(k)) + 0.5) * uGridInterval;
   uint o = offsets[v];
   if (o >= uCapacity) return;
-  nextSamples[o] = vec4(q, uRadius);
+  nextSamples[o] = vec4(gridVertex(v), uRadius);
   nextAncestors[o] = vertexAncestor[v];
 }
