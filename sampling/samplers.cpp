@@ -64,6 +64,21 @@ class Occupancy {
   std::map<int, long long> known_;
 };
 
+/// A frame over a host density volume it does not own (the DensityGrid overloads: no copy).
+class DensityView : public Frame {
+ public:
+  explicit DensityView(const DensityGrid& density) : density_(density) {}
+  Backend backend() const override { return Backend::Cpu; }
+  void buildDensity(const Scene&) override {
+    throw std::logic_error("DensityView::buildDensity: the view's density is given");
+  }
+  const DensityGrid& hostDensity() override { return density_; }
+  void report(RenderStats&) override {}
+
+ private:
+  const DensityGrid& density_;
+};
+
 /// The midpoints the bisection over [lo, hi] (smallest n with occ(n) >= count) may visit in its
 /// next `depth` steps, whichever way each goes.
 void bisectionMids(int lo, int hi, int depth, std::vector<int>& out) {
@@ -145,7 +160,7 @@ class CellSampler : public Sampler {
   /// Only the occupancy is read (Frame::occupiedCells): a GPU frame reads no density back.
   bool readsDensity() const override { return false; }
   std::vector<RadianceSample> generate(const Scene& scene, const DensityGrid& density) override {
-    HostFrame frame(density);
+    DensityView frame(density);
     return generate(frame, scene);
   }
   std::vector<RadianceSample> generate(Frame& frame, const Scene& scene) override {
@@ -262,7 +277,7 @@ SampleCells chooseSampleCells(Frame& frame, const Vec3& ext, IVec3 nd, long long
 
 SampleCells chooseSampleCells(const DensityGrid& density, long long count, bool skipEmpty,
                               bool atMost) {
-  HostFrame frame(density);
+  DensityView frame(density);
   return chooseSampleCells(frame, density.bounds().extent(), density.dims(), count, skipEmpty,
                            atMost);
 }
