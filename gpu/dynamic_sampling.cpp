@@ -739,7 +739,11 @@ DynamicSamplingResult readDynamicSamplingGpu(const DynamicSamplingWorkspace& w, 
   double thr[2] = {0.0, 0.0};
   if (pass.initial > 0) {
     context();
-    w.counts.read(counts.data(), counts.size() * sizeof(GLuint));  // waits for the pass
+    // Two host waits in all: the counts and the threshold (waits for the pass), then the errors
+    // of every split level and the final list, whose sizes the counts give.
+    const BufferRange first[] = {{&w.counts, 0, counts.size() * sizeof(GLuint), counts.data()},
+                                 {&w.threshold, 0, L > 0 ? sizeof thr : 0, thr}};
+    readBuffers(first);
     if (counts[slots.overflow()] > 0) {
       const std::size_t k = counts[slots.overflow() + 1];
       throw GpuError("dynamic sampling: level " + std::to_string(k) + " (grid " +
@@ -753,7 +757,24 @@ DynamicSamplingResult readDynamicSamplingGpu(const DynamicSamplingWorkspace& w, 
       throw GpuError("dynamic sampling: the final list asked for " +
                      std::to_string(counts[slots.finalOverflow()]) + " samples, more than its " +
                      std::to_string(pass.finalCapacity) + " (an internal bound; a bug)");
-    if (L > 0) w.threshold.read(thr, sizeof thr);
+  }
+  std::vector<std::vector<float>> levelErrors(L);
+  std::vector<GpuSamplePoint> points;
+  std::vector<GpuRadianceRecord> radiance;
+  if (pass.initial > 0) {
+    std::vector<BufferRange> second;
+    for (std::size_t k = 0; k < L; ++k) {
+      levelErrors[k].resize(counts[k]);
+      second.push_back({&w.levels[k].errors, 0, counts[k] * sizeof(float), levelErrors[k].data()});
+    }
+    if (samples) {
+      const std::size_t total = counts[slots.end()];
+      points.resize(total);
+      radiance.resize(total);
+      second.push_back({pass.finalPoints, 0, total * sizeof(GpuSamplePoint), points.data()});
+      second.push_back({pass.finalRadiance, 0, total * sizeof(GpuRadianceRecord), radiance.data()});
+    }
+    readBuffers(second);
   }
   const double errorScale = settings.relative ? thr[0] : 0.0, threshold = thr[1];
   const int topCut = budget > 0 ? int(counts[slots.topCut()]) : kErrorBins;
@@ -765,8 +786,7 @@ DynamicSamplingResult readDynamicSamplingGpu(const DynamicSamplingWorkspace& w, 
     ls.samples = (long long)n + (k > 0 && budget > 0 ? counts[slots.childrenOf(k - 1)] : 0);
     ls.ms = k < pass.enqueueMs.size() ? pass.enqueueMs[k] : 0.0;
     if (k < L && n > 0) {
-      std::vector<float> errors(n);
-      w.levels[k].errors.read(errors.data(), n * sizeof(float));
+      std::vector<float>& errors = levelErrors[k];
       ls.threshold = threshold;
       ls.errorScale = errorScale;
       const int cut = budget > 0 ? int(counts[slots.cut(k)]) : 0;
@@ -798,13 +818,7 @@ DynamicSamplingResult readDynamicSamplingGpu(const DynamicSamplingWorkspace& w, 
     if (k > 0 && budget > 0) result.finalPerLevel[k] += counts[slots.childrenOf(k - 1)];
   }
   if (samples && pass.initial > 0) {
-    const std::size_t total = counts[slots.end()];
-    std::vector<GpuSamplePoint> points(total);
-    std::vector<GpuRadianceRecord> radiance(total);
-    if (total) {
-      pass.finalPoints->read(points.data(), total * sizeof(GpuSamplePoint));
-      pass.finalRadiance->read(radiance.data(), total * sizeof(GpuRadianceRecord));
-    }
+    const std::size_t total = points.size();
     // The levels of the list's parts: each level's kept samples, then the top-up's children.
     std::vector<int> level;
     level.reserve(total);

@@ -237,6 +237,28 @@ void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
+void readBuffers(std::span<const BufferRange> ranges) {
+  std::size_t total = 0;
+  for (const BufferRange& r : ranges) total += r.bytes;
+  if (total == 0) return;
+  if (ranges.size() == 1) return ranges[0].buffer->read(ranges[0].dst, total, ranges[0].offset);
+  const Buffer staging(total, nullptr, 0, "read-back staging");
+  std::size_t at = 0;
+  for (const BufferRange& r : ranges) {
+    if (r.bytes)
+      glCopyNamedBufferSubData(r.buffer->id(), staging.id(), GLintptr(r.offset), GLintptr(at),
+                               GLsizeiptr(r.bytes));
+    at += r.bytes;
+  }
+  std::vector<unsigned char> bytes(total);
+  staging.read(bytes.data(), total);
+  at = 0;
+  for (const BufferRange& r : ranges) {
+    if (r.bytes) std::memcpy(r.dst, bytes.data() + at, r.bytes);
+    at += r.bytes;
+  }
+}
+
 namespace {
 
 std::size_t bytesPerTexel(GLenum format) {

@@ -20,6 +20,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -181,6 +182,17 @@ class Buffer : public GlObject<BufferDeleter> {
   std::size_t storage_ = 0;  ///< the bytes stored: storageFor(size_)
   GLbitfield flags_ = 0;
 };
+
+/// One range of a buffer to read back, and where it goes.
+struct BufferRange {
+  const Buffer* buffer;
+  std::size_t offset, bytes;
+  void* dst;
+};
+
+/// Reads every range back with one host wait: the ranges are copied on the GPU into one staging
+/// buffer, which is read once.
+void readBuffers(std::span<const BufferRange> ranges);
 
 /// Texture object (glCreateTextures) with immutable storage.
 class Texture : public GlObject<TextureDeleter> {
