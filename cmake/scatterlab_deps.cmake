@@ -25,3 +25,13 @@ macro(scatterlab_find_openvdb_module)
     endif()
   endif()
 endmacro()
+
+# find_package at warning level: Debian's FindOpenVDB.cmake prints "COMPONENT = openvdb" and
+# Imath's targets file (found through OpenEXR) names a Python binding library that Debian does
+# not ship and scatterlab does not use; neither is news to whoever builds scatterlab.
+macro(scatterlab_find_package_quietly)
+  set(_scatterlab_log_level "${CMAKE_MESSAGE_LOG_LEVEL}")
+  set(CMAKE_MESSAGE_LOG_LEVEL WARNING)
+  find_package(${ARGN})
+  set(CMAKE_MESSAGE_LOG_LEVEL "${_scatterlab_log_level}")
+endmacro()

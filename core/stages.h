@@ -439,13 +439,13 @@ struct StageWork {
   /// View-ray terms the stage sums by its own steps (0: none), against kMaxViewSteps; the key
   /// named when there are too many, and how they arise ("320x240 pixels x 32 steps").
   double viewTerms = 0;
-  std::string termsKey, termsHow;
+  std::string termsKey = {}, termsHow = {};
   /// Points that each march to every light by delta1 (0: none), and which ("at every one of
   /// 1e+06 froxels").
   double lightPoints = 0;
-  std::string lightWhat;
+  std::string lightWhat = {};
   /// The host arrays of the stage's CPU variant.
-  std::vector<MemoryPlan::Item> cpuArrays;
+  std::vector<MemoryPlan::Item> cpuArrays = {};
 };
 
 /// What a stage family declares, the same for each of its backends' variants (Mitsuba's plugin

@@ -268,14 +268,14 @@ struct LevelStats {
 float quantile(std::vector<float> v, double q);
 
 struct DynamicSamplingResult {
-  std::vector<RadianceSample> samples;  ///< ∪_k Q^k minus the split ones; S and dS evaluated
-  std::vector<LevelStats> levels;       ///< [0] = initial set, then one per grid level
+  std::vector<RadianceSample> samples = {};  ///< ∪_k Q^k minus the split ones; S and dS evaluated
+  std::vector<LevelStats> levels = {};       ///< [0] = initial set, then one per grid level
   /// The final samples stay on the device (a resident GPU pass, issue 33): `samples` and
   /// `levels` are empty; the backend reports them after the frame.
   bool onDevice = false;
   /// Final samples per level where `samples` does not hold them (a GPU pass read without its
   /// samples); empty: counted from `samples`.
-  std::vector<long long> finalPerLevel;
+  std::vector<long long> finalPerLevel = {};
 };
 
 /// Contribution of one sample to the image, in the units of E_j (Eq. 5 with the error replaced
