@@ -25,16 +25,17 @@ int printSummary(const ExperimentResult& r, const std::string& out, bool shard) 
   if (!r.plotsNote.empty() && !shard) std::fprintf(stderr, "note: %s\n", r.plotsNote.c_str());
   if (shard)
     std::printf(
-        "%zu runs of this shard: %d rendered, %d resumed, %d failed; wrote %s/runs/, "
+        "%zu runs of this shard: %d rendered, %d resumed, %d failed, %d refused; wrote %s/runs/, "
         "images/, references/, shard manifest (join the shards with `scatterlab "
         "experiment merge`)\n",
-        r.runs.size(), r.rendered, r.resumed, r.failed, out.c_str());
+        r.runs.size(), r.rendered, r.resumed, r.failed, r.refused, out.c_str());
   else
     std::printf(
-        "%zu runs: %d rendered, %d resumed, %d failed; wrote %s/report.html, report.md, "
+        "%zu runs: %d rendered, %d resumed, %d failed, %d refused (the method cannot render "
+        "the scene); wrote %s/report.html, report.md, "
         "results.csv, "
         "results.json, images/, log.txt%s\n",
-        r.runs.size(), r.rendered, r.resumed, r.failed, out.c_str(),
+        r.runs.size(), r.rendered, r.resumed, r.failed, r.refused, out.c_str(),
         r.plotsNote.empty() ? ", plots/" : "");
   if (r.failed) {
     // The tool's prefix and the first failure's reason (issue 37: only a count and the log).

@@ -20,6 +20,15 @@ class ConfigError : public Error {
   using Error::Error;
 };
 
+/// A valid scene that the chosen method cannot render by its nature, not a mistake in the
+/// configuration (radial-blur with a light behind the camera, or inside the medium). The CLI
+/// treats it as a ConfigError; an experiment records the run as "refused" with the reason and
+/// counts it apart from failures (docs/harness.md).
+class UnsupportedSceneError : public ConfigError {
+ public:
+  using ConfigError::ConfigError;
+};
+
 /// A file could not be read or written, or its contents are malformed.
 class IoError : public Error {
  public:

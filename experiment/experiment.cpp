@@ -39,7 +39,8 @@ void writeOutputs(ExperimentResult& res, const std::string& configPath, detail::
   detail::writeText(out.path("report.md"), md.str());
   detail::writeReportHtml(res, facts, configPath, memoryMethod, out);
   out.log("done: " + std::to_string(res.rendered) + " rendered, " + std::to_string(res.resumed) +
-          " resumed, " + std::to_string(res.failed) + " failed");
+          " resumed, " + std::to_string(res.failed) + " failed, " + std::to_string(res.refused) +
+          " refused");
 }
 
 }  // namespace
@@ -74,7 +75,8 @@ ExperimentResult runExperiment(const std::string& configPath, const std::string&
     // The tables, report and plots need every run: `scatterlab experiment merge` writes them.
     detail::writeShardManifest(res, configPath, opt, selected, out);
     out.log("shard done: " + std::to_string(res.rendered) + " rendered, " +
-            std::to_string(res.resumed) + " resumed, " + std::to_string(res.failed) + " failed");
+            std::to_string(res.resumed) + " resumed, " + std::to_string(res.failed) + " failed, " +
+            std::to_string(res.refused) + " refused");
     return res;
   }
   writeOutputs(res, configPath, out, refs, mem.method, opt);

@@ -123,7 +123,7 @@ struct RunRecord {
   Json axes = Json::object();
   int point = 0;
   std::string hash;
-  std::string status;    ///< "ok" or "failed"
+  std::string status;    ///< "ok", "failed", or "refused" (the method cannot render the scene)
   std::string error;     ///< the failure's message
   bool resumed = false;  ///< loaded from DIR/runs/ instead of rendered
   Json stats;            ///< RenderStats::toJson() of the last repetition, timings = medians
@@ -181,15 +181,18 @@ struct ExperimentOptions {
 struct ExperimentResult {
   ExperimentPlan plan;
   std::vector<RunRecord> runs;
-  int rendered = 0, resumed = 0, failed = 0;
+  /// refused: runs whose method cannot render their scene (UnsupportedSceneError), recorded
+  /// with the reason; not failures.
+  int rendered = 0, resumed = 0, failed = 0, refused = 0;
   std::string plotsNote;  ///< why plots are missing, or "" when they were made
   Json machine;           ///< machineFacts() of this invocation
 };
 
 /// Runs (or resumes) the experiment in `configPath`, writing into `outDir` (created if
 /// missing). A failing run is recorded (status "failed", its message and config, in the
-/// results and DIR/log.txt) and the sweep goes on. Throws ConfigError / IoError for a bad
-/// config before anything is rendered.
+/// results and DIR/log.txt) and the sweep goes on; a run whose method cannot render its scene
+/// (UnsupportedSceneError) is recorded as "refused" with the reason, kept on resume. Throws
+/// ConfigError / IoError for a bad config before anything is rendered.
 ExperimentResult runExperiment(const std::string& configPath, const std::string& outDir,
                                const ExperimentOptions& options = {});
 

@@ -61,8 +61,8 @@ void reportHeader(std::ostream& md, const ExperimentResult& res, const std::stri
   md << "# " << markdownText(plan.title) << "\n\n";
   if (!plan.description.empty()) md << markdownText(plan.description) << "\n\n";
   md << "Config `" << configPath << "`; " << res.runs.size() << " runs (" << res.rendered
-     << " rendered now, " << res.resumed << " resumed from `runs/`, " << res.failed
-     << " failed). Written " << nowIso() << ".\n\n"
+     << " rendered now, " << res.resumed << " resumed from `runs/`, " << res.failed << " failed, "
+     << res.refused << " refused). Written " << nowIso() << ".\n\n"
      << "Times are medians over the stated repetitions after the warm-up, in ms per frame "
         "(cold frames: a new method per render); the steady columns, where a sweep has "
         "steady_frames, are medians over that many frames of one method kept between renders, "
@@ -145,7 +145,8 @@ void sweepTableRow(std::ostream& md, const ResultFacts& facts, const SweepSpec& 
   for (const Axis& a : sw.axes)
     md << " " << (rec.axes.contains(a.name) ? valueLabel(rec.axes[a.name]) : "") << " |";
   if (rec.status != "ok") {
-    md << " **failed**: " << rec.error << " |\n";
+    md << " **" << (rec.status == "refused" ? "refused" : "failed") << "**: " << rec.error
+       << " |\n";
     return;
   }
   md << " " << (rec.samples ? std::to_string(*rec.samples) : "—") << " | "
@@ -255,10 +256,15 @@ void reportPlots(std::ostream& md, const std::string& plotsNote, OutputDir& out)
 }
 
 void reportFailures(std::ostream& md, const ExperimentResult& res) {
+  if (res.refused) {
+    md << "\n## Refused\n\nRuns whose method cannot render their scene (not failures):\n\n";
+    for (const RunRecord& rec : res.runs)
+      if (rec.status == "refused") md << "- `" << rec.id << "`: " << rec.error << "\n";
+  }
   if (!res.failed) return;
   md << "\n## Failures\n\n";
   for (const RunRecord& rec : res.runs)
-    if (rec.status != "ok")
+    if (rec.status == "failed")
       md << "- `" << rec.id << "`: " << rec.error << " — config `" << rec.config.dump() << "`\n";
 }
 

@@ -308,6 +308,7 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
     Json row = {{"run", rec.id}, {"ok", ok}};
     if (!ok) {
       row["error"] = rec.error;
+      row["status"] = rec.status;
     } else {
       cells.push_back(rec.samples ? tableCell(std::to_string(*rec.samples), *rec.samples)
                                   : tableCell("—", nullptr));
@@ -360,7 +361,8 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
   for (const Json& m : facts.machines) machines.push_back(machineLine(m));
   Json failures = Json::array();
   for (const RunRecord& rec : res.runs)
-    if (rec.status != "ok") failures.push_back({{"run", rec.id}, {"error", rec.error}});
+    if (rec.status != "ok")
+      failures.push_back({{"run", rec.id}, {"error", rec.error}, {"status", rec.status}});
   const Json data = {{"title", plan.title},
                      {"description", plan.description},
                      {"config", configPath},
@@ -369,6 +371,7 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
                      {"rendered", res.rendered},
                      {"resumed", res.resumed},
                      {"failed", res.failed},
+                     {"refused", res.refused},
                      {"reference", head},
                      {"memory_method", memoryMethod},
                      {"machines", machines},

@@ -131,6 +131,8 @@ class Runner {
         writeText(recordPath, rec.toJson().dump(2) + "\n");
         ++res_.rendered;
         logDone(r, rec);
+      } catch (const UnsupportedSceneError& e) {
+        refuse(rec, recordPath, e.what());
       } catch (const std::exception& e) {
         fail(rec, recordPath, e.what());
       }
@@ -159,10 +161,12 @@ class Runner {
     }
     try {
       RunRecord old = RunRecord::fromJson(readJsonFile(recordPath));
-      if (old.hash == r.hash && old.status == "ok") {
+      if (old.hash == r.hash && (old.status == "ok" || old.status == "refused")) {
+        // A refusal is the method's answer to the scene: kept, as a result is.
         old.resumed = true;
+        const bool refused = old.status == "refused";
         res_.runs.push_back(std::move(old));
-        ++res_.resumed;
+        ++(refused ? res_.refused : res_.resumed);
         ++bar_.done;
         bar_.draw(r.id + " (done before)");
         return true;
@@ -185,6 +189,8 @@ class Runner {
     old.resumed = true;
     if (old.status == "ok")
       ++res_.resumed;
+    else if (old.status == "refused")
+      ++res_.refused;
     else
       ++res_.failed;
     res_.runs.push_back(std::move(old));
@@ -322,6 +328,20 @@ class Runner {
                    rec.errors.empty()
                        ? ""
                        : (", rel L2 " + fmt(100 * rec.errors[0].relL2, "%.2f") + "%").c_str());
+  }
+
+  /// Records the refusal (status "refused", the reason) and its record: the method cannot render
+  /// the scene, which a resume keeps.
+  void refuse(RunRecord& rec, const std::string& recordPath, const std::string& why) {
+    rec.status = "refused";
+    rec.error = why;
+    rec.errors.clear();
+    ++res_.refused;
+    out_.log(rec.id + ": refused: " + rec.error);
+    if (opt_.log)
+      std::fprintf(opt_.log, "%s%s: refused: %s\n", bar_.enabled ? "\r\033[K" : "", rec.id.c_str(),
+                   rec.error.c_str());
+    writeText(recordPath, rec.toJson().dump(2) + "\n");
   }
 
   /// Records the failure (status, message, the run's config in log.txt) and its record, so

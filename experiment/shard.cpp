@@ -128,6 +128,7 @@ void writeShardManifest(const ExperimentResult& res, const std::string& configPa
                   {"rendered", res.rendered},
                   {"resumed", res.resumed},
                   {"failed", res.failed},
+                  {"refused", res.refused},
                   {"machine", res.machine},
                   {"finished", nowIso()}};
   writeText(out.path("shard-" + std::to_string(opt.shardIndex) + "-of-" +

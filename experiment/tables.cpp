@@ -356,6 +356,7 @@ Json resultsJson(const ResultFacts& facts, const ExperimentResult& res,
   jres["rendered"] = res.rendered;
   jres["resumed"] = res.resumed;
   jres["failed"] = res.failed;
+  jres["refused"] = res.refused;
   jres["memory_method"] = memoryMethod;
   jres["default_reference"] = plan.defaultReference;
   jres["reference_checks"] = referenceChecks(facts);

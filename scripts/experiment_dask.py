@@ -87,7 +87,8 @@ def run_shard(exe, config, out, k, n, sets):
     with open(manifest) as f:
         m = json.load(f)
     return {"shard": k, "rc": p.returncode, "host": socket.gethostname(),
-            "rendered": m["rendered"], "resumed": m["resumed"], "failed": m["failed"]}
+            "rendered": m["rendered"], "resumed": m["resumed"], "failed": m["failed"],
+            "refused": m.get("refused", 0)}
 
 
 def run_sweep(client, exe, config, out, shards, sets=(), retries=2, log=sys.stderr):
@@ -103,7 +104,8 @@ def run_sweep(client, exe, config, out, shards, sets=(), retries=2, log=sys.stde
             s = fut.result()
             done[s["shard"]] = s
             print(f"shard {s['shard']}/{shards} on {s['host']}: {s['rendered']} rendered, "
-                  f"{s['resumed']} resumed, {s['failed']} failed", file=log, flush=True)
+                  f"{s['resumed']} resumed, {s['failed']} failed, {s['refused']} refused",
+                  file=log, flush=True)
         except Exception as e:  # noqa: BLE001 -- every failure is reported, the others go on
             errors.append(str(e))
             print(f"error: {e}", file=log, flush=True)

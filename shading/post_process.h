@@ -111,24 +111,40 @@ inline void radialBlurLightPosition(const Scene& scene, int index, float guardBa
                      ? cam.position - l.direction * glm::length(scene.medium.bounds.extent())
                      : l.position;
   if (!cam.project(p, px, py))
-    throw ConfigError("radial-blur cannot render this scene: lights[" + std::to_string(index) +
-                      "] is behind the camera, and the screen-space blur needs the light in "
-                      "front of it (Mitchell's method); use another method, e.g. "
-                      "light-space-march or exact");
+    throw UnsupportedSceneError("radial-blur cannot render this scene: lights[" +
+                                std::to_string(index) +
+                                "] is behind the camera, and the screen-space blur needs the "
+                                "light in front of it (Mitchell's method); use another method, "
+                                "e.g. light-space-march or exact");
   const float w = float(cam.width), h = float(cam.height);
   px = std::clamp(px, -guardBand * w, (1.0f + guardBand) * w);
   py = std::clamp(py, -guardBand * h, (1.0f + guardBand) * h);
 }
 
 /// What radial-blur cannot render, as a ConfigError (CPU and GPU alike): camera.spp > 1 (one
-/// ray per pixel), a light behind the camera (radialBlurLightPosition). Returns nothing; call
-/// it before any pass so that no partial image is made.
+/// ray per pixel); as an UnsupportedSceneError a light behind the camera
+/// (radialBlurLightPosition) or a point or spot light inside the medium's box: the pre-pass's
+/// unshadowed in-scattering peaks as 1/d² around it and the blur spreads that over the whole
+/// frame (the glow scene: 7 586 % relative L1 against exact, 99.5 % of pixels visibly wrong).
+/// Mitchell's method is for a light beyond the medium, the sun behind clouds. Returns nothing;
+/// call it before any pass so that no partial image is made.
 inline void checkRadialBlurScene(const Scene& scene, const RadialBlurSettings& s) {
   if (scene.camera.spp > 1)
     throw ConfigError("'camera.spp': radial-blur renders one ray per pixel; set camera.spp to 1");
   for (int l = 0; l < int(scene.lights.size()); ++l) {
     float x, y;
     radialBlurLightPosition(scene, l, s.guardBand, x, y);
+    const Light& light = scene.lights[std::size_t(l)];
+    const Box& box = scene.medium.bounds;
+    if (light.type != Light::Type::Directional &&
+        glm::all(glm::greaterThan(light.position, box.min)) &&
+        glm::all(glm::lessThan(light.position, box.max)))
+      throw UnsupportedSceneError(
+          "radial-blur cannot render this scene: lights[" + std::to_string(l) +
+          "] is inside the medium's box, and the screen-space blur stands for a light beyond "
+          "the medium (Mitchell's method: the sun behind clouds); around a light inside it the "
+          "blur spreads the light's glow over the whole frame. Use another method, e.g. "
+          "light-space-march or exact");
   }
 }
 

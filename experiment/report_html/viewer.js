@@ -429,7 +429,7 @@
     main.append(el("h1", { text: DATA.title }));
     if (DATA.description) main.append(el("p", { text: DATA.description }));
     main.append(el("p", { class: "meta" }, "Config ", el("code", { text: DATA.config }),
-      `; ${DATA.runs} runs (${DATA.rendered} rendered now, ${DATA.resumed} resumed, ${DATA.failed} failed). Written ${DATA.written}. `,
+      `; ${DATA.runs} runs (${DATA.rendered} rendered now, ${DATA.resumed} resumed, ${DATA.failed} failed, ${DATA.refused || 0} refused). Written ${DATA.written}. `,
       "Tables and definitions: ", el("a", { href: "report.md", text: "report.md" }), ", ",
       el("a", { href: "results.csv", text: "results.csv" }), ", ", el("a", { href: "results.json", text: "results.json" }), "."));
     if (DATA.machines.length > 1)
@@ -463,9 +463,9 @@
     const trs = rows.map((r) => {
       const tr = el("tr", { "data-run": r.run });
       if (!r.ok) {
-        tr.className = "failed";
+        tr.className = r.status === "refused" ? "refused" : "failed";
         r.cells.forEach((c) => tr.append(el("td", { text: c.t })));
-        tr.append(el("td", { colspan: String(cols.length - r.cells.length), text: `failed: ${r.error}` }));
+        tr.append(el("td", { colspan: String(cols.length - r.cells.length), text: `${r.status || "failed"}: ${r.error}` }));
       } else {
         r.cells.forEach((c, k) => tr.append(el("td", { class: numeric[k] ? "num" : "", text: c.t })));
       }

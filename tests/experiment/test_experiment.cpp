@@ -441,6 +441,35 @@ TEST_F(ExperimentTest, FailingRunIsLoggedAndTheSweepGoesOn) {
   EXPECT_EQ(again.failed, 1);
 }
 
+// A method that cannot render its scene (an UnsupportedSceneError: radial-blur with the light
+// inside the medium's box) is a refusal, not a failure: recorded with its reason, counted apart,
+// shown in report.md, and kept on resume (the method's answer does not change).
+TEST_F(ExperimentTest, ARunTheMethodCannotRenderIsRefusedNotFailed) {
+  writeOneRunConfig({{{"name", "radial-blur"},
+                      {"method", "radial-blur"},
+                      {"set", {"lights.0.position=[0.5,0.5,0.5]"}}},
+                     "per-voxel"});
+  const ExperimentResult r = runQuietly();
+  ASSERT_EQ(r.runs.size(), 2u);
+  EXPECT_EQ(r.failed, 0);
+  EXPECT_EQ(r.refused, 1);
+  EXPECT_EQ(r.rendered, 1);
+  EXPECT_EQ(r.runs[0].status, "refused");
+  EXPECT_NE(r.runs[0].error.find("lights[0] is inside the medium's box"), std::string::npos)
+      << r.runs[0].error;
+  EXPECT_EQ(r.runs[1].status, "ok");
+  std::ifstream md(dir / "out" / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(report.find("0 failed, 1 refused"), std::string::npos) << report;
+  EXPECT_NE(report.find("## Refused"), std::string::npos) << report;
+  EXPECT_EQ(report.find("## Failures"), std::string::npos) << report;
+  const ExperimentResult again = runQuietly();
+  EXPECT_EQ(again.rendered, 0);
+  EXPECT_EQ(again.refused, 1);
+  EXPECT_EQ(again.resumed, 1);
+  EXPECT_EQ(again.failed, 0);
+}
+
 // The default reference is `exact` at half a voxel with the halving check; errors carry the
 // masked relative L2 and the visibly wrong share; the report and the tables show them.
 TEST_F(ExperimentTest, DefaultReferenceIsConvergedExactAndMetricsAreRecorded) {

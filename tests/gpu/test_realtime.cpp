@@ -51,12 +51,16 @@ TEST(GpuLightSpaceMarch, MatchesCpu) {
 TEST(GpuRadialBlur, MatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
   Json doc = blobSceneDoc(20, 32, 24);
-  // Both lights: the point light in view, the spot just above the image (off screen).
+  // Both lights: the point light in view behind the medium (radial-blur refuses it inside), the
+  // spot just above the image (off screen).
+  doc["lights"][0]["position"] = {0.55, 0.55, 1.4};
   const Scene scene = sceneFromJson(doc);
-  // Measured on llvmpipe: 1.37e-6 (full-resolution pre-pass), 1.61e-6 (downsample 2, decay 0.95).
+  // Measured on llvmpipe, 2026-11-28 (the light behind the medium): 8.16e-8 (full-resolution
+  // pre-pass), 1.28e-7 (downsample 2, decay 0.95). (With the light inside, before radial-blur
+  // refused it: 1.37e-6 and 1.61e-6.)
   const std::vector<std::pair<Json, double>> cases = {
-      {{{"samples", 32}}, 1.37e-6},
-      {{{"samples", 24}, {"downsample", 2}, {"decay", 0.95}, {"density", 0.6}}, 1.61e-6}};
+      {{{"samples", 32}}, 8.16e-8},
+      {{{"samples", 24}, {"downsample", 2}, {"decay", 0.95}, {"density", 0.6}}, 1.28e-7}};
   for (const auto& [keys, measured] : cases) {
     Json render = {{"method", "radial-blur"}, {"march_step", 1.0 / 40}};
     render.update(keys);
@@ -80,6 +84,14 @@ TEST(GpuRealtimeMethods, RefuseWhatTheyCannotRender) {
     ADD_FAILURE() << "rendered a light behind the camera";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("behind the camera"), std::string::npos) << e.what();
+  }
+  // Nor from a light inside the medium (an UnsupportedSceneError, as on the CPU).
+  s.lights[0].position = Vec3(0.5f, 0.5f, 0.5f);
+  try {
+    createMethod(s, "", "gpu")->render(s, nullptr);
+    ADD_FAILURE() << "rendered a light inside the medium";
+  } catch (const UnsupportedSceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("inside the medium's box"), std::string::npos) << e.what();
   }
   // Objects render on the GPU (tests/gpu/test_competitor_objects.cpp): nothing refused.
 }

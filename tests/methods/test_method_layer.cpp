@@ -202,7 +202,10 @@ TEST(MethodLayer, EveryMethodRunsItsStageSequence) {
                                           "jittered-march", "froxel"};
   ASSERT_EQ(methods().names().size(), stages.size());
   for (const auto& [name, expected] : stages) {
-    const Scene s = loadScene(kGlow, with({"render.levels=[4]"}));
+    // radial-blur refuses glow's lamp inside the medium: the lamp behind the box for it.
+    std::vector<std::string> sets = {"render.levels=[4]"};
+    if (name == "radial-blur") sets.push_back("lights.0.position=[0.52,0.5,1.4]");
+    const Scene s = loadScene(kGlow, with(sets));
     const RenderResult r = createMethod(s, name, "cpu")->render(s, nullptr);
     std::vector<std::string> got;
     for (const auto& [stage, ms] : r.stats.timingsMs) got.push_back(stage);
