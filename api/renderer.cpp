@@ -112,6 +112,18 @@ void Renderer::set(const std::string& assignment) {
   rebuild(doc, time_);
 }
 
+void Renderer::setLight(std::size_t index, const Light& light) {
+  if (index >= scene_.lights.size())
+    throw ConfigError("setLight: lights[" + std::to_string(index) +
+                      "] does not exist (the scene has " + std::to_string(scene_.lights.size()) +
+                      " light(s); indices from 0)");
+  set("lights." + std::to_string(index) + "=" + lightJson(light).dump());
+}
+
+void Renderer::setCamera(const Camera& camera) {
+  set("camera=" + cameraJson(camera).dump());
+}
+
 void Renderer::setTime(double t) {
   if (!std::isfinite(t)) throw ConfigError("time must be finite, got " + std::to_string(t));
   if (t != time_) rebuild(doc_, t);

@@ -68,6 +68,12 @@ class Renderer {
   /// Applies a `--set` assignment ("lights.0.position=[0.5,1,0.5]") to the scene. On error
   /// (bad path or value) throws ConfigError and the renderer keeps its previous scene.
   void set(const std::string& assignment);
+  /// Typed setters for an engine that moves lights and the camera per frame: the same as
+  /// set("lights.<index>=…") and set("camera=…") with the scene format's keys (lightJson,
+  /// cameraJson), checked as a scene file is. The light replaces lights[index] whole (a `path`
+  /// it had is gone); ConfigError when the scene has no such light, or for a value out of range.
+  void setLight(std::size_t index, const Light& light);
+  void setCamera(const Camera& camera);
   /// Sets the animation time (default: the document's medium.density.time, else 0).
   void setTime(double t);
   double time() const { return time_; }

@@ -324,4 +324,45 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
   }
 }
 
+namespace {
+Json vec3Json(const Vec3& v) {
+  return Json::array({v.x, v.y, v.z});
+}
+}  // namespace
+
+Json lightJson(const Light& l) {
+  const auto degrees = [](float c) {
+    return std::round(std::acos(std::clamp(double(c), -1.0, 1.0)) * 180.0 / 3.14159265358979323846 *
+                      1e4) /
+           1e4;
+  };
+  switch (l.type) {
+    case Light::Type::Spot:
+      return {{"type", "spot"},
+              {"position", vec3Json(l.position)},
+              {"direction", vec3Json(l.direction)},
+              {"intensity", vec3Json(l.intensity)},
+              {"outer_deg", degrees(l.cosOuter)},
+              {"inner_deg", degrees(l.cosInner)}};
+    case Light::Type::Directional:
+      return {{"type", "directional"},
+              {"direction", vec3Json(l.direction)},
+              {"irradiance", vec3Json(l.intensity)}};
+    case Light::Type::Point:
+      break;
+  }
+  return {
+      {"type", "point"}, {"position", vec3Json(l.position)}, {"intensity", vec3Json(l.intensity)}};
+}
+
+Json cameraJson(const Camera& c) {
+  return {{"position", vec3Json(c.position)},
+          {"look_at", vec3Json(c.lookAt)},
+          {"up", vec3Json(c.up)},
+          {"fov_y_deg", c.fovYDeg},
+          {"width", c.width},
+          {"height", c.height},
+          {"spp", c.spp}};
+}
+
 }  // namespace scatterlab

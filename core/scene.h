@@ -54,4 +54,10 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
 /// Reads and parses a JSON file without interpreting it. Throws IoError with line/column.
 Json readJsonFile(const std::string& path);
 
+/// A light as the scene format writes it (docs/scene-format.md): parseScene of it gives the
+/// light back (spot cones in degrees from their cosines, rounded to 1e-4°).
+Json lightJson(const Light& light);
+/// The camera as the scene format writes it.
+Json cameraJson(const Camera& camera);
+
 }  // namespace scatterlab

@@ -54,38 +54,10 @@ Json toJson(const py::handle& obj) {
   return parseJson(dumps(obj, "scene"), "the scene dict");
 }
 
-/// The scene's lights as the scene format writes them (docs/scene-format.md): spot cones in
-/// degrees (from their cosines, rounded to 1e-4°).
+/// The scene's lights as the scene format writes them (lightJson).
 Json lightsJson(const std::vector<Light>& lights) {
-  const auto vec = [](const Vec3& v) { return Json::array({v.x, v.y, v.z}); };
-  const auto degrees = [](float c) {
-    return std::round(std::acos(std::clamp(double(c), -1.0, 1.0)) * 180.0 / 3.14159265358979323846 *
-                      1e4) /
-           1e4;
-  };
   Json out = Json::array();
-  for (const Light& l : lights) {
-    Json j;
-    switch (l.type) {
-      case Light::Type::Point:
-        j = {{"type", "point"}, {"position", vec(l.position)}, {"intensity", vec(l.intensity)}};
-        break;
-      case Light::Type::Spot:
-        j = {{"type", "spot"},
-             {"position", vec(l.position)},
-             {"direction", vec(l.direction)},
-             {"intensity", vec(l.intensity)},
-             {"outer_deg", degrees(l.cosOuter)},
-             {"inner_deg", degrees(l.cosInner)}};
-        break;
-      case Light::Type::Directional:
-        j = {{"type", "directional"},
-             {"direction", vec(l.direction)},
-             {"irradiance", vec(l.intensity)}};
-        break;
-    }
-    out.push_back(std::move(j));
-  }
+  for (const Light& l : lights) out.push_back(lightJson(l));
   return out;
 }
 
