@@ -20,6 +20,7 @@
 #include "api/scatterlab.h"
 #include "core/image.h"
 #include "core/limits.h"
+#include "core/metrics.h"
 #include "core/quick_look.h"
 #include "core/stages.h"
 
@@ -277,17 +278,21 @@ py::tuple resultTuple(const RenderResult& r, bool volumes, const Box& bounds, bo
   return py::make_tuple(imageArray(r.image, rgba), stats, v);
 }
 
-py::dict errorDict(const ImageError& e) {
+/// The error as `scatterlab compare --json` names it (apps/cmd_compare.cpp); the masked figures
+/// with a mask.
+py::dict errorDict(const ImageError& e, const LightMask* mask) {
   py::dict d;
   d["rel_l2"] = e.relL2;
   d["rel_l1"] = e.relL1;
-  d["psnr"] = e.psnr;
+  d["psnr_db"] = e.psnr;
   d["max_abs"] = e.maxAbs;
   d["visibly_wrong"] = e.visiblyWrong;
-  if (!std::isnan(e.maskedRelL2)) {
+  d["visible_threshold"] = kVisibleThreshold;
+  if (mask) {
     d["masked_rel_l2"] = e.maskedRelL2;
-    d["mask_radius"] = e.maskRadius;
+    d["mask_radius_px"] = e.maskRadius;
     d["masked_lights"] = e.maskedLights;
+    d["masked_pixels"] = mask->maskedPixels();
   }
   return d;
 }
@@ -478,19 +483,42 @@ PYBIND11_MODULE(_core, m) {
 
   m.def(
       "compare",
-      [](const py::array& a, const py::array& b) {
+      [](const py::array& a, const py::array& b, const PyScene* scene,
+         std::optional<double> maskRadius) {
         const Image img = arrayImage(a, "compare: image"),
                     ref = arrayImage(b, "compare: reference");
+        if (maskRadius && !scene)
+          throw ConfigError("compare: mask_radius needs scene= (the lights it masks around)");
+        if (maskRadius && !(std::isfinite(*maskRadius) && *maskRadius >= 0))
+          throw ConfigError("compare: mask_radius must be a finite number of pixels >= 0, got " +
+                            std::to_string(*maskRadius));
         ImageError e;
+        std::optional<LightMask> mask;
         {
           GilReleased unlocked;
-          e = compareImages(img, ref);
+          if (scene) {
+            const Camera& c = scene->parsed.camera;
+            if (c.width != img.width() || c.height != img.height())
+              throw ConfigError("compare: the images are " + std::to_string(img.width()) + "x" +
+                                std::to_string(img.height()) + " but the scene's camera is " +
+                                std::to_string(c.width) + "x" + std::to_string(c.height) +
+                                "; give the scene the images were rendered with");
+            mask = lightMask(scene->parsed,
+                             maskRadius ? *maskRadius : defaultMaskRadius(c.width, c.height));
+            e = compareImages(img, ref, *mask);
+          } else {
+            e = compareImages(img, ref);
+          }
         }
-        return errorDict(e);
+        return errorDict(e, mask ? &*mask : nullptr);
       },
-      py::arg("image"), py::arg("reference"),
-      "Error of image against reference (docs/metrics.md): rel_l2, rel_l1, psnr, max_abs, "
-      "visibly_wrong");
+      py::arg("image"), py::arg("reference"), py::arg("scene") = nullptr,
+      py::arg("mask_radius") = py::none(),
+      "Error of image against reference (docs/metrics.md), with scatterlab compare --json's keys: "
+      "rel_l2, rel_l1, psnr_db, max_abs, visibly_wrong, visible_threshold; with scene= (the "
+      "scene the images show) also masked_rel_l2 with the pixels next to each light masked, "
+      "mask_radius_px (default 1% of the diagonal, at least 2 px; mask_radius= sets it), "
+      "masked_lights, masked_pixels");
 
   m.def(
       "read_exr",

@@ -142,6 +142,41 @@ class Compare(unittest.TestCase):
         b[0, 0, 0] = 0.0
         self.assertAlmostEqual(sl.compare(b, a)["rel_l2"], 1 / np.sqrt(60), places=6)
 
+    def test_with_the_scene_as_the_tool(self):
+        # Issue 36: compare(..., scene=) gives the masked relative L2 as `scatterlab compare
+        # --scene --json` does, with the tool's key names.
+        if not CLI:
+            self.skipTest("SCATTERLAB_CLI not set")
+        glow = os.path.join(SOURCE, "data", "scenes", "glow.json")
+        sets = {"camera.width": 48, "camera.height": 36}
+        scene = sl.load_scene(glow, overrides=sets)
+        img, _ = sl.render(scene, method="gradient", backend="cpu")
+        ref, _ = sl.render(scene, method="exact", backend="cpu")
+        e = sl.compare(img, ref, scene=scene)
+        with tempfile.TemporaryDirectory() as d:
+            a, b = os.path.join(d, "a.exr"), os.path.join(d, "b.exr")
+            sl.write_exr(img, a)
+            sl.write_exr(ref, b)
+            out = subprocess.run([CLI, "compare", a, b, "--json", "--scene", glow,
+                                  "--set", "camera.width=48", "--set", "camera.height=36"],
+                                 check=True, capture_output=True, text=True).stdout
+        tool = json.loads(out)
+        for key in ("rel_l2", "rel_l1", "psnr_db", "max_abs", "visibly_wrong", "visible_threshold",
+                    "masked_rel_l2", "masked_lights", "masked_pixels"):
+            self.assertAlmostEqual(e[key], tool[key], places=9, msg=key)
+        self.assertEqual(e["mask_radius_px"], tool["mask_radius_px"])
+        self.assertEqual(e["masked_lights"], 1)
+        self.assertLess(e["masked_rel_l2"], e["rel_l2"])  # the lamp's glow is masked
+        self.assertNotIn("masked_rel_l2", sl.compare(img, ref))
+        self.assertGreater(sl.compare(img, ref, scene=scene, mask_radius=6)["masked_pixels"],
+                           e["masked_pixels"])
+        with self.assertRaisesRegex(sl.ConfigError, "camera is 48x36"):
+            sl.compare(img[:, :40], ref[:, :40], scene=scene)
+        with self.assertRaisesRegex(sl.ConfigError, "mask_radius needs scene="):
+            sl.compare(img, ref, mask_radius=3)
+        with self.assertRaisesRegex(sl.ConfigError, "mask_radius must be"):
+            sl.compare(img, ref, scene=scene, mask_radius=-1)
+
     def test_shape_errors(self):
         with self.assertRaises(sl.ConfigError):
             sl.compare(np.ones((4, 5)), np.ones((4, 5)))
