@@ -10,6 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/scene.h"
+#include "core/suggest.h"
 #include "experiment/detail.h"
 
 namespace scatterlab {
@@ -106,7 +107,8 @@ MethodSpec parseMethod(const Json& j, const std::string& path, const std::string
     std::string list;
     for (const auto& n : methods().names()) list += (list.empty() ? "'" : ", '") + n + "'";
     throw ConfigError("'" + path + (j.is_string() ? "" : ".method") + "': unknown method '" +
-                      m.method + "'; allowed: " + list);
+                      m.method + "'" + didYouMean(m.method, methods().names()) +
+                      "; allowed: " + list);
   }
   if (!safeName(m.name))
     throw ConfigError("'" + path + "': method name '" + m.name + "' is not file-name safe");
@@ -161,8 +163,9 @@ Axis parseAxis(Params& ax, const std::string& name) {
   static const std::set<std::string> named = {"resolution", "samples", "lights", "image_size",
                                               "epsilon"};
   if (!named.count(name) && name.find('.') == std::string::npos)
-    throw ConfigError("'" + key + "': unknown sweep axis '" + name +
-                      "'; allowed: resolution, samples, lights, image_size, epsilon, or a dotted "
+    throw ConfigError("'" + key + "': unknown sweep axis '" + name + "'" +
+                      didYouMean(name, std::vector<std::string>(named.begin(), named.end())) +
+                      "; allowed: resolution, samples, lights, image_size, epsilon, or a dotted "
                       "scene key such as render.sampler.radius_scale");
   if (!named.count(name)) {
     try {

@@ -117,7 +117,8 @@ TEST_F(ExperimentTest, BadConfigsNameTheKey) {
   c["sweeps"][0]["axes"] = {{"sample", {1, 2}}};
   std::string e = expectConfigError(c);
   EXPECT_NE(e.find("sweeps[0].axes.sample"), std::string::npos) << e;
-  EXPECT_NE(e.find("unknown sweep axis"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown sweep axis 'sample' (did you mean 'samples'?)"), std::string::npos)
+      << e;
 
   c = tinyConfig();
   c["sweeps"][0]["axes"] = {{"samples", Json::array()}};
@@ -134,7 +135,8 @@ TEST_F(ExperimentTest, BadConfigsNameTheKey) {
   c["methods"][1] = "per-voxle";
   e = expectConfigError(c);
   EXPECT_NE(e.find("methods[1]"), std::string::npos) << e;
-  EXPECT_NE(e.find("unknown method 'per-voxle'"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown method 'per-voxle' (did you mean 'per-voxel'?)"), std::string::npos)
+      << e;
 
   c = tinyConfig();
   c["sweeps"][0]["methods"] = {"gradiant"};
