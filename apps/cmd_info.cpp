@@ -4,11 +4,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
 #include "apps/info.h"
 #include "core/atomic_file.h"
+#include "core/quick_look.h"
 #ifdef SCATTERLAB_HAS_GPU
 #include "gpu/context.h"
 #endif
@@ -17,8 +19,58 @@
 
 namespace scatterlab::cli {
 
+namespace {
+
+const char* lightType(const Light& l) {
+  return l.type == Light::Type::Point  ? "point"
+         : l.type == Light::Type::Spot ? "spot"
+                                       : "directional";
+}
+
+/// The keyframed path of lights[i] in the scene document, if it has one: its key count and time
+/// span (the parsed light is at the scene's time).
+std::optional<std::pair<std::size_t, std::pair<double, double>>> lightPath(const Json& doc,
+                                                                           std::size_t i) {
+  if (!doc.contains("lights") || !doc["lights"].is_array() || i >= doc["lights"].size())
+    return std::nullopt;
+  const Json& l = doc["lights"][i];
+  if (!l.is_object() || !l.contains("path") || !l["path"].is_array() || l["path"].empty())
+    return std::nullopt;
+  const Json& p = l["path"];
+  return std::pair{p.size(), std::pair{p.front().value("t", 0.0), p.back().value("t", 0.0)}};
+}
+
+/// One light as `info` prints it: what its type has (a point light has no direction, a
+/// directional one no position), the spot's cone, and a keyframed path.
+std::string lightLine(const Light& l, const Json& doc, std::size_t i) {
+  char buf[512];
+  const auto v = [&](const Vec3& x) {
+    std::snprintf(buf, sizeof buf, "[%g %g %g]", x.x, x.y, x.z);
+    return std::string(buf);
+  };
+  std::string s = lightType(l);
+  if (l.type != Light::Type::Directional) s += ", position " + v(l.position);
+  if (l.type != Light::Type::Point) s += ", direction " + v(l.direction);
+  if (l.type == Light::Type::Spot) {
+    std::snprintf(buf, sizeof buf, ", cone %g deg (full inside %g deg)",
+                  glm::degrees(std::acos(double(l.cosOuter))),
+                  glm::degrees(std::acos(double(l.cosInner))));
+    s += buf;
+  }
+  s += (l.type == Light::Type::Directional ? ", irradiance " : ", intensity ") + v(l.intensity);
+  if (const auto path = lightPath(doc, i)) {
+    std::snprintf(buf, sizeof buf, "; keyframed path of %zu keys, t %g to %g (position at t = 0)",
+                  path->first, path->second.first, path->second.second);
+    s += buf;
+  }
+  return s;
+}
+
+}  // namespace
+
 void printSceneInfo(const std::string& path) {
   const Scene s = loadScene(path);
+  const Json doc = readSceneDocument(path);
   const Medium& m = s.medium;
   std::printf("scene %s\n", path.c_str());
   std::printf("  medium: box [%g %g %g]..[%g %g %g], %dx%dx%d voxels, sigma_t %g, albedo %g, %s\n",
@@ -28,15 +80,8 @@ void printSceneInfo(const std::string& path) {
                   ? "isotropic phase"
                   : ("Henyey-Greenstein g=" + std::to_string(m.phase.g)).c_str());
   std::printf("  density: %s\n", m.density->describe().c_str());
-  for (const Light& l : s.lights) {
-    const char* t = l.type == Light::Type::Point  ? "point"
-                    : l.type == Light::Type::Spot ? "spot"
-                                                  : "directional";
-    std::printf("  light: %s, position [%g %g %g], direction [%g %g %g], %s [%g %g %g]\n", t,
-                l.position.x, l.position.y, l.position.z, l.direction.x, l.direction.y,
-                l.direction.z, l.type == Light::Type::Directional ? "irradiance" : "intensity",
-                l.intensity.x, l.intensity.y, l.intensity.z);
-  }
+  for (std::size_t i = 0; i < s.lights.size(); ++i)
+    std::printf("  lights[%zu]: %s\n", i, lightLine(s.lights[i], doc, i).c_str());
   if (s.objects) {
     int i = 0;
     for (const ObjectInfo& o : s.objects->objects()) {
@@ -149,15 +194,12 @@ Json describeScene(const std::string& path) {
   const Scene s = loadScene(path);
   createMethod(s);  // validates the render settings
   const Medium& m = s.medium;
+  const Json doc = readSceneDocument(path);
   Json lights = Json::array();
-  for (const Light& l : s.lights) {
-    const bool dir = l.type == Light::Type::Directional;
-    Json j = {{"type", l.type == Light::Type::Point  ? "point"
-                       : l.type == Light::Type::Spot ? "spot"
-                                                     : "directional"},
-              {dir ? "irradiance" : "intensity", vec(l.intensity)}};
-    if (!dir) j["position"] = vec(l.position);
-    if (l.type != Light::Type::Point) j["direction"] = vec(l.direction);
+  for (std::size_t i = 0; i < s.lights.size(); ++i) {
+    Json j = lightJson(s.lights[i]);
+    if (const auto p = lightPath(doc, i))
+      j["path"] = {{"keys", p->first}, {"t_first", p->second.first}, {"t_last", p->second.second}};
     lights.push_back(j);
   }
   const Camera& c = s.camera;
@@ -183,22 +225,45 @@ Json describeScene(const std::string& path) {
           {"render", s.render}};
 }
 
+namespace {
+
+std::string exrChannels(const Image& img) {
+  return std::string(img.alpha().empty() ? "RGB" : "RGBA") + (img.depth().empty() ? "" : "Z");
+}
+
+}  // namespace
+
 void printImageInfo(const std::string& path) {
   const Image img = readExr(path);
-  std::printf(
-      "image %s: %dx%d %s\n", path.c_str(), img.width(), img.height(),
-      img.alpha().empty() ? "RGB float" : "RGBA float (A = 1 - transmittance of the view ray)");
+  std::printf("image %s: %dx%d %s float%s%s\n", path.c_str(), img.width(), img.height(),
+              exrChannels(img).c_str(),
+              img.alpha().empty() ? "" : " (A = 1 - transmittance of the view ray)",
+              img.depth().empty() ? "" : " (Z = depth of the first surface along the view ray)");
   // Statistics over finite values; NaN and inf are counted, not folded in (a NaN made the
   // mean "-nan" and hid where it came from).
   printStats(pixelStats(img.pixels()));
+  const ExrAttributes a = readExrAttributes(path);
+  for (const auto& [name, value] : a.strings)
+    std::printf("  %s: %s\n", name.c_str(), value.c_str());
+  for (const auto& [name, m] : a.matrices) {
+    std::printf("  %s:", name.c_str());
+    for (int r = 0; r < 4; ++r)
+      std::printf(" [%g %g %g %g]", m[std::size_t(4 * r)], m[std::size_t(4 * r + 1)],
+                  m[std::size_t(4 * r + 2)], m[std::size_t(4 * r + 3)]);
+    std::printf("\n");
+  }
 }
 
 Json describeExr(const std::string& path) {
   const Image img = readExr(path);
-  Json j = {{"file", path},           {"kind", "image"},
-            {"format", "OpenEXR"},    {"width", img.width()},
-            {"height", img.height()}, {"channels", img.alpha().empty() ? "RGB" : "RGBA"}};
+  Json j = {{"file", path},         {"kind", "image"},        {"format", "OpenEXR"},
+            {"width", img.width()}, {"height", img.height()}, {"channels", exrChannels(img)}};
   j.update(pixelStats(img.pixels()));
+  const ExrAttributes a = readExrAttributes(path);
+  Json attrs = Json::object();
+  for (const auto& [name, value] : a.strings) attrs[name] = value;
+  for (const auto& [name, m] : a.matrices) attrs[name] = m;
+  j["attributes"] = attrs;
   return j;
 }
 

@@ -381,6 +381,38 @@ Image readExr(const std::string& path) {
   }
 }
 
+ExrAttributes readExrAttributes(const std::string& path) {
+  checkReadableFile(path, "image");
+  try {
+    checkExrAttributeSizes(path);
+    ExrReadContext file(path);
+    exr_context_t ctx = file.get();
+    int32_t count = 0;
+    ExrReadContext::check(exr_get_attribute_count(ctx, 0, &count), "no attribute list");
+    ExrAttributes a;
+    for (int32_t i = 0; i < count; ++i) {
+      const exr_attribute_t* attr = nullptr;
+      ExrReadContext::check(exr_get_attribute_by_index(ctx, 0, EXR_ATTR_LIST_FILE_ORDER, i, &attr),
+                            "cannot read attribute " + std::to_string(i));
+      if (!attr || !attr->name) continue;
+      if (attr->type == EXR_ATTR_STRING && attr->string && attr->string->str)
+        a.strings.emplace_back(
+            attr->name,
+            std::string(attr->string->str, std::size_t(std::max(attr->string->length, 0))));
+      else if (attr->type == EXR_ATTR_M44F && attr->m44f) {
+        std::array<float, 16> m{};
+        std::copy(attr->m44f->m, attr->m44f->m + 16, m.begin());
+        a.matrices.emplace_back(attr->name, m);
+      }
+    }
+    return a;
+  } catch (const IoError& e) {
+    throw IoError("cannot read EXR '" + path + "': " + e.what());
+  } catch (const std::bad_alloc&) {
+    throw IoError("cannot read EXR '" + path + "': corrupt sizes (allocation failed)");
+  }
+}
+
 NonFiniteValues countNonFinite(const Image& img, bool withAlpha) {
   NonFiniteValues n;
   const std::vector<float>& alpha = img.alpha();

@@ -75,6 +75,11 @@ void writeExr(const Image& img, const std::string& path, const ExrAttributes& at
 /// naming the file.
 Image readExr(const std::string& path);
 
+/// The string and 4×4 float matrix attributes of an OpenEXR file's first part, in file order
+/// (what writeExr's `attributes` wrote: `scatterlab info` shows them); the other attributes are
+/// skipped. Throws IoError naming the file.
+ExrAttributes readExrAttributes(const std::string& path);
+
 /// Display transform used for PNG output and PSNR: multiply by 2^exposure, clamp to [0, 1],
 /// encode with the sRGB transfer curve.
 float toneMapSrgb(float linear, float exposure = 0.0f);

@@ -263,6 +263,32 @@ TEST_F(Cli, InfoDescribesScenesAndImages) {
   r = run("info " + out("i.exr"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("16x12"), std::string::npos);
+  // The header's attributes that render writes (issue 36): provenance and the camera matrices.
+  EXPECT_NE(r.output.find("scatterlab:method: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("scatterlab:device: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("worldToCamera: ["), std::string::npos) << r.output;
+  r = run("info --json " + out("i.exr"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Json j = Json::parse(r.output);
+  EXPECT_EQ(j["attributes"]["scatterlab:backend"], "cpu") << r.output;
+  EXPECT_EQ(j["attributes"]["worldToNDC"].size(), 16u) << r.output;
+  // Each light with what its type has, a spot's cone, a keyframed path.
+  Json lit = tinyScene();
+  lit["lights"] = Json::parse(R"([
+      {"type": "point", "intensity": 1,
+       "path": [{"t": 0, "position": [0.2, 1.5, 0.5]}, {"t": 2, "position": [0.8, 1.5, 0.5]}]},
+      {"type": "spot", "position": [0.5, 1.6, 0.5], "direction": [0, -1, 0], "intensity": 2,
+       "outer_deg": 30, "inner_deg": 20},
+      {"type": "directional", "direction": [0, -1, 0], "irradiance": 3}])");
+  r = run("info " + write("lit.json", lit.dump()));
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* want :
+       {"lights[0]: point, position [0.2 1.5 0.5], intensity [1 1 1]; keyframed path of 2 keys, "
+        "t 0 to 2",
+        "lights[1]: spot, position [0.5 1.6 0.5], direction [0 -1 0], cone 30 deg (full inside "
+        "20 deg), intensity [2 2 2]",
+        "lights[2]: directional, direction [0 -1 0], irradiance [3 3 3]"})
+    EXPECT_NE(r.output.find(want), std::string::npos) << want << "\n" << r.output;
   r = run("info " + write("x.txt", "hello"));
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("known extensions"), std::string::npos);
