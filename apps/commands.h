@@ -5,12 +5,14 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/params.h"
 
@@ -75,6 +77,21 @@ inline void checkSetOptions(const std::vector<std::string>& sets) {
       throw UsageError(e.what());
     }
   }
+}
+
+/// Throws IoError when `path` is a PNG (its 8 signature bytes, whatever its extension) where a
+/// linear OpenEXR is needed: `what` names the argument ("image", "reference", "input"), `need`
+/// says who needs the EXR ("compare needs", "convert reads"). Missing, unreadable and special
+/// files are refused first (checkReadableFile), so that nothing blocks on a FIFO.
+inline void refusePng(const std::string& path, const std::string& what, const std::string& need) {
+  checkReadableFile(path, what);
+  std::ifstream f(path, std::ios::binary);
+  char head[8] = {};
+  if (!f.read(head, sizeof head)) return;
+  if (std::string(head, sizeof head) != std::string("\x89PNG\r\n\x1a\n", 8)) return;
+  throw IoError(what + " '" + path + "' is a PNG (8-bit, display-encoded); " + need +
+                " linear OpenEXR images (the .exr that render -o writes; its PNGs are display "
+                "copies)");
 }
 
 Action addRender(CLI::App& app);
