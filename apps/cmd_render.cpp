@@ -36,13 +36,6 @@ std::optional<std::pair<int, int>> parseFrames(const std::string& text) {
   return std::make_pair(first, last);
 }
 
-/// The image format `-o` asks for, by extension (case-insensitive): "exr", "png" or "".
-std::string imageFormat(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
-  return ext == ".exr" ? "exr" : ext == ".png" ? "png" : "";
-}
-
 /// Provenance and camera for the EXR header: scatterlab version, method, backend, device, scene
 /// file, frame time; worldToCamera (glm::lookAt: right-handed, the camera looking down −z) and
 /// worldToNDC (that times glm::perspective with the scene's vertical field of view and aspect,
@@ -125,15 +118,7 @@ Action addRender(CLI::App& app) {
       ->take_all()
       ->allow_extra_args(false);
   c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)")
-      ->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            char* end = nullptr;
-            const double x = std::strtod(v.c_str(), &end);
-            return end != v.c_str() && *end == 0 && std::abs(x) <= 100.0
-                       ? ""
-                       : "'" + v + "' is not a number of stops in [-100, 100]";
-          },
-          "STOPS in [-100, 100]"));
+      ->check(exposureValidator());
   c->add_option("--tonemap", o->tonemap,
                 "Tone curve of the PNG previews (--png, a .png -o, --samples-png): aces "
                 "(Narkowicz, the default: highlights roll off), filmic (Hable) or linear "

@@ -4,6 +4,9 @@
 /// main() turns that into a message on stderr and exit code 1.
 
 #include <CLI/CLI.hpp>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -79,6 +82,27 @@ inline void checkSetOptions(const std::vector<std::string>& sets) {
   }
 }
 
+/// The image format a path asks for, by extension (case-insensitive): "exr", "png" or "".
+inline std::string imageFormat(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
+  return ext == ".exr" ? "exr" : ext == ".png" ? "png" : "";
+}
+
+/// The check of a PNG exposure option (`render --exposure`, `convert --exposure`): a number of
+/// stops in [-100, 100] (writePng's range; NaN and inf refused).
+inline CLI::Validator exposureValidator() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        return end != v.c_str() && *end == 0 && std::abs(x) <= 100.0
+                   ? ""
+                   : "'" + v + "' is not a number of stops in [-100, 100]";
+      },
+      "STOPS in [-100, 100]");
+}
+
 /// Throws IoError when `path` is a PNG (its 8 signature bytes, whatever its extension) where a
 /// linear OpenEXR is needed: `what` names the argument ("image", "reference", "input"), `need`
 /// says who needs the EXR ("compare needs", "convert reads"). Missing, unreadable and special
@@ -96,6 +120,7 @@ inline void refusePng(const std::string& path, const std::string& what, const st
 
 Action addRender(CLI::App& app);
 Action addCompare(CLI::App& app);
+Action addConvert(CLI::App& app);
 Action addInfo(CLI::App& app);
 Action addFit(CLI::App& app);
 Action addExperiment(CLI::App& app);

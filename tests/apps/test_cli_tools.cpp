@@ -1,6 +1,6 @@
-/// Issue 36's rough list, through the tool: `compare` given a PNG, `compare --diff-signed` (the
-/// gallery's signed error map). Good runs write what they say; bad input gives one clear message,
-/// its exit code, and no output file.
+/// Issue 36's rough list, through the tool: `convert` (EXR -> PNG with render's transform),
+/// `compare` given a PNG and `compare --diff-signed` (the gallery's signed error map). Good runs
+/// write what they say; bad input gives one clear message, its exit code, and no output file.
 
 #include <gtest/gtest.h>
 #include <png.h>
@@ -90,6 +90,108 @@ class CliTools : public scatterlab::testing::TempDirTest {
 };
 
 }  // namespace
+
+// `convert` applies render's PNG transform (writePng: 2^exposure, the curve, the sRGB encoding,
+// 8 bits rounded), so its PNG of render's EXR is byte for byte the PNG render wrote beside it.
+TEST_F(CliTools, ConvertWritesThePngRenderWritesBesideTheExr) {
+  // Hand-made values, exact bytes (float arithmetic as in core/image.cpp):
+  Image img(5, 1);
+  img.at(0, 0) = Vec3(0.0f);
+  img.at(1, 0) = Vec3(1.0f);
+  img.at(2, 0) = Vec3(0.5f, 0.25f, 4.0f);
+  img.at(3, 0) = Vec3(0.18f);
+  img.at(4, 0) = Vec3(11.2f);
+  scatterlab::writeExr(img, out("h.exr"));
+  // linear: clamp at 1, then sRGB: 0.5 -> 1.055 * 0.5^(1/2.4) - 0.055 = 0.73535 -> 188.
+  RunResult r = run("convert " + out("h.exr") + " " + out("lin.png") + " --tonemap linear");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote " + out("lin.png") + " (5x1, exposure 0, linear)"),
+            std::string::npos)
+      << r.output;
+  Png p = readPng(out("lin.png"));
+  ASSERT_EQ(p.width, 5);
+  ASSERT_EQ(p.height, 1);
+  EXPECT_EQ(p.at(0, 0), (std::array<int, 3>{0, 0, 0}));
+  EXPECT_EQ(p.at(1, 0), (std::array<int, 3>{255, 255, 255}));
+  // 0.25 is sRGB 0.53709 -> 137.46 -> 137; 4 clamps to 255.
+  EXPECT_EQ(p.at(2, 0), (std::array<int, 3>{188, 137, 255}));
+  // One stop up: 0.25 shows as 0.5 did.
+  r = run("convert " + out("h.exr") + " " + out("ev.png") + " --tonemap linear --exposure 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  p = readPng(out("ev.png"));
+  EXPECT_EQ(p.at(2, 0), (std::array<int, 3>{255, 188, 255}));
+  // The default is render's: aces. 1 -> 2.54 / 3.16 = 0.80380 -> sRGB 0.90823 -> 232;
+  // 0.18 -> 0.32048 -> sRGB 0.55542 -> 141.
+  r = run("convert " + out("h.exr") + " " + out("aces.png"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  p = readPng(out("aces.png"));
+  EXPECT_EQ(p.at(0, 0), (std::array<int, 3>{0, 0, 0}));
+  EXPECT_EQ(p.at(1, 0), (std::array<int, 3>{232, 232, 232}));
+  EXPECT_EQ(p.at(3, 0), (std::array<int, 3>{141, 141, 141}));
+  // filmic: Hable's curve normalised to its white 11.2 shows 11.2 as full white.
+  r = run("convert " + out("h.exr") + " " + out("filmic.png") + " --tonemap filmic");
+  ASSERT_EQ(r.code, 0) << r.output;
+  p = readPng(out("filmic.png"));
+  EXPECT_EQ(p.at(4, 0), (std::array<int, 3>{255, 255, 255}));
+  EXPECT_EQ(p.at(0, 0), (std::array<int, 3>{0, 0, 0}));
+
+  // A render's EXR converts to the very bytes of its own PNG, for the default and other
+  // settings.
+  const std::string scene = writeScene();
+  for (const std::string opts : {"", " --tonemap filmic --exposure 1.5", " --tonemap linear"}) {
+    r = run("render " + scene + " -q -o " + out("r.exr") + " --png " + out("r.png") + opts);
+    ASSERT_EQ(r.code, 0) << r.output;
+    r = run("convert " + out("r.exr") + " " + out("c.png") + opts);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const Png rendered = readPng(out("r.png")), converted = readPng(out("c.png"));
+    EXPECT_EQ(converted.width, 16);
+    EXPECT_EQ(converted.height, 12);
+    EXPECT_EQ(converted.rgb, rendered.rgb) << opts;
+    int lit = 0;
+    for (unsigned char b : converted.rgb) lit += b > 0;
+    EXPECT_GT(lit, 0) << "an all-black image proves nothing" << opts;
+  }
+}
+
+TEST_F(CliTools, ConvertBadInputs) {
+  Image img(4, 3);
+  for (Vec3& v : img.pixels()) v = Vec3(0.5f);
+  scatterlab::writeExr(img, out("in.exr"));
+  const std::string target = out("o.png");
+  const std::string convert = "convert " + out("in.exr") + " ";
+  // Usage errors (exit 2), each naming the option or argument.
+  expectFails(convert + out("o.exr"), 2,
+              {"output: '" + out("o.exr") + "' does not end in .png: convert writes PNG only",
+               "an EXR is already the linear image"},
+              out("o.exr"));
+  expectFails(convert + out("o.jpg"), 2, {"does not end in .png"}, out("o.jpg"));
+  for (const std::string ev : {"nan", "inf", "-inf", "101", "1e300", "bright", "''"})
+    expectFails(convert + target + " --exposure " + ev, 2,
+                {"--exposure", "is not a number of stops in [-100, 100]"}, target);
+  expectFails(convert + target + " --tonemap reinhard", 2, {"--tonemap", "reinhard"}, target);
+  expectFails("convert " + out("in.exr"), 2, {"output is required"}, target);
+  // Bad input files (exit 1, as compare's), named.
+  expectFails("convert " + out("missing.exr") + " " + target, 1,
+              {"input '" + out("missing.exr") + "' does not exist"}, target);
+  expectFails("convert " + dir_.string() + " " + target, 1, {"is a directory"}, target);
+  // A PNG is recognised by its signature, whatever its name.
+  ASSERT_EQ(run(convert + out("p.png")).code, 0);
+  fs::copy_file(out("p.png"), out("disguised.exr"));
+  for (const std::string& png : {out("p.png"), out("disguised.exr")})
+    expectFails("convert " + png + " " + target, 1,
+                {"input '" + png +
+                 "' is a PNG (8-bit, display-encoded); convert reads linear OpenEXR images"},
+                target);
+  const std::string text = write("text.exr", "not an image at all");
+  expectFails("convert " + text + " " + target, 1, {"cannot read EXR '" + text + "'"}, target);
+  // Non-finite pixels would show as black (NaN) or white (inf): said, not hidden.
+  img.at(2, 1) = Vec3(NAN, 0.5f, 0.5f);
+  scatterlab::writeExr(img, out("nan.exr"));
+  expectFails("convert " + out("nan.exr") + " " + target, 1,
+              {"input '" + out("nan.exr") +
+               "' has 1 non-finite channel value (1 NaN, 0 inf; the first at pixel (2, 1))"},
+              target);
+}
 
 // compare used to print "cannot read EXR 'x.png': cannot parse the header: File is not an
 // OpenEXR file: magic ..." for a PNG; now one line saying what the file is and what to give.
