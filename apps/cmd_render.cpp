@@ -36,6 +36,23 @@ std::optional<std::pair<int, int>> parseFrames(const std::string& text) {
   return std::make_pair(first, last);
 }
 
+/// "WxH" (or "WXH"; whole numbers in [1, Camera::kMaxSide], camera.width's and camera.height's
+/// range) -> {W, H}; nullopt when malformed or out of range.
+std::optional<std::pair<int, int>> parseResolution(const std::string& text) {
+  const auto x = text.find_first_of("xX");
+  if (x == std::string::npos) return std::nullopt;
+  const std::string w = text.substr(0, x), h = text.substr(x + 1);
+  const auto side = [](const std::string& s) -> int {
+    if (s.empty() || s.size() > 6 || s.find_first_not_of("0123456789") != std::string::npos)
+      return 0;
+    const int v = std::stoi(s);
+    return v <= Camera::kMaxSide ? v : 0;
+  };
+  const int width = side(w), height = side(h);
+  if (width < 1 || height < 1) return std::nullopt;
+  return std::make_pair(width, height);
+}
+
 /// Provenance and camera for the EXR header: scatterlab version, method, backend, device, scene
 /// file, frame time; worldToCamera (glm::lookAt: right-handed, the camera looking down −z) and
 /// worldToNDC (that times glm::perspective with the scene's vertical field of view and aspect,
@@ -78,7 +95,7 @@ Action addRender(CLI::App& app) {
     std::vector<std::string> sets;
     // PNGs are previews: the default curve rolls glows off instead of clipping them to white
     // discs (EXR output stays linear whatever the curve).
-    std::string frames, tonemap = "aces";
+    std::string frames, tonemap = "aces", resolution;
     double fps = 24.0;
     float exposure = 0.0f;
     bool quiet = false, depth = false;
@@ -117,6 +134,18 @@ Action addRender(CLI::App& app) {
                 "VALUE parsed as JSON where it parses, else a string)")
       ->take_all()
       ->allow_extra_args(false);
+  c->add_option("-r,--resolution", o->resolution,
+                "Image size WxH, e.g. 640x480: the same as --set camera.width=W --set "
+                "camera.height=H (not together with a --set of either)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            return parseResolution(v) ? ""
+                                      : "'" + v +
+                                            "' is not a resolution: expected WxH with whole "
+                                            "numbers from 1 to " +
+                                            std::to_string(Camera::kMaxSide) + ", e.g. 640x480";
+          },
+          "WxH"));
   c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)")
       ->check(exposureValidator());
   c->add_option("--tonemap", o->tonemap,
@@ -175,6 +204,19 @@ Action addRender(CLI::App& app) {
                        didYouMean(o->method, methods().names()) + "; allowed: " + list);
     }
     checkSetOptions(o->sets);
+    if (!o->resolution.empty()) {
+      // -r is shorthand for two --set overrides: giving either key as well would leave one of
+      // them silently unused.
+      for (const std::string& a : o->sets) {
+        const std::string key = a.substr(0, a.find('='));
+        if (key == "camera" || key == "camera.width" || key == "camera.height")
+          throw UsageError("--resolution " + o->resolution + " and --set " + a +
+                           " both set the image size; give one of them");
+      }
+      const auto [w, h] = *parseResolution(o->resolution);
+      o->sets.push_back("camera.width=" + std::to_string(w));
+      o->sets.push_back("camera.height=" + std::to_string(h));
+    }
     if (o->depth && imageFormat(o->out) != "exr")
       throw UsageError("--depth writes a Z channel, which needs an .exr output (-o " + o->out +
                        ")");

@@ -1,6 +1,7 @@
 /// Issue 36's rough list, through the tool: `convert` (EXR -> PNG with render's transform),
-/// `compare` given a PNG and `compare --diff-signed` (the gallery's signed error map). Good runs
-/// write what they say; bad input gives one clear message, its exit code, and no output file.
+/// `compare` given a PNG, `compare --diff-signed` (the gallery's signed error map) and
+/// `render -r WxH`. Good runs write what they say; bad input gives one clear message, its exit
+/// code, and no output file.
 
 #include <gtest/gtest.h>
 #include <png.h>
@@ -303,4 +304,50 @@ TEST_F(CliTools, CompareDiffSignedWritesTheGallerysErrorMapAndItsScale) {
   expectFails("compare " + out("small.exr") + " " + out("ref.exr") + " --diff " + out("y.png") +
                   " --diff-signed",
               1, {"8x2", "64x2"}, out("y.png"));
+}
+
+// -r WxH is --set camera.width=W --set camera.height=H (vdb_render's -res).
+TEST_F(CliTools, RenderResolutionShorthand) {
+  const std::string scene = writeScene();
+  RunResult r =
+      run("render " + scene + " -q -o " + out("a.exr") + " -r 20x14 --stats " + out("a.json"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Json stats = Json::parse(std::ifstream(out("a.json")));
+  EXPECT_EQ(stats["width"], 20);
+  EXPECT_EQ(stats["height"], 14);
+  r = run("render " + scene + " -q -o " + out("b.exr") +
+          " --set camera.width=20 --set camera.height=14");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Image a = scatterlab::readExr(out("a.exr")), b = scatterlab::readExr(out("b.exr"));
+  EXPECT_EQ(a.width(), 20);
+  EXPECT_EQ(a.height(), 14);
+  EXPECT_EQ(a.pixels(), b.pixels());
+  r = run("render " + scene + " -q -o " + out("c.exr") + " --resolution 7X5");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(scatterlab::readExr(out("c.exr")).width(), 7);
+  EXPECT_EQ(scatterlab::readExr(out("c.exr")).height(), 5);
+  // Other --set keys go along with it.
+  r = run("render " + scene + " -q -o " + out("d.exr") + " -r 8x6 --set camera.spp=4");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(scatterlab::readExr(out("d.exr")).width(), 8);
+
+  const std::string o = out("o.exr");
+  for (const std::string bad : {"0x10", "10x0", "10", "axb", "10x10x10", "x10", "10x", "16385x10",
+                                "10x99999999999", "1.5x2", "+3x4", "' 3x4'", "''"})
+    expectFails("render " + scene + " -o " + o + " -r " + bad, 2,
+                {"--resolution",
+                 "is not a resolution: expected WxH with whole numbers from 1 "
+                 "to 16384, e.g. 640x480"},
+                o);
+  // The largest side the camera keys allow passes -r's check (the output's missing directory
+  // then stops the run before any render).
+  r = run("render " + scene + " -o " + out("nodir/o.exr") + " -r 16384x1");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("nodir"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("is not a resolution"), std::string::npos) << r.output;
+  // Both -r and a --set of the size: an error naming both.
+  for (const std::string set :
+       {"camera.width=8", "camera.height=8", "'camera={\"position\": [0.5,0.5,-2]}'"})
+    expectFails("render " + scene + " -o " + o + " -r 20x14 --set " + set, 2,
+                {"--resolution 20x14 and --set camera", "both set the image size; give one"}, o);
 }
