@@ -7,6 +7,7 @@
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/metrics.h"
+#include "experiment/error_map.h"
 
 namespace scatterlab::cli {
 
@@ -27,7 +28,7 @@ Action addCompare(CLI::App& app) {
     std::vector<std::string> sets;
     float diffScale = 0.0f;
     double maskRadius = -1.0;
-    bool json = false;
+    bool json = false, diffSigned = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* c = app.add_subcommand(
@@ -38,22 +39,31 @@ Action addCompare(CLI::App& app) {
   c->add_option("image", o->image, "Image to judge (OpenEXR)")->required();
   c->add_option("reference", o->reference, "Reference image (OpenEXR)")->required();
   c->add_flag("--json", o->json, "Print JSON instead of text");
-  c->add_option("--diff", o->diff,
-                "Also write a PNG of |image - reference| (per channel), scaled so the largest "
-                "difference is white unless --diff-scale is given");
-  c->add_option("--diff-scale", o->diffScale, "Multiplier for --diff (default: 1/max)")
-      ->check(
-          // Issue 37: nan, -inf, -1, 0 and '' fell back to the default silently, inf saturated
-          // the map: a finite number > 0 (in single precision), or the option left out.
-          [](const std::string& v) -> std::string {
-            char* end = nullptr;
-            const double k = std::strtod(v.c_str(), &end);
-            return end != v.c_str() && *end == 0 && std::isfinite(k) && float(k) > 0 &&
-                           k <= double(std::numeric_limits<float>::max())
-                       ? ""
-                       : "expected a finite multiplier > 0, got '" + v + "'";
-          },
-          "S > 0");
+  CLI::Option* diff =
+      c->add_option("--diff", o->diff,
+                    "Also write a PNG of |image - reference| (per channel), scaled so the largest "
+                    "difference is white unless --diff-scale is given");
+  CLI::Option* diffScale =
+      c->add_option("--diff-scale", o->diffScale, "Multiplier for --diff (default: 1/max)")
+          ->check(
+              // Issue 37: nan, -inf, -1, 0 and '' fell back to the default silently, inf saturated
+              // the map: a finite number > 0 (in single precision), or the option left out.
+              [](const std::string& v) -> std::string {
+                char* end = nullptr;
+                const double k = std::strtod(v.c_str(), &end);
+                return end != v.c_str() && *end == 0 && std::isfinite(k) && float(k) > 0 &&
+                               k <= double(std::numeric_limits<float>::max())
+                           ? ""
+                           : "expected a finite multiplier > 0, got '" + v + "'";
+              },
+              "S > 0");
+  c->add_flag("--diff-signed", o->diffSigned,
+              "Make --diff a signed error map instead (the experiment gallery's): per pixel the "
+              "mean over channels of the difference after the PNG transform, red where the "
+              "image is brighter, blue where darker, full colour at +-0.1; its colour scale "
+              "below the map")
+      ->needs(diff)
+      ->excludes(diffScale);
   CLI::Option* scene = c->add_option(
       "--scene", o->scene,
       "The scene the images show (JSON): its camera and point/spot lights give the masked "
@@ -80,6 +90,8 @@ Action addCompare(CLI::App& app) {
   return [o]() {
     checkDistinctPaths({{"image", o->image}, {"--diff", o->diff}});
     checkDistinctPaths({{"reference", o->reference}, {"--diff", o->diff}});
+    refusePng(o->image, "image", "compare needs");
+    refusePng(o->reference, "reference", "compare needs");
     const Image a = readExr(o->image), b = readExr(o->reference);
     // compareImages refuses them too; here the message names the file.
     for (const auto& [file, img] : {std::pair{&o->image, &a}, std::pair{&o->reference, &b}}) {
@@ -97,15 +109,19 @@ Action addCompare(CLI::App& app) {
                                              : defaultMaskRadius(s.camera.width, s.camera.height));
     }
     const ImageError e = mask ? compareImages(a, b, *mask) : compareImages(a, b);
+    // The unsigned map's multiplier: white at |difference| = 1/k.
+    const float k = o->diffScale > 0 ? o->diffScale : (e.maxAbs > 0 ? float(1.0 / e.maxAbs) : 1.0f);
     if (!o->diff.empty()) {
       checkWritablePath(o->diff);
-      Image d(a.width(), a.height());
-      for (size_t i = 0; i < d.pixels().size(); ++i)
-        d.pixels()[i] = glm::abs(a.pixels()[i] - b.pixels()[i]);
-      const float k =
-          o->diffScale > 0 ? o->diffScale : (e.maxAbs > 0 ? float(1.0 / e.maxAbs) : 1.0f);
-      for (Vec3& p : d.pixels()) p *= k;
-      writePng(d, o->diff);
+      if (o->diffSigned) {
+        writePng(signedErrorMapWithScale(a, b), o->diff);
+      } else {
+        Image d(a.width(), a.height());
+        for (size_t i = 0; i < d.pixels().size(); ++i)
+          d.pixels()[i] = glm::abs(a.pixels()[i] - b.pixels()[i]);
+        for (Vec3& p : d.pixels()) p *= k;
+        writePng(d, o->diff);
+      }
     }
     if (o->json) {
       Json j;
@@ -119,6 +135,19 @@ Action addCompare(CLI::App& app) {
       j["max_abs"] = number(e.maxAbs);
       j["visibly_wrong"] = e.visiblyWrong;
       j["visible_threshold"] = kVisibleThreshold;
+      if (!o->diff.empty()) {
+        if (o->diffSigned)
+          j["diff"] = {{"file", o->diff},
+                       {"signed", true},
+                       {"full_scale", kErrorMapFull},
+                       {"units", "mean sRGB channel difference (PNG transform, exposure 0)"}};
+        else
+          j["diff"] = {{"file", o->diff},
+                       {"signed", false},
+                       {"multiplier", k},
+                       {"white_at", 1.0 / double(k)},
+                       {"units", "linear, per channel"}};
+      }
       if (mask) {
         j["masked_rel_l2"] = number(e.maskedRelL2);
         j["mask_radius_px"] = e.maskRadius;
@@ -144,6 +173,16 @@ Action addCompare(CLI::App& app) {
               "excluded\n",
               e.maskedRelL2, 100 * e.maskedRelL2, mask->maskedPixels(), e.maskRadius,
               e.maskedLights, e.maskedLights == 1 ? "" : "s");
+      }
+      if (!o->diff.empty()) {
+        if (o->diffSigned)
+          std::printf(
+              "signed diff:       %s: red = image brighter, blue = darker, full colour at a mean "
+              "sRGB channel difference of +-%g (PNG transform, exposure 0); scale bar below\n",
+              o->diff.c_str(), kErrorMapFull);
+        else
+          std::printf("diff:              %s: |image - reference| x %g, white at %g (linear)\n",
+                      o->diff.c_str(), double(k), 1.0 / double(k));
       }
     }
     return 0;

@@ -36,11 +36,21 @@ std::optional<std::pair<int, int>> parseFrames(const std::string& text) {
   return std::make_pair(first, last);
 }
 
-/// The image format `-o` asks for, by extension (case-insensitive): "exr", "png" or "".
-std::string imageFormat(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
-  return ext == ".exr" ? "exr" : ext == ".png" ? "png" : "";
+/// "WxH" (or "WXH"; whole numbers in [1, Camera::kMaxSide], camera.width's and camera.height's
+/// range) -> {W, H}; nullopt when malformed or out of range.
+std::optional<std::pair<int, int>> parseResolution(const std::string& text) {
+  const auto x = text.find_first_of("xX");
+  if (x == std::string::npos) return std::nullopt;
+  const std::string w = text.substr(0, x), h = text.substr(x + 1);
+  const auto side = [](const std::string& s) -> int {
+    if (s.empty() || s.size() > 6 || s.find_first_not_of("0123456789") != std::string::npos)
+      return 0;
+    const int v = std::stoi(s);
+    return v <= Camera::kMaxSide ? v : 0;
+  };
+  const int width = side(w), height = side(h);
+  if (width < 1 || height < 1) return std::nullopt;
+  return std::make_pair(width, height);
 }
 
 /// Provenance and camera for the EXR header: scatterlab version, method, backend, device, scene
@@ -85,7 +95,7 @@ Action addRender(CLI::App& app) {
     std::vector<std::string> sets;
     // PNGs are previews: the default curve rolls glows off instead of clipping them to white
     // discs (EXR output stays linear whatever the curve).
-    std::string frames, tonemap = "aces";
+    std::string frames, tonemap = "aces", resolution;
     double fps = 24.0;
     float exposure = 0.0f;
     bool quiet = false, depth = false;
@@ -124,16 +134,20 @@ Action addRender(CLI::App& app) {
                 "VALUE parsed as JSON where it parses, else a string)")
       ->take_all()
       ->allow_extra_args(false);
-  c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)")
+  c->add_option("-r,--resolution", o->resolution,
+                "Image size WxH, e.g. 640x480: the same as --set camera.width=W --set "
+                "camera.height=H (not together with a --set of either)")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
-            char* end = nullptr;
-            const double x = std::strtod(v.c_str(), &end);
-            return end != v.c_str() && *end == 0 && std::abs(x) <= 100.0
-                       ? ""
-                       : "'" + v + "' is not a number of stops in [-100, 100]";
+            return parseResolution(v) ? ""
+                                      : "'" + v +
+                                            "' is not a resolution: expected WxH with whole "
+                                            "numbers from 1 to " +
+                                            std::to_string(Camera::kMaxSide) + ", e.g. 640x480";
           },
-          "STOPS in [-100, 100]"));
+          "WxH"));
+  c->add_option("--exposure", o->exposure, "PNG exposure in stops (default 0)")
+      ->check(exposureValidator());
   c->add_option("--tonemap", o->tonemap,
                 "Tone curve of the PNG previews (--png, a .png -o, --samples-png): aces "
                 "(Narkowicz, the default: highlights roll off), filmic (Hable) or linear "
@@ -190,6 +204,19 @@ Action addRender(CLI::App& app) {
                        didYouMean(o->method, methods().names()) + "; allowed: " + list);
     }
     checkSetOptions(o->sets);
+    if (!o->resolution.empty()) {
+      // -r is shorthand for two --set overrides: giving either key as well would leave one of
+      // them silently unused.
+      for (const std::string& a : o->sets) {
+        const std::string key = a.substr(0, a.find('='));
+        if (key == "camera" || key == "camera.width" || key == "camera.height")
+          throw UsageError("--resolution " + o->resolution + " and --set " + a +
+                           " both set the image size; give one of them");
+      }
+      const auto [w, h] = *parseResolution(o->resolution);
+      o->sets.push_back("camera.width=" + std::to_string(w));
+      o->sets.push_back("camera.height=" + std::to_string(h));
+    }
     if (o->depth && imageFormat(o->out) != "exr")
       throw UsageError("--depth writes a Z channel, which needs an .exr output (-o " + o->out +
                        ")");

@@ -4,13 +4,18 @@
 /// main() turns that into a message on stderr and exit code 1.
 
 #include <CLI/CLI.hpp>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/params.h"
 
@@ -77,8 +82,45 @@ inline void checkSetOptions(const std::vector<std::string>& sets) {
   }
 }
 
+/// The image format a path asks for, by extension (case-insensitive): "exr", "png" or "".
+inline std::string imageFormat(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
+  return ext == ".exr" ? "exr" : ext == ".png" ? "png" : "";
+}
+
+/// The check of a PNG exposure option (`render --exposure`, `convert --exposure`): a number of
+/// stops in [-100, 100] (writePng's range; NaN and inf refused).
+inline CLI::Validator exposureValidator() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        return end != v.c_str() && *end == 0 && std::abs(x) <= 100.0
+                   ? ""
+                   : "'" + v + "' is not a number of stops in [-100, 100]";
+      },
+      "STOPS in [-100, 100]");
+}
+
+/// Throws IoError when `path` is a PNG (its 8 signature bytes, whatever its extension) where a
+/// linear OpenEXR is needed: `what` names the argument ("image", "reference", "input"), `need`
+/// says who needs the EXR ("compare needs", "convert reads"). Missing, unreadable and special
+/// files are refused first (checkReadableFile), so that nothing blocks on a FIFO.
+inline void refusePng(const std::string& path, const std::string& what, const std::string& need) {
+  checkReadableFile(path, what);
+  std::ifstream f(path, std::ios::binary);
+  char head[8] = {};
+  if (!f.read(head, sizeof head)) return;
+  if (std::string(head, sizeof head) != std::string("\x89PNG\r\n\x1a\n", 8)) return;
+  throw IoError(what + " '" + path + "' is a PNG (8-bit, display-encoded); " + need +
+                " linear OpenEXR images (the .exr that render -o writes; its PNGs are display "
+                "copies)");
+}
+
 Action addRender(CLI::App& app);
 Action addCompare(CLI::App& app);
+Action addConvert(CLI::App& app);
 Action addInfo(CLI::App& app);
 Action addFit(CLI::App& app);
 Action addExperiment(CLI::App& app);

@@ -106,6 +106,7 @@ int main(int argc, char** argv) {
   };
   add(scatterlab::cli::addRender);
   add(scatterlab::cli::addCompare);
+  add(scatterlab::cli::addConvert);
   add(scatterlab::cli::addInfo);
   add(scatterlab::cli::addFit);
   add(scatterlab::cli::addExperiment);

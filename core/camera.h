@@ -10,6 +10,8 @@ struct Camera {
   Vec3 lookAt{0.5f};
   Vec3 up{0.0f, 1.0f, 0.0f};
   float fovYDeg = 40.0f;  ///< vertical field of view in degrees, in (0, 180)
+  /// The largest camera.width and camera.height a scene may give (and `render -r`).
+  static constexpr int kMaxSide = 16384;
   int width = 320;
   int height = 240;
   /// Samples per pixel: a k x k grid of stratum centres (k² = spp), averaged (box filter).

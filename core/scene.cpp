@@ -115,8 +115,8 @@ Camera parseCamera(Params p, const Box& box) {
   checkNearMedium(p, "look_at", c.lookAt, box);
   c.up = p.has("up") ? direction(p, "up") : p.vec3("up", Vec3(0, 1, 0));
   c.fovYDeg = p.real("fov_y_deg", 40.0, Interval::open(0, 180));
-  c.width = int(p.integer("width", 320, Interval::closed(1, 16384)));
-  c.height = int(p.integer("height", 240, Interval::closed(1, 16384)));
+  c.width = int(p.integer("width", 320, Interval::closed(1, Camera::kMaxSide)));
+  c.height = int(p.integer("height", 240, Interval::closed(1, Camera::kMaxSide)));
   c.spp = int(p.integer("spp", 1, Interval::closed(1, 1024)));
   // The image (RGB float + alpha) and what an output encodes from it (EXR/PNG buffers).
   checkMemory(p.keyPath("width") + "', '" + p.keyPath("height"),

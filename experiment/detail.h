@@ -218,6 +218,15 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
 
 // ---- Gallery and plots (gallery.cpp) ---------------------------------------------------------
 
+/// The gallery's 5×7 bitmap font (also the labels of error_map.cpp's colour scale): the pixel
+/// width of `text` at `scale` (6·scale a character, the last one's gap dropped) ...
+int textWidth(const std::string& text, int scale);
+/// ... `text` drawn with its top left corner at (x0, y0), each font pixel a `scale`² block of
+/// value `c` (lower case as capitals, other characters as '?'; clipped) ...
+void drawText(Image& img, int x0, int y0, const std::string& text, int scale, const Vec3& c);
+/// ... and the font scale for a panel `width` pixels wide: 1 up to 259 px, 2 up to 389, at most 3.
+int labelScale(int width);
+
 /// Appends the gallery section to `md`: the labelled pages plots.py wrote (DIR/gallery/
 /// page-NN.png, listed in gallery/index.json) when `plotted`; otherwise (no python with
 /// matplotlib, --no-plots) one unlabelled side-by-side strip per (sweep, scene, point), the

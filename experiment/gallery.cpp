@@ -9,6 +9,7 @@
 
 #include "core/scene.h"
 #include "experiment/detail.h"
+#include "experiment/error_map.h"
 
 namespace scatterlab {
 
@@ -29,9 +30,6 @@ namespace detail {
 namespace fs = std::filesystem;
 
 namespace {
-
-/// Display-space difference shown at full colour in the signed error maps.
-constexpr double kErrorMapFull = 0.1;
 
 // ---- Labels: a 5×7 bitmap font of capitals, digits and the punctuation of the labels ----------
 
@@ -98,6 +96,8 @@ const Glyph* glyphOf(char c) {
   return nullptr;
 }
 
+}  // namespace
+
 /// Pixel width of `text` at `scale` (6·scale a character, the last one's gap dropped).
 int textWidth(const std::string& text, int scale) {
   return text.empty() ? 0 : int(text.size()) * 6 * scale - scale;
@@ -121,6 +121,13 @@ void drawText(Image& img, int x0, int y0, const std::string& text, int scale, co
       }
   }
 }
+
+/// Font scale for a panel `width` pixels wide: 1 up to 259 px, 2 up to 389, at most 3.
+int labelScale(int width) {
+  return std::clamp(width / 130, 1, 3);
+}
+
+namespace {
 
 /// `lines` wrapped at spaces to at most `maxChars` characters a line (a longer word is cut).
 std::vector<std::string> wrapLines(const std::vector<std::string>& lines, int maxChars) {
@@ -147,11 +154,6 @@ std::vector<std::string> wrapLines(const std::vector<std::string>& lines, int ma
   return out;
 }
 
-/// Font scale for a panel `width` pixels wide: 1 up to 259 px, 2 up to 389, at most 3.
-int labelScale(int width) {
-  return std::clamp(width / 130, 1, 3);
-}
-
 /// Images side by side, left to right, with a 4-pixel black gap.
 Image sideBySide(const std::vector<Image>& imgs) {
   int w = 0, h = 0;
@@ -166,64 +168,6 @@ Image sideBySide(const std::vector<Image>& imgs) {
       for (int x = 0; x < i.width(); ++x) out.at(x0 + x, y) = i.at(x, y);
     x0 += i.width() + 4;
   }
-  return out;
-}
-
-/// Inverse of the sRGB curve: the linear value that toneMapSrgb (exposure 0) shows as `v`.
-float srgbToLinear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-
-/// Signed error map of `img` against `ref` in display units (the visibly-wrong metric's): per
-/// pixel Δ = mean over channels of toneMapSrgb(a) − toneMapSrgb(b); red where the image is
-/// brighter, blue where darker, full at |Δ| = kErrorMapFull. Returned as linear values that show
-/// as those colours after `exposure` stops.
-Image signedErrorMap(const Image& img, const Image& ref, float exposure) {
-  Image out(img.width(), img.height());
-  const float unexpose = std::exp2(-exposure);
-  for (std::size_t i = 0; i < out.pixels().size(); ++i) {
-    float d = 0;
-    for (int c = 0; c < 3; ++c)
-      d += toneMapSrgb(img.pixels()[i][c]) - toneMapSrgb(ref.pixels()[i][c]);
-    const float t = std::min(1.0f, std::abs(d / 3.0f) / float(kErrorMapFull));
-    const float v = srgbToLinear(t) * unexpose;
-    out.pixels()[i] = d > 0 ? Vec3(v, 0, 0) : Vec3(0, 0, v);
-  }
-  return out;
-}
-
-/// The colour scale of the signed error maps in an image `w`×`h`: a bar from blue (−kErrorMapFull,
-/// left) through black (0) to red (+kErrorMapFull, right) with its ends and middle labelled,
-/// "ERROR SCALE" above where it fits — the headline reference's slot in the error row (its error
-/// against itself is 0 everywhere: a black map would say nothing).
-Image errorScale(int w, int h, float exposure) {
-  Image out(w, h);
-  const float unexpose = std::exp2(-exposure);
-  const int scale = labelScale(w), lineH = 9 * scale;
-  const int y0 = h / 2 - std::max(2, h / 8), y1 = h / 2 + std::max(2, h / 8);
-  for (int x = 0; x < w; ++x) {
-    const float t = w > 1 ? 2.0f * float(x) / float(w - 1) - 1.0f : 0.0f;
-    const float v = srgbToLinear(std::abs(t)) * unexpose;
-    const Vec3 c = t > 0 ? Vec3(v, 0, 0) : Vec3(0, 0, v);
-    for (int y = y0; y < y1; ++y) out.at(x, y) = c;
-  }
-  // A white frame around the bar, so that its black middle reads as part of it.
-  const Vec3 white(unexpose, unexpose, unexpose);
-  for (int x = 0; x < w; ++x)
-    out.at(x, std::max(0, y0 - 1)) = out.at(x, std::min(h - 1, y1)) = white;
-  const std::string lo = fmt(-kErrorMapFull, "%g"), hi = fmt(kErrorMapFull, "%+g");
-  const int ty = y1 + 2 + scale;
-  if (textWidth(lo, scale) + textWidth("0", scale) + textWidth(hi, scale) + 4 * scale <= w &&
-      ty + 7 * scale <= h) {
-    drawText(out, 0, ty, lo, scale, white);
-    drawText(out, (w - textWidth("0", scale)) / 2, ty, "0", scale, white);
-    drawText(out, w - textWidth(hi, scale), ty, hi, scale, white);
-  }
-  for (const char* title : {"ERROR SCALE", "SCALE"})
-    if (textWidth(title, scale) <= w && y0 - 2 - lineH >= 0) {
-      drawText(out, (w - textWidth(title, scale)) / 2, y0 - 2 - lineH + scale, title, scale, white);
-      break;
-    }
   return out;
 }
 
@@ -442,11 +386,11 @@ Image galleryStrip(const std::vector<StripPanel>& panels, bool errors, float exp
   const std::vector<Image> top = detail::labelled(panels, exposure);
   if (!errors) return detail::sideBySide(top);
   const Image& ref = panels.front().image;
-  std::vector<Image> maps{detail::errorScale(ref.width(), ref.height(), exposure)};
+  std::vector<Image> maps{errorScale(ref.width(), ref.height(), exposure)};
   for (std::size_t k = 1; k < panels.size(); ++k) {
     const Image& i = panels[k].image;
     maps.push_back(i.width() == ref.width() && i.height() == ref.height()
-                       ? detail::signedErrorMap(i, ref, exposure)
+                       ? signedErrorMap(i, ref, exposure)
                        : Image(i.width(), i.height()));
   }
   return detail::twoRows(top, maps);
