@@ -26,16 +26,7 @@ class Cli : public scatterlab::testing::TempDirTest {
  protected:
   Cli() : TempDirTest("scatterlab_cli") {}
 
-  static Json tinyScene() {
-    return Json::parse(R"({
-      "medium": {"bounds": {"min": [0,0,0], "max": [1,1,1]},
-                 "density": {"type": "gaussians", "blobs": [{"center": [0.5,0.5,0.5], "radius": 0.25, "weight": 1.0}]},
-                 "resolution": 16, "sigma_t": 4.0, "albedo": 0.6, "phase": {"type": "isotropic"}},
-      "lights": [{"type": "point", "position": [0.5,1.4,0.5], "intensity": [4,4,4]}],
-      "camera": {"position": [0.5,0.5,-2], "look_at": [0.5,0.5,0.5], "up": [0,1,0], "fov_y_deg": 40,
-                 "width": 16, "height": 12},
-      "render": {"method": "exact"}})");
-  }
+  static Json tinyScene() { return Json::parse(scatterlab::testing::kTinySceneJson); }
   std::string writeScene(const Json& j) const { return write("scene.json", j.dump(2)); }
 
   /// Runs a render expected to fail; checks exit code, message fragments, and no outputs.

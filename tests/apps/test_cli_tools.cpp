@@ -60,16 +60,7 @@ class CliTools : public scatterlab::testing::TempDirTest {
  protected:
   CliTools() : TempDirTest("scatterlab_tools") {}
 
-  static Json tinyScene() {
-    return Json::parse(R"({
-      "medium": {"bounds": {"min": [0,0,0], "max": [1,1,1]},
-                 "density": {"type": "gaussians", "blobs": [{"center": [0.5,0.5,0.5], "radius": 0.25, "weight": 1.0}]},
-                 "resolution": 16, "sigma_t": 4.0, "albedo": 0.6, "phase": {"type": "isotropic"}},
-      "lights": [{"type": "point", "position": [0.5,1.4,0.5], "intensity": [4,4,4]}],
-      "camera": {"position": [0.5,0.5,-2], "look_at": [0.5,0.5,0.5], "up": [0,1,0], "fov_y_deg": 40,
-                 "width": 16, "height": 12},
-      "render": {"method": "exact"}})");
-  }
+  static Json tinyScene() { return Json::parse(scatterlab::testing::kTinySceneJson); }
   std::string writeScene() const { return write("scene.json", tinyScene().dump(2)); }
 
   /// Runs `args`, expecting exit `code`, each of `fragments` in the output, one line of output

@@ -18,6 +18,17 @@
 
 namespace scatterlab::testing {
 
+/// The tool tests' tiny scene: one Gaussian blob in the unit box, a point light above it, 16×12
+/// pixels, rendered by `exact` (a scene document, parsed by each test file's fixture).
+inline constexpr const char* kTinySceneJson = R"({
+  "medium": {"bounds": {"min": [0,0,0], "max": [1,1,1]},
+             "density": {"type": "gaussians", "blobs": [{"center": [0.5,0.5,0.5], "radius": 0.25, "weight": 1.0}]},
+             "resolution": 16, "sigma_t": 4.0, "albedo": 0.6, "phase": {"type": "isotropic"}},
+  "lights": [{"type": "point", "position": [0.5,1.4,0.5], "intensity": [4,4,4]}],
+  "camera": {"position": [0.5,0.5,-2], "look_at": [0.5,0.5,0.5], "up": [0,1,0], "fov_y_deg": 40,
+             "width": 16, "height": 12},
+  "render": {"method": "exact"}})";
+
 struct RunResult {
   int code;
   std::string output;  ///< stdout and stderr together
