@@ -177,10 +177,8 @@ std::vector<AssemblyPart> assemblyParts(const DynamicSamplingWorkspace& w,
   return parts;
 }
 
-/// The flags of every part of the final list together.
-std::size_t assemblyFlags(const DynamicSamplingWorkspace& w, const std::vector<LevelGrid>& grids,
-                          long long budget) {
-  const std::vector<AssemblyPart> parts = assemblyParts(w, grids, budget);
+/// The flags of every part of `parts` together.
+std::size_t assemblyFlags(const std::vector<AssemblyPart>& parts) {
   return parts.empty() ? 0 : parts.back().base + parts.back().n;
 }
 
@@ -213,7 +211,7 @@ std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
   std::size_t vertices = n0;
   for (std::size_t k = 0; k < L; ++k)
     vertices = std::max({vertices, gridVertices(grids, k), w.levels[k + 1].capacity});
-  vertices = std::max(vertices, assemblyFlags(w, grids, budget));
+  vertices = std::max(vertices, assemblyFlags(assemblyParts(w, grids, budget)));
   if (vertices > w.vertices) {
     ensure(w.inSet, vertices * sizeof(GLuint), "grid info: in set");
     ensure(w.vertexAncestors, vertices * sizeof(std::int32_t), "grid info: ancestor");
@@ -557,7 +555,7 @@ void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std
   const Program& ends =
       gpu::program({.compute = {"dynamic_assemble.comp.glsl"}, .defines = {"SL_PART_ENDS"}},
                    "ds assemble: the parts' ends");
-  const std::size_t total = parts.empty() ? 0 : parts.back().base + parts.back().n;
+  const std::size_t total = assemblyFlags(parts);
   std::size_t children[2] = {0, 0};  // capacity of the two batches: with ∇S, the voxels
   {
     ScopedGpuTimer t(timer, "ds assemble");
