@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "gpu/validate.h"
 
 namespace scatterlab::gpu {
 
@@ -228,6 +229,7 @@ Context::Context() {
   info_.hardware = r.find("llvmpipe") == std::string::npos &&
                    r.find("softpipe") == std::string::npos &&
                    r.find("swrast") == std::string::npos && r.find("Software") == std::string::npos;
+  if (validationRequested()) installValidation();
 #ifndef NDEBUG
   if (epoxy_has_gl_extension("GL_KHR_debug") || epoxy_gl_version() >= 43) {
     glEnable(GL_DEBUG_OUTPUT);

@@ -380,7 +380,9 @@ void dispatchCut(DynamicSamplingWorkspace& w, std::size_t k, std::size_t L, long
   w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
   w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
   dispatch("ds budget cut", {1, 1, 1});
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  // The split's indirect dispatch reads its size from the same buffer (another slot: the
+  // validator, gpu/validate.h, sees the binding, not the slots).
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
 }
 
 /// The budget's cut of level k (budgetedSplit's error groups, on the GPU): the keys pass (each

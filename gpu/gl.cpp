@@ -234,6 +234,8 @@ Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::strin
 void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   if (!n) return;
   countHostWait("buffer read-back");
+  // Every shader write before the read-back is in what it reads (gpu/validate.h).
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
@@ -243,6 +245,7 @@ void readBuffers(std::span<const BufferRange> ranges) {
   if (total == 0) return;
   if (ranges.size() == 1) return ranges[0].buffer->read(ranges[0].dst, total, ranges[0].offset);
   const Buffer staging(total, nullptr, 0, "read-back staging");
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // the copies see every shader write before
   std::size_t at = 0;
   for (const BufferRange& r : ranges) {
     if (r.bytes)

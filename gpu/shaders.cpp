@@ -8,6 +8,7 @@
 #include "core/stages.h"
 #include "gpu/bindings.h"
 #include "gpu/context.h"
+#include "gpu/validate.h"
 
 namespace scatterlab::gpu {
 
@@ -95,6 +96,8 @@ int loopIterationLimit() {
     glCreateBuffers(1, &g.buffer);
     glNamedBufferStorage(g.buffer, sizeof init, init, GL_DYNAMIC_STORAGE_BIT);
     glObjectLabel(GL_BUFFER, g.buffer, -1, "loop guard");
+    // Only atomicMax reaches it, and loopGuardCut() reads it after its own barrier.
+    exemptFromValidation(g.buffer);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding::kLoopGuard, g.buffer);
   }
   return g.limit;

@@ -28,8 +28,18 @@ struct Record {
   vec4 dS[3];
 };
 
+// Only SL_PART_ENDS writes counts; the flags passes only write flags, the others only read them.
+#if defined(SL_KEEP_FLAGS) || defined(SL_CHILD_FLAGS) || defined(SL_KEEP_SCATTER) || \
+    defined(SL_CHILD_SCATTER)
+layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer LevelCounts { uint counts[]; };
+#else
 layout(std430, binding = BINDING_LEVEL_COUNTS) buffer LevelCounts { uint counts[]; };
-layout(std430, binding = BINDING_IN_SET) buffer Flags { uint flags[]; };
+#endif
+#if defined(SL_KEEP_FLAGS) || defined(SL_CHILD_FLAGS)
+layout(std430, binding = BINDING_IN_SET) writeonly buffer Flags { uint flags[]; };
+#else
+layout(std430, binding = BINDING_IN_SET) readonly buffer Flags { uint flags[]; };
+#endif
 layout(std430, binding = BINDING_OFFSETS) readonly buffer Offsets { uint offsets[]; };
 uniform uint uCapacity;   // the list's capacity
 #ifndef SL_PART_ENDS

@@ -1,0 +1,170 @@
+/// GL validation (gpu/validate.h): the memory hazards llvmpipe forgives and a GPU does not are
+/// errors that name the programs, the object and the barrier bit missing; the right barrier, or
+/// `readonly` where a shader only reads, is none.
+
+#include <string>
+
+#include "core/error.h"
+#include "gpu/context.h"
+#include "gpu/dispatch.h"
+#include "gpu/gl.h"
+#include "gpu/validate.h"
+#include "gpu_support.h"
+
+namespace scatterlab::testing {
+namespace {
+
+/// A compute program from GLSL after the #version line (linked after validation is installed,
+/// so that its sources are known to it).
+gpu::Program program(const std::string& body, const std::string& label) {
+  const gpu::Shader cs(GL_COMPUTE_SHADER,
+                       "#version 450 core\nlayout(local_size_x = 1) in;\n" + body, label);
+  return gpu::Program({&cs}, label);
+}
+
+// One program writes binding 0; another (with `readonly` only under a #define, as the variants
+// of the shaders are written) reads binding 0 into binding 1.
+const char* kWrite =
+    "layout(std430, binding = 0) writeonly buffer A { uint a[]; };\n"
+    "void main() { a[0] = 7u; }\n";
+const char* kRead =
+    "#define READ_ONLY_A\n"
+    "#ifdef READ_ONLY_A\n"
+    "layout(std430, binding = 0) readonly buffer A { uint a[]; };\n"
+    "#else\n"
+    "layout(std430, binding = 0) buffer A { uint a[]; };\n"
+    "#endif\n"
+    "layout(std430, binding = 1) writeonly buffer B { uint b[]; };\n"
+    "void main() { b[0] = a[0] + 1u; }\n";
+
+class GpuValidate : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SCATTERLAB_REQUIRE_GPU();
+    gpu::context();
+    gpu::installValidation();  // a no-op under ctest, which sets SCATTERLAB_GPU_VALIDATE
+    ASSERT_TRUE(gpu::validating());
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);  // nothing pending from earlier tests
+  }
+  /// Runs `f`, expecting a GpuError whose message holds every one of `parts`.
+  template <class F>
+  void expectHazard(F f, std::initializer_list<std::string> parts) {
+    try {
+      f();
+      ADD_FAILURE() << "no hazard reported";
+    } catch (const GpuError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("GL hazard"), std::string::npos) << m;
+      for (const std::string& p : parts)
+        EXPECT_NE(m.find(p), std::string::npos) << p << " in " << m;
+    }
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+};
+
+TEST_F(GpuValidate, AReadOfAShaderWriteWithoutTheBarrierIsAnError) {
+  const gpu::Program write = program(kWrite, "test write"), read = program(kRead, "test read");
+  const gpu::Buffer a(16, nullptr, 0, "test a"), b(16, nullptr, 0, "test b");
+  a.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  b.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+  write.use();
+  gpu::dispatch("test write", {1, 1, 1});
+  read.use();
+  expectHazard(
+      [&] {
+        gpu::dispatch("test read", {1, 1, 1});
+      },
+      {"'test read'", "'test write'", "'test a'", "GL_SHADER_STORAGE_BARRIER_BIT"});
+
+  // With the barrier: no error, and the value arrives.
+  write.use();
+  gpu::dispatch("test write", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  read.use();
+  gpu::dispatch("test read", {1, 1, 1});
+  GLuint got = 0;
+  b.read(&got, sizeof got);  // read() issues GL_BUFFER_UPDATE_BARRIER_BIT itself
+  EXPECT_EQ(got, 8u);
+  // A read-back straight from GL, without its barrier, is one.
+  write.use();
+  gpu::dispatch("test write", {1, 1, 1});
+  expectHazard([&] { glGetNamedBufferSubData(a.id(), 0, sizeof got, &got); },
+               {"read-back", "'test a'", "GL_BUFFER_UPDATE_BARRIER_BIT"});
+}
+
+TEST_F(GpuValidate, ReadOnlyBindingsReadTwiceAreNoHazardAndDisjointRangesAreApart) {
+  const gpu::Program read = program(kRead, "test read");
+  const gpu::Program write = program(kWrite, "test write");
+  const gpu::Buffer a(512, nullptr, 0, "test a"), b(16, nullptr, 0, "test b");
+  a.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  b.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+  read.use();
+  gpu::dispatch("test read", {1, 1, 1});
+  gpu::dispatch("test read", {1, 1, 1});  // a is read only; b written only: nothing to see
+  // A write to bytes [256, 512) does not touch a read of [0, 256).
+  glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, a.id(), 256, 256);
+  write.use();
+  gpu::dispatch("test write", {1, 1, 1});
+  glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, a.id(), 0, 256);
+  read.use();
+  gpu::dispatch("test read", {1, 1, 1});
+  glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, a.id(), 0, 512);
+  expectHazard([&] { gpu::dispatch("test read", {1, 1, 1}); }, {"bytes 256–512"});
+}
+
+TEST_F(GpuValidate, AnIndirectSizeAndATextureFetchNeedTheirOwnBits) {
+  // The sizes of an indirect dispatch, written by a shader: GL_COMMAND_BARRIER_BIT.
+  const gpu::Program sizes = program(
+      "layout(std430, binding = 0) writeonly buffer S { uvec3 s; };\n"
+      "void main() { s = uvec3(1u); }\n",
+      "test sizes");
+  const gpu::Program nothing = program("void main() {}\n", "test nothing");
+  const gpu::Buffer args(16, nullptr, 0, "test sizes buffer");
+  args.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  sizes.use();
+  gpu::dispatch("test sizes", {1, 1, 1});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // not the bit an indirect dispatch needs
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, args.id());
+  nothing.use();
+  expectHazard([&] { gpu::dispatchIndirect("test nothing", 0); },
+               {"indirect", "'test sizes buffer'", "GL_COMMAND_BARRIER_BIT"});
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+
+  // An image store, then a sampler fetch of the same texture: GL_TEXTURE_FETCH_BARRIER_BIT.
+  const gpu::Program store = program(
+      "layout(r32f, binding = 0) writeonly uniform image2D uOut;\n"
+      "void main() { imageStore(uOut, ivec2(0), vec4(1.0)); }\n",
+      "test store");
+  const gpu::Program fetch = program(
+      "uniform sampler2D uIn;\n"
+      "layout(std430, binding = 1) writeonly buffer B { float b; };\n"
+      "void main() { b = texelFetch(uIn, ivec2(0), 0).r; }\n",
+      "test fetch");
+  const gpu::Texture t = gpu::Texture::make2D(GL_R32F, 1, 1, "test texture");
+  const gpu::Buffer b(16, nullptr, 0, "test b");
+  b.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+  glBindImageTexture(0, t.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  store.use();
+  gpu::dispatch("test store", {1, 1, 1});
+  glBindTextureUnit(0, t.id());
+  fetch.use();
+  glUniform1i(fetch.uniform("uIn"), 0);
+  expectHazard(
+      [&] {
+        gpu::dispatch("test fetch", {1, 1, 1});
+      },
+      {"samples texture unit 0", "'test texture'", "'test store'", "GL_TEXTURE_FETCH_BARRIER_BIT"});
+  store.use();
+  gpu::dispatch("test store", {1, 1, 1});
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+  fetch.use();
+  gpu::dispatch("test fetch", {1, 1, 1});
+  float got = 0.0f;
+  b.read(&got, sizeof got);
+  EXPECT_EQ(got, 1.0f);
+  glBindTextureUnit(0, 0);
+  glBindImageTexture(0, 0, 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
+}
+
+}  // namespace
+}  // namespace scatterlab::testing
