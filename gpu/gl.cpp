@@ -5,12 +5,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <limits>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
 #include "gpu/context.h"
+#include "gpu/validate.h"
 
 namespace scatterlab::gpu {
 
@@ -227,6 +229,9 @@ Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::strin
     const bool whole = bytes && data && storage_ == bytes;
     glNamedBufferStorage(id_, GLsizeiptr(storage_), whole ? data : nullptr, flags_);
     if (bytes && data && !whole) glNamedBufferSubData(id_, 0, GLsizeiptr(bytes), data);
+    // New storage is undefined in GL (zeros on llvmpipe, not on every GPU): cleared as a
+    // recycled buffer is.
+    if (!data) glClearNamedBufferData(id_, GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
   }
   label(GL_BUFFER, id_, name);
 }
@@ -316,13 +321,7 @@ Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_
     : target_(target), key_{detail::ObjectKind::Texture, target, format, w, h, d} {
   checkTextureSize(target, format, w, h, d, name);
   id_ = detail::takeRecycled(key_);
-  if (id_) {
-    // A new texture's contents are undefined in GL (zeros in practice): a recycled one is zeroed
-    // unless every texel is about to be written.
-    if (contents == Contents::Zeroed)
-      glClearTexImage(id_, 0, isDepthFormat(format) ? GL_DEPTH_COMPONENT : GL_RED, GL_FLOAT,
-                      nullptr);
-  } else {
+  if (!id_) {
     glCreateTextures(target, 1, &id_);
     detail::countCreated();
     if (target == GL_TEXTURE_2D)
@@ -330,6 +329,17 @@ Texture::Texture(GLenum target, GLenum format, int w, int h, int d, std::string_
     else
       glTextureStorage3D(id_, 1, format, w, h, d);
     // A GL_OUT_OF_MEMORY here is reported by the pass's checkGl, naming the pass.
+  }
+  // A texture's contents are undefined in GL, new or recycled (zeros on llvmpipe, not on every
+  // GPU): zeroed unless every texel is about to be written. Under validation (gpu/validate.h)
+  // a texture said to be overwritten starts as NaN (depth: 1), so that a texel left unwritten
+  // shows in the image on llvmpipe too.
+  const GLenum clearFormat = isDepthFormat(format) ? GL_DEPTH_COMPONENT : GL_RED;
+  if (contents == Contents::Zeroed) {
+    glClearTexImage(id_, 0, clearFormat, GL_FLOAT, nullptr);
+  } else if (validating()) {
+    const float poison = isDepthFormat(format) ? 1.0f : std::numeric_limits<float>::quiet_NaN();
+    glClearTexImage(id_, 0, clearFormat, GL_FLOAT, &poison);
   }
   label(GL_TEXTURE, id_, name);
 }

@@ -11,8 +11,10 @@
 /// in a free list, and the next one made with the same description (buffer: bytes and flags;
 /// texture: target, format and size; query: target) takes its name over instead of creating a
 /// new object. A taken object reads as a new one: buffers get their data (or zeros), textures
-/// are cleared to zero, framebuffers lose their attachments. When the last scope ends, the
-/// free list is deleted. glObjectCounts() counts creations and reuses (for the reuse tests).
+/// are cleared to zero (unless Texture::Contents::Overwritten), framebuffers lose their
+/// attachments. New objects are cleared the same way: GL leaves new storage undefined. When the
+/// last scope ends, the free list is deleted. glObjectCounts() counts creations and reuses (for the
+/// reuse tests).
 
 #include <epoxy/gl.h>
 
@@ -197,10 +199,12 @@ void readBuffers(std::span<const BufferRange> ranges);
 /// Texture object (glCreateTextures) with immutable storage.
 class Texture : public GlObject<TextureDeleter> {
  public:
-  /// What a texture holds when it is handed out. A recycled texture is cleared to zero unless
-  /// its maker says the next pass writes every texel (`Overwritten`: an upload, or a compute
-  /// pass with one imageStore per texel): on an H200 the clear of a 256³ RGBA32F volume cost
-  /// ~5 ms that no timer query saw (docs/RESULTS.md, "GPU frames on an NVIDIA H200").
+  /// What a texture holds when it is handed out. A texture, new or recycled, is cleared to zero
+  /// unless its maker says the next pass writes every texel (`Overwritten`: an upload, or a
+  /// compute pass with one imageStore per texel): on an H200 the clear of a 256³ RGBA32F volume
+  /// cost ~5 ms that no timer query saw (docs/RESULTS.md, "GPU frames on an NVIDIA H200").
+  /// Under validation (gpu/validate.h) an Overwritten texture starts as NaN, so that a promise
+  /// not kept shows in the image.
   enum class Contents { Zeroed, Overwritten };
   Texture() = default;
   /// A 2D texture of `format` (sized internal format).
