@@ -425,6 +425,7 @@ std::vector<std::string> declaredUniforms(std::string_view source) {
 Program::Program(std::initializer_list<const Shader*> shaders, std::string_view name) {
   id_ = glCreateProgram();
   detail::countCreated();
+  gpu::label(GL_PROGRAM, id_, name);  // before linking: validation's errors name it
   for (const Shader* s : shaders) glAttachShader(id_, s->id());
   glLinkProgram(id_);
   for (const Shader* s : shaders) glDetachShader(id_, s->id());
@@ -438,7 +439,6 @@ Program::Program(std::initializer_list<const Shader*> shaders, std::string_view 
     log.resize(std::strlen(log.c_str()));
     throw GpuError("program " + std::string(name) + " failed to link:\n" + log);
   }
-  gpu::label(GL_PROGRAM, id_, name);
   auto u = std::make_shared<Uniforms>();
   u->label = std::string(name);
   for (const Shader* s : shaders)

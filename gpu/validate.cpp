@@ -47,6 +47,14 @@ struct ProgramUse {
   std::vector<OpaqueUse> images, samplers;
 };
 
+/// The smallest per-program limits of the desktop GPUs a user may have where they are below
+/// llvmpipe's (NVIDIA: 8 image units and image uniforms, llvmpipe 192 and 32; 2 048 uniform
+/// components in a compute shader, llvmpipe 16 384): a program above them runs on llvmpipe and
+/// fails on the GPU. Storage blocks (16) llvmpipe limits as NVIDIA does.
+constexpr GLint kPortableImageUniforms = 8;  ///< GL_MAX_COMPUTE_IMAGE_UNIFORMS, _IMAGE_UNITS
+constexpr GLint kPortableSamplers = 16;      ///< the spec's GL_MAX_COMPUTE_TEXTURE_IMAGE_UNITS
+constexpr GLint kPortableUniformComponents = 2048;  ///< GL_MAX_COMPUTE_UNIFORM_COMPONENTS
+
 /// Strips // and /* */ comments.
 std::string stripComments(const std::string& s) {
   std::string out;
@@ -508,6 +516,10 @@ std::vector<PendingWrite> checkProgramAccesses(State& s, std::string_view what) 
     for (GLint k = 0; k < im.count; ++k) {
       GLint unit = 0, tex = 0, access = 0;
       glGetUniformiv(GLuint(program), im.location + k, &unit);
+      if (unit >= kPortableImageUniforms)
+        throw GpuError("GL portability (SCATTERLAB_GPU_VALIDATE): " + by + " uses image unit " +
+                       std::to_string(unit) + "; NVIDIA has " +
+                       std::to_string(kPortableImageUniforms) + " (GL_MAX_IMAGE_UNITS)");
       glGetIntegeri_v(GL_IMAGE_BINDING_NAME, GLuint(unit), &tex);
       if (!tex) continue;
       glGetIntegeri_v(GL_IMAGE_BINDING_ACCESS, GLuint(unit), &access);
@@ -559,6 +571,68 @@ void checkFramebuffer(State& s, std::string_view by) {
     check(s, Kind::Texture, GLuint(name), 0, kWhole, GL_FRAMEBUFFER_BARRIER_BIT,
           std::string(by) + " renders into");
   }
+}
+
+// ---- What every desktop GPU allows ----
+
+/// Components of a default-block uniform of `type` (opaque types: 1).
+GLint components(GLenum type) {
+  switch (type) {
+    case GL_FLOAT_VEC2:
+    case GL_INT_VEC2:
+    case GL_UNSIGNED_INT_VEC2:
+    case GL_BOOL_VEC2:
+    case GL_DOUBLE:
+      return 2;
+    case GL_FLOAT_VEC3:
+    case GL_INT_VEC3:
+    case GL_UNSIGNED_INT_VEC3:
+    case GL_BOOL_VEC3:
+      return 3;
+    case GL_FLOAT_VEC4:
+    case GL_INT_VEC4:
+    case GL_UNSIGNED_INT_VEC4:
+    case GL_BOOL_VEC4:
+    case GL_FLOAT_MAT2:
+    case GL_DOUBLE_VEC2:
+      return 4;
+    case GL_DOUBLE_VEC3:
+      return 6;
+    case GL_FLOAT_MAT3:
+      return 9;
+    case GL_DOUBLE_VEC4:
+      return 8;
+    case GL_FLOAT_MAT4:
+      return 16;
+    case GL_DOUBLE_MAT4:
+      return 32;
+    default:
+      return 1;
+  }
+}
+
+void checkPortableLimits(GLuint program, const ProgramUse& use) {
+  GLint images = 0, samplers = 0, uniformComponents = 0;
+  for (const OpaqueUse& o : use.images) images += o.count;
+  for (const OpaqueUse& o : use.samplers) samplers += o.count;
+  GLint n = 0;
+  glGetProgramInterfaceiv(program, GL_UNIFORM, GL_ACTIVE_RESOURCES, &n);
+  for (GLint i = 0; i < n; ++i) {
+    const GLenum props[3] = {GL_TYPE, GL_ARRAY_SIZE, GL_BLOCK_INDEX};
+    GLint v[3] = {};
+    glGetProgramResourceiv(program, GL_UNIFORM, GLuint(i), 3, props, 3, nullptr, v);
+    if (v[2] == -1) uniformComponents += components(GLenum(v[0])) * std::max(v[1], 1);
+  }
+  const auto over = [&](const char* what, GLint count, GLint limit) {
+    if (count > limit)
+      throw GpuError(
+          "GL portability (SCATTERLAB_GPU_VALIDATE): " + objectLabel(GL_PROGRAM, program) +
+          " uses " + std::to_string(count) + " " + what + ", above the " + std::to_string(limit) +
+          " a desktop GPU may allow (NVIDIA's limit; llvmpipe allows more)");
+  };
+  over("image uniforms", images, kPortableImageUniforms);
+  over("samplers", samplers, kPortableSamplers);
+  over("uniform components", uniformComponents, kPortableUniformComponents);
 }
 
 // ---- The hooks: each checks, then calls the entry point it replaced ----
@@ -763,7 +837,10 @@ void linkProgram(GLuint program) {
   std::lock_guard lock(gMutex);
   State& s = state();
   s.programs.erase(program);
-  if (linked) s.programs.emplace(program, describeProgram(program, sources));
+  if (!linked) return;
+  const ProgramUse& use =
+      s.programs.emplace(program, describeProgram(program, sources)).first->second;
+  checkPortableLimits(program, use);
 }
 
 void deleteProgram(GLuint program) {

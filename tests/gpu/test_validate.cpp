@@ -166,5 +166,27 @@ TEST_F(GpuValidate, AnIndirectSizeAndATextureFetchNeedTheirOwnBits) {
   glBindImageTexture(0, 0, 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
 }
 
+TEST_F(GpuValidate, AProgramAboveWhatADesktopGpuAllowsIsAnError) {
+  // Nine image uniforms run on llvmpipe (32) and not on NVIDIA (8).
+  std::string body, sum;
+  for (int i = 0; i < 9; ++i) {
+    body += "layout(r32f, binding = 0) readonly uniform image2D uImage" + std::to_string(i) + ";\n";
+    sum += " + imageLoad(uImage" + std::to_string(i) + ", ivec2(0)).r";
+  }
+  body +=
+      "layout(std430, binding = 0) writeonly buffer B { float b; };\n"
+      "void main() { b = 0.0" +
+      sum + "; }\n";
+  try {
+    program(body, "test nine images");
+    FAIL() << "no error";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("GL portability"), std::string::npos) << m;
+    EXPECT_NE(m.find("'test nine images' uses 9 image uniforms, above the 8"), std::string::npos)
+        << m;
+  }
+}
+
 }  // namespace
 }  // namespace scatterlab::testing
