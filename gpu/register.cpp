@@ -48,6 +48,9 @@ class GpuRefiner : public SampleRefiner {
     r.onDevice = true;
     return r;
   }
+  bool voxelsInstead(long long occupied, long long initial) const override {
+    return scatterlab::voxelsInstead(s_, occupied, initial);
+  }
 
  private:
   DynamicSamplingSettings s_;

@@ -1,5 +1,6 @@
 #include "methods/pipeline.h"
 
+#include <array>
 #include <optional>
 
 #include "core/error.h"
@@ -80,6 +81,12 @@ class PipelineMethod : public Method {
   std::unique_ptr<RadianceEvaluator> evaluator;
   std::unique_ptr<SampleRefiner> refiner;
   std::unique_ptr<Reconstruction> reconstruction;
+  /// With a refiner: per-voxel's reconstruction and march (S in the volume, not V = S / A: the
+  /// settings per-voxel itself runs with), for a medium the refiner would trace more of than
+  /// per-voxel does (SampleRefiner::voxelsInstead).
+  std::unique_ptr<Reconstruction> voxelReconstruction;
+  std::unique_ptr<Integrator> voxelIntegrator;
+  long long plannedSamples = 0;  ///< the sampler's planned count (Sampler::plannedCount)
   std::unique_ptr<Integrator> integrator;
 
   RenderResult render(const Scene& scene, Progress* progress) override {
@@ -112,8 +119,33 @@ class PipelineMethod : public Method {
     const bool reuseRadiance = reuse && reconstruction && radianceKept && keptInputs_ == inputs;
     if (retainDensity && reconstruction) st.extra["radiance_reused"] = reuseRadiance;
     if (reuseRadiance) {
-      finish(std::move(frame), scene, r, *keptRadianceSamples_, progress);
+      finish(std::move(frame), scene, r, *keptRadianceSamples_, progress,
+             keptVoxelsInstead_.value_or(false) ? *voxelIntegrator : *integrator);
       return r;
+    }
+    // The whole-scene fallback: a medium so sparse that per-voxel traces less than the
+    // refiner's first level would is rendered as per-voxel renders it (decided once per
+    // density: it depends on the medium and the keys only).
+    if (voxelReconstruction) {
+      if (!reuse || !keptVoxelsInstead_) {
+        const std::array<IVec3, 1> voxels{scene.medium.resolution};
+        occupiedVoxels_ = frame->countOccupiedCells(voxels)[0];
+        keptVoxelsInstead_ = refiner->voxelsInstead(occupiedVoxels_, plannedSamples);
+      }
+      st.extra["occupied_voxels"] = occupiedVoxels_;
+      st.extra["voxels_instead"] = *keptVoxelsInstead_;
+      if (*keptVoxelsInstead_) {
+        samplesOnDevice_ = false;
+        ReconstructionStats rs;
+        stage("radiance", [&] {
+          rs = voxelReconstruction->reconstruct(*frame, scene, {}, settings_.radianceResolution,
+                                                progress);
+        });
+        st.extra["traced_voxels"] = rs.traced;
+        st.extra["empty_voxels"] = rs.skipped;
+        finish(std::move(frame), scene, r, {}, progress, *voxelIntegrator);
+        return r;
+      }
     }
     // A sampler reads only the medium and its density volume (Sampler), so with the density
     // kept its samples are kept too; S and ∇S are evaluated anew (they depend on the lights).
@@ -155,17 +187,17 @@ class PipelineMethod : public Method {
         st.extra["empty_voxels"] = rs.skipped;
       }
     }
-    finish(std::move(frame), scene, r, std::move(samples), progress);
+    finish(std::move(frame), scene, r, std::move(samples), progress, *integrator);
     return r;
   }
 
  private:
   /// The march and everything after it: the stats, the exports, and keeping the frame.
   void finish(std::unique_ptr<Frame> frame, const Scene& scene, RenderResult& r,
-              std::vector<RadianceSample> samples, Progress* progress) {
+              std::vector<RadianceSample> samples, Progress* progress, Integrator& march) {
     RenderStats& st = r.stats;
     runStage("march", *frame, st, progress,
-             [&] { r.image = integrator->integrate(*frame, scene, progress); });
+             [&] { r.image = march.integrate(*frame, scene, progress); });
     // The last guard of docs/reliability.md: whatever the parse-time bounds miss (products of
     // large but allowed values: intensity, sigma_t, densities, weights), no image with a
     // non-finite pixel leaves a method. (An image left on the GPU, Method::imageOnDevice, is
@@ -182,7 +214,7 @@ class PipelineMethod : public Method {
     }
 
     frame->report(st);
-    integrator->describe(st);
+    march.describe(st);
     if (backend_ == Backend::Gpu) {
       // The CPU march's keys, and slicing (the raster slice marcher's) under the compute
       // pipeline, have no meaning here.
@@ -200,9 +232,10 @@ class PipelineMethod : public Method {
       if (samplesOnDevice_ && st.samples) deviceSampleCount_ = *st.samples;
       st.extra["sampler"] = samplerType;
       // The extensions as resolved for this scene (their defaults depend on it).
-      st.extra["factor_lights"] = settings_.factorLights;
-      st.extra["lamp_model"] = settings_.lampModel;
-      st.extra["log_space"] = settings_.logSpace;
+      const bool perVoxel = &march == voxelIntegrator.get();
+      st.extra["factor_lights"] = settings_.factorLights && !perVoxel;
+      st.extra["lamp_model"] = settings_.lampModel && !perVoxel;
+      st.extra["log_space"] = settings_.logSpace && !perVoxel;
     }
     if (integratorDecl(desc_).viewMarch) st.extra["march_step"] = settings_.march.step;
     st.extra["delta1"] = settings_.delta1;
@@ -225,6 +258,9 @@ class PipelineMethod : public Method {
   }
 
   std::unique_ptr<Frame> frame_;  ///< kept between renders when retainDensity
+  /// The whole-scene fallback's decision for the kept density, and the count it was made on.
+  std::optional<bool> keptVoxelsInstead_;
+  long long occupiedVoxels_ = 0;
   /// The refiner left the final samples on the device (RenderResult::samples is empty; the
   /// backend's report counts them).
   bool samplesOnDevice_ = false;
@@ -274,13 +310,23 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   if (d.sampler)
     m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
                            "radiance evaluator")(settings);
-  if (!d.refiner.empty())
+  // The whole-scene fallback's stages run with per-voxel's own settings: the volume holds S.
+  PipelineSettings perVoxel = settings;
+  perVoxel.factorLights = perVoxel.logSpace = perVoxel.lampModel = false;
+  if (!d.refiner.empty()) {
     m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(settings);
+    m->voxelReconstruction =
+        variant(reconstructions(), "per-voxel", b, p.keyPath("method"), "reconstruction")(perVoxel);
+  }
+  m->plannedSamples = plannedSamples;
   if (d.radianceVolume())
     m->reconstruction = variant(reconstructions(), d.reconstruction, b, p.keyPath("method"),
                                 "reconstruction")(settings);
   m->integrator =
       variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(settings);
+  if (m->voxelReconstruction)
+    m->voxelIntegrator =
+        variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(perVoxel);
   // The sum of the planned allocations and the samples' tracing work, before anything is built.
   const DynamicSamplingSettings* dynamic =
       m->refiner ? &settings.refinerKeys.get<DynamicSamplingSettings>() : nullptr;

@@ -113,6 +113,11 @@ struct DynamicSamplingSettings {
   /// the fallback; key `fallback_probes`): levelProbes().
   int fallbackProbes = 6;
   IVec3 voxelDims{0};  ///< the fallback grid (the radiance volume's dims; withPipeline())
+  /// The whole-scene fallback (extension, key `voxel_switch`; 0 = off, the paper's): where the
+  /// medium's occupied voxels are at most voxelSwitch × the initial samples × (1 + probes), the
+  /// traces of the first level alone, per-voxel traces less than adaptive would, and the
+  /// pipeline renders the scene as per-voxel does (voxelsInstead()).
+  double voxelSwitch = 0.0;
   /// Split into the cell (extension, key `split`: "cell"): a split sample is replaced by the
   /// vertices of G_{k+1} in its cell, the cube of edge R_j centred on it (for a cubic grid the
   /// cell of the partition: 8 children when the next grid is twice as fine), instead of every
@@ -339,6 +344,10 @@ inline constexpr long long kBudgetCap = 8000;
 /// (docs/fidelity.md, "Population of scenes").
 inline constexpr double kBudgetCostShare = 0.5;
 
+/// Default of the whole-scene fallback (key `voxel_switch`): chosen on the population of scenes
+/// (docs/fidelity.md, "The whole-scene fallback").
+inline constexpr double kVoxelSwitch = 3.0;
+
 /// The budget applied to `initialCount` initial samples (0: none). The cost cap C =
 /// costShare · voxels / (7 + probes) when costShare > 0 (at least 1). For kAutoBudget
 /// max(min(kBudgetPerInitial · initialCount, kBudgetCap), C): the count rule's floor, raised where
@@ -436,6 +445,12 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings);
 
+/// Whether a scene whose density has `occupiedVoxels` voxels with D > 0 is rendered as per-voxel
+/// does instead (DynamicSamplingSettings::voxelSwitch), from `initialSamples` initial samples:
+/// the one rule of both backends' refiners.
+bool voxelsInstead(const DynamicSamplingSettings& s, long long occupiedVoxels,
+                   long long initialSamples);
+
 /// Stage: dynamic sampling between the sampler and the reconstruction (method `adaptive`).
 /// Returns the final sample set with S and ∇S evaluated. The CPU variant is dynamicSampling()
 /// with the pipeline's evaluator; the GPU one (gpu/) runs its own passes.
@@ -445,6 +460,9 @@ class SampleRefiner {
   virtual DynamicSamplingResult refine(Frame& frame, const Scene& scene,
                                        std::vector<RadianceSample> initial,
                                        RadianceEvaluator& evaluator) = 0;
+  /// Whether per-voxel, tracing S at the medium's `occupiedVoxels`, costs less than refining
+  /// `initialSamples` would: then the pipeline renders as per-voxel does (voxelsInstead()).
+  virtual bool voxelsInstead(long long occupiedVoxels, long long initialSamples) const = 0;
 };
 /// A refiner's variants are built from the pipeline's settings; "dynamic"'s own keys are in
 /// PipelineSettings::refinerKeys (a DynamicSamplingSettings, withPipeline() applied).

@@ -402,7 +402,10 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
   doc["render"]["march_step"] = 0.5 / 20;
   if (std::string(method) != "per-voxel")
     doc["render"]["sampler"] = {{"type", "jittered"}, {"count", 96}};
-  if (std::string(method) == "adaptive") doc["render"]["levels"] = {4, 8};
+  if (std::string(method) == "adaptive") {
+    doc["render"]["levels"] = {4, 8};
+    doc["render"]["voxel_switch"] = 0;  // dynamic sampling itself, not the whole-scene fallback
+  }
   const Scene scene = parseScene(doc, ".");
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const RenderResult compute = createMethod(scene, "", "gpu")->render(scene, nullptr);

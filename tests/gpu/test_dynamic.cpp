@@ -512,6 +512,7 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
               {"sampler", {{"type", "grid"}, {"count", 64}}},
               {"levels", {8, 12}},
               {"epsilon", GetParam() ? 2e-4 : 0.05}};
+  if (!GetParam()) render["voxel_switch"] = 0;  // dynamic sampling, not per-voxel instead
   const RenderResult cpu = renderWith(scene, render, "cpu");
   const RenderResult gpu = renderWith(scene, render, "gpu");
   expectNoGlError();
@@ -551,7 +552,9 @@ TEST(GpuAdaptiveMethod, DefaultLevelsFollowTheInitialSamplesAsOnCpu) {
   for (const Case& c : {Case{56, 64, {0, 16, 28, 56}}, Case{64, 6000, {0, 32, 64}}}) {
     Scene scene = spotScene(24, 18);
     scene.medium.resolution = IVec3(c.resolution);
-    const Json render{{"method", "adaptive"}, {"sampler", {{"type", "grid"}, {"count", c.count}}}};
+    const Json render{{"method", "adaptive"},
+                      {"sampler", {{"type", "grid"}, {"count", c.count}}},
+                      {"voxel_switch", 0}};
     const RenderResult cpu = renderWith(scene, render, "cpu");
     const RenderResult gpu = renderWith(scene, render, "gpu");
     expectNoGlError();
@@ -610,7 +613,8 @@ double adaptiveExtensionGpuVsCpu(const char* key, const Json& levels) {
   scene.render = {{"method", "adaptive"},
                   {key, true},
                   {"sampler", {{"type", "grid"}, {"count", 64}}},
-                  {"levels", levels}};
+                  {"levels", levels},
+                  {"voxel_switch", 0}};
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const RenderResult gpu = createMethod(scene, "", "gpu")->render(scene, nullptr);
   expectNoGlError();

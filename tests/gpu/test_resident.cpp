@@ -181,9 +181,14 @@ class GpuRendererReuse : public ::testing::TestWithParam<const char*> {};
 TEST_P(GpuRendererReuse, FramesEqualFreshRendersAndCreateNoGlObjects) {
   SCATTERLAB_REQUIRE_GPU();
   const std::string method = GetParam();
+  const auto doc = [](int f) {
+    Json d = frameDoc(f);
+    d["render"]["voxel_switch"] = 0;  // adaptive: dynamic sampling, not per-voxel instead
+    return d;
+  };
   std::vector<Image> fresh;
-  for (int f = 0; f < 3; ++f) fresh.push_back(freshRender(frameDoc(f), method).image);
-  Renderer r(frameDoc(0), ".", method, "gpu");
+  for (int f = 0; f < 3; ++f) fresh.push_back(freshRender(doc(f), method).image);
+  Renderer r(doc(0), ".", method, "gpu");
   std::vector<long long> created, held;
   long long reusedBefore = gpu::glObjectCounts().reused;
   for (int f = 0; f < 3; ++f) {
@@ -240,6 +245,7 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
   const auto doc = [paper = paper](int f) {
     Json d = frameDoc(f);  // a point light inside the medium: lamp_model on by default
     d["render"]["paper"] = paper;
+    if (!paper) d["render"]["voxel_switch"] = 0;  // dynamic sampling, not per-voxel instead
     return d;
   };
   Renderer r(doc(0), ".", method, "gpu");
@@ -305,7 +311,8 @@ TEST(GpuSteadyFrame, AdaptiveUnderABindingBudgetAsAFreshRender) {
   const auto doc = [](int f) {
     Json d = blobSceneDoc(40, 32, 24);
     d["lights"][1]["position"] = {0.5 + 0.1 * f, 1.4, 0.5 - 0.05 * f};
-    d["render"] = {{"method", "adaptive"}, {"levels", {4, 8, 16}}, {"max_samples", 2160}};
+    d["render"] = {
+        {"method", "adaptive"}, {"levels", {4, 8, 16}}, {"max_samples", 2160}, {"voxel_switch", 0}};
     return d;
   };
   Renderer r(doc(0), ".", "adaptive", "gpu");
@@ -365,6 +372,55 @@ INSTANTIATE_TEST_SUITE_P(Methods, GpuSteadyFrame,
                              if (c == '-') c = '_';
                            return name + (std::get<1>(info.param) ? "_paper" : "_defaults");
                          });
+
+}  // namespace
+}  // namespace scatterlab::testing
+
+namespace scatterlab::testing {
+namespace {
+
+/// adaptive's whole-scene fallback on the GPU (docs/fidelity.md): a sparse medium (one small
+/// blob at 48³) is rendered as per-voxel renders it, on the same rule as the CPU's; the decision
+/// is made once per density, so a steady frame (a light moved) waits for nothing and equals a
+/// fresh per-voxel render.
+TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
+  SCATTERLAB_REQUIRE_GPU();
+  const auto doc = [](int f) {
+    Json d =
+        homogeneousBoxDoc(1.0f, 8.0f, 0.8f, Vec3(0.5f + 0.1f * f, 1.4f, 0.5f), 4.0f, 40, 30, 48);
+    d["medium"]["density"] = {
+        {"type", "gaussians"},
+        {"blobs", Json::array({{{"center", {0.5, 0.5, 0.5}}, {"radius", 0.05}, {"weight", 1.0}}})}};
+    return d;
+  };
+  initialize();
+  const Scene cpuScene = parseScene(doc(0), ".");
+  const RenderResult cpu = createMethod(cpuScene, "adaptive", "cpu")->render(cpuScene, nullptr);
+  Renderer r(doc(0), ".", "adaptive", "gpu");
+  r.keepImageOnDevice(true);
+  for (int f = 0; f < 3; ++f) {
+    if (f > 0) r.set("lights.0.position=" + doc(f)["lights"][0]["position"].dump());
+    const RenderResult res = r.render();
+    EXPECT_TRUE(res.stats.extra.at("voxels_instead").get<bool>()) << "frame " << f;
+    EXPECT_EQ(res.stats.extra.at("occupied_voxels"), cpu.stats.extra.at("occupied_voxels"));
+    if (f > 0) {
+      EXPECT_EQ(res.stats.extra.at("host_waits").get<long long>(), 0) << "frame " << f;
+    }
+    ASSERT_TRUE(res.deviceImage.has_value());
+    const RenderResult::DeviceImage& d = *res.deviceImage;
+    std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
+    gpu::context();
+    glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                      rgba.data());
+    const Image fresh = freshRender(doc(f), "per-voxel").image;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < fresh.pixels().size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        worst =
+            std::max(worst, double(std::abs(rgba[4 * i + std::size_t(c)] - fresh.pixels()[i][c])));
+    EXPECT_EQ(worst, 0.0) << "frame " << f;  // the same passes as a fresh per-voxel render
+  }
+}
 
 }  // namespace
 }  // namespace scatterlab::testing

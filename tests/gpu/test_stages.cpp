@@ -382,7 +382,9 @@ TEST(GpuMethods, UploadedDensityInAFreshProcessMatchesCpu) {
   const std::string dir = ::testing::TempDir() + "gpu_fresh_" + std::to_string(::getpid());
   std::filesystem::create_directories(dir);
   Json doc = testing::homogeneousBoxDoc(0.8f, 2.0f, 0.6f, Vec3(0.3f, 1.4f, 0.4f), 3.0f, 24, 18, 16);
-  doc["render"] = {{"sampler", {{"type", "jittered"}, {"count", 64}}}, {"levels", {4, 8}}};
+  doc["render"] = {{"sampler", {{"type", "jittered"}, {"count", 64}}},
+                   {"levels", {4, 8}},
+                   {"voxel_switch", 0}};
   std::ofstream(dir + "/box.json") << doc.dump();
   for (const char* m : {"per-voxel", "gradient", "adaptive"}) {
     for (const char* b : {"cpu", "gpu"}) {

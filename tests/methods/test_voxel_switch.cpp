@@ -1,0 +1,101 @@
+/// The whole-scene fallback of `adaptive` (key voxel_switch, docs/fidelity.md): a medium so
+/// sparse that per-voxel traces less than adaptive's first level would is rendered as per-voxel
+/// renders it — its stages, its image bit for bit — and the rule is the one documented.
+
+#include <algorithm>
+
+#include "sampling/dynamic_sampling.h"
+#include "support/scenes.h"
+
+namespace scatterlab::testing {
+namespace {
+
+/// A wisp: one small blob (radius 0.05) in a unit box at 48³, one point light outside.
+Json wispDoc() {
+  Json doc = homogeneousBoxDoc(1.0f, 8.0f, 0.8f, Vec3(0.5f, 1.4f, 0.5f), 4.0f, 40, 30, 48);
+  doc["medium"]["density"] = {
+      {"type", "gaussians"},
+      {"blobs", Json::array({{{"center", {0.5, 0.5, 0.5}}, {"radius", 0.05}, {"weight", 1.0}}})}};
+  return doc;
+}
+
+RenderResult render(Json doc, const std::string& method, const std::string& sets = "") {
+  if (!sets.empty()) applyOverride(doc, sets);
+  const Scene s = sceneFromJson(doc);
+  return createMethod(s, method, "cpu")->render(s, nullptr);
+}
+
+std::vector<std::string> stages(const RenderResult& r) {
+  std::vector<std::string> got;
+  for (const auto& [stage, ms] : r.stats.timingsMs) got.push_back(stage);
+  return got;
+}
+
+TEST(VoxelSwitch, ASparseMediumIsRenderedAsPerVoxelRendersIt) {
+  const RenderResult perVoxel = render(wispDoc(), "per-voxel");
+  const RenderResult adaptive = render(wispDoc(), "adaptive");
+  EXPECT_TRUE(adaptive.stats.extra.at("voxels_instead").get<bool>());
+  // The count the rule saw: the density's voxels with D > 0.
+  ASSERT_TRUE(adaptive.density);
+  const auto& d = adaptive.density->data();
+  const long long occupied = std::count_if(d.begin(), d.end(), [](float v) { return v > 0.0f; });
+  EXPECT_EQ(adaptive.stats.extra.at("occupied_voxels").get<long long>(), occupied);
+  EXPECT_LT(occupied, 48 * 48 * 48 / 4);
+  EXPECT_EQ(stages(adaptive), (std::vector<std::string>{"density", "radiance", "march"}));
+  EXPECT_EQ(adaptive.stats.extra.at("traced_voxels"), perVoxel.stats.extra.at("traced_voxels"));
+  EXPECT_EQ(*adaptive.stats.samples, 0);
+  EXPECT_FALSE(adaptive.stats.extra.at("factor_lights").get<bool>());  // S in the volume
+  EXPECT_EQ(compareImages(adaptive.image, perVoxel.image).maxAbs, 0.0);
+
+  // Off: dynamic sampling, another image.
+  const RenderResult refined = render(wispDoc(), "adaptive", "render.voxel_switch=0");
+  EXPECT_FALSE(refined.stats.extra.at("voxels_instead").get<bool>());
+  EXPECT_EQ(stages(refined), (std::vector<std::string>{"density", "sampling", "dynamic_sampling",
+                                                       "reconstruction", "march"}));
+  EXPECT_GT(*refined.stats.samples, 0);
+  EXPECT_GT(compareImages(refined.image, perVoxel.image).maxAbs, 0.0);
+  // The paper's algorithm never switches.
+  const RenderResult paper = render(wispDoc(), "adaptive", "render.paper=true");
+  EXPECT_FALSE(paper.stats.extra.at("voxels_instead").get<bool>());
+}
+
+TEST(VoxelSwitch, TheRuleComparesTheOccupiedVoxelsWithTheFirstLevelsTraces) {
+  DynamicSamplingSettings s;
+  s.probes = 40;
+  s.voxelSwitch = 3.0;
+  // 3 × 100 initial samples × (1 + 40 probes) = 12 300 traces.
+  EXPECT_TRUE(voxelsInstead(s, 12300, 100));
+  EXPECT_FALSE(voxelsInstead(s, 12301, 100));
+  EXPECT_FALSE(voxelsInstead(s, 0, 0));  // no samples: nothing to compare
+  s.voxelSwitch = 0.0;
+  EXPECT_FALSE(voxelsInstead(s, 1, 100));
+}
+
+TEST(VoxelSwitch, BadValuesAreNamed) {
+  initialize();
+  for (const char* bad :
+       {"render.voxel_switch=-1", "render.voxel_switch=1001", "render.voxel_switch=\"many\""}) {
+    Json doc = wispDoc();
+    applyOverride(doc, bad);
+    doc["render"]["method"] = "adaptive";
+    try {
+      const Scene s = sceneFromJson(doc);
+      createMethod(s, "", "cpu");
+      ADD_FAILURE() << bad << ": no error";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("voxel_switch"), std::string::npos) << e.what();
+    }
+  }
+  Json doc = wispDoc();
+  doc["render"] = {{"method", "adaptive"}, {"paper", true}, {"voxel_switch", 3}};
+  try {
+    const Scene s = sceneFromJson(doc);
+    createMethod(s, "", "cpu");
+    ADD_FAILURE() << "paper with voxel_switch: no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("extension"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace scatterlab::testing
