@@ -592,14 +592,18 @@ class InterpolatingReconstruction : public Reconstruction {
 
 class PerVoxelReconstruction : public Reconstruction {
  public:
-  explicit PerVoxelReconstruction(float delta1) : delta1_(delta1) {}
+  /// `factored`, `lampModel`: the volume holds what the pipeline's march expects (V = S / A with
+  /// factor_lights: adaptive's whole-scene fallback; per-voxel itself holds S).
+  PerVoxelReconstruction(float delta1, bool factored, bool lampModel)
+      : delta1_(delta1), factored_(factored), lampModel_(lampModel) {}
   bool needsGradients() const override { return false; }
   bool usesSamples() const override { return false; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene, std::span<const RadianceSample>,
                                   IVec3 dims, Progress* progress) override {
     if (progress) progress->restart("per-voxel S", dims.z);
-    const PerVoxelStats pv = buildPerVoxelRadiance(scene, frame.hostDensity(), delta1_,
-                                                   newRadiance(frame, scene, dims), progress);
+    const PerVoxelStats pv =
+        buildPerVoxelRadiance(scene, frame.hostDensity(), delta1_, newRadiance(frame, scene, dims),
+                              progress, factored_, lampModel_);
     ReconstructionStats st;
     st.traced = pv.traced;
     st.skipped = pv.skipped;
@@ -608,6 +612,7 @@ class PerVoxelReconstruction : public Reconstruction {
 
  private:
   float delta1_;
+  bool factored_, lampModel_;
 };
 
 /// The keys of the reconstructions from samples (gradient, rbf, nearest; the extensions of
@@ -656,7 +661,8 @@ void registerReconstructions() {
   }
   reconstructions().declare("per-voxel", {.lightWork = LightWork::EveryVoxel});
   reconstructions().addVariant("per-voxel", Backend::Cpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(new PerVoxelReconstruction(s.delta1));
+    return std::unique_ptr<Reconstruction>(
+        new PerVoxelReconstruction(s.delta1, s.factorLights, s.tracerSteps().lampModel));
   });
 }
 

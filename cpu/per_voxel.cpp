@@ -60,11 +60,13 @@ std::vector<char> occupancyMask(const DensityGrid& density, const RadianceGrid& 
   return occ;
 }
 
-PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
-                                    RadianceGrid& radiance, Progress* progress) {
+namespace {
+
+template <class Source>
+PerVoxelStats tracePerVoxel(const Scene& scene, const DensityGrid& density, const Source& source,
+                            RadianceGrid& radiance, Progress* progress) {
   const IVec3 nr = radiance.dims();
   const std::vector<char> occupied = occupancyMask(density, radiance);
-  const SourceRadiance source(scene, density, delta1);
   const Vec3 eye = scene.camera.position;
   std::atomic<long long> traced{0}, skipped{0};
   tbb::parallel_for(0, nr.z, [&](int k) {
@@ -85,6 +87,17 @@ PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& densi
     if (progress) progress->advance(1);
   });
   return {traced.load(), skipped.load()};
+}
+
+}  // namespace
+
+PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
+                                    RadianceGrid& radiance, Progress* progress, bool factored,
+                                    bool lampModel) {
+  if (factored)
+    return tracePerVoxel(scene, density, FactoredSourceRadiance(scene, density, delta1, lampModel),
+                         radiance, progress);
+  return tracePerVoxel(scene, density, SourceRadiance(scene, density, delta1), radiance, progress);
 }
 
 }  // namespace scatterlab

@@ -61,7 +61,11 @@ struct PerVoxelStats {
 /// point from one direction, so S is single-valued per point even for HG phase). A voxel whose
 /// trilinear neighbourhood in the density volume is empty cannot contribute to the image and is
 /// skipped; the result is identical to tracing it. TBB-parallel; no GL context.
+/// `factored` (adaptive's whole-scene fallback, with PipelineSettings::factorLights): V = S / A
+/// instead of S (FactoredSourceRadiance, A with the lamp model where `lampModel`), which the
+/// factored march multiplies by A again.
 PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
-                                    RadianceGrid& radiance, Progress* progress);
+                                    RadianceGrid& radiance, Progress* progress,
+                                    bool factored = false, bool lampModel = false);
 
 }  // namespace scatterlab

@@ -161,6 +161,7 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
                           Buffer* countersOut) {
   context();
   ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
+  variant.define("SL_FACTOR_LIGHTS", factored_).define("SL_LAMP_MODEL", factored_ && lampModel_);
   addShadowRaySkip(variant);
   const Program& program = gpu::program(addShadowVariant(shadows, variant), "per-voxel S");
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)",

@@ -69,8 +69,11 @@ class GradientSplatGpu : public Reconstruction {
 /// ignores the samples.
 class PerVoxelGpu : public Reconstruction {
  public:
-  explicit PerVoxelGpu(float delta1, ShadowMapSettings shadowMap = {})
-      : delta1_(delta1), shadowMap_(shadowMap) {}
+  /// `factored`, `lampModel`: the volume holds V = S / A (sourceTowardsEye with
+  /// SL_FACTOR_LIGHTS), as the CPU's buildPerVoxelRadiance.
+  explicit PerVoxelGpu(float delta1, ShadowMapSettings shadowMap = {}, bool factored = false,
+                       bool lampModel = false)
+      : delta1_(delta1), shadowMap_(shadowMap), factored_(factored), lampModel_(lampModel) {}
   bool needsGradients() const override { return false; }
   bool usesSamples() const override { return false; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
@@ -85,6 +88,7 @@ class PerVoxelGpu : public Reconstruction {
  private:
   float delta1_;
   ShadowMapSettings shadowMap_;
+  bool factored_, lampModel_;
 };
 
 }  // namespace scatterlab::gpu

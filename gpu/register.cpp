@@ -101,7 +101,8 @@ void registerGpuStages() {
                                                                 s.tracerSteps().lampModel));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(new PerVoxelGpu(s.delta1, s.shadowMap));
+    return std::unique_ptr<Reconstruction>(
+        new PerVoxelGpu(s.delta1, s.shadowMap, s.factorLights, s.tracerSteps().lampModel));
   });
   integrators().addVariant("ray-marcher", Backend::Gpu, [](const PipelineSettings& s) {
     if (s.gpuPipeline == GpuPipeline::Compute)

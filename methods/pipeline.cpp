@@ -81,11 +81,10 @@ class PipelineMethod : public Method {
   std::unique_ptr<RadianceEvaluator> evaluator;
   std::unique_ptr<SampleRefiner> refiner;
   std::unique_ptr<Reconstruction> reconstruction;
-  /// With a refiner: per-voxel's reconstruction and march (S in the volume, not V = S / A: the
-  /// settings per-voxel itself runs with), for a medium the refiner would trace more of than
-  /// per-voxel does (SampleRefiner::voxelsInstead).
+  /// With a refiner: per-voxel's reconstruction (of what this pipeline's volume holds: V = S / A
+  /// with factor_lights), for a medium the refiner would trace more of than per-voxel does
+  /// (SampleRefiner::voxelsInstead).
   std::unique_ptr<Reconstruction> voxelReconstruction;
-  std::unique_ptr<Integrator> voxelIntegrator;
   long long plannedSamples = 0;  ///< the sampler's planned count (Sampler::plannedCount)
   std::unique_ptr<Integrator> integrator;
 
@@ -119,8 +118,7 @@ class PipelineMethod : public Method {
     const bool reuseRadiance = reuse && reconstruction && radianceKept && keptInputs_ == inputs;
     if (retainDensity && reconstruction) st.extra["radiance_reused"] = reuseRadiance;
     if (reuseRadiance) {
-      finish(std::move(frame), scene, r, *keptRadianceSamples_, progress,
-             keptVoxelsInstead_.value_or(false) ? *voxelIntegrator : *integrator);
+      finish(std::move(frame), scene, r, *keptRadianceSamples_, progress);
       return r;
     }
     // The whole-scene fallback: a medium so sparse that per-voxel traces less than the
@@ -143,7 +141,7 @@ class PipelineMethod : public Method {
         });
         st.extra["traced_voxels"] = rs.traced;
         st.extra["empty_voxels"] = rs.skipped;
-        finish(std::move(frame), scene, r, {}, progress, *voxelIntegrator);
+        finish(std::move(frame), scene, r, {}, progress);
         return r;
       }
     }
@@ -187,17 +185,17 @@ class PipelineMethod : public Method {
         st.extra["empty_voxels"] = rs.skipped;
       }
     }
-    finish(std::move(frame), scene, r, std::move(samples), progress, *integrator);
+    finish(std::move(frame), scene, r, std::move(samples), progress);
     return r;
   }
 
  private:
   /// The march and everything after it: the stats, the exports, and keeping the frame.
   void finish(std::unique_ptr<Frame> frame, const Scene& scene, RenderResult& r,
-              std::vector<RadianceSample> samples, Progress* progress, Integrator& march) {
+              std::vector<RadianceSample> samples, Progress* progress) {
     RenderStats& st = r.stats;
     runStage("march", *frame, st, progress,
-             [&] { r.image = march.integrate(*frame, scene, progress); });
+             [&] { r.image = integrator->integrate(*frame, scene, progress); });
     // The last guard of docs/reliability.md: whatever the parse-time bounds miss (products of
     // large but allowed values: intensity, sigma_t, densities, weights), no image with a
     // non-finite pixel leaves a method. (An image left on the GPU, Method::imageOnDevice, is
@@ -214,7 +212,7 @@ class PipelineMethod : public Method {
     }
 
     frame->report(st);
-    march.describe(st);
+    integrator->describe(st);
     if (backend_ == Backend::Gpu) {
       // The CPU march's keys, and slicing (the raster slice marcher's) under the compute
       // pipeline, have no meaning here.
@@ -232,10 +230,9 @@ class PipelineMethod : public Method {
       if (samplesOnDevice_ && st.samples) deviceSampleCount_ = *st.samples;
       st.extra["sampler"] = samplerType;
       // The extensions as resolved for this scene (their defaults depend on it).
-      const bool perVoxel = &march == voxelIntegrator.get();
-      st.extra["factor_lights"] = settings_.factorLights && !perVoxel;
-      st.extra["lamp_model"] = settings_.lampModel && !perVoxel;
-      st.extra["log_space"] = settings_.logSpace && !perVoxel;
+      st.extra["factor_lights"] = settings_.factorLights;
+      st.extra["lamp_model"] = settings_.lampModel;
+      st.extra["log_space"] = settings_.logSpace;
     }
     if (integratorDecl(desc_).viewMarch) st.extra["march_step"] = settings_.march.step;
     st.extra["delta1"] = settings_.delta1;
@@ -310,13 +307,10 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   if (d.sampler)
     m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
                            "radiance evaluator")(settings);
-  // The whole-scene fallback's stages run with per-voxel's own settings: the volume holds S.
-  PipelineSettings perVoxel = settings;
-  perVoxel.factorLights = perVoxel.logSpace = perVoxel.lampModel = false;
   if (!d.refiner.empty()) {
     m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(settings);
     m->voxelReconstruction =
-        variant(reconstructions(), "per-voxel", b, p.keyPath("method"), "reconstruction")(perVoxel);
+        variant(reconstructions(), "per-voxel", b, p.keyPath("method"), "reconstruction")(settings);
   }
   m->plannedSamples = plannedSamples;
   if (d.radianceVolume())
@@ -324,9 +318,6 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
                                 "reconstruction")(settings);
   m->integrator =
       variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(settings);
-  if (m->voxelReconstruction)
-    m->voxelIntegrator =
-        variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(perVoxel);
   // The sum of the planned allocations and the samples' tracing work, before anything is built.
   const DynamicSamplingSettings* dynamic =
       m->refiner ? &settings.refinerKeys.get<DynamicSamplingSettings>() : nullptr;

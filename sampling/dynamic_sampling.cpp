@@ -721,8 +721,8 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
       {"voxel_switch", "number", "3 (0 with paper)", "0…1000 (not with paper)",
        "the whole-scene fallback: where the medium's occupied voxels (D > 0) are at most "
        "voxel_switch × the initial samples × (1 + probes), the traces of the first level alone "
-       "(a sparse medium: wisps, small puffs), the scene is rendered as per-voxel renders it, at "
-       "per-voxel's cost and error; 0: never",
+       "(a sparse medium: wisps, small puffs), the scene is rendered as per-voxel renders it (its "
+       "voxels holding V = S / A with factor_lights); 0: never",
        "0"},
   };
   return keys;
