@@ -232,79 +232,48 @@ void parseQualifiers(const std::string& source, std::map<std::string, Qualifiers
 }
 
 bool isImageType(GLenum t) {
-  switch (t) {
-    case GL_IMAGE_1D:
-    case GL_IMAGE_2D:
-    case GL_IMAGE_3D:
-    case GL_IMAGE_2D_RECT:
-    case GL_IMAGE_CUBE:
-    case GL_IMAGE_BUFFER:
-    case GL_IMAGE_1D_ARRAY:
-    case GL_IMAGE_2D_ARRAY:
-    case GL_IMAGE_CUBE_MAP_ARRAY:
-    case GL_IMAGE_2D_MULTISAMPLE:
-    case GL_IMAGE_2D_MULTISAMPLE_ARRAY:
-    case GL_INT_IMAGE_1D:
-    case GL_INT_IMAGE_2D:
-    case GL_INT_IMAGE_3D:
-    case GL_INT_IMAGE_2D_RECT:
-    case GL_INT_IMAGE_CUBE:
-    case GL_INT_IMAGE_BUFFER:
-    case GL_INT_IMAGE_1D_ARRAY:
-    case GL_INT_IMAGE_2D_ARRAY:
-    case GL_INT_IMAGE_CUBE_MAP_ARRAY:
-    case GL_INT_IMAGE_2D_MULTISAMPLE:
-    case GL_INT_IMAGE_2D_MULTISAMPLE_ARRAY:
-    case GL_UNSIGNED_INT_IMAGE_1D:
-    case GL_UNSIGNED_INT_IMAGE_2D:
-    case GL_UNSIGNED_INT_IMAGE_3D:
-    case GL_UNSIGNED_INT_IMAGE_2D_RECT:
-    case GL_UNSIGNED_INT_IMAGE_CUBE:
-    case GL_UNSIGNED_INT_IMAGE_BUFFER:
-    case GL_UNSIGNED_INT_IMAGE_1D_ARRAY:
-    case GL_UNSIGNED_INT_IMAGE_2D_ARRAY:
-    case GL_UNSIGNED_INT_IMAGE_CUBE_MAP_ARRAY:
-    case GL_UNSIGNED_INT_IMAGE_2D_MULTISAMPLE:
-    case GL_UNSIGNED_INT_IMAGE_2D_MULTISAMPLE_ARRAY:
-      return true;
-    default:
-      return false;
-  }
+  // clang-format off
+  static constexpr GLenum kTypes[] = {
+      GL_IMAGE_1D, GL_IMAGE_2D, GL_IMAGE_3D, GL_IMAGE_2D_RECT, GL_IMAGE_CUBE, GL_IMAGE_BUFFER,
+      GL_IMAGE_1D_ARRAY, GL_IMAGE_2D_ARRAY, GL_IMAGE_CUBE_MAP_ARRAY, GL_IMAGE_2D_MULTISAMPLE,
+      GL_IMAGE_2D_MULTISAMPLE_ARRAY, GL_INT_IMAGE_1D, GL_INT_IMAGE_2D, GL_INT_IMAGE_3D,
+      GL_INT_IMAGE_2D_RECT, GL_INT_IMAGE_CUBE, GL_INT_IMAGE_BUFFER, GL_INT_IMAGE_1D_ARRAY,
+      GL_INT_IMAGE_2D_ARRAY, GL_INT_IMAGE_CUBE_MAP_ARRAY, GL_INT_IMAGE_2D_MULTISAMPLE,
+      GL_INT_IMAGE_2D_MULTISAMPLE_ARRAY, GL_UNSIGNED_INT_IMAGE_1D, GL_UNSIGNED_INT_IMAGE_2D,
+      GL_UNSIGNED_INT_IMAGE_3D, GL_UNSIGNED_INT_IMAGE_2D_RECT, GL_UNSIGNED_INT_IMAGE_CUBE,
+      GL_UNSIGNED_INT_IMAGE_BUFFER, GL_UNSIGNED_INT_IMAGE_1D_ARRAY,
+      GL_UNSIGNED_INT_IMAGE_2D_ARRAY, GL_UNSIGNED_INT_IMAGE_CUBE_MAP_ARRAY,
+      GL_UNSIGNED_INT_IMAGE_2D_MULTISAMPLE, GL_UNSIGNED_INT_IMAGE_2D_MULTISAMPLE_ARRAY};
+  // clang-format on
+  return std::ranges::find(kTypes, t) != std::end(kTypes);
 }
 
 /// GL_TEXTURE_BINDING_* of a sampler type's target (0: not a sampler).
 GLenum samplerBindingQuery(GLenum t) {
-  switch (t) {
-    case GL_SAMPLER_2D:
-    case GL_SAMPLER_2D_SHADOW:
-    case GL_INT_SAMPLER_2D:
-    case GL_UNSIGNED_INT_SAMPLER_2D:
-      return GL_TEXTURE_BINDING_2D;
-    case GL_SAMPLER_3D:
-    case GL_INT_SAMPLER_3D:
-    case GL_UNSIGNED_INT_SAMPLER_3D:
-      return GL_TEXTURE_BINDING_3D;
-    case GL_SAMPLER_2D_ARRAY:
-    case GL_SAMPLER_2D_ARRAY_SHADOW:
-    case GL_INT_SAMPLER_2D_ARRAY:
-    case GL_UNSIGNED_INT_SAMPLER_2D_ARRAY:
-      return GL_TEXTURE_BINDING_2D_ARRAY;
-    case GL_SAMPLER_1D:
-    case GL_INT_SAMPLER_1D:
-    case GL_UNSIGNED_INT_SAMPLER_1D:
-      return GL_TEXTURE_BINDING_1D;
-    case GL_SAMPLER_CUBE:
-    case GL_SAMPLER_CUBE_SHADOW:
-    case GL_INT_SAMPLER_CUBE:
-    case GL_UNSIGNED_INT_SAMPLER_CUBE:
-      return GL_TEXTURE_BINDING_CUBE_MAP;
-    case GL_SAMPLER_BUFFER:
-    case GL_INT_SAMPLER_BUFFER:
-    case GL_UNSIGNED_INT_SAMPLER_BUFFER:
-      return GL_TEXTURE_BINDING_BUFFER;
-    default:
-      return 0;
-  }
+  struct Entry {
+    GLenum type, query;
+  };
+  // clang-format off
+  static constexpr Entry kSamplers[] = {
+      {GL_SAMPLER_2D, GL_TEXTURE_BINDING_2D}, {GL_SAMPLER_2D_SHADOW, GL_TEXTURE_BINDING_2D},
+      {GL_INT_SAMPLER_2D, GL_TEXTURE_BINDING_2D}, {GL_UNSIGNED_INT_SAMPLER_2D, GL_TEXTURE_BINDING_2D},
+      {GL_SAMPLER_3D, GL_TEXTURE_BINDING_3D}, {GL_INT_SAMPLER_3D, GL_TEXTURE_BINDING_3D},
+      {GL_UNSIGNED_INT_SAMPLER_3D, GL_TEXTURE_BINDING_3D},
+      {GL_SAMPLER_2D_ARRAY, GL_TEXTURE_BINDING_2D_ARRAY},
+      {GL_SAMPLER_2D_ARRAY_SHADOW, GL_TEXTURE_BINDING_2D_ARRAY},
+      {GL_INT_SAMPLER_2D_ARRAY, GL_TEXTURE_BINDING_2D_ARRAY},
+      {GL_UNSIGNED_INT_SAMPLER_2D_ARRAY, GL_TEXTURE_BINDING_2D_ARRAY},
+      {GL_SAMPLER_1D, GL_TEXTURE_BINDING_1D}, {GL_INT_SAMPLER_1D, GL_TEXTURE_BINDING_1D},
+      {GL_UNSIGNED_INT_SAMPLER_1D, GL_TEXTURE_BINDING_1D},
+      {GL_SAMPLER_CUBE, GL_TEXTURE_BINDING_CUBE_MAP}, {GL_SAMPLER_CUBE_SHADOW, GL_TEXTURE_BINDING_CUBE_MAP},
+      {GL_INT_SAMPLER_CUBE, GL_TEXTURE_BINDING_CUBE_MAP},
+      {GL_UNSIGNED_INT_SAMPLER_CUBE, GL_TEXTURE_BINDING_CUBE_MAP},
+      {GL_SAMPLER_BUFFER, GL_TEXTURE_BINDING_BUFFER}, {GL_INT_SAMPLER_BUFFER, GL_TEXTURE_BINDING_BUFFER},
+      {GL_UNSIGNED_INT_SAMPLER_BUFFER, GL_TEXTURE_BINDING_BUFFER}};
+  // clang-format on
+  for (const Entry& e : kSamplers)
+    if (e.type == t) return e.query;
+  return 0;
 }
 
 std::string resourceName(GLuint program, GLenum iface, GLuint i) {
@@ -577,38 +546,21 @@ void checkFramebuffer(State& s, std::string_view by) {
 
 /// Components of a default-block uniform of `type` (opaque types: 1).
 GLint components(GLenum type) {
-  switch (type) {
-    case GL_FLOAT_VEC2:
-    case GL_INT_VEC2:
-    case GL_UNSIGNED_INT_VEC2:
-    case GL_BOOL_VEC2:
-    case GL_DOUBLE:
-      return 2;
-    case GL_FLOAT_VEC3:
-    case GL_INT_VEC3:
-    case GL_UNSIGNED_INT_VEC3:
-    case GL_BOOL_VEC3:
-      return 3;
-    case GL_FLOAT_VEC4:
-    case GL_INT_VEC4:
-    case GL_UNSIGNED_INT_VEC4:
-    case GL_BOOL_VEC4:
-    case GL_FLOAT_MAT2:
-    case GL_DOUBLE_VEC2:
-      return 4;
-    case GL_DOUBLE_VEC3:
-      return 6;
-    case GL_FLOAT_MAT3:
-      return 9;
-    case GL_DOUBLE_VEC4:
-      return 8;
-    case GL_FLOAT_MAT4:
-      return 16;
-    case GL_DOUBLE_MAT4:
-      return 32;
-    default:
-      return 1;
-  }
+  struct Entry {
+    GLenum type;
+    GLint n;
+  };
+  // clang-format off
+  static constexpr Entry kSizes[] = {
+      {GL_FLOAT_VEC2, 2}, {GL_INT_VEC2, 2}, {GL_UNSIGNED_INT_VEC2, 2}, {GL_BOOL_VEC2, 2},
+      {GL_DOUBLE, 2}, {GL_FLOAT_VEC3, 3}, {GL_INT_VEC3, 3}, {GL_UNSIGNED_INT_VEC3, 3},
+      {GL_BOOL_VEC3, 3}, {GL_FLOAT_VEC4, 4}, {GL_INT_VEC4, 4}, {GL_UNSIGNED_INT_VEC4, 4},
+      {GL_BOOL_VEC4, 4}, {GL_FLOAT_MAT2, 4}, {GL_DOUBLE_VEC2, 4}, {GL_DOUBLE_VEC3, 6},
+      {GL_DOUBLE_VEC4, 8}, {GL_FLOAT_MAT3, 9}, {GL_FLOAT_MAT4, 16}, {GL_DOUBLE_MAT4, 32}};
+  // clang-format on
+  for (const Entry& e : kSizes)
+    if (e.type == type) return e.n;
+  return 1;  // scalars and opaque types
 }
 
 void checkPortableLimits(GLuint program, const ProgramUse& use) {
@@ -878,37 +830,29 @@ bool validating() {
 void installValidation() {
   std::lock_guard lock(gMutex);
   if (gInstalled) return;
-  hook(epoxy_glMemoryBarrier, real.memoryBarrier, &memoryBarrier, "glMemoryBarrier");
-  hook(epoxy_glMemoryBarrierByRegion, real.memoryBarrierByRegion, &memoryBarrierByRegion,
-       "glMemoryBarrierByRegion");
-  hook(epoxy_glDispatchCompute, real.dispatchCompute, &dispatchCompute, "glDispatchCompute");
-  hook(epoxy_glDispatchComputeIndirect, real.dispatchComputeIndirect, &dispatchComputeIndirect,
-       "glDispatchComputeIndirect");
-  hook(epoxy_glDrawArrays, real.drawArrays, &drawArrays, "glDrawArrays");
-  hook(epoxy_glDrawArraysInstanced, real.drawArraysInstanced, &drawArraysInstanced,
-       "glDrawArraysInstanced");
-  hook(epoxy_glGetNamedBufferSubData, real.getNamedBufferSubData, &getNamedBufferSubData,
-       "glGetNamedBufferSubData");
-  hook(epoxy_glCopyNamedBufferSubData, real.copyNamedBufferSubData, &copyNamedBufferSubData,
-       "glCopyNamedBufferSubData");
-  hook(epoxy_glNamedBufferSubData, real.namedBufferSubData, &namedBufferSubData,
-       "glNamedBufferSubData");
-  hook(epoxy_glClearNamedBufferData, real.clearNamedBufferData, &clearNamedBufferData,
-       "glClearNamedBufferData");
-  hook(epoxy_glClearNamedBufferSubData, real.clearNamedBufferSubData, &clearNamedBufferSubData,
-       "glClearNamedBufferSubData");
-  hook(epoxy_glGetTextureImage, real.getTextureImage, &getTextureImage, "glGetTextureImage");
-  hook(epoxy_glGetTextureSubImage, real.getTextureSubImage, &getTextureSubImage,
-       "glGetTextureSubImage");
-  hook(epoxy_glTextureSubImage2D, real.textureSubImage2D, &textureSubImage2D,
-       "glTextureSubImage2D");
-  hook(epoxy_glTextureSubImage3D, real.textureSubImage3D, &textureSubImage3D,
-       "glTextureSubImage3D");
-  hook(epoxy_glClearTexImage, real.clearTexImage, &clearTexImage, "glClearTexImage");
-  hook(epoxy_glDeleteBuffers, real.deleteBuffers, &deleteBuffers, "glDeleteBuffers");
-  hook(epoxy_glDeleteTextures, real.deleteTextures, &deleteTextures, "glDeleteTextures");
-  hook(epoxy_glLinkProgram, real.linkProgram, &linkProgram, "glLinkProgram");
-  hook(epoxy_glDeleteProgram, real.deleteProgram, &deleteProgram, "glDeleteProgram");
+// Each entry point and the hook of the same name (real.<member> keeps the driver's).
+#define SCATTERLAB_HOOK(gl, member) hook(epoxy_##gl, real.member, &member, #gl)
+  SCATTERLAB_HOOK(glMemoryBarrier, memoryBarrier);
+  SCATTERLAB_HOOK(glMemoryBarrierByRegion, memoryBarrierByRegion);
+  SCATTERLAB_HOOK(glDispatchCompute, dispatchCompute);
+  SCATTERLAB_HOOK(glDispatchComputeIndirect, dispatchComputeIndirect);
+  SCATTERLAB_HOOK(glDrawArrays, drawArrays);
+  SCATTERLAB_HOOK(glDrawArraysInstanced, drawArraysInstanced);
+  SCATTERLAB_HOOK(glGetNamedBufferSubData, getNamedBufferSubData);
+  SCATTERLAB_HOOK(glCopyNamedBufferSubData, copyNamedBufferSubData);
+  SCATTERLAB_HOOK(glNamedBufferSubData, namedBufferSubData);
+  SCATTERLAB_HOOK(glClearNamedBufferData, clearNamedBufferData);
+  SCATTERLAB_HOOK(glClearNamedBufferSubData, clearNamedBufferSubData);
+  SCATTERLAB_HOOK(glGetTextureImage, getTextureImage);
+  SCATTERLAB_HOOK(glGetTextureSubImage, getTextureSubImage);
+  SCATTERLAB_HOOK(glTextureSubImage2D, textureSubImage2D);
+  SCATTERLAB_HOOK(glTextureSubImage3D, textureSubImage3D);
+  SCATTERLAB_HOOK(glClearTexImage, clearTexImage);
+  SCATTERLAB_HOOK(glDeleteBuffers, deleteBuffers);
+  SCATTERLAB_HOOK(glDeleteTextures, deleteTextures);
+  SCATTERLAB_HOOK(glLinkProgram, linkProgram);
+  SCATTERLAB_HOOK(glDeleteProgram, deleteProgram);
+#undef SCATTERLAB_HOOK
   gInstalled = true;
 }
 
