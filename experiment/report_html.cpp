@@ -263,7 +263,8 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
       if (img >= 0)
         items.push_back({{"image", img},
                          {"label", plan.references[k].name + " (reference)"},
-                         {"kind", "reference"}});
+                         {"kind", "reference"},
+                         {"png", fs::path(g.refs[k]).replace_extension(".png").string()}});
     }
     const int nRefs = int(items.size());
     for (const RunRecord* r : g.runs) {
@@ -275,7 +276,8 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
       for (const std::string& a : varying)
         if (r->axes.contains(a)) label += ", " + a + " " + valueLabel(r->axes[a]);
       runItem[r->id] = {int(gi), int(items.size())};
-      items.push_back({{"image", img}, {"label", label}, {"kind", "run"}, {"run", r->id}});
+      items.push_back(
+          {{"image", img}, {"label", label}, {"kind", "run"}, {"run", r->id}, {"png", r->image}});
     }
     if (items.empty()) continue;
     jgroups.push_back({{"title", title}, {"items", items}, {"reference", nRefs > 0 ? 0 : -1}});
@@ -289,6 +291,7 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
   for (const char* c : {"samples used", "time (ms)", "fps"}) columns.push_back(c);
   columns.push_back("rel L2 vs " + head);
   for (const char* c : {"masked rel L2 (K px)", "rel L1", "visibly wrong"}) columns.push_back(c);
+  columns.push_back("overrides (--set)");
   Json rows = Json::array();
   for (const RunRecord& rec : facts.runs) {
     Json cells =
@@ -327,6 +330,11 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
       } else {
         for (int k = 0; k < 4; ++k) cells.push_back(tableCell("—", nullptr));
       }
+      // The --set overrides the run was rendered with (the config's, then the method's).
+      std::string sets;
+      for (const Json& s : rec.config.value("sets", Json::array()))
+        if (s.is_string()) sets += (sets.empty() ? "" : " ") + s.get<std::string>();
+      cells.push_back(tableCell(sets, sets));
       if (const auto it = runItem.find(rec.id); it != runItem.end()) {
         row["group"] = it->second.first;
         row["item"] = it->second.second;
@@ -376,6 +384,10 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
                      {"memory_method", memoryMethod},
                      {"machines", machines},
                      {"max_side", plan.htmlMaxSide},
+                     // What the PNGs beside the EXRs show (writePng: linear curve, this exposure):
+                     // the viewers' default.
+                     {"png_tone", "linear"},
+                     {"png_exposure", plan.exposure},
                      {"images", images.meta()},
                      {"groups", jgroups},
                      {"table", {{"columns", columns}, {"rows", rows}}},

@@ -88,6 +88,25 @@
     for (const c of children) if (c !== null && c !== undefined) e.append(c);
     return e;
   }
+  /// Inline Markdown of the config's texts as DOM nodes (never HTML): `code`, **strong**, *em* and
+  /// [text](http(s) or relative link); anything else stays text.
+  function markdown(text) {
+    const out = [];
+    const re = /`([^`]+)`|\*\*([^*]+)\*\*|\*([^*\s][^*]*)\*|\[([^\]]+)\]\(([^)\s]+)\)/g;
+    let last = 0, m;
+    while ((m = re.exec(text)) !== null) {
+      if (m.index > last) out.push(text.slice(last, m.index));
+      if (m[1] !== undefined) out.push(el("code", { text: m[1] }));
+      else if (m[2] !== undefined) out.push(el("strong", { text: m[2] }));
+      else if (m[3] !== undefined) out.push(el("em", { text: m[3] }));
+      else if (/^https?:\/\//i.test(m[5]) || !m[5].includes(":")) out.push(el("a", { href: m[5], text: m[4] }));
+      else out.push(m[0]);
+      last = re.lastIndex;
+    }
+    if (last < text.length) out.push(text.slice(last));
+    return out;
+  }
+
   function fmt(v) {
     if (!Number.isFinite(v)) return String(v);
     const a = Math.abs(v);
@@ -109,8 +128,9 @@
       this.a = firstRun >= 0 ? firstRun : 0;
       this.b = -1;  // split off
       this.split = 0.5;
-      this.exposure = 0;
-      this.tone = "filmic";
+      // As the PNGs beside the EXRs: the harness's exposure, its linear curve.
+      this.exposure = DATA.png_exposure || 0;
+      this.tone = DATA.png_tone || "linear";
       this.mode = "image";
       this.errScale = 0.1;
       this.view = null;  // {s, ox, oy}: image pixel (x, y) shows at canvas (ox + s x, oy + s y)
@@ -145,8 +165,8 @@
         this.items.forEach((it, k) => sel.append(el("option", { value: String(k), text: `${k + 1} ${it.label}` })));
         return sel;
       };
-      this.exposureInput = el("input", { type: "range", class: "exposure", min: "-10", max: "10", step: "0.25", value: "0" });
-      this.exposureOut = el("output", { text: "+0" });
+      this.exposureInput = el("input", { type: "range", class: "exposure", min: "-10", max: "10", step: "0.25", value: String(this.exposure) });
+      this.exposureOut = el("output", { text: (this.exposure >= 0 ? "+" : "") + this.exposure });
       this.toneSelect = el("select", { class: "tone" });
       for (const t of ["linear", "filmic", "aces"]) this.toneSelect.append(el("option", { value: t, text: t }));
       this.toneSelect.value = this.tone;
@@ -427,15 +447,39 @@
 
   function header(main) {
     main.append(el("h1", { text: DATA.title }));
-    if (DATA.description) main.append(el("p", { text: DATA.description }));
+    if (DATA.description) main.append(el("p", { class: "description" }, ...markdown(DATA.description)));
     main.append(el("p", { class: "meta" }, "Config ", el("code", { text: DATA.config }),
       `; ${DATA.runs} runs (${DATA.rendered} rendered now, ${DATA.resumed} resumed, ${DATA.failed} failed, ${DATA.refused || 0} refused). Written ${DATA.written}. `,
       "Tables and definitions: ", el("a", { href: "report.md", text: "report.md" }), ", ",
       el("a", { href: "results.csv", text: "results.csv" }), ", ", el("a", { href: "results.json", text: "results.json" }), "."));
     if (DATA.machines.length > 1)
       main.append(el("p", {}, el("strong", { text: `These runs come from ${DATA.machines.length} different machines or commits: compare times only between runs of one machine.` })));
-    for (const m of DATA.machines) main.append(el("p", { class: "machine" }, el("strong", { text: "Machine: " }), m));
+    for (const m of DATA.machines) main.append(el("p", { class: "machine" }, el("strong", { text: "Machine: " }), ...markdown(m)));
     for (const m of DATA.missing) main.append(el("p", { class: "note", text: `Left out (unreadable): ${m}` }));
+  }
+
+  /// One row of thumbnails (the PNGs beside the EXRs) per viewer; a click opens that image there.
+  function overviewSection(main) {
+    if (!DATA.groups.length) return;
+    main.append(el("h2", { text: "Overview" }));
+    const grid = el("div", { class: "overview" });
+    DATA.groups.forEach((g, k) => {
+      const row = el("div", { class: "overview-row" }, el("div", { class: "overview-title", text: g.title }));
+      g.items.forEach((it, i) => {
+        if (!it.png) return;
+        const fig = el("figure", { class: "thumb", title: `${it.label}: show in its viewer` },
+          el("img", { src: it.png, alt: it.label, loading: "lazy" }), el("figcaption", { text: it.label }));
+        fig.addEventListener("click", () => {
+          const v = viewers[k];
+          v.activate();
+          v.setA(i);
+          v.root.scrollIntoView({ block: "start" });
+        });
+        row.append(fig);
+      });
+      grid.append(row);
+    });
+    main.append(grid);
   }
 
   function viewersSection(main) {
@@ -519,7 +563,10 @@
 
   const main = document.getElementById("report");
   header(main);
+  const overview = el("div");
+  main.append(overview);
   viewersSection(main);
+  overviewSection(overview);
   tableSection(main);
   plotsSection(main);
   if (viewers.length) viewers[0].activate();

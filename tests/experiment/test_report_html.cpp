@@ -254,6 +254,18 @@ TEST_F(ReportHtmlTest, PageHoldsTheExrsAsHalfFloatsAndReportMdsNumbers) {
     }
     EXPECT_EQ(row["group"], 0);
   }
+  // The overrides each run was rendered with, in the last column.
+  ASSERT_EQ(cols.back(), "overrides (--set)");
+  for (const Json& row : page.data["table"]["rows"]) {
+    const std::string sets = row["cells"].back()["t"].get<std::string>();
+    if (row["run"].get<std::string>().find("gradient") != std::string::npos)
+      EXPECT_NE(sets.find("render.sampler.count=64"), std::string::npos) << sets;
+  }
+  // The viewers start as the PNGs look, and every image has its PNG for the overview.
+  EXPECT_EQ(page.data["png_tone"], "linear");
+  for (const Json& g : page.data["groups"])
+    for (const Json& it : g["items"])
+      EXPECT_TRUE(fs::exists(out / it["png"].get<std::string>())) << it["png"];
   EXPECT_EQ(page.data["machines"].size(), 1u);
   EXPECT_NE(page.data["machines"][0].get<std::string>().find("commit"), std::string::npos);
 

@@ -61,6 +61,10 @@ EXPOSURE_LO, EXPOSURE_HI, EXPOSURE_TOL = 0.1, 0.45, 0.023
 
 # Escaped by the page writer: in the data element and in <title>.
 TITLE = "report.html browser test </script><!-- & <b>"
+# Inline Markdown is rendered (as DOM nodes, never HTML); a link to anything but http(s) or a
+# relative path stays text.
+DESCRIPTION = ("A `code` word, **bold**, *em*, a [link](report.md), "
+               "[no script](javascript:alert(1)) and <b>not bold</b>.")
 failures = []
 
 
@@ -78,6 +82,7 @@ def srgb_to_linear(v):
 def run_experiment(cli, work):
     cfg = {
         "title": TITLE,
+        "description": DESCRIPTION,
         "scene": os.path.join(ROOT, "data", "scenes", "glow.json"),
         "set": ["camera.width=64", "camera.height=48", "medium.resolution=16"],
         "references": ["exact"],
@@ -169,7 +174,26 @@ def test_page(driver, page, args):
     if not args.page:
         check(driver.title == TITLE and
               driver.find_element(By.TAG_NAME, "h1").text == TITLE, "the title, escaped")
+    if not args.page:
+        desc = driver.find_element(By.CSS_SELECTOR, "p.description")
+        tags = driver.execute_script(
+            "return [...arguments[0].children].map(e => e.tagName + ':' + e.textContent)", desc)
+        check(tags == ["CODE:code", "STRONG:bold", "EM:em", "A:link"],
+              "the description's Markdown rendered, the script link and the HTML left as text: %s"
+              % tags)
+        check("javascript:alert(1)" in desc.text and "<b>not bold</b>" in desc.text,
+              "the unsafe parts shown as text")
     wait_idle(driver)
+    # The overview: one thumbnail per image of each viewer, the PNGs beside the EXRs, loaded.
+    thumbs = driver.execute_script(
+        "return [...document.querySelectorAll('.overview .thumb img')]"
+        ".map(i => i.complete && i.naturalWidth > 0)")
+    n_items = driver.execute_script(
+        "return window.scatterlabReport.viewers.reduce((n, v) => n + v.items.length, 0)")
+    check(len(thumbs) == n_items and all(thumbs),
+          "overview: %d thumbnails loaded for %d images" % (sum(thumbs), n_items))
+    check(driver.execute_script("return window.scatterlabReport.viewers[0].tone") == "linear",
+          "the viewers' default tone map is the PNGs' (linear)")
     viewers = driver.execute_script("return window.scatterlabReport.viewers.length")
     check(viewers >= 1, "at least one viewer (%d)" % viewers)
     items = driver.execute_script(
