@@ -115,6 +115,29 @@ def main():
     for label in ("ε=0.01", "ε=0.001", "ε=0.0001"):
         if f"<!-- {label} -->" not in svg:
             fail(f"pareto__eps.svg has no label {label}")
+    # A light in view: the scene's Pareto panel plots the masked error, and the caption says so.
+    lit = [run(i, e, t, rel) for i, (e, t, rel) in enumerate([(1e-2, 20.0, 0.74), (1e-3, 40.0, 0.78)])]
+    for r, masked in zip(lit, (0.02, 0.01)):
+        r["errors"]["exact"].update({"masked_rel_l2": masked, "masked_lights": 1,
+                                     "mask_radius_px": 2.0})
+    if plots.lights_in_view(lit, "exact") != 2.0 or plots.lights_in_view(res["runs"], "exact"):
+        fail("lights_in_view")
+    d2 = tempfile.mkdtemp()
+    os.makedirs(os.path.join(d2, "images"))
+    os.makedirs(os.path.join(d2, "references"))
+    plots.plt.imsave(os.path.join(d2, "images", "run.png"), img)
+    plots.plt.imsave(os.path.join(d2, "references", "exact.png"), img * 0.9)
+    with open(os.path.join(d2, "results.json"), "w") as f:
+        json.dump(dict(res, runs=lit), f)
+    subprocess.run([sys.executable, SCRIPT, d2], check=True)
+    with open(os.path.join(d2, "plots", "index.json")) as f:
+        cap = {p["file"]: p for p in json.load(f)}["pareto__eps.png"]["caption"]
+    if "Where a light is in view (shaft) the error is the masked relative L2" not in cap:
+        fail("masked pareto caption: " + cap)
+    with open(os.path.join(d2, "plots", "pareto__eps.svg")) as f:
+        svg = f.read()
+    if "masked relative L2 vs exact" not in svg or "masked: 2 px around each light" not in svg:
+        fail("masked pareto: axis label or panel title missing")
     with open(os.path.join(d, "gallery", "index.json")) as f:
         slots = json.load(f)["difference_slots"][0]
     if slots[0] != {"tile": "reference", "image": "references/exact.png",
