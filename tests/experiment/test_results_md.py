@@ -76,6 +76,23 @@ def main():
               "Fig. 4/5 with neither results nor a previous section: Not run")
         check(subprocess.run(cmd).returncode == 0 and open(out).read() == text,
               "a second run changes nothing")
+
+        # Fig. 4/5: the paper's 2705 samples beside the runs at its ε only.
+        fig45 = os.path.join(tmp, "fig45")
+        os.makedirs(fig45)
+        runs45 = [{"id": f"epsilon__adaptive__epsilon-{e}", "status": "ok", "samples": n,
+                   "axes": {"epsilon": e}, "paper": {"samples": 2705},
+                   "errors": {"exact": {"rel_l2": 0.2}}, "median_ms": {"total": 100.0}}
+                  for e, n in ((0.001, 889), (0.0001, 2748))]
+        with open(os.path.join(fig45, "results.json"), "w") as f:
+            json.dump({"references": ["exact"], "runs": runs45, "machine": MACHINE,
+                       "machines": [MACHINE]}, f)
+        cmd45 = cmd[:cmd.index("--fig45") + 1] + [fig45] + cmd[cmd.index("--fig45") + 2:]
+        check(subprocess.run(cmd45).returncode == 0, "results_md.py with Fig. 4/5 exits 0")
+        f45 = open(out).read().split("## Fig. 4/5")[1].split("\n## ")[0]
+        check("| epsilon__adaptive__epsilon-0.001 | 889 | — |" in f45 and
+              "| epsilon__adaptive__epsilon-0.0001 | 2748 | 2705 |" in f45,
+              "Fig. 4/5: the paper's count at ε = 1e-4 only")
     finally:
         if not failures:
             shutil.rmtree(tmp, ignore_errors=True)
