@@ -11,6 +11,7 @@
 
 #include "api/scatterlab.h"
 #include "apps/commands.h"
+#include "apps/movie.h"
 #include "core/atomic_file.h"
 #include "core/quick_look.h"
 #include "core/suggest.h"
@@ -95,7 +96,7 @@ Action addRender(CLI::App& app) {
     std::vector<std::string> sets;
     // PNGs are previews: the default curve rolls glows off instead of clipping them to white
     // discs (EXR output stays linear whatever the curve).
-    std::string frames, tonemap = "aces", resolution;
+    std::string frames, tonemap = "aces", resolution, movie;
     double fps = 24.0;
     float exposure = 0.0f;
     bool quiet = false, depth = false;
@@ -169,6 +170,22 @@ Action addRender(CLI::App& app) {
                                         "e.g. 0:47";
           },
           "A:B"));
+  CLI::Option* framesOption = c->get_option("--frames");
+  c->add_option("--movie", o->movie,
+                "With --frames: also encode the frames, tone-mapped as the PNG previews "
+                "(--exposure, --tonemap), into a movie at --fps frames per second, by ffmpeg "
+                "(on PATH, or $SCATTERLAB_FFMPEG): .mp4, .mkv or .mov (H.264), .webm (VP9) or "
+                ".gif")
+      ->needs(framesOption)
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            return movieFormat(v).empty()
+                       ? "'" + v +
+                             "' has no movie extension: expected .mp4, .mkv, .mov, .webm "
+                             "or .gif"
+                       : "";
+          },
+          "FILE.mp4|.mkv|.mov|.webm|.gif"));
   c->add_option("--fps", o->fps, "Frames per unit of scene time for --frames (default 24)")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
@@ -263,6 +280,15 @@ Action addRender(CLI::App& app) {
       for (const std::string* p :
            {&o->out, &o->png, &o->stats, &o->samplesPng, &o->densityVdb, &o->radianceVdb})
         if (!p->empty()) checkWritablePath(framePath(*p, f));
+    // --movie: ffmpeg found, the movie writable and a directory for its frames, before any
+    // render; the frames go there as PNGs and are encoded before anything is committed.
+    std::string ffmpeg;
+    std::optional<TempDir> movieFrames;
+    if (!o->movie.empty()) {
+      ffmpeg = findFfmpeg();
+      checkWritablePath(o->movie);
+      movieFrames.emplace("scatterlab-movie");
+    }
 
     const bool sequence = frames.size() > 1 || frames[0] >= 0;
     Progress progress(sequence ? "frames" : "render", sequence ? (long long)frames.size() : 1,
@@ -295,6 +321,9 @@ Action addRender(CLI::App& app) {
       if (!o->png.empty())
         out.stage(framePath(o->png, f),
                   [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure, curve); });
+      if (movieFrames)
+        writePng(r.image, movieFramePath(movieFrames->path(), int(summaries.size())), o->exposure,
+                 curve);
       if (!o->stats.empty())
         out.stageStream(framePath(o->stats, f),
                         [&](std::ostream& file) { file << r.stats.toJson().dump(2) << "\n"; });
@@ -334,6 +363,11 @@ Action addRender(CLI::App& app) {
       }
       summaries.push_back(std::move(r.stats));
     }
+    if (movieFrames)
+      out.stage(o->movie, [&](const std::string& tmp) {
+        encodeMovie(ffmpeg, movieFrames->path(), int(summaries.size()), o->fps,
+                    movieFormat(o->movie), tmp);
+      });
     out.commit();
     if (!o->quiet) {
       const RenderStats& st = summaries.back();
@@ -356,6 +390,7 @@ Action addRender(CLI::App& app) {
       for (const std::string* extra :
            {&o->png, &o->stats, &o->samplesPng, &o->densityVdb, &o->radianceVdb})
         if (!extra->empty()) std::printf(", %s", shown(*extra).c_str());
+      if (!o->movie.empty()) std::printf(", %s", o->movie.c_str());
       std::printf("\n");
     }
     return 0;

@@ -342,3 +342,106 @@ TEST_F(CliTools, RenderResolutionShorthand) {
     expectFails("render " + scene + " -o " + o + " -r 20x14 --set " + set, 2,
                 {"--resolution 20x14 and --set camera", "both set the image size; give one"}, o);
 }
+
+namespace {
+
+/// A stand-in for ffmpeg (the test machines have none): it checks that every frame the pattern
+/// names exists, records its arguments, and writes "fake FORMAT N frames at RATE" to its output
+/// (the last argument); with FAIL set it prints ffmpeg-like errors and exits 3 instead.
+std::string fakeFfmpeg(const fs::path& dir, bool fail) {
+  const fs::path p = dir / (fail ? "ffmpeg-failing" : "ffmpeg");
+  std::ofstream(p) << "#!/bin/sh\n"
+                   << "echo \"$@\" > \"" << (dir / "ffmpeg.args").string() << "\"\n"
+                   << (fail ? "echo \"Unknown encoder 'libx264'\" >&2\n"
+                              "echo 'Error selecting an encoder' >&2\nexit 3\n"
+                            : "")
+                   << "rate=''; pattern=''; count=''; format=''; out=''\n"
+                   << "while [ $# -gt 0 ]; do\n"
+                   << "  case \"$1\" in\n"
+                   << "    -framerate) rate=$2; shift;;\n"
+                   << "    -i) pattern=$2; shift;;\n"
+                   << "    -frames:v) count=$2; shift;;\n"
+                   << "    -f) format=$2; shift;;\n"
+                   << "  esac\n"
+                   << "  out=$1; shift\n"
+                   << "done\n"
+                   << "d=$(dirname \"$pattern\"); n=0\n"
+                   << "while [ $n -lt \"$count\" ]; do\n"
+                   << "  f=$(printf \"$d/frame%06d.png\" $n)\n"
+                   << "  [ -s \"$f\" ] || { echo \"missing $f\" >&2; exit 4; }\n"
+                   << "  n=$((n + 1))\n"
+                   << "done\n"
+                   << "echo \"fake $format $count frames at $rate\" > \"$out\"\n";
+  fs::permissions(p, fs::perms::owner_all);
+  return p.string();
+}
+
+/// Sets an environment variable for its scope.
+struct ScopedEnv {
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv() { ::unsetenv(name_); }
+  const char* name_;
+};
+
+}  // namespace
+
+// `render --frames A:B --movie OUT` encodes the frames, as PNGs in a directory of its own, through
+// ffmpeg at --fps, after every frame rendered and before anything is committed; the directory is
+// gone afterwards. (Checked by hand with Debian's ffmpeg 5.1, 2026-11-28: .mp4, .mkv and .mov
+// H.264 padded to even sizes, .webm VP9, .gif, 6 frames at 6 fps each, ffprobe.)
+TEST_F(CliTools, RenderMovieEncodesTheFramesThroughFfmpeg) {
+  const std::string scene = writeScene();
+  const ScopedEnv env("SCATTERLAB_FFMPEG", fakeFfmpeg(dir_, false));
+  const std::string movie = out("m.mp4");
+  const RunResult r =
+      run("render " + scene + " -o " + out("f.exr") + " --frames 2:4 --fps 12 --movie " + movie);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(movie);
+  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(content, "fake mp4 3 frames at 12\n");
+  for (const char* f : {"f.0002.exr", "f.0003.exr", "f.0004.exr"}) EXPECT_TRUE(fs::exists(out(f)));
+  EXPECT_NE(r.output.find(movie), std::string::npos) << r.output;
+  std::ifstream argsFile(dir_ / "ffmpeg.args");
+  std::string args((std::istreambuf_iterator<char>(argsFile)), std::istreambuf_iterator<char>());
+  for (const char* a : {"-framerate 12 ", "-c:v libx264 -pix_fmt yuv420p", "-frames:v 3", "-f mp4"})
+    EXPECT_NE(args.find(a), std::string::npos) << a << " in " << args;
+  const std::size_t i = args.find("-i ") + 3;
+  const fs::path frames = fs::path(args.substr(i, args.find(' ', i) - i)).parent_path();
+  EXPECT_FALSE(fs::exists(frames)) << frames << " left behind";
+  // .webm: VP9.
+  ASSERT_EQ(
+      run("render " + scene + " -o " + out("g.exr") + " --frames 0:1 --movie " + out("m.webm"))
+          .code,
+      0);
+  std::ifstream webmArgs(dir_ / "ffmpeg.args");
+  std::string wa((std::istreambuf_iterator<char>(webmArgs)), std::istreambuf_iterator<char>());
+  EXPECT_NE(wa.find("-c:v libvpx-vp9"), std::string::npos) << wa;
+  EXPECT_NE(wa.find("-f webm"), std::string::npos) << wa;
+}
+
+TEST_F(CliTools, RenderMovieBadInputs) {
+  const std::string scene = writeScene();
+  const std::string f = out("f.exr");
+  expectFails("render " + scene + " -o " + f + " --movie " + out("m.mp4"), 2,
+              {"--movie", "--frames"}, out("m.mp4"));
+  expectFails("render " + scene + " -o " + f + " --frames 0:1 --movie " + out("m.avi"), 2,
+              {"'" + out("m.avi") + "' has no movie extension"}, out("m.avi"));
+  {
+    const ScopedEnv env("SCATTERLAB_FFMPEG", out("no-such-ffmpeg"));
+    expectFails("render " + scene + " -o " + f + " --frames 0:1 --movie " + out("m.mp4"), 1,
+                {"SCATTERLAB_FFMPEG", "is not an executable file"}, out("f.0000.exr"));
+  }
+  {
+    const ScopedEnv env("PATH", dir_.string() + "/empty");
+    expectFails("render " + scene + " -o " + f + " --frames 0:1 --movie " + out("m.mp4"), 1,
+                {"--movie needs ffmpeg", "apt-get install ffmpeg"}, out("f.0000.exr"));
+  }
+  // ffmpeg fails: its status and messages, and no frame and no movie (all or nothing).
+  const ScopedEnv env("SCATTERLAB_FFMPEG", fakeFfmpeg(dir_, true));
+  expectFails("render " + scene + " -q -o " + f + " --frames 0:1 --movie " + out("m.mp4"), 1,
+              {"exited with status 3", "Unknown encoder 'libx264'", "Error selecting"},
+              out("m.mp4"));
+  EXPECT_FALSE(fs::exists(out("f.0000.exr")));
+}
