@@ -393,19 +393,33 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "render",
       [](const PyScene& s, const std::string& method, const std::string& backend, bool volumes,
-         bool rgba) {
+         bool rgba, std::optional<long long> samples, std::optional<long long> seed) {
+        // samples= and seed= are render.sampler.count and .seed, checked as the scene's keys.
+        Json doc = s.doc;
+        if (samples || seed) {
+          Json& render = doc["render"];
+          if (!render.is_object()) render = Json::object();
+          Json& sampler = render["sampler"];
+          if (!sampler.is_object()) sampler = Json::object();
+          if (samples) sampler["count"] = *samples;
+          if (seed) sampler["seed"] = *seed;
+        }
         RenderResult r;
         {
           GilReleased unlocked;
-          Renderer renderer(s.doc, s.baseDir, method, backend);
+          Renderer renderer(doc, s.baseDir, method, backend);
           r = renderer.render(nullptr);
         }
         return resultTuple(r, volumes, s.parsed.medium.bounds, rgba);
       },
       py::arg("scene"), py::arg("method") = "", py::arg("backend") = "auto",
-      py::arg("volumes") = false, py::arg("rgba") = false,
+      py::arg("volumes") = false, py::arg("rgba") = false, py::arg("samples") = py::none(),
+      py::arg("seed") = py::none(),
       "Renders the scene: (image float32 (H,W,3), stats dict), plus a dict of the method's "
-      "density and radiance volumes with volumes=True");
+      "density and radiance volumes with volumes=True. samples= and seed= set the sampler's "
+      "count and seed (render.sampler.count, render.sampler.seed: the jittered sampler's) for "
+      "the methods with samples; the other methods report them unused, a bad value is the "
+      "scene's error");
 
   py::class_<PyRenderer>(m, "Renderer",
                          "Re-renders one scene as lights, camera or time change, keeping the "

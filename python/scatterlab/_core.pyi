@@ -41,7 +41,8 @@ def load_scene(
     base_dir: Union[None, str, PathLike[str]] = None,
 ) -> Scene: ...
 def render(
-    scene: Scene, method: str = "", backend: str = "auto", volumes: bool = False, rgba: bool = False
+    scene: Scene, method: str = "", backend: str = "auto", volumes: bool = False, rgba: bool = False,
+    samples: int | None = None, seed: int | None = None
 ) -> Union[tuple[Image, Stats], tuple[Image, Stats, dict[str, Any]]]: ...
 
 class Renderer:

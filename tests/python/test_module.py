@@ -97,6 +97,23 @@ class LoadAndRender(unittest.TestCase):
             self.assertEqual(rgba.shape, (18, 24, 4))
             self.assertEqual(np.abs(rgba - sl.read_exr(out, rgba=True)).max(), 0.0)
 
+    def test_samples_and_seed_are_the_samplers_keys(self):
+        scene = sl.load_scene(box_scene())
+        img1, st1 = sl.render(scene, method="gradient", backend="cpu", samples=120, seed=1)
+        self.assertEqual(st1["sampler"], "jittered")
+        self.assertLessEqual(st1["samples"], 2 * 120)  # the cell search's nearest count
+        _, st_default = sl.render(scene, method="gradient", backend="cpu")
+        self.assertNotEqual(st_default["samples"], st1["samples"])
+        again, _ = sl.render(scene, method="gradient", backend="cpu", samples=120, seed=1)
+        self.assertEqual(np.abs(again - img1).max(), 0.0)  # deterministic per seed
+        other, _ = sl.render(scene, method="gradient", backend="cpu", samples=120, seed=2)
+        self.assertGreater(np.abs(other - img1).max(), 0.0)
+        # The keys' own checks: a count out of range, a seed the grid sampler has not.
+        with self.assertRaisesRegex(sl.ConfigError, "render.sampler.count"):
+            sl.render(scene, method="gradient", backend="cpu", samples=0)
+        with self.assertRaisesRegex(sl.ConfigError, "seed"):
+            sl.render(scene, method="adaptive", backend="cpu", seed=3)
+
     def test_alpha_is_beer_lambert(self):
         # 25x33 so the centre pixel's ray crosses the unit box along +z: T = exp(-sigma_t D).
         rgba, _ = sl.render(sl.load_scene(box_scene(width=33, height=25, value=0.8)),
