@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 SECONDS_EACH=${1:-60}
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_json fuzz_set fuzz_sog fuzz_vdb fuzz_exr fuzz_scene)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_json fuzz_set fuzz_sog fuzz_vdb fuzz_exr fuzz_compare fuzz_scene)
 OUT=build-fuzz
 # libFuzzer reports allocations above its -rss_limit_mb (2 GiB): the library's own memory limit
 # is set below it, so a size the limit refuses is an error, not a finding.
@@ -37,11 +37,13 @@ declare -A SOURCES=(
   [fuzz_sog]="media/sog.cpp media/procedural.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_vdb]="media/vdb.cpp core/density_model.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_exr]="core/image.cpp core/atomic_file.cpp core/limits.cpp"
+  [fuzz_compare]="core/image.cpp core/metrics.cpp core/camera.cpp core/atomic_file.cpp core/limits.cpp"
   [fuzz_scene]="$(echo core/*.cpp media/*.cpp sampling/*.cpp cpu/*.cpp methods/*.cpp \
     experiment/*.cpp)")
 declare -A LIBS=(
   [fuzz_sog]="-ltbb" [fuzz_vdb]="-lopenvdb -ltbb -lImath-3_1"
   [fuzz_exr]="-lOpenEXR-3_1 -lOpenEXRCore-3_1 -lIex-3_1 -lImath-3_1 -lpng"
+  [fuzz_compare]="-lOpenEXR-3_1 -lOpenEXRCore-3_1 -lIex-3_1 -lImath-3_1 -lpng"
   [fuzz_scene]="-lopenvdb -ltbb -lOpenEXR-3_1 -lOpenEXRCore-3_1 -lIex-3_1 -lImath-3_1 -lpng -lembree3
     -ltinyobjloader -lpthread")
 EXR_INCLUDES=(-I/usr/include/OpenEXR -I/usr/include/Imath)
@@ -90,14 +92,16 @@ for name in "${TARGETS[@]}"; do
       "$CLI" render data/scenes/glow.json -o "$tmpseeds/v.exr" --density-vdb "${seeds[0]}/g.vdb" \
         --set medium.resolution=6 --set camera.width=8 --set camera.height=6 >/dev/null
       find data/vdb -name '*.vdb' -size -600k -exec cp {} "${seeds[0]}/" \; ;;
-    fuzz_exr)
+    fuzz_exr | fuzz_compare)  # a zip-compressed render, with its Z channel and attributes
       "$CLI" render data/scenes/glow.json -o "${seeds[0]}/a.exr" --set camera.width=6 \
-        --set camera.height=4 >/dev/null ;;
+        --set camera.height=4 >/dev/null
+      "$CLI" render data/scenes/glow.json -o "${seeds[0]}/z.exr" --set camera.width=5 \
+        --set camera.height=3 --depth >/dev/null ;;
   esac
   # Inputs that once crashed a target stay in its seeds (fuzz/regressions/TARGET_*).
   find fuzz/regressions -name "${name}_*" -exec cp {} "${seeds[0]}/" \;
   maxlen=65536
-  case $name in fuzz_sog | fuzz_vdb | fuzz_exr) maxlen=600000 ;; esac
+  case $name in fuzz_sog | fuzz_vdb | fuzz_exr | fuzz_compare) maxlen=600000 ;; esac
   echo "== $name: ${SECONDS_EACH} s"
   rm -f "$OUT/$name"/crash-* "$OUT/$name"/timeout-* "$OUT/$name"/oom-*
   # fuzz_vdb: OpenVDB parses in a forked child (media/vdb.cpp). A huge allocation there is a
