@@ -439,6 +439,23 @@ std::int64_t bufferSize(GLuint id) {
   return size;
 }
 
+/// The buffer bound at indexed binding `index` of a target and its bytes (the whole buffer where
+/// it was bound without a range).
+struct BoundRange {
+  GLuint buffer = 0;
+  std::int64_t begin = 0, end = 0;
+};
+
+BoundRange boundRange(GLenum binding, GLenum start, GLenum size, GLuint index) {
+  GLint buf = 0;
+  GLint64 b = 0, n = 0;
+  glGetIntegeri_v(binding, index, &buf);
+  if (!buf) return {};
+  glGetInteger64i_v(start, index, &b);
+  glGetInteger64i_v(size, index, &n);
+  return {GLuint(buf), b, n ? b + n : bufferSize(GLuint(buf))};
+}
+
 struct PendingWrite {
   Kind kind;
   GLuint id;
@@ -458,28 +475,21 @@ std::vector<PendingWrite> checkProgramAccesses(State& s, std::string_view what) 
   const ProgramUse& use = found->second;
   const std::string by = std::string(what) + " " + objectLabel(GL_PROGRAM, GLuint(program));
   for (const BlockUse& b : use.storage) {
-    GLint buf = 0;
-    GLint64 start = 0, size = 0;
-    glGetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, b.binding, &buf);
-    if (!buf) continue;
-    glGetInteger64i_v(GL_SHADER_STORAGE_BUFFER_START, b.binding, &start);
-    glGetInteger64i_v(GL_SHADER_STORAGE_BUFFER_SIZE, b.binding, &size);
-    const std::int64_t end = size ? start + size : bufferSize(GLuint(buf));
+    const BoundRange r =
+        boundRange(GL_SHADER_STORAGE_BUFFER_BINDING, GL_SHADER_STORAGE_BUFFER_START,
+                   GL_SHADER_STORAGE_BUFFER_SIZE, b.binding);
+    if (!r.buffer) continue;
     if (!b.q.writeOnly)
-      check(s, Kind::Buffer, GLuint(buf), start, end, GL_SHADER_STORAGE_BARRIER_BIT,
+      check(s, Kind::Buffer, r.buffer, r.begin, r.end, GL_SHADER_STORAGE_BARRIER_BIT,
             by + " reads storage binding " + std::to_string(b.binding) + ":");
-    if (!b.q.readOnly) out.push_back({Kind::Buffer, GLuint(buf), start, end});
+    if (!b.q.readOnly) out.push_back({Kind::Buffer, r.buffer, r.begin, r.end});
   }
   for (const BlockUse& b : use.uniformBlocks) {
-    GLint buf = 0;
-    GLint64 start = 0, size = 0;
-    glGetIntegeri_v(GL_UNIFORM_BUFFER_BINDING, b.binding, &buf);
-    if (!buf) continue;
-    glGetInteger64i_v(GL_UNIFORM_BUFFER_START, b.binding, &start);
-    glGetInteger64i_v(GL_UNIFORM_BUFFER_SIZE, b.binding, &size);
-    check(s, Kind::Buffer, GLuint(buf), start, size ? start + size : bufferSize(GLuint(buf)),
-          GL_UNIFORM_BARRIER_BIT,
-          by + " reads uniform block binding " + std::to_string(b.binding) + ":");
+    const BoundRange r = boundRange(GL_UNIFORM_BUFFER_BINDING, GL_UNIFORM_BUFFER_START,
+                                    GL_UNIFORM_BUFFER_SIZE, b.binding);
+    if (r.buffer)
+      check(s, Kind::Buffer, r.buffer, r.begin, r.end, GL_UNIFORM_BARRIER_BIT,
+            by + " reads uniform block binding " + std::to_string(b.binding) + ":");
   }
   for (const OpaqueUse& im : use.images)
     for (GLint k = 0; k < im.count; ++k) {
