@@ -482,8 +482,10 @@ struct StageVariants {
   bool has(Backend b) const { return bool(on[int(b)]); }
 };
 
-/// Name -> declaration and per-backend variants. declare() and addVariant() fill an entry,
-/// creating it on first use, so gpu/ adds its variants beside the CPU ones.
+/// Name -> declaration and per-backend variants. declare() creates the entry (once per name, in
+/// the stage family's file); addVariant() adds a backend's variant to a declared name, so gpu/
+/// adds its variants beside the CPU ones, and a variant of a name never declared (a misspelling
+/// in a register function) is a std::logic_error at initialize(), not a stage without keys.
 template <class Maker>
 class StageRegistry : public Registry<StageVariants<Maker>> {
  public:
@@ -492,6 +494,9 @@ class StageRegistry : public Registry<StageVariants<Maker>> {
     this->entry(name).decl = std::move(decl);
   }
   void addVariant(const std::string& name, Backend b, Maker make) {
+    if (!this->contains(name))
+      throw std::logic_error("a " + std::string(backendName(b)) + " variant of '" + name +
+                             "', which no stage declares (declare() it first)");
     this->entry(name).on[int(b)] = std::move(make);
   }
 };

@@ -251,3 +251,27 @@ TEST(MethodLayer, UnknownBackendsAreErrorsListingTheAllowedOnes) {
 
 }  // namespace
 }  // namespace scatterlab
+
+namespace scatterlab::testing {
+namespace {
+
+// Issue 38: a stage's variant can only be added to a name its family declared (a misspelt name
+// in a register function fails at initialize(), instead of a stage without keys or docs).
+TEST(MethodLayer, AVariantOfANameNeverDeclaredIsRefused) {
+  StageRegistry<IntegratorMaker> r("test integrator");
+  try {
+    r.addVariant("ray-marchr", Backend::Gpu, {});
+    FAIL() << "no error";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("'ray-marchr', which no stage declares"),
+              std::string::npos)
+        << e.what();
+  }
+  r.declare("ray-marcher", {});
+  r.addVariant("ray-marcher", Backend::Cpu, [](const PipelineSettings&) { return nullptr; });
+  EXPECT_TRUE(r.get("ray-marcher", "integrator").has(Backend::Cpu));
+  EXPECT_FALSE(r.get("ray-marcher", "integrator").has(Backend::Gpu));
+}
+
+}  // namespace
+}  // namespace scatterlab::testing
