@@ -382,6 +382,12 @@ Action addRender(CLI::App& app) {
         std::printf(" in %.1f ms\n", total);
       if (st.extra.contains("backend_choice"))
         std::printf("%s\n", st.extra["backend_choice"].get<std::string>().c_str());
+      if (st.extra.value("voxels_instead", false))
+        std::printf(
+            "rendered as per-voxel renders it: the medium's %lld occupied voxels cost less "
+            "to trace than dynamic sampling's first level (render.voxel_switch; 0 turns "
+            "it off)\n",
+            st.extra["occupied_voxels"].get<long long>());
       const int f0 = frames.front(), f1 = frames.back();
       const auto shown = [&](const std::string& p) {
         return sequence ? framePath(p, f0) + " .. " + framePath(p, f1) : p;
