@@ -81,9 +81,9 @@ class PipelineMethod : public Method {
   std::unique_ptr<RadianceEvaluator> evaluator;
   std::unique_ptr<SampleRefiner> refiner;
   std::unique_ptr<Reconstruction> reconstruction;
-  /// With a refiner: per-voxel's reconstruction (of what this pipeline's volume holds: V = S / A
-  /// with factor_lights), for a medium the refiner would trace more of than per-voxel does
-  /// (SampleRefiner::voxelsInstead).
+  /// With a refiner: the row's whole-scene fallback (MethodDesc::wholeSceneFallback: per-voxel's
+  /// reconstruction, of what this pipeline's volume holds, V = S / A with factor_lights), for a
+  /// medium the refiner would trace more of than it (SampleRefiner::voxelsInstead).
   std::unique_ptr<Reconstruction> voxelReconstruction;
   long long plannedSamples = 0;  ///< the sampler's planned count (Sampler::plannedCount)
   std::unique_ptr<Integrator> integrator;
@@ -285,6 +285,7 @@ bool pipelineRunsOn(const MethodDesc& d, Backend b) {
   if (d.sampler && !has(radianceEvaluators(), d.evaluator)) return false;
   if (!d.refiner.empty() && !has(refiners(), d.refiner)) return false;
   if (d.radianceVolume() && !has(reconstructions(), d.reconstruction)) return false;
+  if (!d.wholeSceneFallback.empty() && !has(reconstructions(), d.wholeSceneFallback)) return false;
   return has(integrators(), d.integrator);
 }
 
@@ -307,11 +308,11 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
   if (d.sampler)
     m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
                            "radiance evaluator")(settings);
-  if (!d.refiner.empty()) {
+  if (!d.refiner.empty())
     m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(settings);
-    m->voxelReconstruction =
-        variant(reconstructions(), "per-voxel", b, p.keyPath("method"), "reconstruction")(settings);
-  }
+  if (m->refiner && !d.wholeSceneFallback.empty())
+    m->voxelReconstruction = variant(reconstructions(), d.wholeSceneFallback, b,
+                                     p.keyPath("method"), "reconstruction")(settings);
   m->plannedSamples = plannedSamples;
   if (d.radianceVolume())
     m->reconstruction = variant(reconstructions(), d.reconstruction, b, p.keyPath("method"),

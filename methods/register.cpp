@@ -44,6 +44,7 @@ const std::vector<MethodDesc>& builtinMethods() {
        .sampler = true,
        .refiner = "dynamic",
        .reconstruction = "gradient",
+       .wholeSceneFallback = "per-voxel",
        .integrator = "ray-marcher",
        .extended = true,
        .extendedSampler = {.type = "grid", .count = kExtendedCount}},

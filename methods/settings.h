@@ -30,8 +30,11 @@ struct MethodDesc {
   bool sampler = false;  ///< a sampler and the radiance evaluator run (samples)
   /// radianceEvaluators() entry run with a sampler (render.evaluator may replace it).
   std::string evaluator = "volume-tracer";
-  std::string refiner = {};          ///< a SampleRefiner between them ("dynamic"), or empty
-  std::string reconstruction = {};   ///< reconstructions() entry, or empty (no radiance volume)
+  std::string refiner = {};         ///< a SampleRefiner between them ("dynamic"), or empty
+  std::string reconstruction = {};  ///< reconstructions() entry, or empty (no radiance volume)
+  /// With a refiner: the reconstructions() entry the whole scene falls back to where it costs
+  /// less than refining (SampleRefiner::voxelsInstead, key voxel_switch), or empty.
+  std::string wholeSceneFallback = {};
   std::string integrator = {};       ///< default integrators() entry (render.integrator)
   bool integratorSelectable = true;  ///< whether render.integrator may replace it
   /// The fidelity extensions (docs/fidelity.md) are on by default (`gradient`, `adaptive`); the
