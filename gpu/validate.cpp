@@ -622,72 +622,71 @@ struct Real {
   decltype(epoxy_glDeleteProgram) deleteProgram;
 } real;
 
-void memoryBarrier(GLbitfield bits) {
-  {
-    std::lock_guard lock(gMutex);
-    State& s = state();
-    for (auto it = s.writes.begin(); it != s.writes.end();) {
-      for (Write& w : it->second) w.pending &= ~bits;
-      std::erase_if(it->second, [](const Write& w) { return w.pending == 0; });
-      it = it->second.empty() ? s.writes.erase(it) : std::next(it);
-    }
+/// A barrier of `bits`: the writes' pending bits cleared, writes with none left forgotten.
+void clearPending(GLbitfield bits) {
+  std::lock_guard lock(gMutex);
+  State& s = state();
+  for (auto it = s.writes.begin(); it != s.writes.end();) {
+    for (Write& w : it->second) w.pending &= ~bits;
+    std::erase_if(it->second, [](const Write& w) { return w.pending == 0; });
+    it = it->second.empty() ? s.writes.erase(it) : std::next(it);
   }
+}
+
+void memoryBarrier(GLbitfield bits) {
+  clearPending(bits);
   real.memoryBarrier(bits);
 }
 
 void memoryBarrierByRegion(GLbitfield bits) {
+  clearPending(bits);
   real.memoryBarrierByRegion(bits);
-  std::lock_guard lock(gMutex);
+}
+
+/// A dispatch or draw: `checkFirst` (its indirect sizes, its framebuffer) and the current
+/// program's reads checked, the call made (without the lock: it may be long on a driver that
+/// runs it at once), then the program's writes recorded.
+template <class CheckFirst, class Call>
+void checkedCall(const char* what, CheckFirst checkFirst, Call call) {
+  std::unique_lock lock(gMutex);
   State& s = state();
-  for (auto& [k, ws] : s.writes)
-    for (Write& w : ws) w.pending &= ~bits;
+  checkFirst(s);
+  const std::vector<PendingWrite> writes = checkProgramAccesses(s, what);
+  lock.unlock();
+  call();
+  lock.lock();
+  recordWrites(state(), writes);
 }
 
 void dispatchCompute(GLuint x, GLuint y, GLuint z) {
-  std::unique_lock lock(gMutex);
-  State& s = state();
-  const std::vector<PendingWrite> writes = checkProgramAccesses(s, "a dispatch of");
-  lock.unlock();
-  real.dispatchCompute(x, y, z);
-  lock.lock();
-  recordWrites(state(), writes);
+  checkedCall(
+      "a dispatch of", [](State&) {}, [&] { real.dispatchCompute(x, y, z); });
 }
 
 void dispatchComputeIndirect(GLintptr offset) {
-  std::unique_lock lock(gMutex);
-  State& s = state();
-  GLint indirect = 0;
-  glGetIntegerv(GL_DISPATCH_INDIRECT_BUFFER_BINDING, &indirect);
-  check(s, Kind::Buffer, GLuint(indirect), offset, offset + 3 * sizeof(GLuint),
-        GL_COMMAND_BARRIER_BIT,
-        "an indirect dispatch of " + currentProgramLabel() + " takes its size from");
-  const std::vector<PendingWrite> writes = checkProgramAccesses(s, "a dispatch of");
-  lock.unlock();
-  real.dispatchComputeIndirect(offset);
-  lock.lock();
-  recordWrites(state(), writes);
+  checkedCall(
+      "a dispatch of",
+      [&](State& s) {
+        GLint indirect = 0;
+        glGetIntegerv(GL_DISPATCH_INDIRECT_BUFFER_BINDING, &indirect);
+        check(s, Kind::Buffer, GLuint(indirect), offset, offset + 3 * sizeof(GLuint),
+              GL_COMMAND_BARRIER_BIT,
+              "an indirect dispatch of " + currentProgramLabel() + " takes its size from");
+      },
+      [&] { real.dispatchComputeIndirect(offset); });
+}
+
+void checkDrawFramebuffer(State& s) {
+  checkFramebuffer(s, "a draw of " + currentProgramLabel());
 }
 
 void drawArrays(GLenum mode, GLint first, GLsizei count) {
-  std::unique_lock lock(gMutex);
-  State& s = state();
-  checkFramebuffer(s, "a draw of " + currentProgramLabel());
-  const std::vector<PendingWrite> writes = checkProgramAccesses(s, "a draw of");
-  lock.unlock();
-  real.drawArrays(mode, first, count);
-  lock.lock();
-  recordWrites(state(), writes);
+  checkedCall("a draw of", checkDrawFramebuffer, [&] { real.drawArrays(mode, first, count); });
 }
 
 void drawArraysInstanced(GLenum mode, GLint first, GLsizei count, GLsizei instances) {
-  std::unique_lock lock(gMutex);
-  State& s = state();
-  checkFramebuffer(s, "a draw of " + currentProgramLabel());
-  const std::vector<PendingWrite> writes = checkProgramAccesses(s, "a draw of");
-  lock.unlock();
-  real.drawArraysInstanced(mode, first, count, instances);
-  lock.lock();
-  recordWrites(state(), writes);
+  checkedCall("a draw of", checkDrawFramebuffer,
+              [&] { real.drawArraysInstanced(mode, first, count, instances); });
 }
 
 void bufferAccess(GLuint id, std::int64_t begin, std::int64_t end, std::string_view access,
