@@ -420,22 +420,27 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     }
 
     // Probes: S traced at x_j + R_j·d_i (one batched evaluation). A probe where the density is
-    // zero adds nothing to Eq. 5 (its term is weighted by D), so only the others are traced.
+    // zero adds nothing to Eq. 5 (its term is weighted by D), nor does one where the error is
+    // weighted by A and A is zero (outside every spot cone), so only the others are traced.
     const int np = levelProbes(settings, grids[level]);
     const std::size_t nProbes = current.size() * std::size_t(np);
-    std::vector<Vec3> probeAt(nProbes);
+    std::vector<Vec3> probeAt(nProbes), probeA(lightFactor ? nProbes : 0);
     std::vector<float> probeD(nProbes);
     tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
       Vec3 p[kMaxProbes];
       probePoints(current[j], p, np);
       for (int i = 0; i < np; ++i) {
-        probeAt[np * j + i] = p[i];
-        probeD[np * j + i] = density.sample(p[i]);
+        const std::size_t k = np * j + i;
+        probeAt[k] = p[i];
+        probeD[k] = density.sample(p[i]);
+        if (lightFactor)  // only where the term counts (A is large next to a lamp; D = 0: 0)
+          probeA[k] = probeD[k] != 0.0f ? lightFactorTowardsEye(*lightFactor, p[i], eye) : Vec3(0);
       }
     });
-    std::vector<std::uint32_t> traced;  // indices of the probes with D > 0, in order
+    std::vector<std::uint32_t> traced;  // indices of the probes whose term can be non-zero
     for (std::size_t k = 0; k < nProbes; ++k)
-      if (probeD[k] != 0.0f) traced.push_back(std::uint32_t(k));
+      if (probeD[k] != 0.0f && (!lightFactor || probeA[k] != Vec3(0.0f)))
+        traced.push_back(std::uint32_t(k));
     std::vector<RadianceSample> probes(traced.size());
     for (std::size_t t = 0; t < traced.size(); ++t) probes[t].position = probeAt[traced[t]];
     evaluator.evaluate(frame, scene, probes, /*gradients=*/false);
@@ -450,9 +455,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
       for (int i = 0; i < np; ++i) {
         S[i] = probeS[np * j + i];
         D[i] = probeD[np * j + i];
-        if (lightFactor)  // only where the term counts (A is large next to a lamp; D = 0: 0)
-          A[i] = D[i] != 0.0f ? lightFactorTowardsEye(*lightFactor, probeAt[np * j + i], eye)
-                              : Vec3(0.0f);
+        if (lightFactor) A[i] = probeA[np * j + i];
       }
       float tau = settings.perSampleTau && level > 0
                       ? viewTransmittance(scene, density, current[j].position, settings.delta1)

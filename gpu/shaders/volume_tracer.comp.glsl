@@ -123,7 +123,11 @@ void main() {
     if (lane == 0u) {
       totalS[slot][row] = partS[slot][row][0];
       totalA[slot][row] = partA[slot][row][0];
-#ifdef SL_FACTOR_LIGHTS
+#if defined(SL_PROBES) && defined(SL_WEIGHT_A)
+      // A probe's term is weighted by A: the channels where A is zero (what the cones-ignored
+      // sums fill) count for nothing, so they are not traced (the CPU skips such probes).
+      needsFree[slot][row] = false;
+#elif defined(SL_FACTOR_LIGHTS)
       needsFree[slot][row] =
           traced && factoredNeedsFree(partA[slot][row][0].rgb, partS[slot][row][0].w);
 #else

@@ -744,6 +744,54 @@ TEST(DynamicSampling, ErrorWeightedByAIsZeroOutsideTheSpotCone) {
   EXPECT_EQ(weighted.levels[0].split, expected);
 }
 
+TEST(DynamicSampling, ProbesWhereAIsZeroAreNotTraced) {
+  // Weighted by A, a probe outside every spot cone adds 0 to E whatever it would trace: it is not
+  // traced (the fog shafts of the population spent most of their first level on such probes).
+  // The evaluator's calls without gradients are the probe batches; they hold exactly the probe
+  // points with D > 0 inside the cone.
+  const Scene scene = spotScene();
+  const DensityGrid density = densityOf(scene);
+  struct Recording : AnalyticEvaluator {
+    std::vector<Vec3> probed;
+    void evaluate(Frame& f, const Scene& sc, std::span<RadianceSample> samples,
+                  bool gradients) override {
+      if (!gradients)
+        for (const auto& s : samples) probed.push_back(s.position);
+      AnalyticEvaluator::evaluate(f, sc, samples, gradients);
+    }
+  } ev;
+  ev.S = [](const Vec3& p) { return Vec3(0.2f + glm::dot(p, p)); };
+  ev.grad = [](const Vec3& p, Vec3 g[3]) {
+    for (int a = 0; a < 3; ++a) g[a] = Vec3(2.0f * p[a]);
+  };
+  DynamicSamplingSettings st;
+  st.levels = {16};
+  st.probes = 40;
+  st.epsilon = 1e-12;
+  st.delta1 = scene.medium.voxelSize();
+  st.space.weightA = true;
+  std::vector<RadianceSample> init;
+  for (int i = 0; i < 8; ++i)
+    for (int k = 0; k < 8; ++k)
+      init.push_back(sampleAt(Vec3((i + 0.5f) / 8, 0.5f, (k + 0.5f) / 8), 0.125f));
+  const DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
+  std::size_t expected = 0, all = 0;
+  for (const RadianceSample& s : init) {
+    Vec3 p[kMaxProbes];
+    probePoints(s, p, kMaxProbes);
+    for (int i = 0; i < kMaxProbes; ++i) {
+      const Vec3 d = glm::normalize(p[i] - Vec3(0.5f, 1.3f, 0.5f));
+      all += density.sample(p[i]) != 0.0f;
+      expected += density.sample(p[i]) != 0.0f && -d.y > std::cos(glm::radians(12.0f));
+    }
+  }
+  EXPECT_EQ(ev.probed.size(), expected);
+  EXPECT_LT(expected * 4, all);  // most of the probes lie outside the narrow cone
+  // Which samples split is unchanged (ErrorWeightedByAIsZeroOutsideTheSpotCone counts them).
+  EXPECT_GT(r.levels[0].split, 0);
+  EXPECT_LT(r.levels[0].split, 64);
+}
+
 }  // namespace
 }  // namespace scatterlab
 
