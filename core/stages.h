@@ -148,6 +148,11 @@ struct TracerSteps {
   /// With factorLights: A and V include the near-lamp transmittance model (LampModel in
   /// shading/transport.h, docs/fidelity.md §8).
   bool lampModel = false;
+  /// With factorLights: a sample whose sphere of validity, grown by `reach` (the radiance
+  /// voxel's half-diagonal), meets no spot cone is not traced (LitReach, shading/transport.h):
+  /// its V is never multiplied by a non-zero A. It holds V = 0 (ln V = ln kMinV). Points of
+  /// radius 0 (dynamic sampling's probes) are always traced. 0: every sample is traced.
+  float reach = 0.0f;
   /// Whether the values are ln V: the one place where factorLights and logSpace combine.
   bool logValues() const { return factorLights && logSpace; }
 };
@@ -190,13 +195,21 @@ struct PipelineSettings {
   float delta1 = 0.0f;  ///< volume-tracing step towards the lights (the paper's Δ1)
   float delta2 = 0.0f;  ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
+  /// The half-diagonal of the 2×2×2-voxel cube around a radiance voxel centre (the support
+  /// of its trilinear weight): TracerSteps::reach with factorLights.
+  float radianceReach = 0.0f;
   ShadowMapSettings shadowMap;
   /// The settings of the integrator's and the refiner's own keys (light-space-march's,
   /// froxel's, dynamic sampling's, ...), parsed by their StageDecl; empty for stages without.
   StageOwnSettings integratorKeys, refinerKeys;
 
   TracerSteps tracerSteps() const {
-    return {delta1, delta2, factorLights, logSpace, factorLights && lampModel};
+    return {delta1,
+            delta2,
+            factorLights,
+            logSpace,
+            factorLights && lampModel,
+            factorLights ? radianceReach : 0.0f};
   }
   /// The samples and the radiance volume hold ln V (TracerSteps::logValues()).
   bool logValues() const { return tracerSteps().logValues(); }
@@ -221,6 +234,11 @@ inline constexpr float kLampDepth = 2.0f;
 inline constexpr int kErrorBinShift = 17;
 inline constexpr int kErrorBins = 4096;
 
+/// LitReach (shading/transport.h): a spot cone is widened by kLitMargin radians and a ball by
+/// the factor kLitGrow before they are tested, so CPU and GPU rounding never drops what A lights.
+inline constexpr float kLitMargin = 1e-3f;
+inline constexpr float kLitGrow = 1.001f;
+
 /// The physics constants the shaders share with the CPU, by the #define the GPU programs see
 /// them under (gpu/shaders.h injects each one, so that no shader copies a number by hand).
 struct SharedConstant {
@@ -234,6 +252,8 @@ inline constexpr SharedConstant kSharedConstants[] = {
     {"SL_BLOCK", float(MaxDensityGrid::kBlock)},  // voxels per edge of an empty-space block
     {"SL_ERROR_BIN_SHIFT", float(kErrorBinShift)},
     {"SL_ERROR_BINS", float(kErrorBins)},
+    {"SL_LIT_MARGIN", kLitMargin},
+    {"SL_LIT_GROW", kLitGrow},
 };
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted

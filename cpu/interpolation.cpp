@@ -132,6 +132,7 @@ struct SliceAccumulators {
   std::vector<float> r, g, b, w, occ;
   std::vector<float> qr, qg, qb;  ///< one row's normalised values
   std::vector<int> spanLo, spanHi;
+  std::vector<char> lit;  ///< one row's LitReach test (with Gather::lit)
 };
 
 /// VoxelOccupancy (cpu/per_voxel.h), asked only of voxels no sphere covers. When the two
@@ -219,6 +220,11 @@ struct Gather {
   float densityVoxel;  ///< smallest density voxel edge: the occlusion march's step bound
   const NearestIndex& nearest;
   const UncoveredOccupancy& occupied;
+  /// With the factored volume where only spot lights shine (null otherwise): voxels it does
+  /// not reach within `reach` are 0, and samples it does not reach within R + `reach` are left
+  /// out (they cannot touch a voxel it reaches).
+  const LitReach* lit;
+  float reach;
 };
 
 /// Samples per Z slice, in sample order (binned once; each slice is one task and owns its
@@ -228,6 +234,7 @@ std::vector<std::vector<int>> binBySlice(const Gather& g) {
   for (std::size_t j = 0; j < g.samples.size(); ++j) {
     const RadianceSample& s = g.samples[j];
     if (!usable(s)) continue;
+    if (g.lit && !g.lit->reaches(s.position, s.radius + g.reach)) continue;
     int k0, k1;
     voxelRange(s.position.z, s.radius, g.lo.z, g.invH.z, g.n.z, k0, k1);
     for (int k = k0; k <= k1; ++k) slices[std::size_t(k)].push_back(int(j));
@@ -404,16 +411,29 @@ long long writeRow(const Gather& g, int j, int k, SliceAccumulators& acc) {
   int a, b;  // no voxel of the row outside [a, b] is occupied
   g.occupied.rowRange(j, k, a, b);
   const int s0 = acc.spanLo[j], s1 = acc.spanHi[j];
+  const char* lit = nullptr;  // LitReach of each voxel of the row (null: all lit)
+  if (g.lit) {
+    acc.lit.resize(std::size_t(n.x));
+    bool any = false;
+    for (int i = 0; i < n.x; ++i)
+      any |= acc.lit[std::size_t(i)] = g.lit->reaches(g.out.cellCenter(i, j, k), g.reach);
+    if (!any) a = n.x, b = -1;  // nothing to fill
+    lit = acc.lit.data();
+  }
   const auto uncovered = [&](int i) {
     ++unc;
     return uncoveredValue(g, i, j, k);
+  };
+  // An occupied voxel no sphere reached, where the march can see it.
+  const auto fills = [&](int i) {
+    return i >= a && i <= b && (!lit || lit[i]) && g.occupied(i, j, k);
   };
   // Voxels before and after the touched span: uncovered.
   const auto uncoveredRun = [&](int from, int to) {  // [from, to)
     std::fill(orow + from, orow + to, Vec3(0.0f));
     if (wrow) std::fill(wrow + from, wrow + to, 0.0f);
     for (int i = std::max(from, a); i < std::min(to, b + 1); ++i)
-      if (g.occupied(i, j, k)) orow[i] = uncovered(i);
+      if (fills(i)) orow[i] = uncovered(i);
   };
   if (s0 > s1) {
     uncoveredRun(0, n.x);
@@ -441,7 +461,7 @@ long long writeRow(const Gather& g, int j, int k, SliceAccumulators& acc) {
       if (d > 0.0f) {
         orow[i] = Vec3(qr[i], qg[i], qb[i]);
       } else {
-        orow[i] = i >= a && i <= b && g.occupied(i, j, k) ? uncovered(i) : Vec3(0.0f);
+        orow[i] = fills(i) ? uncovered(i) : Vec3(0.0f);
       }
       if (wrow) wrow[i] = d > 0.0f ? d : 0.0f;
     }
@@ -455,12 +475,18 @@ long long writeRow(const Gather& g, int j, int k, SliceAccumulators& acc) {
       if (g.kind != Interpolation::Nearest) v /= d;
       v = g.log ? glm::exp(v) : clampNonNegative(v);
     } else {
-      v = i >= a && i <= b && g.occupied(i, j, k) ? uncovered(i) : Vec3(0.0f);
+      v = fills(i) ? uncovered(i) : Vec3(0.0f);
     }
     orow[i] = v;
     if (wrow) wrow[i] = covered ? (g.kind == Interpolation::Nearest ? 1.0f : d) : 0.0f;
   }
   uncoveredRun(s1 + 1, n.x);
+  if (lit)  // what the march multiplies by A = 0 everywhere around it
+    for (int i = s0; i <= s1; ++i)
+      if (!lit[i]) {
+        orow[i] = Vec3(0.0f);
+        if (wrow) wrow[i] = 0.0f;
+      }
   // Clear what this slice touched for the next slice of this thread.
   std::fill(ar + row + s0, ar + row + s1 + 1, 0.0f);
   std::fill(ag + row + s0, ag + row + s1 + 1, 0.0f);
@@ -476,8 +502,10 @@ long long writeRow(const Gather& g, int j, int k, SliceAccumulators& acc) {
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
                                        Grid3<float>* weightSum, ValueSpace space,
-                                       float occlusionSigmaT, std::optional<TaylorBounds> bounds) {
+                                       float occlusionSigmaT, std::optional<TaylorBounds> bounds,
+                                       const LitReach* lit) {
   const IVec3 n = out.dims();
+  if (lit && lit->everywhere()) lit = nullptr;
   if (weightSum) weightSum->reset(out.bounds(), n, 0.0f);
   const Vec3 dc = density.cellSize();
   const NearestIndex nearest(samples);
@@ -497,7 +525,9 @@ ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& de
                  kind == Interpolation::Nearest ? kInfinity : 0.0f,
                  std::min(dc.x, std::min(dc.y, dc.z)),
                  nearest,
-                 occupied};
+                 occupied,
+                 lit,
+                 glm::length(out.cellSize())};
   const std::vector<std::vector<int>> slices = binBySlice(g);
   const std::size_t nxy = std::size_t(n.x) * n.y;
   // Accumulators of one slice, per thread, allocated and cleared once: after a slice only the
@@ -568,9 +598,15 @@ class InterpolatingReconstruction : public Reconstruction {
  public:
   /// lamp: the values are V with LampModel (PipelineSettings::lampModel); the bounds' hi is
   /// tightened per frame (lampBounds).
+  /// factored: the volume holds V = S / A, so voxels no spot cone reaches are left 0 (LitReach).
   InterpolatingReconstruction(Interpolation k, ValueSpace space, bool occlusion,
-                              std::optional<TaylorBounds> bounds, bool lamp)
-      : kind_(k), space_(space), occlusion_(occlusion), bounds_(bounds), lamp_(lamp) {}
+                              std::optional<TaylorBounds> bounds, bool lamp, bool factored)
+      : kind_(k),
+        space_(space),
+        occlusion_(occlusion),
+        bounds_(bounds),
+        lamp_(lamp),
+        factored_(factored) {}
   bool needsGradients() const override { return kind_ == Interpolation::Gradient; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene,
                                   std::span<const RadianceSample> samples, IVec3 dims,
@@ -578,8 +614,10 @@ class InterpolatingReconstruction : public Reconstruction {
     const DensityGrid& density = frame.hostDensity();
     std::optional<TaylorBounds> bounds = bounds_;
     if (bounds && lamp_) bounds = lampBounds(*bounds, scene, density);
+    const LitReach lit(scene.lights);
     return interpolateSamples(kind_, density, samples, newRadiance(frame, scene, dims), nullptr,
-                              space_, occlusion_ ? scene.medium.sigmaT : 0.0f, bounds);
+                              space_, occlusion_ ? scene.medium.sigmaT : 0.0f, bounds,
+                              factored_ ? &lit : nullptr);
   }
 
  private:
@@ -587,7 +625,7 @@ class InterpolatingReconstruction : public Reconstruction {
   ValueSpace space_;
   bool occlusion_;
   std::optional<TaylorBounds> bounds_;
-  bool lamp_;
+  bool lamp_, factored_;
 };
 
 class PerVoxelReconstruction : public Reconstruction {
@@ -648,8 +686,9 @@ void registerReconstructions() {
   const auto interp = [](Interpolation k) {
     return [k](const PipelineSettings& s) {
       const ValueSpace space = s.logValues() ? ValueSpace::Log : ValueSpace::Linear;
-      return std::unique_ptr<Reconstruction>(new InterpolatingReconstruction(
-          k, space, s.occlusionWeights, taylorBounds(s), s.tracerSteps().lampModel));
+      return std::unique_ptr<Reconstruction>(
+          new InterpolatingReconstruction(k, space, s.occlusionWeights, taylorBounds(s),
+                                          s.tracerSteps().lampModel, s.tracerSteps().reach > 0.0f));
     };
   };
   const StageDecl fromSamples{.keys = {{interpolationKeys, parseInterpolation}}};

@@ -28,6 +28,8 @@
 
 namespace scatterlab {
 
+class LitReach;
+
 enum class Interpolation {
   /// Paper Eq. 4: S(x) = Σ W_j(x)·(S_j + (x − x_j)·∇S_j) / Σ W_j(x) over {j : ‖x − x_j‖ < R_j},
   /// W_j(x) = R_j / ‖x − x_j‖. Singularity: ‖x − x_j‖ is clamped below at kSingularEps·R_j,
@@ -49,12 +51,16 @@ enum class Interpolation {
 /// logarithm (results exponentiated: PipelineSettings::logSpace).
 enum class ValueSpace { Linear, Log };
 
+/// `lit` (the volume holds V = S / A, which the march multiplies by A): a voxel it does not
+/// reach within the voxel's half-diagonal is 0 and never uncovered, and a sample it does not
+/// reach within R + that is left out (TracerSteps::reach: it was not traced).
 ReconstructionStats interpolateSamples(Interpolation kind, const DensityGrid& density,
                                        std::span<const RadianceSample> samples, RadianceGrid& out,
                                        Grid3<float>* weightSum = nullptr,
                                        ValueSpace space = ValueSpace::Linear,
                                        float occlusionSigmaT = 0.0f,
-                                       std::optional<TaylorBounds> bounds = std::nullopt);
+                                       std::optional<TaylorBounds> bounds = std::nullopt,
+                                       const LitReach* lit = nullptr);
 
 /// Brute-force evaluation of the interpolation at one point, over all samples (no clamping,
 /// no uncovered rule): the formulas above executed literally, for tests and probes.

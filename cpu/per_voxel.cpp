@@ -62,11 +62,14 @@ std::vector<char> occupancyMask(const DensityGrid& density, const RadianceGrid& 
 
 namespace {
 
+/// `lit` (null: none): voxels it does not reach within their half-diagonal are skipped too.
 template <class Source>
 PerVoxelStats tracePerVoxel(const Scene& scene, const DensityGrid& density, const Source& source,
-                            RadianceGrid& radiance, Progress* progress) {
+                            RadianceGrid& radiance, Progress* progress,
+                            const LitReach* lit = nullptr) {
   const IVec3 nr = radiance.dims();
   const std::vector<char> occupied = occupancyMask(density, radiance);
+  const float reach = glm::length(radiance.cellSize());
   const Vec3 eye = scene.camera.position;
   std::atomic<long long> traced{0}, skipped{0};
   tbb::parallel_for(0, nr.z, [&](int k) {
@@ -74,7 +77,7 @@ PerVoxelStats tracePerVoxel(const Scene& scene, const DensityGrid& density, cons
     for (int j = 0; j < nr.y; ++j)
       for (int i = 0; i < nr.x; ++i) {
         const Vec3 c = radiance.cellCenter(i, j, k);
-        if (!occupied[radiance.index(i, j, k)]) {
+        if (!occupied[radiance.index(i, j, k)] || (lit && !lit->reaches(c, reach))) {
           radiance.at(i, j, k) = Vec3(0.0f);
           ++s;
           continue;
@@ -94,9 +97,12 @@ PerVoxelStats tracePerVoxel(const Scene& scene, const DensityGrid& density, cons
 PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
                                     RadianceGrid& radiance, Progress* progress, bool factored,
                                     bool lampModel) {
-  if (factored)
+  if (factored) {
+    // V is multiplied by A in the march: where no spot cone reaches a voxel's support, nothing.
+    const LitReach lit(scene.lights);
     return tracePerVoxel(scene, density, FactoredSourceRadiance(scene, density, delta1, lampModel),
-                         radiance, progress);
+                         radiance, progress, lit.everywhere() ? nullptr : &lit);
+  }
   return tracePerVoxel(scene, density, SourceRadiance(scene, density, delta1), radiance, progress);
 }
 

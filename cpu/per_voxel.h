@@ -54,6 +54,7 @@ std::vector<char> occupancyMask(const DensityGrid& density, const RadianceGrid& 
 struct PerVoxelStats {
   long long traced = 0;   ///< voxels whose S was traced
   long long skipped = 0;  ///< voxels left at 0: no density in their 2x2x2 neighbourhood
+                          ///< (or, factored, no spot cone reaches it)
 };
 
 /// Fills `radiance` (bounds and dims set by the caller, normally those of `density`) with S at
@@ -63,7 +64,8 @@ struct PerVoxelStats {
 /// skipped; the result is identical to tracing it. TBB-parallel; no GL context.
 /// `factored` (adaptive's whole-scene fallback, with PipelineSettings::factorLights): V = S / A
 /// instead of S (FactoredSourceRadiance, A with the lamp model where `lampModel`), which the
-/// factored march multiplies by A again.
+/// factored march multiplies by A again; a voxel no spot cone reaches within its half-diagonal
+/// is then skipped too (LitReach, shading/transport.h: A is 0 wherever the march reads it).
 PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
                                     RadianceGrid& radiance, Progress* progress,
                                     bool factored = false, bool lampModel = false);

@@ -9,9 +9,13 @@ namespace scatterlab {
 
 namespace {
 
+/// `lit` (null: every sample traced): a sample it does not reach within its radius + `reach`
+/// is not traced and holds `unlit` (TracerSteps::reach). A point without a sphere of validity
+/// (radius 0: dynamic sampling's probes) is always traced.
 template <class Source>
 void evaluateWith(const Source& source, const Scene& scene, float delta2,
-                  std::span<RadianceSample> samples, bool gradients) {
+                  std::span<RadianceSample> samples, bool gradients, const LitReach* lit = nullptr,
+                  float reach = 0.0f, Vec3 unlit = Vec3(0.0f)) {
   const Vec3 eye = scene.camera.position;
   const auto S = [&](const Vec3& p) { return source(p, towardsEye(eye, p)); };
   const float h = delta2, inv2h = 0.5f / delta2;
@@ -19,6 +23,11 @@ void evaluateWith(const Source& source, const Scene& scene, float delta2,
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t n = r.begin(); n < r.end(); ++n) {
                         RadianceSample& s = samples[n];
+                        if (lit && s.radius > 0.0f && !lit->reaches(s.position, s.radius + reach)) {
+                          s.S = unlit;
+                          for (int a = 0; a < 3; ++a) s.dS[a] = Vec3(0.0f);
+                          continue;
+                        }
                         s.S = S(s.position);
                         for (int a = 0; a < 3; ++a) {
                           if (!gradients) {
@@ -37,15 +46,19 @@ void evaluateWith(const Source& source, const Scene& scene, float delta2,
 
 void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
                      std::span<RadianceSample> samples, bool gradients) {
+  const LitReach lit(scene.lights);
+  const LitReach* skip =
+      steps.factorLights && steps.reach > 0.0f && !lit.everywhere() ? &lit : nullptr;
   if (steps.logValues()) {
     const FactoredSourceRadiance v(scene, density, steps.delta1, steps.lampModel);
     const auto logV = [&](const Vec3& x, const Vec3& toViewer) {
       return glm::log(glm::max(v(x, toViewer), Vec3(kMinV)));
     };
-    evaluateWith(logV, scene, steps.delta2, samples, gradients);
+    evaluateWith(logV, scene, steps.delta2, samples, gradients, skip, steps.reach,
+                 Vec3(std::log(kMinV)));
   } else if (steps.factorLights)
     evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1, steps.lampModel), scene,
-                 steps.delta2, samples, gradients);
+                 steps.delta2, samples, gradients, skip, steps.reach);
   else
     evaluateWith(SourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
                  gradients);

@@ -93,7 +93,8 @@ TracerVariant valueSpace(const TracerSteps& steps, bool gradients) {
   return {.gradients = gradients,
           .factorLights = steps.factorLights,
           .lampModel = steps.factorLights && steps.lampModel,
-          .logSpace = steps.logValues()};
+          .logSpace = steps.logValues(),
+          .reach = steps.factorLights ? steps.reach : 0.0f};
 }
 
 /// The probe pass's layout: the tracer's lanes over the lights, a row per probe of a group.

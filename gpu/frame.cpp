@@ -321,12 +321,13 @@ ReconstructionStats GradientSplatGpu::reconstruct(Frame& frame, const Scene& sce
   else if (gpuLampBounds)
     bounds_ = settingsBounds_;
   lampScene_ = gpuLampBounds ? &scene : nullptr;
+  litScene_ = factored_ ? &scene : nullptr;
   f.radiance = Volume();  // the previous render's volume goes back to the recycler first
   auto counter = std::make_shared<Buffer>();
   f.radiance = reconstruct(f.density, samples, scene.medium.bounds, dims, &st, &f.timer, &f.samples,
                            counter.get());
   // Read after the frame (GpuFrame::report), not inside it.
-  lampScene_ = nullptr;
+  lampScene_ = litScene_ = nullptr;
   const GpuBins* deviceBins = f.samples.deviceBins();
   f.deferStats([counter, deviceBins](RenderStats& st) {
     GLuint n = 0;

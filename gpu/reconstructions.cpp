@@ -33,20 +33,19 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     splatVariant.fragment = {"radiance_splat.frag.glsl"};
   }
   const bool lampBounds = gather && bounds_ && lampScene_;
-  if (occlusion || lampBounds) {
-    // The occlusion weights march the density, the lamps' bound reads it and the lights, with
-    // common.glsl's lookups.
+  const bool lit = gather && litScene_ && !LitReach(litScene_->lights).everywhere();
+  if (occlusion || lampBounds || lit) {
+    // The occlusion weights march the density, the lamps' bound reads it and the lights, the
+    // cones' reach the lights, with common.glsl's lookups.
     auto& files = gather ? splatVariant.compute : splatVariant.fragment;
     files.insert(files.begin(), "common.glsl");
   }
   splatVariant.define("SL_OCCLUSION", occlusion)
       .define("SL_BOUNDED", bool(bounds_))
       .define("SL_LAMP_BOUNDS", lampBounds)
+      .define("SL_LIT_REACH", lit)
       .define("SL_LOG_SPACE", lampBounds && log_);
   const Program& splat = program(splatVariant, gather ? "radiance gather" : "radiance splat");
-  const Program& normalize = program(
-      ProgramVariant{.compute = {"radiance_normalize.comp.glsl"}}.define("SL_LOG_SPACE", log_),
-      "radiance normalize");
   // The raster splat draws one instance per packed sample; the gather reads the samples as the
   // tracer left them (resident: this render's S and ∇S on the GPU, no upload) or uploads them.
   Buffer packedSamples;
@@ -82,6 +81,14 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (gradient splat)",
                                   Texture::Contents::Overwritten);
   const Vec3 cell = bounds.extent() / Vec3(dims);
+  // The compute gather fills uncovered occupied voxels from the nearest sample, as the CPU;
+  // a resident list's count is read on the GPU.
+  const bool countOnDevice = gather && gathered->onDevice.has_value();
+  const Program& normalize = program(ProgramVariant{.compute = {"radiance_normalize.comp.glsl"}}
+                                         .define("SL_LOG_SPACE", log_)
+                                         .define("SL_NEAREST_FILL", gather)
+                                         .define("SL_COUNT_ON_DEVICE", countOnDevice),
+                                     "radiance normalize");
   const BinBuffers* bins = nullptr;
   IVec3 binDims{0};
   if (gather) bins = &gathered->binsFor(bounds, dims, &binDims, "radiance gather");
@@ -96,12 +103,14 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
       packedSamples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
     }
     if (bounds_) glUniform2f(splat.uniform("uTaylorBounds"), bounds_->lo, bounds_->hi);
-    std::optional<TracingInputs> lamps;
-    if (lampBounds) {
-      lamps.emplace(*lampScene_, density, 0.0f);
-      lamps->apply(splat);
-      glUniform1f(splat.uniform("uBoxDiagonal"), glm::length(density.bounds.extent()));
+    std::optional<TracingInputs> lights;
+    if (lampBounds || lit) {
+      lights.emplace(lampBounds ? *lampScene_ : *litScene_, density, 0.0f);
+      lights->apply(splat);
     }
+    if (lampBounds)
+      glUniform1f(splat.uniform("uBoxDiagonal"), glm::length(density.bounds.extent()));
+    if (lit) glUniform1f(splat.uniform("uReach"), glm::length(cell));
     if (occlusion) {
       glBindTextureUnit(binding::kDensityTexture, density.texture.id());
       setVec3(splat, "uDensityScale", density.indexScale());
@@ -134,11 +143,20 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
     glBindTextureUnit(binding::kDensityTexture, density.texture.id());
     counter.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     setIVec3(normalize, "uGridDims", dims);
-    // radiance voxel index v -> density texture coordinate (u + 0.5) / dims_density.
-    const Vec3 dd = Vec3(density.dims), ds = density.indexScale(), dof = density.indexOffset();
-    setVec3(normalize, "uDensityLookupScale", cell * ds / dd);
-    setVec3(normalize, "uDensityLookupOffset", ((bounds.min + 0.5f * cell) * ds + dof + 0.5f) / dd);
+    setVec3(normalize, "uGridMin", bounds.min);
+    setVec3(normalize, "uGridCell", cell);
+    setVec3(normalize, "uDensityScale", density.indexScale());
+    setVec3(normalize, "uDensityOffset", density.indexOffset());
+    setIVec3(normalize, "uDensityDims", density.dims);
     glUniform1i(normalize.uniform("uSameGrid"), sameGrid(density, bounds, dims));
+    if (gather) {
+      gathered->points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+      gathered->radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+      if (countOnDevice)
+        gathered->onDevice->count.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
+      else
+        glUniform1ui(normalize.uniform("uSampleCount"), GLuint(gathered->size()));
+    }
     out.densityInAlpha = sameGrid(density, bounds, dims);
     dispatch("radiance normalize", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)},
              timer);
@@ -161,7 +179,9 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
                           Buffer* countersOut) {
   context();
   ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
-  variant.define("SL_FACTOR_LIGHTS", factored_).define("SL_LAMP_MODEL", factored_ && lampModel_);
+  variant.define("SL_FACTOR_LIGHTS", factored_)
+      .define("SL_LAMP_MODEL", factored_ && lampModel_)
+      .define("SL_LIT_REACH", factored_);
   addShadowRaySkip(variant);
   const Program& program = gpu::program(addShadowVariant(shadows, variant), "per-voxel S");
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)",
@@ -181,6 +201,8 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
     out.densityInAlpha = sameGrid(density, bounds, dims);
     setVec3(program, "uRadMin", bounds.min);
     setVec3(program, "uRadCell", bounds.extent() / Vec3(dims));
+    if (factored_)
+      glUniform1f(program.uniform("uReach"), glm::length(bounds.extent() / Vec3(dims)));
     dispatch("per-voxel S", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)}, timer);
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }

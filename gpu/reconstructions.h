@@ -29,12 +29,16 @@ class GradientSplatGpu : public Reconstruction {
   /// bounds: each sample's Taylor estimate is clamped to it (PipelineSettings::boundedTaylor).
   /// lamp: the values are V with LampModel; the bounds' hi is tightened per frame
   /// (lampBounds, shading/transport.h) as the CPU gather does.
+  /// factored: the values are V = S / A with TracerSteps::reach: the compute gather leaves the
+  /// voxels no spot cone reaches at 0 (LitReach), as the CPU gather.
   explicit GradientSplatGpu(bool logSpace = false, bool occlusion = false,
                             std::optional<TaylorBounds> bounds = std::nullopt,
-                            GpuPipeline pipeline = GpuPipeline::Compute, bool lamp = false)
+                            GpuPipeline pipeline = GpuPipeline::Compute, bool lamp = false,
+                            bool factored = false)
       : log_(logSpace),
         occlusion_(occlusion),
         lamp_(lamp),
+        factored_(factored),
         bounds_(bounds),
         settingsBounds_(bounds),
         pipeline_(pipeline) {}
@@ -54,12 +58,15 @@ class GradientSplatGpu : public Reconstruction {
                      DeviceSamples* resident = nullptr, Buffer* uncoveredCount = nullptr);
 
  private:
-  bool log_, occlusion_, lamp_;
+  bool log_, occlusion_, lamp_, factored_;
   std::optional<TaylorBounds> bounds_;          ///< this frame's (tightened with lamp_)
   std::optional<TaylorBounds> settingsBounds_;  ///< taylorBounds() of the settings
   /// The compute gather tightens bounds_'s hi for the lamps on the GPU (SL_LAMP_BOUNDS) from
   /// this scene's lights: set by the frame override for one call.
   const Scene* lampScene_ = nullptr;
+  /// With factored_ (compute gather): the scene whose spot cones bound the voxels gathered
+  /// (SL_LIT_REACH), set by the frame override for one call.
+  const Scene* litScene_ = nullptr;
   GpuPipeline pipeline_;
   float sigmaT_ = 0.0f;  ///< for the occlusion weights
 };

@@ -96,9 +96,9 @@ void registerGpuStages() {
     return std::unique_ptr<RadianceEvaluator>(new VolumeTracerGpu(s.tracerSteps(), s.shadowMap));
   });
   reconstructions().addVariant("gradient", Backend::Gpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(new GradientSplatGpu(s.logValues(), s.occlusionWeights,
-                                                                taylorBounds(s), s.gpuPipeline,
-                                                                s.tracerSteps().lampModel));
+    return std::unique_ptr<Reconstruction>(
+        new GradientSplatGpu(s.logValues(), s.occlusionWeights, taylorBounds(s), s.gpuPipeline,
+                             s.tracerSteps().lampModel, s.tracerSteps().reach > 0.0f));
   });
   reconstructions().addVariant("per-voxel", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Reconstruction>(

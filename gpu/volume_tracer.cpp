@@ -18,23 +18,35 @@ namespace scatterlab::gpu {
 
 namespace {
 
+/// Whether samples no spot cone reaches are left untraced (TracerVariant::reach).
+bool litReach(const TracerVariant& v) {
+  return v.factorLights && v.reach > 0.0f;
+}
+
+/// The evaluator's variant (not the probe pass's: probes have no sphere): with SL_LIT_REACH.
+ProgramVariant tracerEvaluatorVariant(const TracerShape& shape, const TracerVariant& v) {
+  return tracerProgramVariant(shape, v).define("SL_LIT_REACH", litReach(v));
+}
+
 /// The tracer's program. Lanes split the lights (a power of two, for the tree sum), rows are
 /// the 7 points of S and ∇S (1 without gradients), 32 / lanes samples per workgroup: 224
 /// invocations per group with gradients, one per (sample, point, light) up to 32 lights.
 /// levelCount: the count is counts[uLevel] (traceLevel), not uCount.
 const Program& tracerProgram(const TracerShape& shape, const TracerVariant& v,
                              const ShadowMaps* shadows, bool levelCount) {
-  ProgramVariant variant = tracerProgramVariant(shape, v);
+  ProgramVariant variant = tracerEvaluatorVariant(shape, v);
   variant.define("SL_LEVEL_COUNT", levelCount);
   return gpu::program(addShadowVariant(shadows, variant), "volume tracer");
 }
 
-/// Makes `program` current with the tracing inputs, δ2, the points and the results bound.
+/// Makes `program` current with the tracing inputs, δ2, the reach, the points and the results
+/// bound.
 void useTracer(const Program& program, const TracingInputs& inputs, float delta2,
-               const Buffer& points, const Buffer& results) {
+               const TracerVariant& v, const Buffer& points, const Buffer& results) {
   program.use();
   inputs.apply(program);
   glUniform1f(program.uniform("uDelta2"), delta2);
+  if (litReach(v)) glUniform1f(program.uniform("uReach"), v.reach);
   points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
   results.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
 }
@@ -60,7 +72,7 @@ void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVar
   if (capacity == 0) return;
   const TracerShape shape = tracerShape(lights, variant.gradients);
   const Program& program = tracerProgram(shape, variant, inputs.shadows(), true);
-  useTracer(program, inputs, delta2, points, results);
+  useTracer(program, inputs, delta2, variant, points, results);
   glUniform1ui(program.uniform("uLevel"), GLuint(level));
   glUniform1ui(program.uniform("uFirstSlot"),
                firstSlot == kFromZero ? 0xffffffffu : GLuint(firstSlot));
@@ -78,13 +90,15 @@ void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buf
   context();
   if (count == 0) return;
   const TracerShape shape = tracerShape(scene.lights.size(), gradients);
-  const Program& program = tracerProgram(
-      shape,
-      {.gradients = gradients, .factorLights = factor_, .lampModel = lamp_, .logSpace = log_},
-      shadows, false);
+  const TracerVariant variant{.gradients = gradients,
+                              .factorLights = factor_,
+                              .lampModel = lamp_,
+                              .logSpace = log_,
+                              .reach = reach_};
+  const Program& program = tracerProgram(shape, variant, shadows, false);
   TracingInputs inputs(scene, density, delta1_, shadows);
   inputs.skipEmptySpace(timer);
-  useTracer(program, inputs, delta2_, points, results);
+  useTracer(program, inputs, delta2_, variant, points, results);
   glUniform1ui(program.uniform("uCount"), GLuint(count));
   // Workgroups stride over the samples: at most 65535 (GL's least maximum) whatever the count.
   dispatch(kTracerPass, {std::min<GLuint>(groups(count, GLuint(shape.slots)), 65535u), 1, 1},

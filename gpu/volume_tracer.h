@@ -29,6 +29,7 @@ class VolumeTracerGpu : public RadianceEvaluator {
         factor_(steps.factorLights),
         log_(steps.logValues()),
         lamp_(steps.lampModel),
+        reach_(steps.reach),
         shadowMap_(shadowMap) {}
   void evaluate(Frame& frame, const Scene& scene, std::span<RadianceSample> samples,
                 bool gradients) override;
@@ -44,6 +45,7 @@ class VolumeTracerGpu : public RadianceEvaluator {
  private:
   float delta1_, delta2_;
   bool factor_, log_, lamp_;
+  float reach_;
   ShadowMapSettings shadowMap_;
 };
 
@@ -54,6 +56,8 @@ inline constexpr const char* kTracerPass = "radiance evaluation";
 /// ln V (TracerSteps, DynamicSamplingSettings).
 struct TracerVariant {
   bool gradients = true, factorLights = false, lampModel = false, logSpace = false;
+  /// TracerSteps::reach with factorLights (SL_LIT_REACH; 0: every sample traced).
+  float reach = 0.0f;
 };
 
 /// traceLevel's firstSlot when the samples start at 0.

@@ -210,6 +210,7 @@ const std::vector<KeyDoc>& radianceVolumeKeys() {
 void parseRadianceVolume(Params& p, const Scene& scene, PipelineSettings& s) {
   s.radianceResolution = p.resolution("radiance_resolution", scene.medium.resolution, sizeof(Vec3),
                                       "the source-radiance volume (RGB float)");
+  s.radianceReach = glm::length(scene.medium.bounds.extent() / Vec3(s.radianceResolution));
   s.gpuPipeline = p.choice("gpu_pipeline", {"compute", "raster"}, "compute") == "compute"
                       ? GpuPipeline::Compute
                       : GpuPipeline::Raster;

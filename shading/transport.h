@@ -326,6 +326,58 @@ class LightFactor {
   LampModel lamp_;
 };
 
+/// Where A of LightFactor can be non-zero. A point or directional light lights every point;
+/// a spot light only its outer cone (spotFalloff is 0 at and beyond cos_outer). Where the
+/// volume and the samples hold V = S / A, the march multiplies V by A, so a radiance voxel
+/// whose trilinear support (the ball of its half-diagonal, `reach`) meets no cone, and a sample
+/// whose sphere of validity grown by that reach meets none, cannot change the image: they are
+/// neither traced nor gathered (docs/fidelity.md, "Where no cone reaches"). The test is
+/// conservative (the cone widened by kLitMargin radians, the ball by kLitGrow: core/stages.h),
+/// so CPU and GPU (litReaches in gpu/shaders/common.glsl, the same formula) may differ only where
+/// A is 0.
+class LitReach {
+ public:
+  explicit LitReach(const std::vector<Light>& lights) {
+    for (const Light& l : lights) {
+      if (l.type != Light::Type::Spot) {
+        everywhere_ = true;
+        return;
+      }
+      const float angle = std::acos(std::clamp(l.cosOuter, -1.0f, 1.0f)) + kLitMargin;
+      spots_.push_back(
+          {l.position, l.direction, std::cos(angle), std::sin(angle), angle > 0.5f * kPi});
+    }
+  }
+  /// Every point may be lit (some light is not a spot): nothing is ever skipped.
+  bool everywhere() const { return everywhere_; }
+  /// Whether some light's A may be non-zero within distance r of c: the ball subtends
+  /// β = asin(r / L) seen from the apex (L = |c − apex|), and meets the cone of half-angle θ
+  /// (widened by kLitMargin) where the angle α of c to the axis is at most θ + β, i.e.
+  /// cos α ≥ cos θ·cos β − sin θ·sin β (always where θ + β ≥ π).
+  bool reaches(const Vec3& c, float r) const {
+    if (everywhere_) return true;
+    r *= kLitGrow;
+    for (const Spot& s : spots_) {
+      const Vec3 v = c - s.apex;
+      const float L = glm::length(v);
+      if (L <= r) return true;
+      const float sinB = r / L, cosB = std::sqrt(1.0f - sinB * sinB);
+      if (s.wide && sinB >= s.sinA) return true;
+      if (glm::dot(v, s.axis) >= L * (s.cosA * cosB - s.sinA * sinB)) return true;
+    }
+    return false;
+  }
+
+ private:
+  struct Spot {
+    Vec3 apex, axis;
+    float cosA, sinA;  ///< of the outer half-angle widened by kLitMargin
+    bool wide;         ///< that angle is above 90°
+  };
+  bool everywhere_ = false;
+  std::vector<Spot> spots_;
+};
+
 /// V(x, ω) = S / A of LightFactor, traced like SourceRadiance. Where A is zero in a channel
 /// (outside every spot cone) S is zero too and any V reproduces it; there V is the weighted
 /// transmittance with the cones ignored — the continuation of V from inside the cone — so that

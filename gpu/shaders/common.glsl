@@ -174,6 +174,27 @@ bool lightGeometry(GpuLight l, vec3 x, out vec3 toLight, out float dist, out flo
   return true;
 }
 
+// LitReach::reaches (shading/transport.h), the same formula: whether some light's A may be
+// non-zero within r of c. A point or directional light lights everything; a spot its outer
+// cone, widened by SL_LIT_MARGIN radians, which the ball (grown by SL_LIT_GROW) meets where
+// the angle of c to the axis is at most the cone's plus asin(r / L).
+bool litReaches(vec3 c, float r) {
+  r *= SL_LIT_GROW;
+  for (int li = 0; li < uLightCount; ++li) {
+    GpuLight l = lights[li];
+    if (int(l.positionType.w) != 1) return true;
+    float angle = acos(clamp(l.intensityCosOuter.w, -1.0, 1.0)) + SL_LIT_MARGIN;
+    float cosA = cos(angle), sinA = sin(angle);
+    vec3 v = c - l.positionType.xyz;
+    float L = length(v);
+    if (L <= r) return true;
+    float sinB = r / L, cosB = sqrt(1.0 - sinB * sinB);
+    if (angle > 1.57079633 && sinB >= sinA) return true;
+    if (dot(v, l.directionCosInner.xyz) >= L * (cosA * cosB - sinA * sinB)) return true;
+  }
+  return false;
+}
+
 // The end of the segment to trace towards a directional light: where the ray leaves the box.
 vec3 boxExit(vec3 x, vec3 toLight) {
   float t0, t1;

@@ -10,6 +10,11 @@ uniform ivec3 uRadDims;
 uniform vec3 uRadMin;
 uniform vec3 uRadCell;
 uniform bool uSameGrid;  // the density's grid: alpha carries the voxel's density
+#ifdef SL_LIT_REACH
+// With SL_FACTOR_LIGHTS the march multiplies V by A: a voxel no spot cone reaches within its
+// half-diagonal uReach is skipped too (buildPerVoxelRadiance's LitReach).
+uniform float uReach;
+#endif
 
 void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
@@ -27,6 +32,9 @@ void main() {
           occupied = true;
           break;
         }
+#ifdef SL_LIT_REACH
+  occupied = occupied && litReaches(c, uReach);
+#endif
   float own = uSameGrid ? texelFetch(uDensity, v, 0).r : 0.0;
   if (!occupied) {
     imageStore(uRadiance, v, vec4(0.0, 0.0, 0.0, own));

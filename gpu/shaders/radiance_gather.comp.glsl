@@ -20,6 +20,12 @@ uniform vec3 uGridCell;
 uniform ivec3 uGridDims;
 uniform ivec3 uBins;
 uniform int uBinVoxels;
+#ifdef SL_LIT_REACH
+// After common.glsl (litReaches): the volume holds V = S / A and only spot lights shine; a voxel
+// no cone reaches within uReach (its half-diagonal) is marked with weight −1 and left 0 by the
+// normalisation, not counted as uncovered (the CPU gather's LitReach).
+uniform float uReach;
+#endif
 #ifdef SL_OCCLUSION
 uniform float uDensityVoxel;  // smallest density voxel edge (world units)
 #endif
@@ -49,6 +55,12 @@ void main() {
   // The rasterised splat's voxel centre: (min.xy + gl_FragCoord.xy·cell.xy, the slice's z).
   vec3 x = vec3(uGridMin.xy + (vec2(v.xy) + 0.5) * uGridCell.xy,
                 uGridMin.z + (float(v.z) + 0.5) * uGridCell.z);
+#ifdef SL_LIT_REACH
+  if (!litReaches(x, uReach)) {
+    imageStore(uSums, v, vec4(0.0, 0.0, 0.0, -1.0));
+    return;
+  }
+#endif
   ivec3 b = v / uBinVoxels;
   int bin = (b.z * uBins.y + b.y) * uBins.x + b.x;
   vec4 sum = vec4(0.0);

@@ -32,6 +32,9 @@ shared float term[SL_SLOTS][SL_ROWS];
 #else
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
 uniform float uDelta2;
+#ifdef SL_LIT_REACH
+uniform float uReach;  // TracerSteps::reach: the radiance voxel's half-diagonal
+#endif
 #endif
 #if defined(SL_LEVEL_COUNT) || defined(SL_PROBES)
 // Dynamic sampling's level uLevel (gpu::traceLevel): its count is written on the GPU; with
@@ -105,7 +108,14 @@ void main() {
     const bool traced = D != 0.0;  // a term of 0 is not traced (as on the CPU)
 #else
     const vec3 q = rowPoint(live ? positions[i].xyz : vec3(0.0), row);
+#ifdef SL_LIT_REACH
+    // TracerSteps::reach: a sample no spot cone reaches within R + uReach is not traced (V = 0,
+    // ln V = ln SL_MIN_V, ∇ = 0); a point of radius 0 always is.
+    const bool traced = live && (!(positions[i].w > 0.0) ||
+                                 litReaches(positions[i].xyz, positions[i].w + uReach));
+#else
     const bool traced = live;
+#endif
 #endif
     const vec3 toViewer = towardsEye(q);
     vec3 s = vec3(0.0), a = vec3(0.0);

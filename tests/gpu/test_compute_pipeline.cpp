@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/stages.h"
+#include "cpu/interpolation.h"
 #include "cpu/per_voxel.h"
 #include "cpu/ray_marcher.h"
 #include "gpu/frame.h"
@@ -231,7 +232,9 @@ RadianceGrid reconstructOn(GpuPipeline pipeline, bool occlusion, const Scene& sc
 }
 
 /// The gather sums each voxel's samples in the order the raster splat blends them, with the
-/// same per-sample arithmetic: the volumes agree to rounding (fma contraction may differ).
+/// same per-sample arithmetic: the volumes agree to rounding (fma contraction may differ) where
+/// a sphere covers the voxel. (Occupied voxels no sphere covers: the compute pipeline gives them
+/// the nearest sample's S, as the CPU; the raster splat leaves them 0. GpuGradientSplat.*.)
 void gatherVsSplat(bool occlusion) {
   const Scene scene = sceneFromJson(blobSceneDoc(20, 8, 6));
   const IVec3 dims(21, 18, 17);  // not multiples of the bin size: partial bins at the far faces
@@ -246,6 +249,10 @@ void gatherVsSplat(bool occlusion) {
   EXPECT_EQ(ug, ur);
   double num = 0, den = 0, maxRel = 0;
   for (std::size_t i = 0; i < g.size(); ++i) {
+    const int x = int(i % std::size_t(dims.x)), y = int(i / dims.x % dims.y),
+              z = int(i / dims.x / dims.y);
+    if (interpolateAt(Interpolation::Gradient, g.cellCenter(x, y, z), samples).covering == 0)
+      continue;
     const Vec3 d = g.data()[i] - r.data()[i];
     num += glm::dot(d, d);
     den += glm::dot(r.data()[i], r.data()[i]);
@@ -426,7 +433,9 @@ void endToEnd(const char* method, double computeTol, double rasterTol) {
 
 // The issue's target: compute ≡ CPU within 1e-4 relative L2 on llvmpipe, 1e-3 on hardware.
 // Measured (gradient / per-voxel / adaptive with levels 4, 8), relative L2 against the CPU:
-//   llvmpipe 2026-11-26: compute 1.22e-6 / 1.43e-6 / 1.2e-6, raster 9.56e-7 / 8.33e-7 / 1.01e-6;
+//   llvmpipe 2026-11-26: compute 1.22e-6 / 1.43e-6 / 1.2e-6, raster 9.56e-7 / 8.33e-7 / 1.01e-6
+//   (2026-11-28, the compute gather filling uncovered voxels from the nearest sample as the CPU:
+//   compute 1.05e-7 / 9.88e-8 / 1.34e-7);
 //   NVIDIA H200 (driver 580.159.04) 2026-11-27: compute 1.9e-6 / 7.21e-7 / 1.94e-6, raster
 //   1.44e-4 / 5.41e-4 / 1.38e-4 (the raster pipeline's rasterised slices and blending: the
 //   compute pipeline is the one that matches on hardware).
@@ -444,6 +453,41 @@ TEST(GpuComputePipeline, PerVoxelEndToEndMatchesCpu) {
 TEST(GpuComputePipeline, AdaptiveEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
   endToEnd("adaptive", 2.9e-6, 2.1e-4);
+}
+
+// Where no spot cone reaches (LitReach, shading/transport.h): the tracer leaves samples no cone
+// reaches untraced, the gather leaves voxels 0, the per-voxel fallback skips them, as the CPU
+// does. A box of fog under a narrow spot; gradient, adaptive and adaptive's whole-scene
+// fallback (per-voxel V) against the CPU.
+TEST(GpuComputePipeline, WhereNoConeReachesTheGpuSkipsAsTheCpu) {
+  SCATTERLAB_REQUIRE_GPU();
+  initialize();
+  Json doc = homogeneousBoxDoc(1.0f, 1.5f, 0.8f, Vec3(0), 1.0f, 40, 30, 24);
+  doc["lights"] = Json::parse(R"([{"type": "spot", "position": [0.45, 1.4, 0.55],
+      "direction": [0.1, -1, 0], "intensity": [3, 2.5, 2], "inner_deg": 6, "outer_deg": 9}])");
+  doc["camera"]["position"] = {0.5, 0.6, -1.6};
+  for (const Json& r :
+       {Json{{"method", "gradient"}, {"sampler", {{"type", "jittered"}, {"count", 200}}}},
+        Json{{"method", "adaptive"}, {"voxel_switch", 0}, {"levels", {4, 8}}},
+        Json{{"method", "adaptive"}, {"voxel_switch", 1000}}}) {
+    doc["render"] = r;
+    const Scene scene = parseScene(doc, ".");
+    const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
+    const RenderResult gpu = createMethod(scene, "", "gpu")->render(scene, nullptr);
+    const double e = relL2(gpu.image, cpu.image);
+    std::printf("%s vs CPU: %.3g (relative L2)\n", r.dump().c_str(), e);
+    // Measured on llvmpipe 2026-11-28: 2.53e-6 / 2.51e-6 / 2.49e-6 (the spot's cone edge: its
+    // smoothstep rounds differently on the two); × 1.5. Not yet measured on hardware.
+    EXPECT_LT(e, 3.8e-6) << r.dump();
+    if (r["voxel_switch"] == 1000) {
+      // The voxels traced: those the cone reaches; the cone test's trigonometry may differ by
+      // an ulp between devices, so a voxel at its margin (where A is 0) may go either way.
+      const auto c = cpu.stats.extra["traced_voxels"].get<long long>();
+      const auto g = gpu.stats.extra["traced_voxels"].get<long long>();
+      EXPECT_LT(c, 24 * 24 * 24 / 2);
+      EXPECT_NEAR(double(g), double(c), 0.01 * double(c));
+    }
+  }
 }
 
 TEST(GpuComputePipeline, SlicingUnderTheComputePipelineIsReportedUnused) {

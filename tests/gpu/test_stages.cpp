@@ -230,6 +230,7 @@ TEST(GpuGradientSplat, MatchesDirectEq4) {
 
   long long uncovered = 0, covered = 0;
   int bad = 0;
+  const VoxelOccupancy occupied(density, out);
   for (int k = 0; k < dims.z; ++k)
     for (int j = 0; j < dims.y; ++j)
       for (int i = 0; i < dims.x; ++i) {
@@ -243,12 +244,22 @@ TEST(GpuGradientSplat, MatchesDirectEq4) {
           sum += W * s.taylor(x);
           wsum += W;
         }
-        // Eq. 4, clamped to non-negative as the CPU reconstruction (clampNonNegative).
-        const Vec3 want = wsum > 0 ? glm::max(sum / wsum, Vec3(0.0f)) : Vec3(0.0f);
-        if (wsum > 0)
+        // Eq. 4, clamped to non-negative as the CPU reconstruction (clampNonNegative); an
+        // occupied voxel no sphere covers takes the nearest sample's S (lowest index on ties).
+        Vec3 want = wsum > 0 ? glm::max(sum / wsum, Vec3(0.0f)) : Vec3(0.0f);
+        if (wsum > 0) {
           ++covered;
-        else if (density.at(i, j, k) > 0)
+        } else if (occupied(i, j, k)) {
           ++uncovered;
+          float best = kInfinity;
+          for (const RadianceSample& s : samples) {
+            const Vec3 d = x - s.position;
+            if (glm::dot(d, d) < best) {
+              best = glm::dot(d, d);
+              want = glm::max(s.S, Vec3(0.0f));
+            }
+          }
+        }
         const auto r = close3(out.at(i, j, k), want, 1e-3f, 1e-2f);
         if (!r && ++bad < 5)
           ADD_FAILURE() << "voxel " << i << "," << j << "," << k << ": " << r.message();
@@ -382,9 +393,8 @@ TEST(GpuMethods, UploadedDensityInAFreshProcessMatchesCpu) {
   const std::string dir = ::testing::TempDir() + "gpu_fresh_" + std::to_string(::getpid());
   std::filesystem::create_directories(dir);
   Json doc = testing::homogeneousBoxDoc(0.8f, 2.0f, 0.6f, Vec3(0.3f, 1.4f, 0.4f), 3.0f, 24, 18, 16);
-  doc["render"] = {{"sampler", {{"type", "jittered"}, {"count", 64}}},
-                   {"levels", {4, 8}},
-                   {"voxel_switch", 0}};
+  doc["render"] = {
+      {"sampler", {{"type", "jittered"}, {"count", 64}}}, {"levels", {4, 8}}, {"voxel_switch", 0}};
   std::ofstream(dir + "/box.json") << doc.dump();
   for (const char* m : {"per-voxel", "gradient", "adaptive"}) {
     for (const char* b : {"cpu", "gpu"}) {
