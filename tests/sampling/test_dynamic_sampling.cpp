@@ -705,50 +705,10 @@ TEST(DynamicSampling, ErrorWeightedByAIsZeroOutsideTheSpotCone) {
   // V with curvature everywhere (its Taylor estimate misses at every probe) under a narrow spot
   // light (cone of radius ~0.2 at y = 0.5, around x = z = 0.5): weighted by A, only samples
   // whose probes reach into the cone have an error, so only they split; unweighted, every
-  // sample has the same error and all split.
-  const Scene scene = spotScene();
-  const DensityGrid density = densityOf(scene);
-  AnalyticEvaluator ev;
-  ev.S = [](const Vec3& p) { return Vec3(0.2f + glm::dot(p, p)); };
-  ev.grad = [](const Vec3& p, Vec3 g[3]) {
-    for (int a = 0; a < 3; ++a) g[a] = Vec3(2.0f * p[a]);
-  };
-  DynamicSamplingSettings st;
-  st.levels = {16};
-  st.probes = 40;
-  st.epsilon = 1e-12;  // every nonzero error splits
-  st.delta1 = scene.medium.voxelSize();
-  std::vector<RadianceSample> init;
-  for (int i = 0; i < 8; ++i)
-    for (int k = 0; k < 8; ++k)
-      init.push_back(sampleAt(Vec3((i + 0.5f) / 8, 0.5f, (k + 0.5f) / 8), 0.125f));
-  const DynamicSamplingResult plain = dynamicSampling(scene, density, init, ev, st);
-  EXPECT_EQ(plain.levels[0].split, 64);
-  st.space.weightA = true;
-  const DynamicSamplingResult weighted = dynamicSampling(scene, density, init, ev, st);
-  // The light at (0.5, 1.3, 0.5), outer half-angle 12°: radius 0.8·tan 12° = 0.17 at y = 0.5
-  // (more above it); a sample splits iff a probe (at most R = 0.125 away) is inside the cone.
-  int expected = 0;
-  for (const RadianceSample& s : init) {
-    Vec3 p[kMaxProbes];
-    probePoints(s, p, kMaxProbes);
-    bool inside = false;
-    for (int i = 0; i < kMaxProbes; ++i) {
-      const Vec3 d = glm::normalize(p[i] - Vec3(0.5f, 1.3f, 0.5f));
-      inside = inside || -d.y > std::cos(glm::radians(12.0f));
-    }
-    expected += inside;
-  }
-  EXPECT_GT(expected, 0);
-  EXPECT_LT(expected, 64);
-  EXPECT_EQ(weighted.levels[0].split, expected);
-}
-
-TEST(DynamicSampling, ProbesWhereAIsZeroAreNotTraced) {
-  // Weighted by A, a probe outside every spot cone adds 0 to E whatever it would trace: it is not
-  // traced (the fog shafts of the population spent most of their first level on such probes).
-  // The evaluator's calls without gradients are the probe batches; they hold exactly the probe
-  // points with D > 0 inside the cone.
+  // sample has the same error and all split. Weighted, a probe outside the cone adds 0 whatever
+  // it would trace, so it is not traced (the population's fog shafts spent most of their first
+  // level on such probes): the evaluator's calls without gradients, the probe batches, hold
+  // exactly the probe points inside the cone with D > 0.
   const Scene scene = spotScene();
   const DensityGrid density = densityOf(scene);
   struct Recording : AnalyticEvaluator {
@@ -767,29 +727,39 @@ TEST(DynamicSampling, ProbesWhereAIsZeroAreNotTraced) {
   DynamicSamplingSettings st;
   st.levels = {16};
   st.probes = 40;
-  st.epsilon = 1e-12;
+  st.epsilon = 1e-12;  // every nonzero error splits
   st.delta1 = scene.medium.voxelSize();
-  st.space.weightA = true;
   std::vector<RadianceSample> init;
   for (int i = 0; i < 8; ++i)
     for (int k = 0; k < 8; ++k)
       init.push_back(sampleAt(Vec3((i + 0.5f) / 8, 0.5f, (k + 0.5f) / 8), 0.125f));
-  const DynamicSamplingResult r = dynamicSampling(scene, density, init, ev, st);
-  std::size_t expected = 0, all = 0;
+  const DynamicSamplingResult plain = dynamicSampling(scene, density, init, ev, st);
+  EXPECT_EQ(plain.levels[0].split, 64);
+  const std::size_t everyProbe = ev.probed.size();
+  st.space.weightA = true;
+  ev.probed.clear();
+  const DynamicSamplingResult weighted = dynamicSampling(scene, density, init, ev, st);
+  // The light at (0.5, 1.3, 0.5), outer half-angle 12°: radius 0.8·tan 12° = 0.17 at y = 0.5
+  // (more above it); a sample splits iff a probe (at most R = 0.125 away) is inside the cone.
+  int expected = 0;
+  std::size_t probesInside = 0;
   for (const RadianceSample& s : init) {
     Vec3 p[kMaxProbes];
     probePoints(s, p, kMaxProbes);
+    bool inside = false;
     for (int i = 0; i < kMaxProbes; ++i) {
       const Vec3 d = glm::normalize(p[i] - Vec3(0.5f, 1.3f, 0.5f));
-      all += density.sample(p[i]) != 0.0f;
-      expected += density.sample(p[i]) != 0.0f && -d.y > std::cos(glm::radians(12.0f));
+      const bool in = -d.y > std::cos(glm::radians(12.0f));
+      inside = inside || in;
+      probesInside += in && density.sample(p[i]) != 0.0f;
     }
+    expected += inside;
   }
-  EXPECT_EQ(ev.probed.size(), expected);
-  EXPECT_LT(expected * 4, all);  // most of the probes lie outside the narrow cone
-  // Which samples split is unchanged (ErrorWeightedByAIsZeroOutsideTheSpotCone counts them).
-  EXPECT_GT(r.levels[0].split, 0);
-  EXPECT_LT(r.levels[0].split, 64);
+  EXPECT_GT(expected, 0);
+  EXPECT_LT(expected, 64);
+  EXPECT_EQ(weighted.levels[0].split, expected);
+  EXPECT_EQ(ev.probed.size(), probesInside);
+  EXPECT_LT(probesInside * 4, everyProbe);  // unweighted, every probe with D > 0 was traced
 }
 
 }  // namespace
