@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "core/error.h"
+#include "shading/transport.h"
 
 namespace scatterlab {
 
@@ -122,17 +123,26 @@ class PipelineMethod : public Method {
       return r;
     }
     // The whole-scene fallback: a medium so sparse that per-voxel traces less than the
-    // refiner's first level would is rendered as per-voxel renders it (decided once per
-    // density: it depends on the medium and the keys only).
+    // refiner's first level would is rendered as per-voxel renders it. Per-voxel traces the
+    // occupied voxels (counted once per density) that some light reaches: where only spot
+    // lights shine, at most those a cone reaches (LitReach::voxelBound, host geometry, no GPU
+    // wait), so the decision follows the lights from frame to frame.
     if (voxelReconstruction) {
-      if (!reuse || !keptVoxelsInstead_) {
+      if (!reuse || !keptOccupied_) {
         const std::array<IVec3, 1> voxels{scene.medium.resolution};
-        occupiedVoxels_ = frame->countOccupiedCells(voxels)[0];
-        keptVoxelsInstead_ = refiner->voxelsInstead(occupiedVoxels_, plannedSamples);
+        keptOccupied_ = frame->countOccupiedCells(voxels)[0];
       }
-      st.extra["occupied_voxels"] = occupiedVoxels_;
-      st.extra["voxels_instead"] = *keptVoxelsInstead_;
-      if (*keptVoxelsInstead_) {
+      const LitReach lit(scene.lights);
+      long long traced = *keptOccupied_;
+      st.extra["occupied_voxels"] = traced;
+      if (!lit.everywhere()) {
+        const long long bound = lit.voxelBound(scene.medium.bounds, scene.medium.resolution);
+        st.extra["lit_voxels"] = bound;
+        traced = std::min(traced, bound);
+      }
+      const bool voxelsInstead = refiner->voxelsInstead(traced, plannedSamples);
+      st.extra["voxels_instead"] = voxelsInstead;
+      if (voxelsInstead) {
         samplesOnDevice_ = false;
         ReconstructionStats rs;
         stage("radiance", [&] {
@@ -255,9 +265,9 @@ class PipelineMethod : public Method {
   }
 
   std::unique_ptr<Frame> frame_;  ///< kept between renders when retainDensity
-  /// The whole-scene fallback's decision for the kept density, and the count it was made on.
-  std::optional<bool> keptVoxelsInstead_;
-  long long occupiedVoxels_ = 0;
+  /// The kept density's occupied voxels (Frame::countOccupiedCells), which the whole-scene
+  /// fallback's decision starts from.
+  std::optional<long long> keptOccupied_;
   /// The refiner left the final samples on the device (RenderResult::samples is empty; the
   /// backend's report counts them).
   bool samplesOnDevice_ = false;

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "sampling/dynamic_sampling.h"
+#include "shading/transport.h"
 #include "support/scenes.h"
 
 namespace scatterlab::testing {
@@ -30,6 +31,49 @@ std::vector<std::string> stages(const RenderResult& r) {
   std::vector<std::string> got;
   for (const auto& [stage, ms] : r.stats.timingsMs) got.push_back(stage);
   return got;
+}
+
+/// Fog filling a 32³ box under a narrow spot: every voxel occupied, few of them lit.
+Json shaftDoc() {
+  Json doc = homogeneousBoxDoc(1.0f, 1.5f, 0.8f, Vec3(0), 1.0f, 40, 30, 32);
+  doc["lights"] = Json::parse(R"([{"type": "spot", "position": [0.45, 1.4, 0.55],
+      "direction": [0.1, -1, 0], "intensity": [3, 2.5, 2], "inner_deg": 6, "outer_deg": 9}])");
+  doc["camera"]["position"] = {0.5, 0.6, -1.6};
+  doc["render"]["sampler"] = {{"type", "grid"}, {"count", 100}};
+  doc["render"]["voxel_switch"] = 2;
+  return doc;
+}
+
+TEST(VoxelSwitch, WhereOnlySpotsShinePerVoxelTracesWhatTheConesReach) {
+  // Per-voxel traces the occupied voxels a light reaches: under spot lights only, at most the
+  // voxels a cone reaches (LitReach::voxelBound). 32 768 voxels are occupied, more than
+  // voxel_switch × the first level's traces (2 × 125 × 41 = 10 250), but the cone reaches fewer
+  // (6 912 by the bound): the scene switches; with a dark point light added (it lights
+  // everything, the image is the same) it does not.
+  const Scene scene = sceneFromJson(shaftDoc());
+  const RenderResult spot = render(shaftDoc(), "adaptive");
+  const long long bound = LitReach(scene.lights).voxelBound(scene.medium.bounds, IVec3(32));
+  EXPECT_EQ(spot.stats.extra.at("occupied_voxels").get<long long>(), 32 * 32 * 32);
+  EXPECT_EQ(spot.stats.extra.at("lit_voxels").get<long long>(), bound);
+  EXPECT_LT(bound, 32 * 32 * 32 / 4);
+  EXPECT_TRUE(spot.stats.extra.at("voxels_instead").get<bool>());
+  Json dark = shaftDoc();
+  dark["lights"].push_back({{"type", "point"}, {"position", {3, 3, 3}}, {"intensity", 0}});
+  const RenderResult all = render(dark, "adaptive");
+  EXPECT_FALSE(all.stats.extra.contains("lit_voxels"));
+  EXPECT_FALSE(all.stats.extra.at("voxels_instead").get<bool>());
+  // The bound holds every voxel a cone reaches (the per-voxel fallback's test, voxel by voxel).
+  const LitReach lit(scene.lights);
+  const Vec3 cell = scene.medium.bounds.extent() / 32.0f;
+  long long reached = 0;
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x)
+        reached += lit.reaches(scene.medium.bounds.min + (Vec3(x, y, z) + 0.5f) * cell,
+                               glm::length(cell));
+  EXPECT_GT(reached, 0);
+  EXPECT_GE(bound, reached);
+  EXPECT_LT(bound, 3 * reached);  // blocks of 2³ voxels, not the whole box
 }
 
 TEST(VoxelSwitch, ASparseMediumIsRenderedAsPerVoxelRendersIt) {
