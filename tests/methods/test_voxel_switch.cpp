@@ -69,8 +69,8 @@ TEST(VoxelSwitch, WhereOnlySpotsShinePerVoxelTracesWhatTheConesReach) {
   for (int z = 0; z < 32; ++z)
     for (int y = 0; y < 32; ++y)
       for (int x = 0; x < 32; ++x)
-        reached += lit.reaches(scene.medium.bounds.min + (Vec3(x, y, z) + 0.5f) * cell,
-                               glm::length(cell));
+        reached +=
+            lit.reaches(scene.medium.bounds.min + (Vec3(x, y, z) + 0.5f) * cell, glm::length(cell));
   EXPECT_GT(reached, 0);
   EXPECT_GE(bound, reached);
   EXPECT_LT(bound, 3 * reached);  // blocks of 2³ voxels, not the whole box
