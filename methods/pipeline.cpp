@@ -124,19 +124,24 @@ class PipelineMethod : public Method {
     }
     // The whole-scene fallback: a medium so sparse that per-voxel traces less than the
     // refiner's first level would is rendered as per-voxel renders it. Per-voxel traces the
-    // occupied voxels (counted once per density) that some light reaches: where only spot
-    // lights shine, at most those a cone reaches (LitReach::voxelBound, host geometry, no GPU
-    // wait), so the decision follows the lights from frame to frame.
+    // occupied voxels that some light reaches: where only spot lights shine, at most those of
+    // the occupied cells of a coarse grid that a cone reaches (LitReach::voxelBound). The
+    // counts and the cells are taken once per density (on a GPU one pass, two small reads); the
+    // cones are host geometry, so the decision follows the lights from frame to frame with no
+    // wait.
     if (voxelReconstruction) {
+      const IVec3 res = scene.medium.resolution;
       if (!reuse || !keptOccupied_) {
-        const std::array<IVec3, 1> voxels{scene.medium.resolution};
-        keptOccupied_ = frame->countOccupiedCells(voxels)[0];
+        const std::array<IVec3, 2> grids{res, LitReach::boundCells(res)};
+        keptOccupied_ = frame->countOccupiedCells(grids)[0];
+        keptOccupiedCells_.assign(std::size_t(grids[1].x) * grids[1].y * grids[1].z, 0);
+        for (int c : frame->occupiedCellList(grids[1])) keptOccupiedCells_[std::size_t(c)] = 1;
       }
       const LitReach lit(scene.lights);
       long long traced = *keptOccupied_;
       st.extra["occupied_voxels"] = traced;
       if (!lit.everywhere()) {
-        const long long bound = lit.voxelBound(scene.medium.bounds, scene.medium.resolution);
+        const long long bound = lit.voxelBound(scene.medium.bounds, res, &keptOccupiedCells_);
         st.extra["lit_voxels"] = bound;
         traced = std::min(traced, bound);
       }
@@ -268,6 +273,8 @@ class PipelineMethod : public Method {
   /// The kept density's occupied voxels (Frame::countOccupiedCells), which the whole-scene
   /// fallback's decision starts from.
   std::optional<long long> keptOccupied_;
+  /// Per cell of a LitReach::boundCells grid, whether it holds density (for the cones' bound).
+  std::vector<char> keptOccupiedCells_;
   /// The refiner left the final samples on the device (RenderResult::samples is empty; the
   /// backend's report counts them).
   bool samplesOnDevice_ = false;

@@ -4,6 +4,7 @@
 /// ω) = Σ_l f(ω_l → ω)·E_l(x) of DESIGN.md §2. Header-only templates so the inner loops inline; no
 /// virtual calls per step.
 
+#include <array>
 #include <vector>
 
 #include "core/grid.h"
@@ -350,24 +351,55 @@ class LitReach {
   }
   /// Every point may be lit (some light is not a spot): nothing is ever skipped.
   bool everywhere() const { return everywhere_; }
+  /// The cells of voxelBound: at most 32 per axis (fewer where the grid has fewer voxels).
+  static IVec3 boundCells(IVec3 dims) { return glm::clamp(dims, IVec3(1), IVec3(32)); }
   /// An upper bound of the voxels of a `dims` grid over `box` that a cone reaches within their
-  /// half-diagonal: 16 blocks per axis (or one per voxel) tested whole, each with a ball around
-  /// it, so at most 4 096 tests; every voxel when everywhere(). Host geometry only: no density is
-  /// read.
-  long long voxelBound(const Box& box, IVec3 dims) const {
-    const long long all = (long long)dims.x * dims.y * dims.z;
-    if (everywhere_) return all;
-    const IVec3 b = glm::max((dims + 15) / 16, IVec3(1));  // block edge, voxels
+  /// half-diagonal, counted by the cells of a boundCells(dims) grid (occupiedCells()' voxel →
+  /// cell map, core/stages.h), each tested whole with a ball around its voxels; blocks of 4³
+  /// cells are tested first and only the cells of blocks a cone reaches are tested again, so a
+  /// narrow cone costs a few hundred tests. Host geometry only. `occupied` (one char per cell,
+  /// as indexed by occupiedCells(); null: every cell): only the cells that hold density count.
+  /// Every voxel of those cells when everywhere().
+  long long voxelBound(const Box& box, IVec3 dims,
+                       const std::vector<char>* occupied = nullptr) const {
+    const IVec3 c = boundCells(dims);
     const Vec3 cell = box.extent() / Vec3(dims);
     const float reach = glm::length(cell);
+    // Per axis, the first voxel of each cell (and one past the last).
+    std::array<std::vector<int>, 3> first;
+    for (int a = 0; a < 3; ++a) {
+      const std::vector<int> map = voxelCells(dims[a], c[a]);
+      first[a].assign(std::size_t(c[a]) + 1, dims[a]);
+      for (int u = dims[a] - 1; u >= 0; --u) first[a][std::size_t(map[std::size_t(u)])] = u;
+      for (int k = c[a] - 1; k >= 0; --k)  // a cell with no voxel starts where the next does
+        first[a][std::size_t(k)] = std::min(first[a][std::size_t(k)], first[a][std::size_t(k) + 1]);
+    }
+    // Cells [k0, k1) per axis: whether a cone reaches the ball around their voxels; their
+    // voxels in `count`.
+    const auto reached = [&](IVec3 k0, IVec3 k1, long long* count) {
+      const IVec3 lo(first[0][std::size_t(k0.x)], first[1][std::size_t(k0.y)],
+                     first[2][std::size_t(k0.z)]);
+      const IVec3 hi(first[0][std::size_t(k1.x)], first[1][std::size_t(k1.y)],
+                     first[2][std::size_t(k1.z)]);
+      if (glm::any(glm::lessThanEqual(hi, lo))) return false;
+      if (count) *count = (long long)(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+      const Vec3 half = 0.5f * Vec3(hi - lo) * cell;
+      return everywhere_ || reaches(box.min + Vec3(lo) * cell + half, glm::length(half) + reach);
+    };
+    constexpr int kBlock = 4;
     long long n = 0;
-    for (int z = 0; z < dims.z; z += b.z)
-      for (int y = 0; y < dims.y; y += b.y)
-        for (int x = 0; x < dims.x; x += b.x) {
-          const IVec3 lo(x, y, z), hi = glm::min(lo + b, dims);
-          const Vec3 half = 0.5f * Vec3(hi - lo) * cell;
-          if (reaches(box.min + Vec3(lo) * cell + half, glm::length(half) + reach))
-            n += (long long)(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+    for (int bz = 0; bz < c.z; bz += kBlock)
+      for (int by = 0; by < c.y; by += kBlock)
+        for (int bx = 0; bx < c.x; bx += kBlock) {
+          const IVec3 b0(bx, by, bz), b1 = glm::min(b0 + kBlock, c);
+          if (!reached(b0, b1, nullptr)) continue;
+          for (int z = b0.z; z < b1.z; ++z)
+            for (int y = b0.y; y < b1.y; ++y)
+              for (int x = b0.x; x < b1.x; ++x) {
+                if (occupied && !(*occupied)[std::size_t((z * c.y + y) * c.x + x)]) continue;
+                long long voxels = 0;
+                if (reached(IVec3(x, y, z), IVec3(x, y, z) + 1, &voxels)) n += voxels;
+              }
         }
     return n;
   }
