@@ -373,6 +373,50 @@ INSTANTIATE_TEST_SUITE_P(Methods, GpuSteadyFrame,
                            return name + (std::get<1>(info.param) ? "_paper" : "_defaults");
                          });
 
+TEST(GpuSteadyFrame, ASpotWhoseConeWidensLeavesTheWholeSceneFallbackAndComesBack) {
+  // Under spot lights only, the whole-scene fallback counts the occupied voxels a cone reaches,
+  // from the lights every frame: a narrow cone switches to per-voxel V, a wide one does not.
+  // A Renderer whose light widens and narrows again changes path from frame to frame, and each
+  // frame is what a fresh render of its scene gives.
+  SCATTERLAB_REQUIRE_GPU();
+  const auto doc = [](float outerDeg) {
+    Json d = homogeneousBoxDoc(1.0f, 1.5f, 0.8f, Vec3(0), 1.0f, 40, 30, 32);
+    d["lights"] = Json::parse(R"([{"type": "spot", "position": [0.45, 1.4, 0.55],
+        "direction": [0.1, -1, 0], "intensity": [3, 2.5, 2], "inner_deg": 4}])");
+    d["lights"][0]["outer_deg"] = outerDeg;
+    d["camera"]["position"] = {0.5, 0.6, -1.6};
+    d["render"]["sampler"] = {{"type", "grid"}, {"count", 100}};
+    d["render"]["voxel_switch"] = 2;
+    return d;
+  };
+  initialize();
+  Renderer r(doc(9.0f), ".", "adaptive", "gpu");
+  r.keepImageOnDevice(true);
+  const float cones[] = {9.0f, 40.0f, 9.0f};
+  const bool switched[] = {true, false, true};
+  for (int f = 0; f < 3; ++f) {
+    if (f > 0) r.set("lights.0.outer_deg=" + std::to_string(cones[f]));
+    const RenderResult res = r.render();
+    EXPECT_EQ(res.stats.extra.at("voxels_instead").get<bool>(), switched[f]) << "frame " << f;
+    ASSERT_TRUE(res.deviceImage.has_value());
+    const RenderResult::DeviceImage& d = *res.deviceImage;
+    std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
+    gpu::context();
+    glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                      rgba.data());
+    const Image fresh = freshRender(doc(cones[f]), "adaptive").image;
+    double worst = 0.0, peak = 0.0;
+    for (std::size_t i = 0; i < fresh.pixels().size(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        worst =
+            std::max(worst, double(std::abs(rgba[4 * i + std::size_t(c)] - fresh.pixels()[i][c])));
+        peak = std::max(peak, double(fresh.pixels()[i][c]));
+      }
+    EXPECT_GT(peak, 0.0) << "frame " << f;
+    EXPECT_EQ(worst, 0.0) << "frame " << f;  // the same passes as a fresh render
+  }
+}
+
 }  // namespace
 }  // namespace scatterlab::testing
 
