@@ -160,6 +160,9 @@ struct RunRecord {
   Json toJson() const;
   static RunRecord fromJson(const Json& j);
   double totalMs() const;
+  /// What the reports' "samples used" column shows: the samples, or for adaptive rendered by
+  /// its whole-scene fallback (stats voxels_instead) "per-voxel: N voxels", or "—".
+  std::string samplesLabel() const;
   /// steady[key] where the steady frames hold it (not on the CPU for gpu_ms, host_waits).
   std::optional<double> steadyValue(const char* key) const;
 };

@@ -149,9 +149,8 @@ void sweepTableRow(std::ostream& md, const ResultFacts& facts, const SweepSpec& 
        << " |\n";
     return;
   }
-  md << " " << (rec.samples ? std::to_string(*rec.samples) : "—") << " | "
-     << fmt(rec.totalMs(), "%.1f") << " | " << fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.2f")
-     << " |";
+  md << " " << rec.samplesLabel() << " | " << fmt(rec.totalMs(), "%.1f") << " | "
+     << fmt(1000.0 / std::max(rec.totalMs(), 1e-9), "%.2f") << " |";
   if (sw.steadyFrames > 0) {
     const auto steady = [&](const char* key, const char* format) {
       const auto v = rec.steadyValue(key);

@@ -313,8 +313,8 @@ void writeReportHtml(const ExperimentResult& res, const ResultFacts& facts,
       row["error"] = rec.error;
       row["status"] = rec.status;
     } else {
-      cells.push_back(rec.samples ? tableCell(std::to_string(*rec.samples), *rec.samples)
-                                  : tableCell("—", nullptr));
+      cells.push_back(rec.samples ? tableCell(rec.samplesLabel(), *rec.samples)
+                                  : tableCell(rec.samplesLabel(), nullptr));
       cells.push_back(tableCell(fmt(rec.totalMs(), "%.1f"), rec.totalMs()));
       const double fps = 1000.0 / std::max(rec.totalMs(), 1e-9);
       cells.push_back(tableCell(fmt(fps, "%.2f"), fps));

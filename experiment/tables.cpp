@@ -57,6 +57,15 @@ double RunRecord::totalMs() const {
   return 0.0;
 }
 
+std::string RunRecord::samplesLabel() const {
+  if (stats.is_object() && stats.value("voxels_instead", false)) {
+    const Json traced = stats.value("traced_voxels", Json());
+    return "per-voxel: " + (traced.is_number() ? std::to_string(traced.get<long long>()) : "?") +
+           " voxels";
+  }
+  return samples ? std::to_string(*samples) : "—";
+}
+
 Json RunRecord::toJson() const {
   Json j;
   j["id"] = id;

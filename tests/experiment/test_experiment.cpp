@@ -95,6 +95,21 @@ class ExperimentTest : public ::testing::Test {
   fs::path dir;
 };
 
+TEST(RunRecord, AdaptiveRenderedAsPerVoxelSaysSoInTheSamplesColumn) {
+  // adaptive's whole-scene fallback renders without samples: the reports say what it traced
+  // instead of "0".
+  RunRecord r;
+  r.samples = 0;
+  r.stats = {{"voxels_instead", true}, {"traced_voxels", 7408}};
+  EXPECT_EQ(r.samplesLabel(), "per-voxel: 7408 voxels");
+  r.stats = {{"voxels_instead", false}};
+  r.samples = 5032;
+  EXPECT_EQ(r.samplesLabel(), "5032");
+  r.samples.reset();
+  r.stats = Json::object();
+  EXPECT_EQ(r.samplesLabel(), "—");
+}
+
 TEST_F(ExperimentTest, ParserExpandsSweeps) {
   writeJson(dir / "exp.json", tinyConfig());
   const ExperimentPlan plan = parseExperiment((dir / "exp.json").string());
