@@ -51,6 +51,11 @@ inline constexpr GLuint kNextAncestors = 11;
 /// float sums of mean_RGB|L̃ − L|·D per sample and group of kProbeGroup probes (dynamic sampling's
 /// probe pass; never in one program with the grid information buffer).
 inline constexpr GLuint kProbeSums = 7;
+/// The radiance normalisation's kept nearest-sample fill (radiance_normalize.comp.glsl,
+/// DeviceSamples::NearestFill): uvec2 (voxel, sample) entries, and two uints (the entries
+/// written, whether they overflowed). Never in one program with kErrors or kInSet.
+inline constexpr GLuint kFillEntries = 5;
+inline constexpr GLuint kFillWords = 7;
 /// Scan (scan.comp.glsl): input, output, per-block totals, and the scanned block totals.
 inline constexpr GLuint kScanIn = 0;
 inline constexpr GLuint kScanOut = 1;
@@ -175,6 +180,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_ASSEMBLE_PARTS", binding::kAssembleParts},
     {"BINDING_NEXT_ANCESTORS", binding::kNextAncestors},
     {"BINDING_PROBE_SUMS", binding::kProbeSums},
+    {"BINDING_FILL_ENTRIES", binding::kFillEntries},
+    {"BINDING_FILL_WORDS", binding::kFillWords},
     {"BINDING_SCAN_IN", binding::kScanIn},
     {"BINDING_SCAN_OUT", binding::kScanOut},
     {"BINDING_SCAN_BLOCK_SUMS", binding::kScanBlockSums},

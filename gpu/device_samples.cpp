@@ -24,6 +24,7 @@ bool DeviceSamples::setPoints(std::span<const RadianceSample> samples) {
   radiance = Buffer(spheres.size() * sizeof(GpuRadianceRecord), nullptr, 0, "sample S and grad S");
   radianceCurrent = false;
   bins_.reset();
+  fill.reset();
   return true;
 }
 
@@ -49,6 +50,7 @@ void DeviceSamples::reserveOnDevice(std::size_t capacity,
   spheres.clear();
   bins_.reset();
   deviceBins_.reset();
+  fill.reset();
   radianceCurrent = false;
   if (!onDevice) onDevice.emplace();
   ensure(points, capacity * sizeof(GpuSamplePoint), "sample positions (on device)");

@@ -34,6 +34,18 @@ struct DeviceSamples {
   bool radianceCurrent = false;    ///< `radiance` was written by this render's tracer
   /// A list whose count only the GPU knows (DeviceSampleList).
   std::optional<DeviceSampleList> onDevice;
+  /// The compute gather's occupied voxels no sphere covers, each with its nearest sample
+  /// (radiance_normalize.comp.glsl): they depend on the positions, the radii, the density and
+  /// the grid, not on the lights, so a frame that keeps its samples (and with them its density)
+  /// fills them from this list instead of searching. Dropped with the points.
+  struct NearestFill {
+    Box bounds;
+    IVec3 dims{0};
+    std::size_t capacity = 0;  ///< entries `entries` holds; more: `words`[1] set, not kept
+    Buffer entries;            ///< uvec2 (voxel index, sample index)
+    Buffer words;              ///< uint count, uint overflow
+  };
+  std::optional<NearestFill> fill;
 
   /// Uploads the samples' positions and radii unless the same ones are uploaded already
   /// (compared on the host: no GPU wait); a new set drops the bins and S. Sizes `radiance`.

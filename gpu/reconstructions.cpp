@@ -82,13 +82,50 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
                                   Texture::Contents::Overwritten);
   const Vec3 cell = bounds.extent() / Vec3(dims);
   // The compute gather fills uncovered occupied voxels from the nearest sample, as the CPU;
-  // a resident list's count is read on the GPU.
+  // a resident list's count is read on the GPU. Samples kept from frame to frame (a host list
+  // the frame keeps) keep the voxels and their nearest samples too: found once, then written
+  // from the list by a small pass (DeviceSamples::NearestFill).
   const bool countOnDevice = gather && gathered->onDevice.has_value();
-  const Program& normalize = program(ProgramVariant{.compute = {"radiance_normalize.comp.glsl"}}
-                                         .define("SL_LOG_SPACE", log_)
-                                         .define("SL_NEAREST_FILL", gather)
-                                         .define("SL_COUNT_ON_DEVICE", countOnDevice),
+  DeviceSamples::NearestFill* fill = nullptr;
+  bool record = false;
+  if (gather && resident && gathered == resident && !countOnDevice) {
+    auto& kept = resident->fill;
+    if (!kept || kept->dims != dims || kept->bounds.min != bounds.min ||
+        kept->bounds.max != bounds.max) {
+      kept.emplace();
+      kept->bounds = bounds;
+      kept->dims = dims;
+      // At most every voxel, at most 4 M entries (32 MiB): past that the list overflows, and
+      // every frame searches as without it.
+      kept->capacity = std::min<std::size_t>(std::size_t(dims.x) * dims.y * dims.z, 1u << 22);
+      kept->entries =
+          Buffer(kept->capacity * 2 * sizeof(GLuint), nullptr, 0, "nearest-sample fill entries");
+      const GLuint zeros[2] = {0, 0};
+      kept->words = Buffer(sizeof zeros, zeros, 0, "nearest-sample fill count");
+      record = true;
+    }
+    fill = &*kept;
+  }
+  enum class FillMode { Search, Record, Kept, Pass };
+  const auto normalizeVariant = [&](FillMode m) {
+    return ProgramVariant{.compute = {"radiance_normalize.comp.glsl"}}
+        .define("SL_LOG_SPACE", log_)
+        .define("SL_NEAREST_FILL", gather)
+        .define("SL_COUNT_ON_DEVICE", countOnDevice)
+        .define("SL_FILL_RECORD", m == FillMode::Record)
+        .define("SL_FILL_KEPT", m == FillMode::Kept)
+        .define("SL_FILL_PASS", m == FillMode::Pass);
+  };
+  const Program& normalize = program(normalizeVariant(!fill    ? FillMode::Search
+                                                      : record ? FillMode::Record
+                                                               : FillMode::Kept),
                                      "radiance normalize");
+  if (record) {
+    // The programs of the frames that keep the list, made now: a steady frame creates no GL
+    // object (programs are kept by their defines).
+    (void)program(normalizeVariant(FillMode::Kept), "radiance normalize");
+    (void)program(normalizeVariant(FillMode::Pass), "radiance nearest fill");
+  }
   const BinBuffers* bins = nullptr;
   IVec3 binDims{0};
   if (gather) bins = &gathered->binsFor(bounds, dims, &binDims, "radiance gather");
@@ -157,8 +194,32 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
       else
         glUniform1ui(normalize.uniform("uSampleCount"), GLuint(gathered->size()));
     }
+    if (fill) {
+      fill->entries.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFillEntries);
+      fill->words.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFillWords);
+      glUniform1ui(normalize.uniform("uFillCapacity"), GLuint(fill->capacity));
+    }
     out.densityInAlpha = sameGrid(density, bounds, dims);
     dispatch("radiance normalize", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)},
+             timer);
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+  }
+  if (fill && !record) {
+    // The kept voxels from the kept list: at most 1024 workgroups, striding over the entries
+    // the GPU counted (no read-back).
+    const Program& pass = program(normalizeVariant(FillMode::Pass), "radiance nearest fill");
+    pass.use();
+    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    gathered->radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
+    fill->entries.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFillEntries);
+    fill->words.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFillWords);
+    counter.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+    glUniform1ui(pass.uniform("uFillCapacity"), GLuint(fill->capacity));
+    setIVec3(pass, "uGridDims", dims);
+    glUniform1i(pass.uniform("uSameGrid"), sameGrid(density, bounds, dims));
+    dispatch("radiance nearest fill", {std::min<GLuint>(groups(fill->capacity, 64), 1024u), 1, 1},
              timer);
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
