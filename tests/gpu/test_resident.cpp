@@ -177,6 +177,20 @@ RenderResult freshRender(const Json& doc, const std::string& method) {
   return createMethod(s, method, "gpu")->render(s, nullptr);
 }
 
+/// The image a render left on the device (keepImageOnDevice), read back: its RGB.
+Image deviceImage(const RenderResult& res) {
+  const RenderResult::DeviceImage& d = *res.deviceImage;
+  std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
+  gpu::context();  // a Renderer call leaves scatterlab's context current on no thread
+  glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
+                    rgba.data());
+  gpu::checkGl("device image read-back");
+  Image img(d.width, d.height);
+  for (std::size_t i = 0; i < img.pixels().size(); ++i)
+    img.pixels()[i] = Vec3(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]);
+  return img;
+}
+
 class GpuRendererReuse : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(GpuRendererReuse, FramesEqualFreshRendersAndCreateNoGlObjects) {
@@ -269,12 +283,7 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
     ASSERT_TRUE(res.deviceImage.has_value());
     EXPECT_FALSE(res.stats.extra.contains("image_readback_ms"));
     // The image, read after the frame, equals a fresh render's (which reads its image back).
-    const RenderResult::DeviceImage& d = *res.deviceImage;
-    std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
-    gpu::context();  // a Renderer call leaves scatterlab's context current on no thread
-    glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                      rgba.data());
-    gpu::checkGl("device image read-back");
+    const Image onDevice = deviceImage(res);
     Json freshDoc = doc(f);
     const RenderResult freshResult = freshRender(freshDoc, method);
     const Image& fresh = freshResult.image;
@@ -291,11 +300,7 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
               << key << " of level " << l;
       EXPECT_TRUE(res.samples.empty());  // left on the device
     }
-    double worst = 0.0;
-    for (std::size_t i = 0; i < fresh.pixels().size(); ++i)
-      for (int c = 0; c < 3; ++c)
-        worst =
-            std::max(worst, double(std::abs(rgba[4 * i + std::size_t(c)] - fresh.pixels()[i][c])));
+    const double worst = compareImages(onDevice, fresh).maxAbs;
     std::printf("  max |device image - fresh render| = %.3g\n", worst);
     // Measured on llvmpipe: 0 (the same passes on the same records; the lamp bound computed on
     // the GPU equals the host's on this scene).
@@ -337,16 +342,7 @@ TEST(GpuSteadyFrame, AdaptiveUnderABindingBudgetAsAFreshRender) {
       capped += levels[l].at("capped").get<long long>();
       toppedUp += levels[l].at("topped_up").get<long long>();
     }
-    const RenderResult::DeviceImage& d = *res.deviceImage;
-    std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
-    gpu::context();
-    glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                      rgba.data());
-    double worst = 0.0;
-    for (std::size_t i = 0; i < fresh.image.pixels().size(); ++i)
-      for (int c = 0; c < 3; ++c)
-        worst = std::max(
-            worst, double(std::abs(rgba[4 * i + std::size_t(c)] - fresh.image.pixels()[i][c])));
+    const double worst = compareImages(deviceImage(res), fresh.image).maxAbs;
     std::printf("frame %d: %lld samples, max |device image - fresh render| = %.3g\n", f,
                 *res.stats.samples, worst);
     EXPECT_EQ(worst, 0.0) << "frame " << f;  // measured on llvmpipe: 0 (the same passes)
@@ -443,21 +439,13 @@ TEST(GpuSteadyFrame, ASpotWhoseConeWidensLeavesTheWholeSceneFallbackAndComesBack
     const RenderResult res = r.render();
     EXPECT_EQ(res.stats.extra.at("voxels_instead").get<bool>(), switched[f]) << "frame " << f;
     ASSERT_TRUE(res.deviceImage.has_value());
-    const RenderResult::DeviceImage& d = *res.deviceImage;
-    std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
-    gpu::context();
-    glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                      rgba.data());
     const Image fresh = freshRender(doc(cones[f]), "adaptive").image;
-    double worst = 0.0, peak = 0.0;
-    for (std::size_t i = 0; i < fresh.pixels().size(); ++i)
-      for (int c = 0; c < 3; ++c) {
-        worst =
-            std::max(worst, double(std::abs(rgba[4 * i + std::size_t(c)] - fresh.pixels()[i][c])));
-        peak = std::max(peak, double(fresh.pixels()[i][c]));
-      }
+    double peak = 0.0;
+    for (const Vec3& p : fresh.pixels())
+      peak = std::max({peak, double(p.x), double(p.y), double(p.z)});
     EXPECT_GT(peak, 0.0) << "frame " << f;
-    EXPECT_EQ(worst, 0.0) << "frame " << f;  // the same passes as a fresh render
+    // The same passes as a fresh render.
+    EXPECT_EQ(compareImages(deviceImage(res), fresh).maxAbs, 0.0) << "frame " << f;
   }
 }
 
@@ -495,11 +483,6 @@ TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
       EXPECT_EQ(res.stats.extra.at("host_waits").get<long long>(), 0) << "frame " << f;
     }
     ASSERT_TRUE(res.deviceImage.has_value());
-    const RenderResult::DeviceImage& d = *res.deviceImage;
-    std::vector<float> rgba(std::size_t(d.width) * std::size_t(d.height) * 4);
-    gpu::context();
-    glGetTextureImage(d.texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)),
-                      rgba.data());
     const Image fresh = freshRender(doc(f), "adaptive").image;
     if (f == 0) {
       const double toCpu = compareImages(fresh, cpu.image).relL2;
@@ -507,12 +490,8 @@ TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
       // Measured on llvmpipe, 2026-11-28: 1.94e-7; 1e-6 leaves a GPU's float rounding room.
       EXPECT_LT(toCpu, 1e-6);
     }
-    double worst = 0.0;
-    for (std::size_t i = 0; i < fresh.pixels().size(); ++i)
-      for (int c = 0; c < 3; ++c)
-        worst =
-            std::max(worst, double(std::abs(rgba[4 * i + std::size_t(c)] - fresh.pixels()[i][c])));
-    EXPECT_EQ(worst, 0.0) << "frame " << f;  // the same passes as a fresh render
+    // The same passes as a fresh render.
+    EXPECT_EQ(compareImages(deviceImage(res), fresh).maxAbs, 0.0) << "frame " << f;
   }
 }
 
