@@ -131,16 +131,20 @@ class PipelineMethod : public Method {
     // wait.
     if (voxelReconstruction) {
       const IVec3 res = scene.medium.resolution;
+      const IVec3 cells = LitReach::boundCells(res);
       if (!reuse || !keptOccupied_) {
-        const std::array<IVec3, 2> grids{res, LitReach::boundCells(res)};
+        const std::array<IVec3, 2> grids{res, cells};  // one pass on a GPU
         keptOccupied_ = frame->countOccupiedCells(grids)[0];
-        keptOccupiedCells_.assign(std::size_t(grids[1].x) * grids[1].y * grids[1].z, 0);
-        for (int c : frame->occupiedCellList(grids[1])) keptOccupiedCells_[std::size_t(c)] = 1;
+        keptOccupiedCells_.clear();
       }
       const LitReach lit(scene.lights);
       long long traced = *keptOccupied_;
       st.extra["occupied_voxels"] = traced;
       if (!lit.everywhere()) {
+        if (keptOccupiedCells_.empty()) {  // read once per density, when spots alone shine
+          keptOccupiedCells_.assign(std::size_t(cells.x) * cells.y * cells.z, 0);
+          for (int c : frame->occupiedCellList(cells)) keptOccupiedCells_[std::size_t(c)] = 1;
+        }
         const long long bound = lit.voxelBound(scene.medium.bounds, res, &keptOccupiedCells_);
         st.extra["lit_voxels"] = bound;
         traced = std::min(traced, bound);
@@ -273,7 +277,8 @@ class PipelineMethod : public Method {
   /// The kept density's occupied voxels (Frame::countOccupiedCells), which the whole-scene
   /// fallback's decision starts from.
   std::optional<long long> keptOccupied_;
-  /// Per cell of a LitReach::boundCells grid, whether it holds density (for the cones' bound).
+  /// Per cell of a LitReach::boundCells grid, whether it holds density (for the cones' bound;
+  /// empty until a frame lit by spots alone needs it).
   std::vector<char> keptOccupiedCells_;
   /// The refiner left the final samples on the device (RenderResult::samples is empty; the
   /// backend's report counts them).
