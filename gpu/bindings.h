@@ -52,7 +52,7 @@ inline constexpr GLuint kNextAncestors = 11;
 /// probe pass; never in one program with the grid information buffer).
 inline constexpr GLuint kProbeSums = 7;
 /// The radiance normalisation's kept nearest-sample fill (radiance_normalize.comp.glsl,
-/// DeviceSamples::NearestFill): uvec2 (voxel, sample) entries, and two uints (the entries
+/// gpu::NearestFill): uvec2 (voxel, sample) entries, and two uints (the entries
 /// written, whether they overflowed). Never in one program with kErrors or kInSet.
 inline constexpr GLuint kFillEntries = 5;
 inline constexpr GLuint kFillWords = 7;

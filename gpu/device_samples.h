@@ -27,6 +27,18 @@ struct DeviceSampleList {
   std::vector<std::pair<std::size_t, float>> radii;
 };
 
+/// The compute gather's occupied voxels no sphere covers, each with its nearest sample
+/// (radiance_normalize.comp.glsl): they depend on the positions, the radii, the density and the
+/// grid, not on the lights, so a frame that keeps its samples (and with them its density) fills
+/// them from this list instead of searching.
+struct NearestFill {
+  Box bounds;
+  IVec3 dims{0};
+  std::size_t capacity = 0;  ///< entries `entries` holds; more: `words`[1] set, not kept
+  Buffer entries;            ///< uvec2 (voxel index, sample index)
+  Buffer words;              ///< uint count, uint overflow
+};
+
 struct DeviceSamples {
   std::vector<glm::vec4> spheres;  ///< what `points` holds (xyz, radius), to see a change
   Buffer points;                   ///< GpuSamplePoint[spheres.size()]
@@ -34,17 +46,8 @@ struct DeviceSamples {
   bool radianceCurrent = false;    ///< `radiance` was written by this render's tracer
   /// A list whose count only the GPU knows (DeviceSampleList).
   std::optional<DeviceSampleList> onDevice;
-  /// The compute gather's occupied voxels no sphere covers, each with its nearest sample
-  /// (radiance_normalize.comp.glsl): they depend on the positions, the radii, the density and
-  /// the grid, not on the lights, so a frame that keeps its samples (and with them its density)
-  /// fills them from this list instead of searching. Dropped with the points.
-  struct NearestFill {
-    Box bounds;
-    IVec3 dims{0};
-    std::size_t capacity = 0;  ///< entries `entries` holds; more: `words`[1] set, not kept
-    Buffer entries;            ///< uvec2 (voxel index, sample index)
-    Buffer words;              ///< uint count, uint overflow
-  };
+  /// The compute gather's uncovered voxels and their nearest samples (NearestFill), kept with
+  /// the points. Dropped with them.
   std::optional<NearestFill> fill;
 
   /// Uploads the samples' positions and radii unless the same ones are uploaded already

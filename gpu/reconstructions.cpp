@@ -84,9 +84,9 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   // The compute gather fills uncovered occupied voxels from the nearest sample, as the CPU;
   // a resident list's count is read on the GPU. Samples kept from frame to frame (a host list
   // the frame keeps) keep the voxels and their nearest samples too: found once, then written
-  // from the list by a small pass (DeviceSamples::NearestFill).
+  // from the list by a small pass (gpu::NearestFill).
   const bool countOnDevice = gather && gathered->onDevice.has_value();
-  DeviceSamples::NearestFill* fill = nullptr;
+  NearestFill* fill = nullptr;
   bool record = false;
   if (gather && resident && gathered == resident && !countOnDevice) {
     auto& kept = resident->fill;

@@ -5,7 +5,7 @@
 // on ties), as the CPU reconstruction does (cpu/interpolation.cpp, uncoveredValue). A weight of
 // −1 marks a voxel the gather left out (SL_LIT_REACH there): 0, not counted.
 // The nearest samples depend on the positions, the radii, the density and the grid, not on the
-// lights (DeviceSamples::NearestFill): SL_FILL_RECORD appends each (voxel, sample) found to a
+// lights (gpu::NearestFill): SL_FILL_RECORD appends each (voxel, sample) found to a
 // list; SL_FILL_KEPT (a later frame with the same samples) does not search unless that list
 // overflowed, and SL_FILL_PASS, run after it, writes the listed voxels from the list.
 #ifdef SL_FILL_PASS

@@ -373,7 +373,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, GpuSteadyFrame,
 TEST(GpuSteadyFrame, UncoveredVoxelsAreFilledFromTheKeptListAsAFreshRenderSearches) {
   // Gaussian centres leave voxels at the plume's fringe that no sphere covers: a fresh render
   // searches their nearest samples, a steady frame (samples kept) writes them from the list the
-  // first frame kept (DeviceSamples::NearestFill). The same image, the same count, no wait.
+  // first frame kept (gpu::NearestFill). The same image, the same count, no wait.
   SCATTERLAB_REQUIRE_GPU();
   std::ifstream in(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
   const Json base = Json::parse(in);
