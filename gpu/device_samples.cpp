@@ -60,6 +60,24 @@ void DeviceSamples::reserveOnDevice(std::size_t capacity,
   onDevice->radii = std::move(radii);
 }
 
+NearestFill& DeviceSamples::fillFor(const Box& bounds, IVec3 dims, bool* created) {
+  *created = !fill || fill->dims != dims || fill->bounds.min != bounds.min ||
+             fill->bounds.max != bounds.max;
+  if (*created) {
+    fill.emplace();
+    fill->bounds = bounds;
+    fill->dims = dims;
+    // At most every voxel, at most 4 M entries (32 MiB): past that the list overflows, and every
+    // frame searches as without it.
+    fill->capacity = std::min<std::size_t>(std::size_t(dims.x) * dims.y * dims.z, 1u << 22);
+    fill->entries =
+        Buffer(fill->capacity * 2 * sizeof(GLuint), nullptr, 0, "nearest-sample fill entries");
+    const GLuint zeros[2] = {0, 0};
+    fill->words = Buffer(sizeof zeros, zeros, 0, "nearest-sample fill count");
+  }
+  return *fill;
+}
+
 const BinBuffers& DeviceSamples::binsFor(const Box& bounds, IVec3 dims, IVec3* binCount,
                                          const char* pass) {
   if (onDevice) {

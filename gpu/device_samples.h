@@ -61,6 +61,9 @@ struct DeviceSamples {
   /// were built for this grid, else binned on the host and uploaded (once per sample set); an
   /// onDevice list is binned on the GPU (every time: its samples change with the light).
   const BinBuffers& binsFor(const Box& bounds, IVec3 dims, IVec3* binCount, const char* pass);
+  /// The nearest-sample fill of (bounds, dims): the kept one, or a new empty one (`*created`
+  /// true: the normalisation records it this frame). Not for an onDevice list. Needs the context.
+  NearestFill& fillFor(const Box& bounds, IVec3 dims, bool* created);
   std::size_t size() const { return spheres.size(); }
   /// The overflow word of the last GPU-built bins (null: none; read it after the frame).
   const GpuBins* deviceBins() const { return deviceBins_ ? &*deviceBins_ : nullptr; }

@@ -88,27 +88,11 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   const bool countOnDevice = gather && gathered->onDevice.has_value();
   NearestFill* fill = nullptr;
   bool record = false;
-  if (gather && resident && gathered == resident && !countOnDevice) {
-    auto& kept = resident->fill;
-    if (!kept || kept->dims != dims || kept->bounds.min != bounds.min ||
-        kept->bounds.max != bounds.max) {
-      kept.emplace();
-      kept->bounds = bounds;
-      kept->dims = dims;
-      // At most every voxel, at most 4 M entries (32 MiB): past that the list overflows, and
-      // every frame searches as without it.
-      kept->capacity = std::min<std::size_t>(std::size_t(dims.x) * dims.y * dims.z, 1u << 22);
-      kept->entries =
-          Buffer(kept->capacity * 2 * sizeof(GLuint), nullptr, 0, "nearest-sample fill entries");
-      const GLuint zeros[2] = {0, 0};
-      kept->words = Buffer(sizeof zeros, zeros, 0, "nearest-sample fill count");
-      record = true;
-    }
-    fill = &*kept;
-  }
+  if (gather && resident && gathered == resident && !countOnDevice)
+    fill = &resident->fillFor(bounds, dims, &record);
   enum class FillMode { Search, Record, Kept, Pass };
   const auto normalizeVariant = [&](FillMode m) {
-    return ProgramVariant{.compute = {"radiance_normalize.comp.glsl"}}
+    return ProgramVariant{.compute = {"common.glsl", "radiance_normalize.comp.glsl"}}
         .define("SL_LOG_SPACE", log_)
         .define("SL_NEAREST_FILL", gather)
         .define("SL_COUNT_ON_DEVICE", countOnDevice)
@@ -261,9 +245,9 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
     glUniform1i(program.uniform("uSameGrid"), sameGrid(density, bounds, dims));
     out.densityInAlpha = sameGrid(density, bounds, dims);
     setVec3(program, "uRadMin", bounds.min);
-    setVec3(program, "uRadCell", bounds.extent() / Vec3(dims));
-    if (factored_)
-      glUniform1f(program.uniform("uReach"), glm::length(bounds.extent() / Vec3(dims)));
+    const Vec3 cell = bounds.extent() / Vec3(dims);
+    setVec3(program, "uRadCell", cell);
+    if (factored_) glUniform1f(program.uniform("uReach"), glm::length(cell));
     dispatch("per-voxel S", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)}, timer);
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }

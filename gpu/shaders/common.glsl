@@ -84,6 +84,20 @@ bool intersectBox(vec3 o, vec3 d, float tmin, float tmax, out float t0, out floa
   return true;
 }
 
+// VoxelOccupancy (cpu/per_voxel.h): whether a density voxel with D > 0 has a trilinear support
+// overlapping that of the radiance voxel centred at c with edge `cell` (the range shrunk by 1e-4
+// voxel against rounding). The per-voxel pass skips the others; the normalisation counts the
+// occupied voxels no sample covers.
+bool radianceVoxelOccupied(vec3 c, vec3 cell) {
+  ivec3 lo = max(ivec3(floor((c - cell) * uDensityScale + uDensityOffset + 1e-4)), ivec3(0));
+  ivec3 hi = min(ivec3(ceil((c + cell) * uDensityScale + uDensityOffset - 1e-4)), uDensityDims - 1);
+  for (int k = lo.z; k <= hi.z; ++k)
+    for (int j = lo.y; j <= hi.y; ++j)
+      for (int i = lo.x; i <= hi.x; ++i)
+        if (texelFetch(uDensity, ivec3(i, j, k), 0).r > 0.0) return true;
+  return false;
+}
+
 // Grid3::sampleIndex. SL_HW_FILTER uses the texture unit's trilinear filter (fast on a GPU,
 // limited to 8 fractional bits of weight on most hardware); the default fetches the eight
 // neighbours and interpolates in float, as the CPU does.

@@ -20,18 +20,7 @@ void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(v, uRadDims))) return;
   vec3 c = uRadMin + (vec3(v) + 0.5) * uRadCell;
-  // Same rule as VoxelOccupancy (cpu/per_voxel.h), 1e-4 voxel inside against rounding.
-  ivec3 lo = max(ivec3(floor((c - uRadCell) * uDensityScale + uDensityOffset + 1e-4)), ivec3(0));
-  ivec3 hi = min(ivec3(ceil((c + uRadCell) * uDensityScale + uDensityOffset - 1e-4)),
-                 uDensityDims - 1);
-  bool occupied = false;
-  for (int k = lo.z; k <= hi.z && !occupied; ++k)
-    for (int j = lo.y; j <= hi.y && !occupied; ++j)
-      for (int i = lo.x; i <= hi.x; ++i)
-        if (texelFetch(uDensity, ivec3(i, j, k), 0).r > 0.0) {
-          occupied = true;
-          break;
-        }
+  bool occupied = radianceVoxelOccupied(c, uRadCell);
 #ifdef SL_LIT_REACH
   occupied = occupied && litReaches(c, uReach);
 #endif

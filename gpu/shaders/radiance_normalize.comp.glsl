@@ -1,7 +1,7 @@
+// After common.glsl (the density's uniforms, RadianceRecord, radianceVoxelOccupied).
 // Normalises the splatted sums into the source-radiance volume: S = Σ W·taylor / Σ W. A voxel no
-// sample covers is 0 unless it is occupied (VoxelOccupancy, cpu/per_voxel.h: density in its
-// trilinear support; the same test as per_voxel.comp.glsl), which is counted as uncovered and,
-// with SL_NEAREST_FILL (the compute gather), takes the value of the nearest sample (lowest index
+// sample covers is 0 unless it is occupied (radianceVoxelOccupied: density in its trilinear
+// support, as per_voxel.comp.glsl skips), which is counted as uncovered and, with SL_NEAREST_FILL (the compute gather), takes the value of the nearest sample (lowest index
 // on ties), as the CPU reconstruction does (cpu/interpolation.cpp, uncoveredValue). A weight of
 // −1 marks a voxel the gather left out (SL_LIT_REACH there): 0, not counted.
 // The nearest samples depend on the positions, the radii, the density and the grid, not on the
@@ -15,18 +15,13 @@ layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 #endif
 layout(rgba32f, binding = BINDING_SUMS_IMAGE) uniform readonly image3D uSums;
 layout(rgba32f, binding = BINDING_RADIANCE_IMAGE) uniform writeonly image3D uRadiance;
-layout(binding = BINDING_DENSITY_TEXTURE) uniform sampler3D uDensity;
 layout(std430, binding = BINDING_COUNTERS) buffer Counters { uint uncovered; };
 uniform ivec3 uGridDims;
 uniform bool uSameGrid;  // density and radiance share dims: alpha carries the voxel's density
 uniform vec3 uGridMin;   // the radiance volume: voxel centres at min + (v + 0.5)·cell
 uniform vec3 uGridCell;
-uniform vec3 uDensityScale;  // world -> density index: u = p * scale + offset
-uniform vec3 uDensityOffset;
-uniform ivec3 uDensityDims;
 #if defined(SL_NEAREST_FILL) || defined(SL_FILL_PASS)
-struct FillRecord { vec4 S; vec4 dS[3]; };  // gpu::GpuRadianceRecord
-layout(std430, binding = BINDING_RADIANCE) readonly buffer FillRadiance { FillRecord records[]; };
+layout(std430, binding = BINDING_RADIANCE) readonly buffer FillRadiance { RadianceRecord records[]; };
 #endif
 #if defined(SL_FILL_RECORD) || defined(SL_FILL_KEPT) || defined(SL_FILL_PASS)
 layout(std430, binding = BINDING_FILL_ENTRIES) buffer FillEntries { uvec2 fillEntries[]; };
@@ -42,19 +37,6 @@ layout(std430, binding = BINDING_LEVEL_COUNTS) readonly buffer SampleCount { uin
 uniform uint uSampleCount;
 #endif
 #endif
-
-// VoxelOccupancy: a density voxel with D > 0 whose trilinear support overlaps the voxel's,
-// the range shrunk by 1e-4 voxel against rounding.
-bool occupied(vec3 c) {
-  ivec3 lo = max(ivec3(floor((c - uGridCell) * uDensityScale + uDensityOffset + 1e-4)), ivec3(0));
-  ivec3 hi = min(ivec3(ceil((c + uGridCell) * uDensityScale + uDensityOffset - 1e-4)),
-                 uDensityDims - 1);
-  for (int k = lo.z; k <= hi.z; ++k)
-    for (int j = lo.y; j <= hi.y; ++j)
-      for (int i = lo.x; i <= hi.x; ++i)
-        if (texelFetch(uDensity, ivec3(i, j, k), 0).r > 0.0) return true;
-  return false;
-}
 
 #ifdef SL_FILL_PASS
 // The kept list's voxels, after the normalisation wrote them 0 (nothing when it overflowed:
@@ -105,7 +87,7 @@ void main() {
   }
 #endif
   precise vec3 c = uGridMin + (vec3(v) + 0.5) * uGridCell;
-  if (!(s.a < 0.0) && occupied(c)) {
+  if (!(s.a < 0.0) && radianceVoxelOccupied(c, uGridCell)) {
     atomicAdd(uncovered, 1u);
 #ifdef SL_NEAREST_FILL
 #ifdef SL_COUNT_ON_DEVICE
