@@ -79,6 +79,15 @@ ExrAttributes exrAttributes(const Scene& scene, const RenderStats& st, const std
 }
 
 /// OUT.exr -> OUT.0007.exr: the frame number, 4 digits, before the extension.
+/// `to` as a hard link to `from` (same bytes, nothing written), or a copy where the two are on
+/// different file systems.
+void linkOrCopy(const std::string& from, const std::string& to) {
+  std::error_code ec;
+  std::filesystem::remove(to, ec);
+  std::filesystem::create_hard_link(from, to, ec);
+  if (ec) std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing);
+}
+
 std::string framePath(const std::string& path, int frame) {
   if (path.empty() || frame < 0) return path;
   const std::filesystem::path p(path);
@@ -312,18 +321,33 @@ Action addRender(CLI::App& app) {
       if (!o->depth) r.image.depth().clear();
       if (!sequence) progress.restart("write", 1);
       const Scene& frameScene = renderer.scene();
+      // The frame's PNG is encoded once: a movie frame is a link to (or a copy of) the PNG
+      // written for OUT or --png when there is one.
+      std::string pngWritten;
+      const auto writeFramePng = [&](const std::string& tmp) {
+        writePng(r.image, tmp, o->exposure, curve);
+        pngWritten = tmp;
+      };
       out.stage(framePath(o->out, f), [&](const std::string& tmp) {
         if (imageFormat(o->out) == "png")
-          writePng(r.image, tmp, o->exposure, curve);
+          writeFramePng(tmp);
         else
           writeExr(r.image, tmp, exrAttributes(frameScene, r.stats, o->scene, renderer.time()));
       });
       if (!o->png.empty())
-        out.stage(framePath(o->png, f),
-                  [&](const std::string& tmp) { writePng(r.image, tmp, o->exposure, curve); });
-      if (movieFrames)
-        writePng(r.image, movieFramePath(movieFrames->path(), int(summaries.size())), o->exposure,
-                 curve);
+        out.stage(framePath(o->png, f), [&](const std::string& tmp) {
+          if (pngWritten.empty())
+            writeFramePng(tmp);
+          else
+            linkOrCopy(pngWritten, tmp);
+        });
+      if (movieFrames) {
+        const std::string frame = movieFramePath(movieFrames->path(), int(summaries.size()));
+        if (pngWritten.empty())
+          writePng(r.image, frame, o->exposure, curve);
+        else
+          linkOrCopy(pngWritten, frame);
+      }
       if (!o->stats.empty())
         out.stageStream(framePath(o->stats, f),
                         [&](std::ostream& file) { file << r.stats.toJson().dump(2) << "\n"; });

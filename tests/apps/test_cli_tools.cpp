@@ -369,6 +369,8 @@ std::string fakeFfmpeg(const fs::path& dir, bool fail) {
                    << "while [ $n -lt \"$count\" ]; do\n"
                    << "  f=$(printf \"$d/frame%06d.png\" $n)\n"
                    << "  [ -s \"$f\" ] || { echo \"missing $f\" >&2; exit 4; }\n"
+                   << "  mkdir -p \"" << (dir / "seen").string() << "\"\n"
+                   << "  cp \"$f\" \"" << (dir / "seen").string() << "\"\n"
                    << "  n=$((n + 1))\n"
                    << "done\n"
                    << "echo \"fake $format $count frames at $rate\" > \"$out\"\n";
@@ -419,6 +421,17 @@ TEST_F(CliTools, RenderMovieEncodesTheFramesThroughFfmpeg) {
   std::string wa((std::istreambuf_iterator<char>(webmArgs)), std::istreambuf_iterator<char>());
   EXPECT_NE(wa.find("-c:v libvpx-vp9"), std::string::npos) << wa;
   EXPECT_NE(wa.find("-f webm"), std::string::npos) << wa;
+  // With --png the movie's frames are those PNGs, byte for byte (encoded once, then linked).
+  ASSERT_EQ(run("render " + scene + " -o " + out("h.exr") + " --frames 0:1 --png " + out("h.png") +
+                " --movie " + out("h.mp4"))
+                .code,
+            0);
+  for (const char* f : {"0000", "0001"}) {
+    const std::string seen = dir_ / "seen" / ("frame00000" + std::string(1, f[3]) + ".png");
+    EXPECT_EQ(scatterlab::testing::readBytes(seen),
+              scatterlab::testing::readBytes(out("h." + std::string(f) + ".png")))
+        << f;
+  }
 }
 
 TEST_F(CliTools, RenderMovieBadInputs) {

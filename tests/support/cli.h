@@ -75,6 +75,12 @@ class TempDirTest : public ::testing::Test {
   std::string prefix_;
 };
 
+/// The whole contents of the file at `path` (empty when it cannot be read).
+inline std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 /// Reads a FIFO without blocking the test forever: opened non-blocking (so the open succeeds
 /// before a writer exists), polled until a writer has written and closed, or `timeout`.
 inline std::string drainFifo(const std::string& path, std::chrono::seconds timeout) {
