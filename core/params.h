@@ -50,8 +50,9 @@ struct KeyDoc {
   std::string_view example = {};
   /// For an object-valued key: the table of its keys (the test builds its example from it).
   const std::vector<KeyDoc>& (*fields)() = nullptr;
-  /// "cpu" or "gpu" when the key means something on that backend only: the other accepts it
-  /// and reports it in the stats as unused (a scene valid on one backend is valid on both).
+  /// "cpu" or "gpu" when the key means something on that backend only, "gpu-raster" on the
+  /// GPU's raster pipeline only: the others accept it and report it in the stats as unused (a
+  /// scene valid on one backend is valid on both; MethodPlan::unusedKeys).
   std::string_view only = {};
 };
 

@@ -186,12 +186,6 @@ struct PipelineSettings {
   MarchSettings march;
   Slicing slicing = Slicing::RaySteps;
   GpuPipeline gpuPipeline = GpuPipeline::Compute;
-  /// The GPU-only keys the scene set (slicing, gpu_pipeline, as key paths): reported unused on
-  /// the CPU, whose marcher steps along each ray; slicing also under the compute pipeline.
-  std::vector<std::string> gpuKeysGiven;
-  /// The CPU march's keys the scene set (fast_march, march_scale, half_float_volumes,
-  /// march_simd, as key paths): reported unused on the GPU, whose slice marcher has none of them.
-  std::vector<std::string> cpuMarchKeysGiven;
   float delta1 = 0.0f;  ///< volume-tracing step towards the lights (the paper's Δ1)
   float delta2 = 0.0f;  ///< central-difference step of ∇S (the paper's Δ2)
   IVec3 radianceResolution{0};
@@ -466,6 +460,14 @@ struct StageWork {
   std::string lightWhat = {};
   /// The host arrays of the stage's CPU variant.
   std::vector<MemoryPlan::Item> cpuArrays = {};
+  /// Refiners: the stage traces, for each planned sample, S and its 6 central differences of
+  /// ∇S, and `probesPerSample` more points (dynamic sampling's level-0 probes; the key
+  /// `probesKey` sets them), each kept as a sample while it runs.
+  bool tracesGradients = false;
+  int probesPerSample = 0;
+  std::string probesKey = {};
+  /// Arrays the stage allocates whichever backend runs (dynamic sampling's finest grid buffer).
+  std::vector<MemoryPlan::Item> arrays = {};
 };
 
 /// What a stage family declares, the same for each of its backends' variants (Mitsuba's plugin

@@ -77,7 +77,6 @@ class RayMarcher : public Integrator {
  public:
   explicit RayMarcher(const PipelineSettings& s)
       : march_(s.march),
-        gpuKeysGiven_(s.gpuKeysGiven),
         factored_(s.factorLights),
         lampModel_(s.tracerSteps().lampModel),
         delta1_(s.delta1) {}
@@ -87,10 +86,6 @@ class RayMarcher : public Integrator {
     Image img = march(f, scene, progress, counts);
     f.marchSteps = {counts.looked.load(), counts.skipped.load()};
     return img;
-  }
-  void describe(RenderStats& stats) const override {
-    // The CPU marcher steps along each ray: the GPU's slicing and pipeline mean nothing here.
-    if (!gpuKeysGiven_.empty()) stats.extra["unused_keys"] = gpuKeysGiven_;
   }
 
  private:
@@ -121,7 +116,6 @@ class RayMarcher : public Integrator {
   }
 
   MarchSettings march_;
-  std::vector<std::string> gpuKeysGiven_;
   bool factored_;
   bool lampModel_;  ///< A includes LampModel's m_l (PipelineSettings::lampModel)
   float delta1_;
@@ -209,7 +203,7 @@ const std::vector<KeyDoc>& rayMarcherKeys() {
       {"slicing", "string", "ray-steps", "ray-steps, view-planes",
        "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
        "slabs (raster pipeline); accepted and reported unused on the CPU",
-       R"("view-planes")", nullptr, "gpu"},
+       R"("view-planes")", nullptr, "gpu-raster"},
   };
   return keys;
 }

@@ -51,6 +51,9 @@ class GpuRefiner : public SampleRefiner {
   bool voxelsInstead(long long occupied, long long initial) const override {
     return scatterlab::voxelsInstead(s_, occupied, initial);
   }
+  void describe(RenderStats& stats, const DynamicSamplingResult& result) const override {
+    addDynamicSamplingStats(stats, result, s_);
+  }
 
  private:
   DynamicSamplingSettings s_;

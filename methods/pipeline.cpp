@@ -74,11 +74,15 @@ struct RadianceInputs {
 
 class PipelineMethod : public Method {
  public:
-  PipelineMethod(MethodDesc desc, Backend backend, PipelineSettings settings, std::string note)
-      : desc_(std::move(desc)), backend_(backend), settings_(settings), note_(std::move(note)) {}
+  PipelineMethod(MethodPlan plan, std::string note)
+      : plan_(std::move(plan)),
+        desc_(plan_.desc),
+        backend_(plan_.backend),
+        settings_(plan_.settings),
+        note_(std::move(note)) {}
 
-  std::unique_ptr<Sampler> sampler;
-  std::string samplerType;
+  const MethodPlan& plan() const { return plan_; }
+
   std::unique_ptr<RadianceEvaluator> evaluator;
   std::unique_ptr<SampleRefiner> refiner;
   std::unique_ptr<Reconstruction> reconstruction;
@@ -86,7 +90,6 @@ class PipelineMethod : public Method {
   /// reconstruction, of what this pipeline's volume holds, V = S / A with factor_lights), for a
   /// medium the refiner would trace more of than it (SampleRefiner::voxelsInstead).
   std::unique_ptr<Reconstruction> voxelReconstruction;
-  long long plannedSamples = 0;  ///< the sampler's planned count (Sampler::plannedCount)
   std::unique_ptr<Integrator> integrator;
 
   RenderResult render(const Scene& scene, Progress* progress) override {
@@ -149,7 +152,7 @@ class PipelineMethod : public Method {
         st.extra["lit_voxels"] = bound;
         traced = std::min(traced, bound);
       }
-      const bool voxelsInstead = refiner->voxelsInstead(traced, plannedSamples);
+      const bool voxelsInstead = refiner->voxelsInstead(traced, plan_.plannedSamples);
       st.extra["voxels_instead"] = voxelsInstead;
       if (voxelsInstead) {
         samplesOnDevice_ = false;
@@ -167,6 +170,7 @@ class PipelineMethod : public Method {
     // A sampler reads only the medium and its density volume (Sampler), so with the density
     // kept its samples are kept too; S and ∇S are evaluated anew (they depend on the lights).
     std::vector<RadianceSample> samples;
+    Sampler* sampler = plan_.sampler.get();
     if (sampler && reuse && keptSamples_) {
       samples = *keptSamples_;
       st.extra["samples_reused"] = true;
@@ -183,8 +187,7 @@ class PipelineMethod : public Method {
             [&] { ds = refiner->refine(*frame, scene, std::move(samples), *evaluator); });
       // A resident GPU pass (ds.onDevice) reports its levels and count after the frame.
       samplesOnDevice_ = ds.onDevice;
-      if (!ds.onDevice)
-        addDynamicSamplingStats(st, ds, settings_.refinerKeys.get<DynamicSamplingSettings>());
+      if (!ds.onDevice) refiner->describe(st, ds);
       samples = std::move(ds.samples);
     } else if (sampler) {
       stage("evaluation",
@@ -232,28 +235,21 @@ class PipelineMethod : public Method {
 
     frame->report(st);
     integrator->describe(st);
-    if (backend_ == Backend::Gpu) {
-      // The CPU march's keys, and slicing (the raster slice marcher's) under the compute
-      // pipeline, have no meaning here.
-      std::vector<std::string> unused = settings_.cpuMarchKeysGiven;
-      if (settings_.gpuPipeline == GpuPipeline::Compute)
-        for (const std::string& k : settings_.gpuKeysGiven)
-          if (k.ends_with(".slicing")) unused.push_back(k);
-      for (const std::string& k : unused) st.extra["unused_keys"].push_back(k);
-    }
-    if (sampler) {
+    // The keys the scene set that mean nothing on this backend (MethodPlan::unusedKeys).
+    if (!plan_.unusedKeys.empty()) st.extra["unused_keys"] = plan_.unusedKeys;
+    if (plan_.sampler) {
       if (!samplesOnDevice_)
         st.samples = (long long)samples.size();
       else if (!st.samples && deviceSampleCount_ >= 0)
         st.samples = deviceSampleCount_;  // the radiance reused: the count of the render it is from
       if (samplesOnDevice_ && st.samples) deviceSampleCount_ = *st.samples;
-      st.extra["sampler"] = samplerType;
+      st.extra["sampler"] = plan_.samplerType;
       // The extensions as resolved for this scene (their defaults depend on it).
       st.extra["factor_lights"] = settings_.factorLights;
       st.extra["lamp_model"] = settings_.lampModel;
       st.extra["log_space"] = settings_.logSpace;
     }
-    if (integratorDecl(desc_).viewMarch) st.extra["march_step"] = settings_.march.step;
+    if (plan_.integratorDecl->viewMarch) st.extra["march_step"] = settings_.march.step;
     st.extra["delta1"] = settings_.delta1;
     if (!note_.empty()) st.extra["backend_choice"] = note_;
     if (!ignoredKeys.empty()) st.extra["ignored_keys"] = ignoredKeys;
@@ -291,9 +287,10 @@ class PipelineMethod : public Method {
   bool keptRadiance_ = false;
   RadianceInputs keptInputs_;
   std::optional<std::vector<RadianceSample>> keptRadianceSamples_;
-  MethodDesc desc_;
-  Backend backend_;
-  PipelineSettings settings_;
+  MethodPlan plan_;
+  const MethodDesc& desc_;
+  const Backend backend_;
+  const PipelineSettings& settings_;
   std::string note_;
 };
 
@@ -315,39 +312,24 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
                                            Backend b, std::string note) {
   // Every key is read before any backend-specific choice, so a scene valid on one backend is
   // valid on the other.
-  const PipelineSettings settings = parsePipelineSettings(p, scene, d);
-  auto m = std::make_unique<PipelineMethod>(d, b, settings, std::move(note));
-  std::string evaluatorName, integratorName = d.integrator;
-  long long plannedSamples = 0;
-  if (d.sampler) {
-    m->sampler =
-        makeSampler(p, scene, m->samplerType, settings.paper ? SamplerChoice{} : d.extendedSampler);
-    plannedSamples = m->sampler->plannedCount(scene);
-    evaluatorName = p.string("evaluator", d.evaluator);
-  }
-  if (d.integratorSelectable) integratorName = p.string("integrator", d.integrator);
-
+  auto m = std::make_unique<PipelineMethod>(planMethod(d, p, scene, b), std::move(note));
+  const MethodPlan& pl = m->plan();
+  const PipelineSettings& settings = pl.settings;
   if (d.sampler)
-    m->evaluator = variant(radianceEvaluators(), evaluatorName, b, p.keyPath("evaluator"),
+    m->evaluator = variant(radianceEvaluators(), pl.evaluator, b, p.keyPath("evaluator"),
                            "radiance evaluator")(settings);
   if (!d.refiner.empty())
     m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(settings);
   if (m->refiner && !d.wholeSceneFallback.empty())
     m->voxelReconstruction = variant(reconstructions(), d.wholeSceneFallback, b,
                                      p.keyPath("method"), "reconstruction")(settings);
-  m->plannedSamples = plannedSamples;
   if (d.radianceVolume())
     m->reconstruction = variant(reconstructions(), d.reconstruction, b, p.keyPath("method"),
                                 "reconstruction")(settings);
   m->integrator =
-      variant(integrators(), integratorName, b, p.keyPath("integrator"), "integrator")(settings);
+      variant(integrators(), pl.integrator, b, p.keyPath("integrator"), "integrator")(settings);
   // The sum of the planned allocations and the samples' tracing work, before anything is built.
-  const DynamicSamplingSettings* dynamic =
-      m->refiner ? &settings.refinerKeys.get<DynamicSamplingSettings>() : nullptr;
-  checkRenderPlan(p, scene, d, settings, plannedSamples,
-                  m->reconstruction && m->reconstruction->needsGradients(), dynamic,
-                  b == Backend::Cpu && integrators().get(integratorName, "").decl.fusedVolumeOnCpu,
-                  b == Backend::Cpu);
+  checkRenderPlan(p, scene, pl, m->reconstruction && m->reconstruction->needsGradients());
   return m;
 }
 

@@ -226,27 +226,37 @@ const std::vector<KeyDoc>& integratorChoiceKeys() {
   return keys;
 }
 
-/// The declarations of `d`'s stages (evaluator, reconstruction, refiner, integrator: the
-/// defaults its row names), in reading order.
-std::vector<const StageDecl*> stageDecls(const MethodDesc& d) {
+/// The declarations of the stages a method runs, in reading order: `evaluator` (with samples),
+/// `d`'s reconstruction and refiner, and `integrator`.
+std::vector<const StageDecl*> stageDecls(const MethodDesc& d, const std::string& evaluator,
+                                         const std::string& integrator,
+                                         const std::string& evaluatorKey = "render.evaluator",
+                                         const std::string& integratorKey = "render.method") {
   std::vector<const StageDecl*> out;
-  if (d.sampler) out.push_back(&radianceEvaluators().get(d.evaluator, "render.evaluator").decl);
+  if (d.sampler) out.push_back(&radianceEvaluators().get(evaluator, evaluatorKey).decl);
   if (d.radianceVolume())
     out.push_back(&reconstructions().get(d.reconstruction, "render.method").decl);
   if (!d.refiner.empty()) out.push_back(&refiners().get(d.refiner, "render.method").decl);
-  out.push_back(&integratorDecl(d));
+  out.push_back(&integrators().get(integrator, integratorKey).decl);
   return out;
 }
 
-/// The tables of `d`'s keys, in reading order (methodKeyTable()).
-std::vector<const std::vector<KeyDoc>*> keyTables(const MethodDesc& d) {
+/// The row's default stages.
+std::vector<const StageDecl*> stageDecls(const MethodDesc& d) {
+  return stageDecls(d, d.evaluator, d.integrator);
+}
+
+/// The tables of the keys of `d` running `stages` (stageDecls()), in reading order
+/// (methodKeyTable()).
+std::vector<const std::vector<KeyDoc>*> keyTables(const MethodDesc& d,
+                                                  const std::vector<const StageDecl*>& stages) {
   std::vector<const std::vector<KeyDoc>*> t;
-  if (integratorDecl(d).viewMarch) t.push_back(&viewMarchKeys());
+  if (stages.back()->viewMarch) t.push_back(&viewMarchKeys());
   t.push_back(&commonKeys());
   if (d.sampler) t.push_back(&sampleKeys());
   if (d.radianceVolume()) t.push_back(&radianceVolumeKeys());
   if (d.integratorSelectable) t.push_back(&integratorChoiceKeys());
-  for (const StageDecl* st : stageDecls(d))
+  for (const StageDecl* st : stages)
     for (const KeyGroup& g : st->keys) t.push_back(&g.table());
   return t;
 }
@@ -257,13 +267,14 @@ std::string sci(double v) {
   return formatCount(v);
 }
 
-void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s) {
+void checkWork(Params& p, const Scene& scene, const std::vector<const StageDecl*>& stages,
+               const PipelineSettings& s) {
   const double diag = glm::length(glm::dvec3(scene.medium.bounds.extent()));
   const Camera& c = scene.camera;
   const double rays = double(c.width) * c.height * c.spp;
   // Methods that do not step by march_step (light-space-march: `steps` per ray, at most 65536)
   // have no view bound here.
-  const double perRay = integratorDecl(d).viewMarch ? std::ceil(diag / s.march.step) : 0.0;
+  const double perRay = stages.back()->viewMarch ? std::ceil(diag / s.march.step) : 0.0;
   const double view = rays * perRay;
   const std::string size = std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels x " +
                            std::to_string(c.spp) + " spp";
@@ -276,7 +287,7 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
       std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
   double light = 0;
   std::string what;
-  for (const StageDecl* st : stageDecls(d)) {
+  for (const StageDecl* st : stages) {
     if (st->work) {
       // The competitors: their own steps and the points that trace the lights.
       const StageWork w = st->work(scene, s);
@@ -306,15 +317,32 @@ void checkWork(Params& p, const Scene& scene, const MethodDesc& d, const Pipelin
                      "; use a longer step, a smaller image or volume");
 }
 
-}  // namespace
-
-const StageDecl& integratorDecl(const MethodDesc& d) {
-  return integrators().get(d.integrator, "render.method").decl;
+/// Reads the keys of `d` running `stages` into their settings (parsePipelineSettings).
+PipelineSettings parseSettings(Params& p, const Scene& scene, const MethodDesc& d,
+                               const std::vector<const StageDecl*>& stages) {
+  PipelineSettings s;
+  const StageDecl& integrator = *stages.back();
+  if (integrator.viewMarch) parseViewMarch(p, scene, s);
+  parseCommon(p, scene, s);
+  if (d.sampler) parseSampleValues(p, scene, s, d.extended);
+  if (d.radianceVolume()) parseRadianceVolume(p, scene, s);
+  for (const StageDecl* st : stages)
+    for (const KeyGroup& g : st->keys) g.parse(p, scene, s);
+  // The integrators that march one ray per (low-resolution) pixel or froxel column.
+  if (integrator.onePerPixel && scene.camera.spp > 1)
+    throw ConfigError("camera.spp: " + d.name +
+                      " renders one ray per pixel; camera.spp must be 1 (got " +
+                      std::to_string(scene.camera.spp) + ")");
+  checkWork(p, scene, stages, s);
+  return s;
 }
+
+}  // namespace
 
 std::vector<KeyDoc> methodKeyTable(const MethodDesc& d) {
   std::vector<KeyDoc> rows;
-  for (const std::vector<KeyDoc>* t : keyTables(d)) rows.insert(rows.end(), t->begin(), t->end());
+  for (const std::vector<KeyDoc>* t : keyTables(d, stageDecls(d)))
+    rows.insert(rows.end(), t->begin(), t->end());
   return rows;
 }
 
@@ -325,27 +353,38 @@ std::vector<std::string> methodKeys(const MethodDesc& d) {
 }
 
 PipelineSettings parsePipelineSettings(Params& p, const Scene& scene, const MethodDesc& d) {
-  PipelineSettings s;
-  const StageDecl& integrator = integratorDecl(d);
-  if (integrator.viewMarch) parseViewMarch(p, scene, s);
-  parseCommon(p, scene, s);
-  if (d.sampler) parseSampleValues(p, scene, s, d.extended);
-  if (d.radianceVolume()) parseRadianceVolume(p, scene, s);
-  for (const StageDecl* st : stageDecls(d))
-    for (const KeyGroup& g : st->keys) g.parse(p, scene, s);
-  // The keys that mean something on one backend only, which the other reports as unused.
-  for (const KeyDoc& row : methodKeyTable(d)) {
-    if (row.only.empty() || !p.has(std::string(row.name))) continue;
-    (row.only == "gpu" ? s.gpuKeysGiven : s.cpuMarchKeysGiven)
-        .push_back(p.keyPath(std::string(row.name)));
+  return parseSettings(p, scene, d, stageDecls(d));
+}
+
+MethodPlan planMethod(const MethodDesc& d, Params& p, const Scene& scene, Backend b) {
+  MethodPlan plan;
+  plan.desc = d;
+  plan.backend = b;
+  // The stages first: which keys are read follows from them.
+  plan.integrator = d.integratorSelectable ? p.string("integrator", d.integrator) : d.integrator;
+  if (d.sampler) plan.evaluator = p.string("evaluator", d.evaluator);
+  plan.stages = stageDecls(d, d.sampler ? plan.evaluator : d.evaluator, plan.integrator,
+                           p.keyPath("evaluator"),
+                           d.integratorSelectable ? p.keyPath("integrator") : p.keyPath("method"));
+  plan.integratorDecl = plan.stages.back();
+  plan.settings = parseSettings(p, scene, d, plan.stages);
+  if (d.sampler) {
+    plan.sampler = makeSampler(p, scene, plan.samplerType,
+                               plan.settings.paper ? SamplerChoice{} : d.extendedSampler);
+    plan.plannedSamples = plan.sampler->plannedCount(scene);
   }
-  // The integrators that march one ray per (low-resolution) pixel or froxel column.
-  if (integrator.onePerPixel && scene.camera.spp > 1)
-    throw ConfigError("camera.spp: " + d.name +
-                      " renders one ray per pixel; camera.spp must be 1 (got " +
-                      std::to_string(scene.camera.spp) + ")");
-  checkWork(p, scene, d, s);
-  return s;
+  // The keys that mean something on one backend (or the GPU's raster pipeline) only: the
+  // others accept them and report them unused.
+  const bool raster = b == Backend::Gpu && plan.settings.gpuPipeline == GpuPipeline::Raster;
+  for (const std::vector<KeyDoc>* table : keyTables(d, plan.stages))
+    for (const KeyDoc& row : *table) {
+      if (row.only.empty() || !p.has(std::string(row.name))) continue;
+      const bool used = row.only == "cpu"   ? b == Backend::Cpu
+                        : row.only == "gpu" ? b == Backend::Gpu
+                                            : raster;  // "gpu-raster"
+      if (!used) plan.unusedKeys.push_back(p.keyPath(std::string(row.name)));
+    }
+  return plan;
 }
 
 std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string& type,
@@ -365,77 +404,88 @@ std::unique_ptr<Sampler> makeSampler(Params& p, const Scene& scene, std::string&
   return sampler;
 }
 
-void checkRenderPlan(Params& p, const Scene& scene, const MethodDesc& d, const PipelineSettings& s,
-                     long long samples, bool gradients, const DynamicSamplingSettings* dynamic,
-                     bool fusedVolume, bool cpu) {
+void checkRenderPlan(Params& p, const Scene& scene, const MethodPlan& plan, bool gradients) {
+  const MethodDesc& d = plan.desc;
+  const PipelineSettings& s = plan.settings;
+  const long long samples = plan.plannedSamples;
+  const bool cpu = plan.backend == Backend::Cpu;
+  // What the stages declare beyond the pipeline's own volumes (StageDecl::work).
+  std::vector<StageWork> works;
+  for (const StageDecl* st : plan.stages)
+    if (st->work) works.push_back(st->work(scene, s));
   const auto voxels = [](IVec3 r) { return double(r.x) * double(r.y) * double(r.z); };
   const auto dims = [](IVec3 r) {
     return std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z);
   };
   const IVec3 res = scene.medium.resolution;
-  MemoryPlan plan;
-  plan.add("medium.resolution", "the density volume of " + dims(res) + " voxels",
-           voxels(res) * sizeof(float));
+  MemoryPlan memory;
+  memory.add("medium.resolution", "the density volume of " + dims(res) + " voxels",
+             voxels(res) * sizeof(float));
   const IVec3 blocks = (res + IVec3(7)) / IVec3(8);  // MaxDensityGrid::kBlock
-  plan.add("medium.resolution", "the max-density grid", voxels(blocks) * sizeof(float));
+  memory.add("medium.resolution", "the max-density grid", voxels(blocks) * sizeof(float));
   if (const auto* sog = dynamic_cast<const SogDensity*>(scene.medium.density.get()))
-    plan.add("medium.file", "the .sog model's residual hash",
-             double(sog->model().residual.memoryBytes()));
+    memory.add("medium.file", "the .sog model's residual hash",
+               double(sog->model().residual.memoryBytes()));
   if (const auto* g = scene.medium.density ? scene.medium.density->gaussians() : nullptr)
-    plan.add("medium", "the medium's " + std::to_string(g->size()) + " Gaussians",
-             double(g->size()) * sizeof(GaussianBlob));
+    memory.add("medium", "the medium's " + std::to_string(g->size()) + " Gaussians",
+               double(g->size()) * sizeof(GaussianBlob));
   const Camera& c = scene.camera;
-  plan.add(std::vector<std::string>{"camera.width", "camera.height"},
-           "an image of " + std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels",
-           double(c.width) * double(c.height) * 32.0);
+  memory.add(std::vector<std::string>{"camera.width", "camera.height"},
+             "an image of " + std::to_string(c.width) + "x" + std::to_string(c.height) + " pixels",
+             double(c.width) * double(c.height) * 32.0);
   if (d.radianceVolume()) {
     const IVec3 r = s.radianceResolution;
-    plan.add(p.keyPath("radiance_resolution"),
-             "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
+    memory.add(p.keyPath("radiance_resolution"),
+               "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
     // The fast march fuses density and radiance (4 floats per voxel) when their grids agree.
-    if (integratorDecl(d).viewMarch && s.march.fast && fusedVolume && r == res)
-      plan.add(p.keyPath("fast_march"),
-               "the fused density + radiance volume of " + dims(r) + " voxels",
-               voxels(r) * 4 * sizeof(float));
+    if (plan.integratorDecl->viewMarch && plan.integratorDecl->fusedVolumeOnCpu && cpu &&
+        s.march.fast && r == res)
+      memory.add(p.keyPath("fast_march"),
+                 "the fused density + radiance volume of " + dims(r) + " voxels",
+                 voxels(r) * 4 * sizeof(float));
   }
-  const double perSample = double(sizeof(RadianceSample));
   if (samples > 0)
-    plan.add(p.keyPath("sampler.count"), std::to_string(samples) + " radiance samples",
-             sampleSetBytes(double(samples)));
-  // Probes are traced only when there is a level to split into.
-  const int probes = dynamic && !dynamic->levels.empty() ? dynamic->probes : 0;
-  if (probes > 0 && samples > 0) {
-    plan.add(p.keyPath("probes"),
-             "the probes of " + std::to_string(samples) + " level-0 samples (" +
-                 std::to_string(dynamic->probes) + " each)",
-             double(samples) * dynamic->probes * perSample);
-    const double n = std::pow(double(dynamic->levels.back()), 3.0);
-    plan.add(p.keyPath("levels"),
-             "the grid buffer of level " + std::to_string(dynamic->levels.back()) + "^3",
-             n * (sizeof(std::uint8_t) + sizeof(std::int32_t)));
-  }
-  // The competitors' own host arrays (CPU variants): froxel volumes, transmittance maps,
-  // light-space-march's shadow maps (StageDecl::work).
-  if (cpu)
-    for (const StageDecl* st : stageDecls(d)) {
-      if (!st->work) continue;
-      for (MemoryPlan::Item& item : st->work(scene, s).cpuArrays) {
-        for (std::string& k : item.keys) k = p.keyPath(k);
-        plan.add(std::move(item.keys), item.what, item.bytes);
-      }
+    memory.add(p.keyPath("sampler.count"), std::to_string(samples) + " radiance samples",
+               sampleSetBytes(double(samples)));
+  // A refiner's probes of the first level, each kept as a sample while it runs; its arrays.
+  int probes = 0;
+  std::string probesKey;
+  bool traced = gradients;
+  for (StageWork& w : works) {
+    traced = traced || w.tracesGradients;
+    if (w.probesPerSample > 0 && samples > 0) {
+      probes += w.probesPerSample;
+      probesKey = w.probesKey;
+      memory.add(p.keyPath(w.probesKey),
+                 "the probes of " + std::to_string(samples) + " level-0 samples (" +
+                     std::to_string(w.probesPerSample) + " each)",
+                 double(samples) * w.probesPerSample * double(sizeof(RadianceSample)));
     }
-  plan.check();
+    if (samples > 0)
+      for (MemoryPlan::Item& item : w.arrays) {
+        for (std::string& k : item.keys) k = p.keyPath(k);
+        memory.add(std::move(item.keys), item.what, item.bytes);
+      }
+    // The competitors' own host arrays (CPU variants): froxel volumes, transmittance maps,
+    // light-space-march's shadow maps.
+    if (cpu)
+      for (MemoryPlan::Item& item : w.cpuArrays) {
+        for (std::string& k : item.keys) k = p.keyPath(k);
+        memory.add(std::move(item.keys), item.what, item.bytes);
+      }
+  }
+  memory.check();
 
   // The samples' tracing: every traced point marches ⌈diagonal / delta1⌉ steps to each light.
   if (samples <= 0) return;
   const double diag = glm::length(glm::dvec3(scene.medium.bounds.extent()));
   const double perTrace =
       std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
-  const double points = 1.0 + (gradients || dynamic ? 6.0 : 0.0) + probes;
+  const double points = 1.0 + (traced ? 6.0 : 0.0) + probes;
   const double steps = double(samples) * points * perTrace;
   if (steps > kMaxLightSteps) {
     std::string keys = "'" + p.keyPath("sampler.count") + "', '" + p.keyPath("delta1") + "'";
-    if (probes) keys += ", '" + p.keyPath("probes") + "'";
+    if (probes) keys += ", '" + p.keyPath(probesKey) + "'";
     throw LimitError(keys + ": evaluating " + std::to_string(samples) + " samples traces " +
                      sci(points) + " points each (S" + (points > 1 ? ", 6 for its gradient" : "") +
                      (probes ? ", " + std::to_string(probes) + " probes" : "") + ") with " +

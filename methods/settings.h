@@ -49,6 +49,37 @@ struct MethodDesc {
   bool radianceVolume() const { return !reconstruction.empty(); }
 };
 
+/// A method resolved once for one render object and one backend: the stages that run (their
+/// declarations and chosen names), their settings, its sampler and planned sample count, and
+/// what the scene set that this backend does not read. The pipeline, the render plan's checks
+/// and the stats read it; nothing after planMethod() looks a stage up by name again.
+struct MethodPlan {
+  MethodDesc desc;
+  Backend backend = Backend::Cpu;
+  PipelineSettings settings;
+  /// The evaluator and integrator that run (render.evaluator, render.integrator, else the
+  /// row's); the evaluator empty without samples.
+  std::string evaluator, integrator;
+  /// The declarations of the stages that run, in reading order: evaluator, reconstruction,
+  /// refiner, integrator.
+  std::vector<const StageDecl*> stages;
+  const StageDecl* integratorDecl = nullptr;  ///< the last of `stages`
+  /// With samples: the sampler (its keys read), its name and its planned count.
+  std::unique_ptr<Sampler> sampler;
+  std::string samplerType;
+  long long plannedSamples = 0;
+  /// The keys the scene set that mean nothing on `backend` (KeyDoc::only; slicing also under
+  /// the compute pipeline), as key paths: the stats' unused_keys.
+  std::vector<std::string> unusedKeys;
+};
+
+/// Resolves `desc` for `backend`: reads render.evaluator and render.integrator (unknown names
+/// are ConfigErrors with suggestions), then every key of the stages that run (the same on
+/// every backend, so a scene valid on one is valid on the other), the sampler's, and checks
+/// the view march's and the light-tracing stages' work. Whether each stage has a variant on
+/// `backend` is checked when the variants are built (makePipelineMethod).
+MethodPlan planMethod(const MethodDesc& desc, Params& render, const Scene& scene, Backend backend);
+
 /// Every render key `desc` reads, as rows of the tables that own them, in reading order: the
 /// pipeline's own (delta1, shadow_map; with samples paper, factor_lights, log_space, sampler,
 /// evaluator; with a radiance volume radiance_resolution, gpu_pipeline, integrator), the view
@@ -64,21 +95,16 @@ std::vector<std::string> methodKeys(const MethodDesc& desc);
 const std::vector<KeyDoc>& shadowMapKeys();
 
 /// Reads the keys of methodKeyTable(desc) into the settings the stage variants are built from,
-/// except sampler, evaluator and integrator (makePipelineMethod reads them as it builds those
-/// stages), and checks the work of the view march and of the stages that trace light at every
-/// step or voxel. Must not call finish().
+/// except sampler, evaluator and integrator (planMethod reads them), and checks the work of the
+/// view march and of the stages that trace light at every step or voxel; for the row's default
+/// stages (planMethod: the chosen ones). Must not call finish().
 PipelineSettings parsePipelineSettings(Params& render, const Scene& scene, const MethodDesc& desc);
-
-/// The declaration of `desc`'s default integrator (what its view march and keys are).
-const StageDecl& integratorDecl(const MethodDesc& desc);
 
 /// The render.sampler object; `type` receives the sampler's name. Default: `extendedDefault`
 /// when its type is set, else the paper's: Gaussian centres when the medium has Gaussians,
 /// else jittered samples (with the sampler's default count).
 std::unique_ptr<Sampler> makeSampler(Params& render, const Scene& scene, std::string& type,
                                      const SamplerChoice& extendedDefault = {});
-
-struct DynamicSamplingSettings;
 
 /// Checks a render's plan before anything is built (docs/reliability.md):
 ///  - memory: the sum of its planned allocations (MemoryPlan: the density volume, the
@@ -87,15 +113,13 @@ struct DynamicSamplingSettings;
 ///    buffer, a .sog medium's Gaussians and hash) against the memory limit, a LimitError naming
 ///    the largest contributors;
 ///  - work: the light-march steps of evaluating the samples, samples × traced points (S, the 6
-///    central differences of ∇S when `gradients`, the probes of dynamic sampling's level 0)
-///    × ⌈diagonal / delta1⌉ × lights, against kMaxLightSteps, a LimitError naming the keys.
-/// `samples`: the planned count (Sampler::plannedCount), 0 without a sampler; `dynamic`: null
-/// without dynamic sampling; `fusedVolume`: the image is marched by a CPU integrator that fuses
-/// density and radiance into one volume when fast_march is on and their grids agree
-/// (StageDecl::fusedVolumeOnCpu); `cpu`: the method runs on the CPU, whose competitors' host
-/// arrays (StageDecl::work: froxel volume, transmittance maps, shadow maps) are in the plan.
-void checkRenderPlan(Params& render, const Scene& scene, const MethodDesc& desc,
-                     const PipelineSettings& settings, long long samples, bool gradients,
-                     const DynamicSamplingSettings* dynamic, bool fusedVolume, bool cpu = true);
+///    central differences of ∇S when `gradients` or a stage traces them, the probes of a
+///    refiner's first level: StageWork) × ⌈diagonal / delta1⌉ × lights, against
+///    kMaxLightSteps, a LimitError naming the keys.
+/// The samples are plan.plannedSamples (0 without a sampler); the fused volume of a CPU
+/// integrator that fuses density and radiance when fast_march is on and their grids agree
+/// (StageDecl::fusedVolumeOnCpu) and the competitors' host arrays (StageDecl::work: froxel
+/// volume, transmittance maps, shadow maps) count where plan.backend is the CPU.
+void checkRenderPlan(Params& render, const Scene& scene, const MethodPlan& plan, bool gradients);
 
 }  // namespace scatterlab

@@ -851,6 +851,9 @@ class CpuRefiner : public SampleRefiner {
   bool voxelsInstead(long long occupied, long long initial) const override {
     return scatterlab::voxelsInstead(s_, occupied, initial);
   }
+  void describe(RenderStats& stats, const DynamicSamplingResult& result) const override {
+    addDynamicSamplingStats(stats, result, s_);
+  }
 
  private:
   DynamicSamplingSettings s_;
@@ -874,13 +877,34 @@ DynamicSamplingSettings withPipeline(DynamicSamplingSettings ds, const PipelineS
   return ds;
 }
 
+namespace {
+
+/// What dynamic sampling plans (checkRenderPlan): ∇S at every sample, the probes of its first
+/// level (only when there is a level to split into: `levels: []` traces none) and the grid
+/// information buffer of its finest level.
+StageWork dynamicSamplingWork(const Scene&, const PipelineSettings& ps) {
+  const DynamicSamplingSettings& s = ps.refinerKeys.get<DynamicSamplingSettings>();
+  StageWork w{.tracesGradients = true};
+  if (s.levels.empty()) return w;
+  w.probesPerSample = s.probes;
+  w.probesKey = "probes";
+  const double n = std::pow(double(s.levels.back()), 3.0);
+  w.arrays.push_back({{"levels"},
+                      "the grid buffer of level " + std::to_string(s.levels.back()) + "^3",
+                      n * (sizeof(std::uint8_t) + sizeof(std::int32_t))});
+  return w;
+}
+
+}  // namespace
+
 void registerRefiners() {
-  refiners().declare(
-      "dynamic",
-      {.keys = {{dynamicSamplingKeys, [](Params& p, const Scene& scene, PipelineSettings& s) {
-                   s.refinerKeys.set(
-                       withPipeline(parseDynamicSampling(p, scene, s.paper, s.factorLights), s));
-                 }}}});
+  refiners().declare("dynamic",
+                     {.keys = {{dynamicSamplingKeys,
+                                [](Params& p, const Scene& scene, PipelineSettings& s) {
+                                  s.refinerKeys.set(withPipeline(
+                                      parseDynamicSampling(p, scene, s.paper, s.factorLights), s));
+                                }}},
+                      .work = dynamicSamplingWork});
   refiners().addVariant("dynamic", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<SampleRefiner>(
         new CpuRefiner(s.refinerKeys.get<DynamicSamplingSettings>()));

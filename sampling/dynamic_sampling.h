@@ -463,6 +463,10 @@ class SampleRefiner {
   /// Whether per-voxel, tracing S at the medium's `occupiedVoxels`, costs less than refining
   /// `initialSamples` would: then the pipeline renders as per-voxel does (voxelsInstead()).
   virtual bool voxelsInstead(long long occupiedVoxels, long long initialSamples) const = 0;
+  /// Writes what refine() did into the stats (addDynamicSamplingStats with its settings); a
+  /// result left on the device (DynamicSamplingResult::onDevice) is reported after the frame
+  /// by the variant itself instead.
+  virtual void describe(RenderStats& stats, const DynamicSamplingResult& result) const = 0;
 };
 /// A refiner's variants are built from the pipeline's settings; "dynamic"'s own keys are in
 /// PipelineSettings::refinerKeys (a DynamicSamplingSettings, withPipeline() applied).

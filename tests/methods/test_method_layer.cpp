@@ -162,6 +162,72 @@ TEST(MethodLayer, ShadowMapKeysAreValidatedOnEveryBackend) {
   EXPECT_TRUE(ps.shadowMap.given);
 }
 
+const MethodDesc& rowNamed(const std::string& name) {
+  for (const MethodDesc& d : builtinMethods())
+    if (d.name == name) return d;
+  throw std::logic_error("no row " + name);
+}
+
+// The plan resolves the stages that run once, the chosen ones: render.integrator replaces the
+// row's integrator in the plan's declarations, so its facts (here exact's light march at every
+// view step) are what the checks read; the sampler is built and its count planned.
+TEST(MethodLayer, ThePlanHoldsTheChosenStages) {
+  initialize();
+  const Scene s = loadScene(kGlow, with({"render.integrator=\"exact\""}));
+  Params p(s.render, "render");
+  const MethodPlan plan = planMethod(rowNamed("per-voxel"), p, s, Backend::Cpu);
+  EXPECT_EQ(plan.integrator, "exact");
+  ASSERT_NE(plan.integratorDecl, nullptr);
+  EXPECT_EQ(plan.integratorDecl, plan.stages.back());
+  EXPECT_EQ(plan.integratorDecl->lightWork, LightWork::EveryViewStep);
+  EXPECT_EQ(plan.stages.size(), 2u);  // reconstruction, integrator
+  const Scene g = loadScene(kGlow, with({}));
+  Params q(g.render, "render");
+  const MethodPlan gradient = planMethod(rowNamed("gradient"), q, g, Backend::Cpu);
+  EXPECT_EQ(gradient.evaluator, "volume-tracer");
+  EXPECT_EQ(gradient.integrator, "ray-marcher");
+  ASSERT_TRUE(gradient.sampler);
+  EXPECT_EQ(gradient.samplerType, "jittered");
+  EXPECT_EQ(gradient.plannedSamples, gradient.sampler->plannedCount(g));
+  EXPECT_GT(gradient.plannedSamples, 0);
+  // The work bound follows the chosen integrator: 2000 x 1500 rays at a step of 1e-3 are
+  // 5.2e9 view steps (within kMaxViewSteps, so per-voxel's ray-marcher passes), but exact's
+  // shadow rays at each of them, 222 steps each at 128³, are 1.15e12 (above kMaxLightSteps).
+  const std::vector<std::string> big = {"camera.width=2000", "camera.height=1500",
+                                        "render.march_step=1e-3"};
+  std::vector<std::string> bigExact = big;
+  bigExact.push_back("render.integrator=\"exact\"");
+  const Scene marched = loadScene(kGlow, big), traced = loadScene(kGlow, bigExact);
+  Params r(marched.render, "render"), e(traced.render, "render");
+  EXPECT_NO_THROW(planMethod(rowNamed("per-voxel"), r, marched, Backend::Cpu));
+  try {
+    planMethod(rowNamed("per-voxel"), e, traced, Backend::Cpu);
+    ADD_FAILURE() << "exact's light work was not bounded";
+  } catch (const LimitError& err) {
+    EXPECT_NE(std::string(err.what()).find("'render.delta1'"), std::string::npos) << err.what();
+  }
+}
+
+// Which keys a backend does not read is decided once, in the plan, from the rows' `only`:
+// the GPU's keys on the CPU, slicing under the GPU's compute pipeline only, the CPU march's
+// on the GPU. (Planning builds no variant, so this needs no GPU.)
+TEST(MethodLayer, UnusedKeysPerBackendComeFromThePlan) {
+  initialize();
+  const auto unused = [](const std::vector<std::string>& sets, Backend b) {
+    const Scene s = loadScene(kGlow, with(sets));
+    Params p(s.render, "render");
+    return planMethod(rowNamed("gradient"), p, s, b).unusedKeys;
+  };
+  using V = std::vector<std::string>;
+  const V gpuKeys = {"render.gpu_pipeline=\"raster\"", "render.slicing=\"view-planes\""};
+  EXPECT_EQ(unused(gpuKeys, Backend::Cpu), (V{"render.gpu_pipeline", "render.slicing"}));
+  EXPECT_EQ(unused(gpuKeys, Backend::Gpu), V{});
+  EXPECT_EQ(unused({"render.slicing=\"view-planes\""}, Backend::Gpu), V{"render.slicing"});
+  const V cpuKeys = {"render.fast_march=false", "render.march_simd=\"sse2\""};
+  EXPECT_EQ(unused(cpuKeys, Backend::Gpu), (V{"render.fast_march", "render.march_simd"}));
+  EXPECT_EQ(unused(cpuKeys, Backend::Cpu), V{});
+}
+
 // methodKeys() (what the tolerance of other methods' keys uses) is exactly what each method's
 // parser reads from an empty render object.
 TEST(MethodLayer, KeyListsAreWhatTheParsersRead) {
