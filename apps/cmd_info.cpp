@@ -411,6 +411,49 @@ void printMethods(bool json) {
   }
 }
 
+/// Every render key a registered method reads, once per distinct table row (two families may
+/// own a key of the same name: light-space-march's and jittered-march's `steps`), with the
+/// methods that read it; or a JSON object of them (key → array of rows). KeyDoc's views point
+/// at static tables.
+void printKeys(bool json) {
+  Json all = Json::object();
+  for (const std::string& name : methods().names())
+    for (const KeyDoc& row : methods().get(name, "method").keyDocs) {
+      Json entry = {{"type", row.type},
+                    {"default", row.def},
+                    {"allowed", row.range},
+                    {"meaning", row.meaning}};
+      if (!row.only.empty()) entry["only"] = row.only;
+      Json& rows = all[std::string(row.name)];
+      if (rows.is_null()) rows = Json::array();
+      auto same = std::find_if(rows.begin(), rows.end(), [&](const Json& r) {
+        return r["type"] == entry["type"] && r["default"] == entry["default"] &&
+               r["allowed"] == entry["allowed"] && r["meaning"] == entry["meaning"];
+      });
+      if (same == rows.end()) {
+        entry["methods"] = Json::array();
+        rows.push_back(entry);
+        same = rows.end() - 1;
+      }
+      (*same)["methods"].push_back(name);
+    }
+  if (json) {
+    std::printf("%s\n", all.dump(2).c_str());
+    return;
+  }
+  for (const auto& [name, rows] : all.items())
+    for (const Json& k : rows) {
+      std::string m;
+      for (const auto& x : k["methods"]) m += (m.empty() ? "" : ", ") + x.get<std::string>();
+      const std::string only =
+          k.contains("only") ? " [" + k["only"].get<std::string>() + " only]" : "";
+      std::printf("render.%s (%s; default %s; allowed %s)%s\n    %s\n    read by: %s\n",
+                  name.c_str(), k["type"].get<std::string>().c_str(),
+                  k["default"].get<std::string>().c_str(), k["allowed"].get<std::string>().c_str(),
+                  only.c_str(), k["meaning"].get<std::string>().c_str(), m.c_str());
+    }
+}
+
 }  // namespace
 
 Action addInfo(CLI::App& app) {
@@ -422,16 +465,21 @@ Action addInfo(CLI::App& app) {
   c->add_option("file", *file, "File to describe");
   c->add_flag("--methods", *methodsFlag,
               "List the rendering methods of this build with the backends each runs on");
+  auto keysFlag = std::make_shared<bool>(false);
+  c->add_flag("--keys", *keysFlag,
+              "List every render key the methods read: type, default, allowed values, meaning, "
+              "and which methods read it (docs/scene-format.md)");
   c->add_flag("--gpu", *gpuFlag,
               "Print the OpenGL vendor, renderer and version of the GPU backend");
   c->add_flag("--json", *jsonFlag, "Print the file's facts as one JSON object (not with --gpu)");
-  return [file, gpuFlag, jsonFlag, methodsFlag]() {
+  return [file, gpuFlag, jsonFlag, methodsFlag, keysFlag]() {
     if (*jsonFlag && *gpuFlag) throw ConfigError("info: --json describes a FILE, not --gpu");
     if (*methodsFlag) printMethods(*jsonFlag && file->empty());
+    if (*keysFlag) printKeys(*jsonFlag && file->empty());
     if (*gpuFlag) printGpuInfo();
     if (file->empty()) {
-      if (*gpuFlag || *methodsFlag) return 0;
-      throw ConfigError("info: give a FILE to describe, or --gpu, or --methods");
+      if (*gpuFlag || *methodsFlag || *keysFlag) return 0;
+      throw ConfigError("info: give a FILE to describe, or --gpu, --methods or --keys");
     }
     checkReadableFile(*file);
     std::string ext = std::filesystem::path(*file).extension().string();

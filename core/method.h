@@ -80,6 +80,10 @@ struct MethodEntry {
   /// The render keys the method reads (top-level names, e.g. "sampler", "delta1"), the same on
   /// every backend; "method" and "backend" are read by createMethod.
   std::vector<std::string> keys;
+  /// The rows of those keys' tables (KeyDoc: type, default, allowed values, meaning), in
+  /// reading order: what `scatterlab info --keys` prints and docs/scene-format.md is checked
+  /// against.
+  std::vector<KeyDoc> keyDocs;
   /// Whether the method has a variant of every stage on `backend`.
   std::function<bool(Backend backend)> runsOn;
   /// Reads the method's keys from the render object (whichever backend runs) and returns the

@@ -202,7 +202,8 @@ const std::vector<KeyDoc>& rayMarcherKeys() {
        R"("sse2")", nullptr, "cpu"},
       {"slicing", "string", "ray-steps", "ray-steps, view-planes",
        "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
-       "slabs (raster pipeline); accepted and reported unused on the CPU",
+       "slabs (raster pipeline); accepted and reported unused on the CPU and under the compute "
+       "pipeline",
        R"("view-planes")", nullptr, "gpu-raster"},
   };
   return keys;

@@ -657,11 +657,11 @@ class PerVoxelReconstruction : public Reconstruction {
 /// docs/fidelity.md, which only gradient's Taylor terms use).
 const std::vector<KeyDoc>& interpolationKeys() {
   static const std::vector<KeyDoc> keys = {
-      {"occlusion_weights", "bool", "false", "true, false",
+      {"occlusion_weights", "bool", "false", "true, false (true not with paper)",
        "Eq. 4 weights times exp(−σt·τ) of the segment sample → voxel: no sample contributes "
        "across a dense occluder; gradient reconstruction",
        "true"},
-      {"bounded_taylor", "bool", "true (false with paper)", "true, false",
+      {"bounded_taylor", "bool", "true (false with paper)", "true, false (true not with paper)",
        "clamp each sample's Taylor estimate to the known range of what is interpolated (V in "
        "[0, 1], ln V <= 0, S >= 0) before weighting; gradient reconstruction",
        "false"},

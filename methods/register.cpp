@@ -77,7 +77,8 @@ void registerMethods() {
   for (const MethodDesc& d : builtinMethods()) {
     MethodEntry e;
     e.summary = d.summary;
-    e.keys = methodKeys(d);
+    e.keyDocs = methodKeyTable(d);
+    for (const KeyDoc& row : e.keyDocs) e.keys.emplace_back(row.name);
     e.runsOn = [d](Backend b) { return pipelineRunsOn(d, b); };
     e.create = [d](Params& render, const Scene& scene, Backend b, const std::string& note) {
       return makePipelineMethod(d, render, scene, b, note);

@@ -129,14 +129,16 @@ const std::vector<KeyDoc>& sampleKeys() {
        "true"},
       {"log_space", "bool",
        "true with factor_lights and bounded_taylor in scenes without objects whose densest "
-       "voxel has an optical depth σt·D·h of at least 0.5 (false with paper)",
+       "voxel has an optical depth σt·D_max·h ≥ 0.5 (h the largest voxel edge; D_max from the "
+       "density model: uniform, height, grid, VDB, sums of up to 4096 Gaussians; "
+       "docs/fidelity.md §14), else false",
        "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "dynamic sampling then measures its error on V; methods with samples",
        "true"},
       {"lamp_model", "bool",
-       "true with factor_lights in scenes without objects with a point or spot light inside the "
-       "medium's box (false with paper)",
+       "true with factor_lights in scenes without objects that have a point or spot light "
+       "inside the medium's box; false with paper",
        "true, false (true needs factor_lights)",
        "A also holds each point or spot light's transmittance through a homogeneous medium of "
        "the light's own extinction, saturating at optical depth 2, so V = S / A has no cusp at "

@@ -666,14 +666,15 @@ static int defaultProbes(std::size_t lights) {
 
 const std::vector<KeyDoc>& dynamicSamplingKeys() {
   static const std::vector<KeyDoc> keys = {
-      {"epsilon", "number", "0.05 (relative); 1e-4 (absolute) with paper", ">= 0",
+      {"epsilon", "number", "0.05 (relative); 1e-4 (absolute) with paper", "≥ 0",
        "split a sample when its error E_j (Eq. 5) is above epsilon · the mean R³|S|Dτ of the "
        "initial samples (relative), or, with paper, above epsilon itself (the paper's ε)",
        "0.5"},
       {"levels", "array of int",
-       "[16, 32, 64]: those <= half the medium resolution and (not with paper) finer than the "
-       "initial samples",
-       "increasing, each 2…1024, finest <= half the medium resolution",
+       "[16, 32, 64]: those ≤ half the medium resolution; not with paper, only those finer "
+       "than the initial samples, and half the medium resolution added where it is ≥ 1.5 × "
+       "the last (e.g. [16, 32, 56] at 112³; docs/fidelity.md \"Population of scenes\")",
+       "increasing, each 2…1024, finest ≤ half the medium resolution",
        "vertices per axis of the split grids G1, G2, …", "[2]"},
       {"tau", "string", "visible (ancestor with paper)",
        "ancestor, sample, visible (not with paper)",
@@ -683,18 +684,19 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        R"("sample")"},
       {"probes", "int",
        "40 with up to 4 lights, 26 with 5–6, 14 with more (at most 160 light traces per "
-       "sample); 6 with paper",
+       "sample: every probe traces every light; docs/fidelity.md §13); 6 with paper",
        "6, 14, 26, 40",
        "probe points per sample: Eq. 5's six, + 8 cube diagonals, + 12 edge diagonals, + 14 at "
        "R/2",
        "6"},
       {"max_samples", "int",
        "auto: 4 × the initial count, at most 8000, or more by budget (no cap with paper)",
-       ">= 0 (non-integers rounded down; 0: no cap; not with paper)",
+       "≥ 0 (a non-integer is rounded down; 0 = no cap; not with paper)",
        "most samples in the final set: each level splits its largest errors first within an "
        "equal share of the budget left (one pass)",
        "100"},
-      {"budget", "number", "0.5 (0 with max_samples given or paper)", "0…1000 (not with paper)",
+      {"budget", "number", "0.5 (0 with max_samples given or with paper)",
+       "0…1000 (not with paper)",
        "the samples' budget as a share of per-voxel's cost on the same scene, B = budget × "
        "radiance voxels / (7 + probes) (a sample costs S, its six central differences and its "
        "probes; per-voxel one S per voxel): the final set may grow to max(max_samples' auto "
@@ -706,7 +708,7 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "sphere (about 33)",
        R"("sphere")"},
       {"error_weight", "string",
-       R"("radiance"; "transmittance" with factor_lights and directional lights only)",
+       R"("radiance"; "transmittance" with factor_lights in scenes with directional lights only)",
        "radiance, transmittance (transmittance needs factor_lights)",
        "what E_j (Eq. 5) and the relative ε's scale measure: the source radiance S the image "
        "sees (with factor_lights the error of V weighted per probe by the lights' analytic "
@@ -717,7 +719,7 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "cell of it still fails the error test S is evaluated directly at the voxels inside it "
        "(final samples that give the reconstruction exactly that value there)",
        "false"},
-      {"fallback_probes", "int", "6", "6, 14, 26, 40 (at most probes; not with paper)",
+      {"fallback_probes", "int", "6", "6, 14, 26, 40 (at most probes are used; not with paper)",
        "probe points on the level the fallback follows (the finest of levels): probing it is "
        "what the fallback costs where nothing fails",
        "14"},

@@ -212,17 +212,18 @@ void checkSampleMemory(Params& p, long long count) {
 const std::vector<KeyDoc>& samplerKeys() {
   static const std::vector<KeyDoc> keys = {
       {"type", "string",
-       "gradient: jittered with count 8000; adaptive: grid with count 2000; with paper and for "
+       "gradient: jittered with count 8000, at_most (adaptive's budget cap); adaptive: grid with "
+       "count 2000; with paper and for "
        "rbf, nearest: gaussian-centres when the medium is a sum of Gaussians, else jittered",
        "gaussian-centres, jittered, grid", "how the initial samples are placed", R"("jittered")"},
       {"count", "int", "512 (gaussian-centres: every Gaussian)", "1…1e8",
        "number of samples (gaussian-centres: keep the count Gaussians of largest mass)", "8"},
       {"radius_scale", "number", "3 (gaussian-centres), 1.75 (jittered), 1 (grid)", "> 0",
        "valid radius R_j in Gaussian radii or cell sizes", "1.5"},
-      {"seed", "int", "0", ">= 0", "jittered: random seed", "1"},
+      {"seed", "int", "0", "≥ 0", "jittered: random seed", "1"},
       {"skip_empty", "bool", "true", "true, false", "jittered, grid: drop cells without density",
        "false"},
-      {"at_most", "bool", "false (true for gradient's default sampler)", "true, false",
+      {"at_most", "bool", "false (true in gradient's default sampler)", "true, false",
        "jittered, grid: count is a ceiling (the finest cell grid with at most count occupied "
        "cells) instead of a target (the grid whose occupied cells come nearest to it)",
        "true"},

@@ -662,6 +662,29 @@ TEST_F(Cli, InfoListsTheMethods) {
   EXPECT_EQ(j.size(), scatterlab::methods().names().size());
 }
 
+// `info --keys` prints the render keys from the code's tables (the rows docs/scene-format.md is
+// checked against): each key once per distinct row, with the methods that read it.
+TEST_F(Cli, InfoListsTheRenderKeys) {
+  RunResult r = run("info --keys");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("render.probes (int; default 40 with up to 4 lights"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("render.slicing (string; default ray-steps; allowed ray-steps, "
+                          "view-planes) [gpu-raster only]"),
+            std::string::npos)
+      << r.output;
+  r = run("info --keys --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Json j = Json::parse(r.output);
+  EXPECT_EQ(j["probes"].size(), 1u);
+  EXPECT_EQ(j["probes"][0]["methods"], Json::array({"adaptive"}));
+  EXPECT_EQ(j["probes"][0]["type"], "int");
+  ASSERT_EQ(j["steps"].size(), 2u);  // jittered-march's and light-space-march's
+  scatterlab::initialize();          // every method reads delta1
+  EXPECT_EQ(j["delta1"][0]["methods"].size(), scatterlab::methods().names().size())
+      << j["delta1"].dump();
+}
+
 // Issue 25: the shipped fig3 config runs without a terminal warning (its scene's render.sampler
 // is ignored by the references by design; log.txt notes it).
 TEST_F(Cli, ShippedFig3ConfigPrintsNoWarning) {

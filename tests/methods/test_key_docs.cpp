@@ -5,13 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "api/scatterlab.h"
 #include "core/stages.h"
 #include "methods/register.h"
 #include "methods/settings.h"
+#include "sampling/samplers.h"
 
 namespace scatterlab {
 namespace {
@@ -127,6 +130,87 @@ std::set<std::string> tableKeys(const std::string& text) {
     if (last != std::string::npos && last > 0) cells += line.substr(0, last) + "\n";
   }
   return backticked(cells);
+}
+
+/// A cell as the docs and the code both mean it: backticks, quotes and an escaped '|' are
+/// markup, the rest is compared letter for letter.
+std::string cellText(std::string_view s) {
+  std::string out;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '`' || s[i] == '"') continue;
+    if (s[i] == '\\' && i + 1 < s.size() && s[i + 1] == '|') continue;
+    out += s[i];
+  }
+  const std::size_t a = out.find_first_not_of(' '), b = out.find_last_not_of(' ');
+  return a == std::string::npos ? "" : out.substr(a, b - a + 1);
+}
+
+// docs/scene-format.md's render key rows are checked cell by cell against the key tables the
+// code reads them by (KeyDoc, what `scatterlab info --keys` prints): each documented row's
+// type, default and allowed values are those of a table row of that key, and each table row is
+// documented. Keys two families own under one name (`steps`, `downsample`,
+// `light_transmittance`) have a row per family.
+TEST(KeyDocs, RenderKeyRowsMatchTheKeyTablesCellByCell) {
+  initialize();
+  std::map<std::string, std::vector<KeyDoc>> code;
+  const auto add = [&](const std::string& prefix, const KeyDoc& row) {
+    std::vector<KeyDoc>& rows = code[prefix + std::string(row.name)];
+    for (const KeyDoc& r : rows)
+      if (r.type == row.type && r.def == row.def && r.range == row.range) return;
+    rows.push_back(row);
+  };
+  for (const MethodDesc& d : builtinMethods())
+    for (const KeyDoc& row : methodKeyTable(d)) add("", row);
+  for (const KeyDoc& row : samplerKeys()) add("sampler.", row);
+  for (const KeyDoc& row : shadowMapKeys()) add("shadow_map.", row);
+
+  const std::string doc = readDoc("scene-format.md");
+  std::istringstream in(doc.substr(doc.find("## `render`")));
+  std::string line, prefix;
+  const std::regex row("^\\| `([a-z_0-9]+)` \\|(.*)$");
+  std::smatch m;
+  std::set<std::pair<std::string, std::size_t>> matched;  // (key, index of its code row)
+  int rows = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("### Methods", 0) == 0) break;
+    if (line.rfind("### `render.sampler`", 0) == 0) prefix = "sampler.";
+    if (line.rfind("### `render.shadow_map`", 0) == 0) prefix = "shadow_map.";
+    if (!std::regex_search(line, m, row)) continue;
+    const std::string key = prefix + m[1].str();
+    // The cells after the key, split at each '|' not escaped as "\\|".
+    std::vector<std::string> cells(1);
+    const std::string rest = m[2].str();
+    for (std::size_t i = 0; i < rest.size(); ++i) {
+      if (rest[i] == '|' && (i == 0 || rest[i - 1] != '\\'))
+        cells.emplace_back();
+      else
+        cells.back() += rest[i];
+    }
+    const auto it = code.find(key);
+    if (it == code.end() || cells.size() < 4) continue;  // method, backend: createMethod's
+    ++rows;
+    bool found = false;
+    for (std::size_t i = 0; i < it->second.size() && !found; ++i) {
+      const KeyDoc& k = it->second[i];
+      if (cellText(cells[0]) == cellText(k.type) && cellText(cells[1]) == cellText(k.def) &&
+          cellText(cells[2]) == cellText(k.range)) {
+        found = true;
+        matched.insert({key, i});
+      }
+    }
+    std::string tables;
+    for (const KeyDoc& k : it->second)
+      tables +=
+          "\n  " + std::string(k.type) + " | " + std::string(k.def) + " | " + std::string(k.range);
+    EXPECT_TRUE(found) << "render." << key << ": the docs say\n  " << cellText(cells[0]) << " | "
+                       << cellText(cells[1]) << " | " << cellText(cells[2]) << "\nbut the key table"
+                       << (it->second.size() > 1 ? "s say" : " says") << tables;
+  }
+  EXPECT_GT(rows, 50) << "the render key tables of docs/scene-format.md were not found";
+  for (const auto& [key, list] : code)
+    for (std::size_t i = 0; i < list.size(); ++i)
+      EXPECT_TRUE(matched.count({key, i}))
+          << "render." << key << " (" << list[i].def << ") has no row in docs/scene-format.md";
 }
 
 TEST(KeyDocs, EverySceneKeyReadIsNamedInTheDocs) {
