@@ -37,10 +37,6 @@ const std::vector<KeyDoc>& shadowMapKeys() {
 
 namespace {
 
-/// log_space's default threshold: the optical depth across the densest voxel (1 − e^−0.5: it
-/// stops 40 % of the light). The fidelity scenes lie at <= 0.25 or >= 1.0 (docs/fidelity.md §14).
-constexpr float kOpaqueVoxelDepth = 0.5f;
-
 // The pipeline's own keys, in groups read as the method's stages need them (methodKeyTable());
 // each stage's keys are in its family's file (StageDecl).
 
@@ -127,15 +123,6 @@ const std::vector<KeyDoc>& sampleKeys() {
        "interpolate S divided by the lights' analytic unshadowed source radiance, multiply it "
        "back at each march step (singular lights); methods with samples",
        "true"},
-      {"log_space", "bool",
-       "true with factor_lights and bounded_taylor in scenes without objects whose densest "
-       "voxel has an optical depth σt·D_max·h ≥ 0.5 (h the largest voxel edge; D_max from the "
-       "density model: uniform, height, grid, VDB, sums of up to 4096 Gaussians; "
-       "docs/fidelity.md §14), else false",
-       "true, false (true needs factor_lights)",
-       "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
-       "dynamic sampling then measures its error on V; methods with samples",
-       "true"},
       {"lamp_model", "bool",
        "true with factor_lights in scenes without objects that have a point or spot light "
        "inside the medium's box; false with paper",
@@ -152,31 +139,14 @@ const std::vector<KeyDoc>& sampleKeys() {
   return keys;
 }
 
-/// paper, factor_lights, log_space (sampler and evaluator: makePipelineMethod). `extended`:
-/// the method's extensions are on by default.
+/// paper, factor_lights, lamp_model (sampler and evaluator: planMethod; log_space, which
+/// interpolates ln V, is the interpolating reconstructions' key). `extended`: the method's
+/// extensions are on by default.
 void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool extended) {
   s.paper = p.boolean("paper", false);
   s.factorLights = p.boolean("factor_lights", extended && !s.paper);
   if (s.paper && s.factorLights)
     p.fail("factor_lights", "is an extension; it cannot be true with render.paper = true");
-  // Default chosen by measurement (docs/fidelity.md §14): ln V wins where single voxels are
-  // nearly opaque (a voxel's optical depth σt·D·h >= 0.5: smoke1, chimney, the thin sheets),
-  // whose shadows a linear V between samples cannot follow, and loses in optically thin media
-  // (lamps in fog, glow, thick clouds: every voxel <= 0.25) and, badly, at the hard shadows of
-  // scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV.
-  const std::optional<float> peak =
-      scene.medium.density ? scene.medium.density->peak() : std::optional<float>();
-  const Vec3 voxel = scene.medium.bounds.extent() / Vec3(scene.medium.resolution);
-  const bool opaqueVoxels =
-      peak &&
-      scene.medium.sigmaT * *peak * std::max({voxel.x, voxel.y, voxel.z}) >= kOpaqueVoxelDepth;
-  // Not where the Taylor terms are unbounded (bounded_taylor: false, read by the
-  // reconstruction): exp of an unbounded extrapolation of ln V overflows (docs/fidelity.md §14).
-  const auto bounded = p.json().find("bounded_taylor");
-  const bool unbounded =
-      bounded != p.json().end() && bounded->is_boolean() && !bounded->get<bool>();
-  s.logSpace = p.boolean(
-      "log_space", s.factorLights && !s.paper && !scene.objects && opaqueVoxels && !unbounded);
   // Default chosen by measurement (docs/fidelity.md §8): a clear win with lamps inside smoke
   // and fog, but it loses at the hard shadows of scene objects (window: 6.6 % -> 7.3 %), so it
   // is on only in scenes without objects, and only where a point or spot light lies inside the
@@ -190,8 +160,6 @@ void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool 
     p.fail("lamp_model", "is an extension; it cannot be true with render.paper = true");
   if (s.lampModel && !s.factorLights)
     p.fail("lamp_model", "is part of factor_lights' A; it needs factor_lights = true");
-  if (s.logSpace && !s.factorLights)
-    p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
 }
 
 /// Methods with a source-radiance volume.
