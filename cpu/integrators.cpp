@@ -36,7 +36,7 @@ struct FusedLookup {
     D = v[0];
     if (D <= 0.0f) return false;
     S = Vec3(v[1], v[2], v[3]);
-    if (factor) S *= (*factor)(r.at(t), -r.dir);
+    if (factor && S != Vec3(0.0f)) S *= (*factor)(r.at(t), -r.dir);  // V = 0: no A to evaluate
     return true;
   }
   void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
@@ -59,8 +59,11 @@ struct FusedLookup {
       for (int q = 0; q < q1; ++q) {
         if (!(V[q][0] > 0.0f)) continue;
         D[q] = V[q][0];
+        S[q] = Vec3(V[q][1], V[q][2], V[q][3]);
+        // V = 0 (outside every spot cone, or fully shadowed): S = 0 without evaluating A.
+        if (S[q] == Vec3(0.0f)) continue;
         const float t = t0 + (float(i + q) + 0.5f) * dt;
-        S[q] = Vec3(V[q][1], V[q][2], V[q][3]) * (*factor)(r.at(t), -r.dir);
+        S[q] *= (*factor)(r.at(t), -r.dir);
       }
       xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
       for (int q = 0; q < q1 && T > c.minT; ++q) {
@@ -107,7 +110,8 @@ class RayMarcher : public Integrator {
     const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
     if (factored_) {
       const auto lookup = [&](const Vec3& x, const Vec3& toViewer) {
-        return radiance.sampleIndex(x * s + o) * A(x, toViewer);
+        const Vec3 v = radiance.sampleIndex(x * s + o);
+        return v == Vec3(0.0f) ? v : v * A(x, toViewer);  // V = 0: no A to evaluate
       };
       return marchImage(scene, *f.density, lookup, march_, progress, delta1_, &counts);
     }

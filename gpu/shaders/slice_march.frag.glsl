@@ -57,7 +57,7 @@ void main() {
   float alpha = stepTransmittance(uSigmaT * D * dt);
   vec3 S = textureLod(uRadiance, (x * uRadScale + uRadOffset + 0.5) / vec3(uRadDims), 0.0).rgb;
 #ifdef SL_FACTOR_LIGHTS
-  S *= lightFactor(x, -dir);  // the volume holds V = S / A
+  if (S != vec3(0.0)) S *= lightFactor(x, -dir);  // the volume holds V = S / A; V = 0: S = 0
 #endif
   outColor = vec4(uAlbedo * (1.0 - alpha) * S, alpha);
 }

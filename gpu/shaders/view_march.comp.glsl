@@ -95,7 +95,9 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
           vec3 S = radianceAtIndex(x * uRadScale + uRadOffset).rgb;
 #endif
 #ifdef SL_FACTOR_LIGHTS
-          S *= lightFactor(x, -dir);  // the volume holds V = S / A
+          // The volume holds V = S / A; where V = 0 (outside every spot cone, or fully
+          // shadowed) S is 0 without evaluating A, as on the CPU.
+          if (S != vec3(0.0)) S *= lightFactor(x, -dir);
 #endif
           float a = stepTransmittance(uSigmaT * D * dt);
           L += (T * uAlbedo * (1.0 - a)) * S;
