@@ -723,7 +723,7 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "probe points on the level the fallback follows (the finest of levels): probing it is "
        "what the fallback costs where nothing fails",
        "14"},
-      {"voxel_switch", "number", "3 (0 with paper)", "0…1000 (not with paper)",
+      {"voxel_switch", "number", "4 (0 with paper)", "0…1000 (not with paper)",
        "the whole-scene fallback: where the medium's occupied voxels (D > 0) are at most "
        "voxel_switch × the initial samples × (1 + probes), the traces of the first level alone "
        "(a sparse medium: wisps, small puffs), the scene is rendered as per-voxel renders it (its "

@@ -346,7 +346,7 @@ inline constexpr double kBudgetCostShare = 0.5;
 
 /// Default of the whole-scene fallback (key `voxel_switch`): chosen on the population of scenes
 /// (docs/fidelity.md, "The whole-scene fallback").
-inline constexpr double kVoxelSwitch = 3.0;
+inline constexpr double kVoxelSwitch = 4.0;
 
 /// The budget applied to `initialCount` initial samples (0: none). The cost cap C =
 /// costShare · voxels / (7 + probes) when costShare > 0 (at least 1). For kAutoBudget
