@@ -333,7 +333,7 @@ Image readExr(const std::string& path) {
     if (alpha) img.alpha().assign(std::size_t(w) * h, 0.0f);
     if (depth) img.depth().assign(std::size_t(w) * h, 0.0f);
 
-    exr_decode_pipeline_t d = EXR_DECODE_PIPELINE_INITIALIZER;
+    exr_decode_pipeline_t d{};  // all zero, as EXR_DECODE_PIPELINE_INITIALIZER ({0}) but warning-free
     struct Pipeline {
       exr_context_t ctx;
       exr_decode_pipeline_t& d;

@@ -258,8 +258,9 @@ TEST_F(ReportHtmlTest, PageHoldsTheExrsAsHalfFloatsAndReportMdsNumbers) {
   ASSERT_EQ(cols.back(), "overrides (--set)");
   for (const Json& row : page.data["table"]["rows"]) {
     const std::string sets = row["cells"].back()["t"].get<std::string>();
-    if (row["run"].get<std::string>().find("gradient") != std::string::npos)
+    if (row["run"].get<std::string>().find("gradient") != std::string::npos) {
       EXPECT_NE(sets.find("render.sampler.count=64"), std::string::npos) << sets;
+    }
   }
   // The viewers start as the PNGs look, and every image has its PNG for the overview.
   EXPECT_EQ(page.data["png_tone"], "linear");
