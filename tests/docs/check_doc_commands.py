@@ -76,12 +76,14 @@ def runnable(block, root):
     GPU, every input either a repository file or an output of an earlier command."""
     made, out = set(), []
     for line in block:
-        if "$" in line or "--frames" in line or "--gpu" in line or "gpu" in line.split("--backend")[1:2]:
+        if "$" in line or "--frames" in line or "--gpu" in line:
             return None
         segs = segments(line)
         if len(segs) != 1:
             return None
         words = segs[0]
+        if any(w == "--backend" and nxt == "gpu" for w, nxt in zip(words, words[1:])):
+            return None
         if len(words) < 2 or words[0] != "build/bin/scatterlab" or words[1] not in RUNNABLE:
             return None
         outputs = {words[i + 1] for i, w in enumerate(words[:-1])
