@@ -44,14 +44,16 @@ PipelineSettings marchSettings(const Scene& scene, int mode) {
   PipelineSettings s;
   s.march.step = s.delta1 = s.delta2 = scene.medium.voxelSize();
   s.march.fast = mode != 0;
-  s.march.simd = mode == 1 ? MarchSimd::Sse2 : mode >= 2 ? MarchSimd::Avx2 : MarchSimd::Auto;
-  s.march.halfFloat = mode == 3;
+  RayMarcherSettings r;
+  r.simd = mode == 1 ? MarchSimd::Sse2 : mode >= 2 ? MarchSimd::Avx2 : MarchSimd::Auto;
+  r.halfFloat = mode == 3;
   s.march.scale = mode == 4 ? 2 : mode == 5 ? 4 : 1;
   if (mode >= 6) {
     s.march.fast = mode == 7;
-    s.march.simd = MarchSimd::Avx2;
+    r.simd = MarchSimd::Avx2;
     s.factorLights = true;
   }
+  s.integratorKeys.set(r);
   s.radianceResolution = scene.medium.resolution;
   return s;
 }

@@ -58,10 +58,9 @@ struct RadianceSample {
   }
 };
 
-/// View-ray marching settings (render keys march_step, min_transmittance).
-/// Instruction set of the fast march's kernel: the best this CPU has, or one named.
-enum class MarchSimd { Auto, Sse2, Avx2 };
-
+/// View-ray marching settings, shared by every integrator that marches the view rays (render
+/// keys march_step, min_transmittance, fast_march, march_scale; the ray-marcher's own keys are
+/// RayMarcherSettings in shading/view_march.h).
 struct MarchSettings {
   float step = 0.0f;  ///< view-ray step in world units
   /// March stops when transmittance falls below this (its share of the result is below it).
@@ -69,20 +68,9 @@ struct MarchSettings {
   /// render.fast_march: empty-space skipping (MaxDensityGrid), tiles and, for volume lookups,
   /// one fused density + radiance lookup per step; false runs the plain march (the reference).
   bool fast = true;
-  /// render.half_float_volumes: the fast march's fused density + radiance volume in IEEE half.
-  bool halfFloat = false;
-  /// render.march_simd: which compiled kernel the fast march runs (cpu/fused_march.h).
-  MarchSimd simd = MarchSimd::Auto;
   /// render.march_scale: march one ray per scale × scale pixels and upsample depth-aware
   /// (cpu/ray_marcher.h); 1 marches every pixel.
   int scale = 1;
-};
-
-/// How the GPU marcher lays its slices (render key slicing; the CPU marcher steps along each
-/// ray and has no slices).
-enum class Slicing {
-  RaySteps,    ///< layer k = step k of each pixel's own ray: the CPU marcher's sample points
-  ViewPlanes,  ///< the paper's slabs perpendicular to the view axis
 };
 
 /// How the GPU backend runs the stages of a method with a radiance volume (render key
@@ -184,7 +172,9 @@ struct PipelineSettings {
   /// drag its neighbours' average (docs/fidelity.md). Default: on unless `paper`.
   bool boundedTaylor = false;
   MarchSettings march;
-  Slicing slicing = Slicing::RaySteps;
+  /// render.gpu_pipeline: read by the GPU variants of two families (the reconstructions'
+  /// splats and the ray-marcher), so it is the pipeline's key, not one family's; unused on the
+  /// CPU (its row's `only`).
   GpuPipeline gpuPipeline = GpuPipeline::Compute;
   float delta1 = 0.0f;  ///< volume-tracing step towards the lights (the paper's Δ1)
   float delta2 = 0.0f;  ///< central-difference step of ∇S (the paper's Δ2)

@@ -14,6 +14,7 @@
 
 #include "core/stages.h"
 #include "cpu/fused_volume.h"
+#include "shading/view_march.h"
 
 namespace scatterlab {
 

@@ -13,6 +13,7 @@
 #include "cpu/shadow_rays.h"
 #include "shading/screen_march.h"
 #include "shading/transport.h"
+#include "shading/view_march.h"
 
 namespace scatterlab {
 
@@ -80,6 +81,7 @@ class RayMarcher : public Integrator {
  public:
   explicit RayMarcher(const PipelineSettings& s)
       : march_(s.march),
+        keys_(s.integratorKeys.get<RayMarcherSettings>()),
         factored_(s.factorLights),
         lampModel_(s.tracerSteps().lampModel),
         delta1_(s.delta1) {}
@@ -99,11 +101,11 @@ class RayMarcher : public Integrator {
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LightFactor A(scene, lampModel_ ? LampModel(scene, *f.density) : LampModel());
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
-      const FusedVolume volume(*f.density, radiance, march_.halfFloat);
+      const FusedVolume volume(*f.density, radiance, keys_.halfFloat);
       const FusedLookup lookup{volume,
                                factored_ ? &A : nullptr,
-                               fusedSpanKernel(march_.simd),
-                               fusedLookupKernel(march_.simd),
+                               fusedSpanKernel(keys_.simd),
+                               fusedLookupKernel(keys_.simd),
                                {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
       return marchWith(scene, *f.density, lookup, march_, progress, delta1_, &counts);
     }
@@ -120,6 +122,7 @@ class RayMarcher : public Integrator {
   }
 
   MarchSettings march_;
+  RayMarcherSettings keys_;
   bool factored_;
   bool lampModel_;  ///< A includes LampModel's m_l (PipelineSettings::lampModel)
   float delta1_;
@@ -192,38 +195,6 @@ class FroxelIntegrator : public Integrator {
   Json passes_;
 };
 
-/// The ray-marcher's own keys: how the CPU march stores and steps through the fused volume, and
-/// how the GPU's raster marcher lays its slices (the march itself reads the view march's keys).
-const std::vector<KeyDoc>& rayMarcherKeys() {
-  static const std::vector<KeyDoc> keys = {
-      {"half_float_volumes", "bool", "false", "true, false",
-       "fast CPU march: store the fused density + radiance volume in IEEE half (8 instead of 16 "
-       "bytes per voxel; error in docs/benchmarks.md); methods with a radiance volume",
-       "true", nullptr, "cpu"},
-      {"march_simd", "string", "auto", "auto, sse2, avx2",
-       "fast CPU march's kernel: auto = avx2 where the CPU has AVX2, FMA and F16C, else sse2 "
-       "(same images within 1e-6); methods with a radiance volume",
-       R"("sse2")", nullptr, "cpu"},
-      {"slicing", "string", "ray-steps", "ray-steps, view-planes",
-       "GPU marcher's layers: each ray's own steps (= CPU samples) or the paper's view-aligned "
-       "slabs (raster pipeline); accepted and reported unused on the CPU and under the compute "
-       "pipeline",
-       R"("view-planes")", nullptr, "gpu-raster"},
-  };
-  return keys;
-}
-
-void parseRayMarcher(Params& p, const Scene&, PipelineSettings& s) {
-  s.march.halfFloat = p.boolean("half_float_volumes", false);
-  const std::string simd = p.choice("march_simd", {"auto", "sse2", "avx2"}, "auto");
-  s.march.simd = simd == "sse2"   ? MarchSimd::Sse2
-                 : simd == "avx2" ? MarchSimd::Avx2
-                                  : MarchSimd::Auto;
-  s.slicing = p.choice("slicing", {"ray-steps", "view-planes"}, "ray-steps") == "ray-steps"
-                  ? Slicing::RaySteps
-                  : Slicing::ViewPlanes;
-}
-
 }  // namespace
 
 void registerIntegrators() {
@@ -235,9 +206,7 @@ void registerIntegrators() {
   integrators().addVariant("froxel", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new FroxelIntegrator(s));
   });
-  integrators().declare(
-      "ray-marcher",
-      {.keys = {{rayMarcherKeys, parseRayMarcher}}, .viewMarch = true, .fusedVolumeOnCpu = true});
+  integrators().declare("ray-marcher", rayMarcherStage());
   integrators().addVariant("ray-marcher", Backend::Cpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new RayMarcher(s));
   });

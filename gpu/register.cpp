@@ -14,6 +14,7 @@
 #include "gpu/view_march.h"
 #include "gpu/volume_tracer.h"
 #include "sampling/dynamic_sampling.h"
+#include "shading/view_march.h"
 
 namespace scatterlab::gpu {
 
@@ -111,9 +112,9 @@ void registerGpuStages() {
     if (s.gpuPipeline == GpuPipeline::Compute)
       return std::unique_ptr<Integrator>(new ViewMarchGpu(s.march, s.factorLights, s.delta1,
                                                           s.shadowMap, s.tracerSteps().lampModel));
-    return std::unique_ptr<Integrator>(new SliceMarcher(s.march, s.slicing == Slicing::RaySteps,
-                                                        s.factorLights, s.delta1, s.shadowMap,
-                                                        s.tracerSteps().lampModel));
+    return std::unique_ptr<Integrator>(new SliceMarcher(
+        s.march, s.integratorKeys.get<RayMarcherSettings>().slicing == Slicing::RaySteps,
+        s.factorLights, s.delta1, s.shadowMap, s.tracerSteps().lampModel));
   });
   integrators().addVariant("light-space-march", Backend::Gpu, [](const PipelineSettings& s) {
     return std::unique_ptr<Integrator>(new LightSpaceMarchGpu(

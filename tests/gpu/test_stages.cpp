@@ -20,6 +20,7 @@
 #include "gpu_support.h"
 #include "media/procedural.h"
 #include "shading/transport.h"
+#include "shading/view_march.h"
 
 namespace scatterlab::testing {
 namespace {
@@ -325,7 +326,8 @@ double sliceVsCpu(bool lightInside, float stepVoxels, const char* slicing = "vie
 
   PipelineSettings ps;
   ps.march = ms;
-  ps.slicing = std::string(slicing) == "ray-steps" ? Slicing::RaySteps : Slicing::ViewPlanes;
+  ps.integratorKeys.set(RayMarcherSettings{
+      .slicing = std::string(slicing) == "ray-steps" ? Slicing::RaySteps : Slicing::ViewPlanes});
   ps.gpuPipeline = GpuPipeline::Raster;  // the paper's slice marcher (the compute march:
                                          // test_compute_pipeline.cpp)
   auto integ = integrators().get("ray-marcher", "integrator").on[int(Backend::Gpu)](ps);
