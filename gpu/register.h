@@ -7,8 +7,8 @@ namespace scatterlab::gpu {
 /// Registers the GPU backend's frame (backends()) and the GPU variants beside the CPU ones:
 /// evaluator "volume-tracer", reconstructions "gradient" and "per-voxel", integrator
 /// "ray-marcher" (the slice marcher; slicing from PipelineSettings), integrators
-/// "light-space-march" and "radial-blur" (gpu/post_process.h), refiner "dynamic". Backend
-/// "auto" prefers the GPU only on hardware (not a software rasteriser).
+/// "light-space-march" and "radial-blur" (gpu/light_space_march.h, gpu/radial_blur.h), refiner
+/// "dynamic". Backend "auto" prefers the GPU only on hardware (not a software rasteriser).
 void registerGpuStages();
 
 }  // namespace scatterlab::gpu

@@ -42,6 +42,10 @@ void setScreenCamera(const Program& p, const Scene& scene) {
   glUniform1f(p.uniform("uAlbedo"), scene.medium.albedo);
 }
 
+void bindScreenImage(GLuint unit, const Texture& t, GLenum access) {
+  glBindImageTexture(unit, t.id(), 0, GL_FALSE, 0, access, GL_RGBA32F);
+}
+
 Image readScreenImage(const Texture& t, int w, int h, OutputAlpha alpha, const char* pass,
                       StageTimer* timer) {
   const std::size_t n = std::size_t(w) * std::size_t(h);

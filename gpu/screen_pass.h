@@ -1,8 +1,8 @@
 #pragma once
-/// The set-up every per-pixel GPU pass shares (gpu/post_process.cpp: light-space-march and
-/// radial-blur; gpu/screen_march.cpp: jittered-march and froxel): the scene objects' shadow
-/// maps, the tracing inputs, the surface pass, programs with the shadow-map variant, the camera
-/// uniforms, and the read-back of the RGBA32F result. Needs the GL context.
+/// The set-up every per-pixel GPU pass shares (gpu/light_space_march.cpp, gpu/radial_blur.cpp:
+/// light-space-march and radial-blur; gpu/screen_march.cpp: jittered-march and froxel): the scene
+/// objects' shadow maps, the tracing inputs, the surface pass, programs with the shadow-map
+/// variant, the camera uniforms, and the read-back of the RGBA32F result. Needs the GL context.
 
 #include <string>
 #include <vector>
@@ -48,6 +48,9 @@ class ScreenPass {
 /// uRight, uUp, uTanHalf, the image size (ivec2 uImageSize or vec2 uSize, whichever the program
 /// declares) and uAlbedo. `p` must be in use.
 void setScreenCamera(const Program& p, const Scene& scene);
+
+/// Binds a 2D RGBA32F image of the per-pixel passes to image unit `unit` (level 0, not layered).
+void bindScreenImage(GLuint unit, const Texture& t, GLenum access);
 
 /// What the alpha of a pass's RGBA32F output holds.
 enum class OutputAlpha {

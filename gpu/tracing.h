@@ -56,9 +56,9 @@ struct SceneShadows {
 /// after `color` was cleared to (background, 1); its view-ray distance goes into `distance`
 /// (R32F, 3e38 where no surface), and its depth into `depth` (the depth range nearD..farD of
 /// the camera's projection). The slice marcher composites over `color` with `depth` as its
-/// depth buffer; the per-pixel methods (gpu/post_process.h, gpu/screen_march.h) read `distance`
-/// and `color` (ScreenSurfaces). Needs the context, `objects` built and `inputs` made with its
-/// maps.
+/// depth buffer; the per-pixel methods (gpu/light_space_march.h, gpu/radial_blur.h,
+/// gpu/screen_march.h) read `distance` and `color` (ScreenSurfaces). Needs the context, `objects`
+/// built and `inputs` made with its maps.
 struct SurfacePass {
   Texture distance;
   Texture depth;

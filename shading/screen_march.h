@@ -12,6 +12,7 @@
 #include "core/scene.h"
 #include "core/stages.h"
 #include "core/stats.h"
+#include "shading/blue_noise.h"
 
 namespace scatterlab {
 
@@ -19,7 +20,7 @@ namespace scatterlab {
 enum class Jitter {
   None,       ///< every sample at the middle of its step
   Ign,        ///< interleaved gradient noise (Jimenez 2014) of the pixel
-  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (cpu/blue_noise.h)
+  BlueNoise,  ///< a 64 x 64 tileable void-and-cluster blue-noise table (shading/blue_noise.h)
 };
 
 /// `jittered-march`'s keys (jitteredMarchStage()).
@@ -61,15 +62,6 @@ inline float interleavedGradientNoise(int x, int y) {
 /// Relative depth scale of `jittered-march`'s bilateral upsampling: a low-res neighbour whose
 /// depth differs by 5 % of the pixel's weighs e^(−1) of one at the same depth.
 inline constexpr float kUpsampleDepthSigma = 0.05f;
-
-/// Side of the tileable blue-noise table.
-inline constexpr int kBlueNoiseSize = 64;
-
-/// A kBlueNoiseSize² tileable blue-noise table (row-major), values (rank + ½)/N in (0, 1),
-/// each rank once: Ulichney's void-and-cluster (1993) on the torus, Gaussian energy σ = 1.5,
-/// initial pattern of N/10 points from a fixed seed, so the table is the same on every run and
-/// machine. Built once on first use (a few ms).
-const std::vector<float>& blueNoiseTable();
 
 /// The per-pixel offset in [0, 1) of the samples inside their steps: ½ without jitter.
 inline float jitterOffset(Jitter j, int x, int y) {

@@ -1,7 +1,7 @@
 /// The four competitors' GPU variants on scenes with objects (issue 13 with issue 12's objects):
-/// light-space-march and radial-blur (gpu/post_process.h), jittered-march and froxel
-/// (gpu/screen_march.h) against their CPU variants on a sphere's shadow in homogeneous fog
-/// over a floor, for a spot, a point and a directional light. The GPU takes V_l from shadow
+/// light-space-march and radial-blur (gpu/light_space_march.h, gpu/radial_blur.h), jittered-march
+/// and froxel (gpu/screen_march.h) against their CPU variants on a sphere's shadow in homogeneous
+/// fog over a floor, for a spot, a point and a directional light. The GPU takes V_l from shadow
 /// maps (render.shadow_map) and the first surface from the surface pass's raster of the
 /// tessellated sphere; the CPU traces Embree rays (light-space-march: its own CPU shadow map),
 /// so the images differ on shadow and silhouette edges only: the tolerances are measured.

@@ -1,6 +1,6 @@
-/// The GPU variants of the real-time methods (gpu/post_process.h) against their CPU twins
-/// (cpu/light_space_march.h, cpu/radial_blur.h), end to end through createMethod, on
-/// llvmpipe in CI; and what the GPU variants refuse (a light behind the camera).
+/// The GPU variants of the real-time methods (gpu/light_space_march.h, gpu/radial_blur.h) against
+/// their CPU twins (cpu/light_space_march.h, cpu/radial_blur.h), end to end through createMethod,
+/// on llvmpipe in CI; and what the GPU variants refuse (a light behind the camera).
 
 #include "core/method.h"
 #include "gpu/context.h"
