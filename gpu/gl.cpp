@@ -236,6 +236,32 @@ Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::strin
   label(GL_BUFFER, id_, name);
 }
 
+void Buffer::bindBase(GLenum target, GLuint index) const {
+  if (target == GL_SHADER_STORAGE_BUFFER) {
+    static const std::size_t limit = [] {
+      GLint64 v = 0;
+      glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &v);
+      return v > 0 ? std::size_t(v) : std::size_t(1) << 24;  // GL's minimum
+    }();
+    if (size_ > limit) {
+      char name[256] = {};
+      GLsizei n = 0;
+      glGetObjectLabel(GL_BUFFER, id_, GLsizei(sizeof name), &n, name);
+      throw GpuError("'" + std::string(name, std::size_t(n)) + "': a storage buffer of " +
+                     std::to_string((size_ + (1u << 20) - 1) >> 20) +
+                     " MiB is above what this device's shaders address in one block "
+                     "(GL_MAX_SHADER_STORAGE_BLOCK_SIZE: " +
+                     std::to_string(limit >> 20) +
+                     " MiB); use fewer samples, a coarser volume or the CPU backend");
+    }
+    if (storage_ > limit) {
+      glBindBufferRange(target, index, id_, 0, GLsizeiptr(size_));
+      return;
+    }
+  }
+  glBindBufferBase(target, index, id_);
+}
+
 void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   if (!n) return;
   countHostWait("buffer read-back");

@@ -174,7 +174,12 @@ class Buffer : public GlObject<BufferDeleter> {
   std::size_t size() const { return size_; }
   /// Copies bytes [offset, offset + n) back to host memory.
   void read(void* dst, std::size_t n, std::size_t offset = 0) const;
-  void bindBase(GLenum target, GLuint index) const { glBindBufferBase(target, index, id_); }
+  /// Binds the buffer to `index` of `target`. A shader storage binding above the device's
+  /// GL_MAX_SHADER_STORAGE_BLOCK_SIZE (GL's minimum is 16 MiB; 128 MiB on some GPUs, 2 GiB on
+  /// others) is a GpuError naming the buffer and the limit: a shader would read and write past
+  /// what the device addresses, a wrong image with no GL error. A buffer whose rounded-up storage
+  /// alone passes the limit binds its size() bytes.
+  void bindBase(GLenum target, GLuint index) const;
 
  private:
   detail::ObjectKey key() const {

@@ -265,6 +265,29 @@ TEST(GpuPassLayer, ADispatchBeyondTheDeviceLimitIsAnErrorBeforeAnyWork) {
   gpu::checkGl("after the refused dispatch");
 }
 
+// A storage buffer above GL_MAX_SHADER_STORAGE_BLOCK_SIZE (llvmpipe: 128 MiB; GL's minimum
+// 16 MiB) is refused where it is bound, naming the buffer and the limit; one at the limit binds.
+TEST(GpuPassLayer, AStorageBufferAboveTheDeviceBlockSizeIsAnErrorWhereItIsBound) {
+  SCATTERLAB_REQUIRE_GPU();
+  GLint64 limit = 0;
+  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &limit);
+  if (limit > (GLint64(1) << 28)) GTEST_SKIP() << "the device's limit is " << limit << " bytes";
+  const gpu::Buffer at(std::size_t(limit), nullptr, 0, "at the limit");
+  EXPECT_NO_THROW(at.bindBase(GL_SHADER_STORAGE_BUFFER, 0));
+  const gpu::Buffer above(std::size_t(limit) + 4, nullptr, 0, "above the limit");
+  try {
+    above.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+    FAIL() << "expected GpuError";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("'above the limit'"), std::string::npos) << m;
+    EXPECT_NE(m.find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE: " + std::to_string(limit >> 20) + " MiB"),
+              std::string::npos)
+        << m;
+  }
+  gpu::checkGl("after the refused binding");
+}
+
 TEST(GpuCli, BackendGpuWithoutContextFailsClearly) {
   const std::string dir = ::testing::TempDir();
   const std::string scene = dir + "/gpu_cli_scene.json", out = dir + "/gpu_cli_out.exr";
