@@ -59,7 +59,8 @@ std::string levelLabel(const char* what, std::size_t level) {
 /// list's end, where its top-up children begin and where the fallback's children begin, the
 /// budget's running kept count, count after a cut and top-up cut, the final list's overflow, the
 /// cut of each split level, the samples each level keeps and the top-up children of each split
-/// level.
+/// level; last three uints per level: its evaluate pass's dispatch with tau "visible" (8 samples
+/// per workgroup, dynamic_error.comp.glsl).
 struct CountSlots {
   std::size_t L;
   std::size_t overflow() const { return L + 1; }
@@ -74,8 +75,13 @@ struct CountSlots {
   std::size_t cut(std::size_t k) const { return end() + 7 + k; }
   std::size_t keptOf(std::size_t k) const { return end() + 7 + L + k; }
   std::size_t childrenOf(std::size_t k) const { return end() + 8 + 2 * L + k; }
-  std::size_t words() const { return end() + 8 + 3 * L; }
+  std::size_t evaluate(std::size_t k) const { return end() + 8 + 3 * L + 3 * k; }
+  std::size_t words() const { return end() + 8 + 3 * L + 3 * (L + 1); }
 };
+
+/// The most workgroups of the evaluate pass with tau "visible" (GL's least
+/// GL_MAX_COMPUTE_WORK_GROUP_COUNT; dynamic_level.comp.glsl clamps its indirect size alike).
+constexpr GLuint kMaxEvaluateGroups = 65535;
 
 /// Sums per sample of the probe pass: the groups of kProbeGroup probes (`probes`: the most of
 /// any level, the buffer's size; a level's own count: levelProbes()).
@@ -118,7 +124,8 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
     variant.define("SL_PROBES");
   } else {
     variant.compute = {"common.glsl", "dynamic_error.comp.glsl"};
-    variant.define("SL_FACTOR_LIGHTS", space.factorLights)
+    variant.define(settings.visibleTau ? "SL_TAU_LANES 8" : "SL_TAU_LANES 1")
+        .define("SL_FACTOR_LIGHTS", space.factorLights)
         .define("SL_LAMP_MODEL", space.lampModel)
         .define("SL_LOG_SPACE", space.logSpace);
     addShadowRaySkip(variant);
@@ -297,7 +304,6 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     glUniform3fv(program.uniform("uProbeDirs"), kMaxProbes, &dirs[0].x);
     glUniform1i(program.uniform("uTauMode"), k == 0 ? 0 : (settings.perSampleTau ? 2 : 1));
     glUniform1f(program.uniform("uTauDelta1"), settings.delta1);
-    glUniform1i(program.uniform("uVisibleTau"), settings.visibleTau ? 1 : 0);
     setVec3(program, "uDensityInvCell", Vec3(1.0f) / density.cellSize());
     l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
     l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAncestors);
@@ -305,7 +311,18 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
     l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-    dispatchOverLevel("ds evaluate", w, k, L);
+    // Workgroups of 64 / lanes samples (they stride over the samples where the device's limit
+    // caps their count); after level 0 the count pass left the size (the count is known only
+    // on the GPU).
+    if (!settings.visibleTau) {
+      dispatchOverLevel("ds evaluate", w, k, L);
+    } else if (k == 0) {
+      dispatch("ds evaluate", {std::min<GLuint>(groups(l.capacity, 8), kMaxEvaluateGroups), 1, 1});
+    } else {
+      glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
+      dispatchIndirect("ds evaluate", GLintptr(CountSlots{L}.evaluate(k) * sizeof(GLuint)));
+      glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    }
   }
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   {  // pass 2: parallel over (sample, probe, light); a workgroup's y is its group of probes
@@ -497,6 +514,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
     glUniform1ui(count.uniform("uCapacity"), GLuint(l.capacity));
     glUniform1ui(count.uniform("uOverflowSlot"), GLuint(CountSlots{L}.overflow()));
     glUniform1ui(count.uniform("uDispatchSlot"), GLuint(CountSlots{L}.dispatch(0)));
+    glUniform1ui(count.uniform("uEvaluateSlot"), GLuint(CountSlots{L}.evaluate(0)));
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);

@@ -4,10 +4,13 @@
 // invocation after 65535 iterations in all, which 40 probes × 16 lights reached):
 // 0. volume_tracer.comp.glsl (gpu::traceLevel), parallel over (sample, point, light): S and ∇S
 //    of the level's samples into results[];
-// 1. this file without SL_COMBINE, one invocation per sample of a level that may split (a
-//    final level stops after pass 0): τ to the viewer (kept in errors[j] until pass 3) and on
-//    level 0 the sample's contribution R³·mean|S|·D·τ (the scale of a relative ε; with
-//    SL_WEIGHT_A |S| times A at the sample);
+// 1. this file without SL_COMBINE, for a level that may split (a final level stops after
+//    pass 0): τ to the viewer (kept in errors[j] until pass 3) and on level 0 the sample's
+//    contribution R³·mean|S|·D·τ (the scale of a relative ε; with SL_WEIGHT_A |S| times A at
+//    the sample). With tau "visible" (SL_TAU_LANES 8) a workgroup holds 8 samples × 8 lanes:
+//    lane 0 traces the sample's own τ (or reads its ancestor's), lanes 1–6 the six axis probes',
+//    and lane 0 takes their maximum in the serial order — one trace per invocation instead of
+//    seven in series; otherwise (SL_TAU_LANES 1) one invocation per sample;
 // 2. volume_tracer.comp.glsl with SL_PROBES, parallel over (sample, probe, light): each group of
 //    kProbeGroup probes' sum of mean_RGB|L̃ − L|·D (with SL_WEIGHT_A mean_RGB(A ⊙ |L̃ − L|)·D, A
 //    at the probe);
@@ -19,7 +22,13 @@
 // sampling/dynamic_sampling.cpp (localShadingError, which sums the probes in the same groups,
 // sampleContribution, viewTransmittance) operation for operation, but for the order in which
 // the lights' terms of one point are added (the lanes' tree).
+#ifdef SL_COMBINE
 layout(local_size_x = 64) in;
+#else
+const uint kLanes = uint(SL_TAU_LANES);  // 8 with tau "visible", else 1
+const uint kSlots = 64u / kLanes;        // samples per workgroup
+layout(local_size_x = SL_TAU_LANES, local_size_y = 64 / SL_TAU_LANES) in;
+#endif
 
 layout(std430, binding = BINDING_SAMPLES) readonly buffer Samples { vec4 samples[]; };  // xyz, valid radius
 layout(std430, binding = BINDING_ANCESTORS) readonly buffer Ancestors { int ancestors[]; };
@@ -49,35 +58,24 @@ void main() {
 #else
 uniform int uTauMode;           // 0: level 0 (trace τ, store it in rootTau), 1: ancestor's, 2: own
 uniform float uTauDelta1;       // step of the τ trace
-uniform int uVisibleTau;        // 1: τ = max(τ, τ at the six axis probes) (tau "visible")
-uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU (the six axis probes of uVisibleTau)
+uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU (the six axis probes of tau "visible")
 
 float viewTransmittance(vec3 x) { return exp(-uSigmaT * opticalDepth(x, uEye, uTauDelta1)); }
 
-void main() {
-  uint j = gl_GlobalInvocationID.x;
-  uint count = counts[uLevel];
-  if (j >= count) return;
+shared float sTau[64];  // [slot · kLanes + lane]: τ of the sample (lane 0) and its probes
+
+// The sample j's E-pass values once its lanes' τ are in sTau (lane 0 only).
+void finish(uint j, uint count, uint slot) {
   vec4 pr = samples[j];
   vec3 x = pr.xyz;
   float R = pr.w;
-  float tau;
-  if (uTauMode == 0) {
-    tau = viewTransmittance(x);
-    rootTau[j] = tau;
-  } else if (uTauMode == 1) {
-    tau = rootTau[ancestors[j]];
-  } else {
-    tau = viewTransmittance(x);
-  }
-  if (uVisibleTau != 0) {
-    // tau "visible": the most visible of the sample and its six axis probes (the CPU's
-    // probePoints order; rootTau keeps the centre's τ).
-    for (int i = 0; i < 6; ++i) {
-      precise vec3 p = x + R * uProbeDirs[i];
-      tau = max(tau, viewTransmittance(p));
-    }
-  }
+  float tau = sTau[slot * kLanes];
+  if (uTauMode == 0) rootTau[j] = tau;
+#if SL_TAU_LANES > 1
+  // tau "visible": the most visible of the sample and its six axis probes (the CPU's
+  // probePoints order; rootTau keeps the centre's τ).
+  for (uint i = 1u; i <= 6u; ++i) tau = max(tau, sTau[slot * kLanes + i]);
+#endif
   errors[j] = tau;  // E_j once pass 3 has combined the probe groups
   if (uTauMode == 0) {
     vec3 S = results[j].S.rgb;  // pass 0's
@@ -91,6 +89,31 @@ void main() {
 #endif
     precise float c = R * R * R * ((a.x + a.y + a.z) / 3.0) * densityAtPoint(x) * tau;
     errors[count + j] = c;
+  }
+}
+
+// Workgroups stride over the level's samples (the dispatch covers its capacity; the count is
+// known only here), kSlots samples at a time; the loop is uniform over the workgroup, so its
+// barriers are too.
+void main() {
+  uint count = counts[uLevel];
+  uint lane = gl_LocalInvocationID.x, slot = gl_LocalInvocationID.y;
+  for (uint base = gl_WorkGroupID.x * kSlots; base < count; base += gl_NumWorkGroups.x * kSlots) {
+    uint j = base + slot;
+    if (j < count && lane <= 6u) {
+      vec4 pr = samples[j];
+      float t;
+      if (lane == 0u) {
+        t = uTauMode == 1 ? rootTau[ancestors[j]] : viewTransmittance(pr.xyz);
+      } else {
+        precise vec3 p = pr.xyz + pr.w * uProbeDirs[lane - 1u];
+        t = viewTransmittance(p);
+      }
+      sTau[slot * kLanes + lane] = t;
+    }
+    barrier();
+    if (j < count && lane == 0u) finish(j, count, slot);
+    barrier();  // sTau is rewritten by the next round
   }
 }
 #endif

@@ -4,7 +4,8 @@
 // threshold ε·scale (or ε), both as doubles for the split pass and the host's read-back.
 // Without it (after the scan of G_{k+1}'s membership): |Q^{k+1}| = last offset + last flag,
 // clamped to the level's capacity (an overflow records the largest asked count and its level,
-// reported by the host once the frame is done), and the level's indirect dispatch size.
+// reported by the host once the frame is done), and the level's indirect dispatch sizes (64
+// samples per workgroup, and 8 for the evaluate pass with tau "visible").
 layout(local_size_x = 1) in;
 
 layout(std430, binding = BINDING_LEVEL_COUNTS) buffer LevelCounts { uint counts[]; };
@@ -35,6 +36,7 @@ uniform uint uLevel;        // k + 1
 uniform uint uCapacity;     // the level's sample capacity
 uniform uint uOverflowSlot; // counts[slot]: largest asked count, counts[slot + 1]: its level
 uniform uint uDispatchSlot; // counts[slot + 3·level ...]: the level's (x, 1, 1) dispatch
+uniform uint uEvaluateSlot; // likewise, its evaluate pass's with tau "visible" (8 per workgroup)
 
 void main() {
   uint n = uVertexCount;
@@ -49,5 +51,9 @@ void main() {
   counts[d] = (kept + 63u) / 64u;
   counts[d + 1u] = 1u;
   counts[d + 2u] = 1u;
+  uint e = uEvaluateSlot + 3u * uLevel;
+  counts[e] = min((kept + 7u) / 8u, 65535u);  // the workgroups stride over the rest
+  counts[e + 1u] = 1u;
+  counts[e + 2u] = 1u;
 }
 #endif
