@@ -25,6 +25,9 @@
 #ifdef SL_COMBINE
 layout(local_size_x = 64) in;
 #else
+#ifndef SL_TAU_LANES
+#define SL_TAU_LANES 1
+#endif
 const uint kLanes = uint(SL_TAU_LANES);  // 8 with tau "visible", else 1
 const uint kSlots = 64u / kLanes;        // samples per workgroup
 layout(local_size_x = SL_TAU_LANES, local_size_y = 64 / SL_TAU_LANES) in;
