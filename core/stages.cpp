@@ -65,8 +65,16 @@ std::vector<int> voxelCells(int voxels, int cells) {
 }
 
 std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims) {
+  const std::vector<int> used = occupiedVoxelsPerCell(g, dims);
+  std::vector<int> out;
+  for (std::size_t c = 0; c < used.size(); ++c)
+    if (used[c]) out.push_back(int(c));
+  return out;
+}
+
+std::vector<int> occupiedVoxelsPerCell(const DensityGrid& g, IVec3 dims) {
   const std::size_t n = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
-  std::vector<char> used(n, 0);
+  std::vector<int> used(n, 0);
   const IVec3 nd = g.dims();
   const std::vector<int> ci = voxelCells(nd.x, dims.x), cj = voxelCells(nd.y, dims.y),
                          ck = voxelCells(nd.z, dims.z);
@@ -77,12 +85,9 @@ std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims) {
           std::size_t(dims.x) *
           (std::size_t(cj[std::size_t(j)]) + std::size_t(dims.y) * std::size_t(ck[std::size_t(k)]));
       for (int i = 0; i < nd.x; ++i, ++d)
-        if (*d > 0.0f) used[rowCell + std::size_t(ci[std::size_t(i)])] = 1;
+        if (*d > 0.0f) ++used[rowCell + std::size_t(ci[std::size_t(i)])];
     }
-  std::vector<int> out;
-  for (std::size_t c = 0; c < n; ++c)
-    if (used[c]) out.push_back(int(c));
-  return out;
+  return used;
 }
 
 std::vector<RadianceSample> Sampler::generate(Frame& frame, const Scene& scene) {
@@ -99,6 +104,10 @@ std::vector<long long> Frame::countOccupiedCells(std::span<const IVec3> grids) {
 
 std::vector<int> Frame::occupiedCellList(IVec3 dims) {
   return scatterlab::occupiedCells(hostDensity(), dims);
+}
+
+std::vector<int> Frame::occupiedVoxelsPerCell(IVec3 dims) {
+  return scatterlab::occupiedVoxelsPerCell(hostDensity(), dims);
 }
 
 }  // namespace scatterlab

@@ -295,6 +295,10 @@ class Frame {
   /// The occupied cells of a `dims` grid (as countOccupiedCells), ascending. A GPU frame reads
   /// them from its last count when that counted `dims` (no new pass).
   virtual std::vector<int> occupiedCellList(IVec3 dims);
+  /// Per cell of a `dims` grid (as countOccupiedCells, indexed as occupiedCells()), how many
+  /// voxel centres with D > 0 it holds. A GPU frame counts them in one pass and reads them back
+  /// (one wait, 4 bytes per cell).
+  virtual std::vector<int> occupiedVoxelsPerCell(IVec3 dims);
   /// Whether countOccupiedCells counts several grids for about the price of one (a GPU frame:
   /// one pass and one wait for all), so that a search may ask for grids it may not need.
   virtual bool countsGridsTogether() const { return false; }
@@ -308,6 +312,8 @@ std::vector<int> voxelCells(int voxels, int cells);
 /// The cells of a regular `dims` grid over `g`'s box that hold a voxel centre with D > 0 (linear
 /// indices i + nx·(j + ny·k), ascending).
 std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims);
+/// Per cell of that grid (linear index as occupiedCells()), its voxel centres with D > 0.
+std::vector<int> occupiedVoxelsPerCell(const DensityGrid& g, IVec3 dims);
 
 /// The CPU backend's frame: the volumes as host grids. No GL context.
 class HostFrame : public Frame {

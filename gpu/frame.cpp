@@ -167,6 +167,39 @@ std::vector<int> GpuFrame::occupiedCellList(IVec3 dims) {
   return list;
 }
 
+std::vector<int> GpuFrame::occupiedVoxelsPerCell(IVec3 dims) {
+  context();
+  const IVec3 nd = density.dims;
+  const std::size_t cells = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+  std::vector<int> out(cells, 0);
+  if (cells == 0 || nd.x <= 0 || nd.y <= 0 || nd.z <= 0) return out;
+  std::vector<GLint> maps;
+  for (const auto& [voxels, n] : {std::pair{nd.x, dims.x}, {nd.y, dims.y}, {nd.z, dims.z}})
+    for (const int c : voxelCells(voxels, n)) maps.push_back(c);
+  const GLint table[4] = {dims.x, dims.y, dims.z, 0};
+  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
+  const Buffer tableBuffer(sizeof table, table, 0, "cell occupancy grids");
+  const Buffer counts(cells * sizeof(GLuint), nullptr, 0, "occupied voxels per cell");
+  const Program& p =
+      program({.compute = {"cell_occupancy.comp.glsl"}, .defines = {"SL_VOXEL_COUNTS"}},
+              "occupied voxels per cell");
+  {
+    ScopedGpuTimer t(&timer, "cell occupancy");
+    p.use();
+    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    mapBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+    tableBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+    counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+    setIVec3(p, "uVoxels", nd);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    dispatch("cell occupancy", {groups(nd.x, 4), groups(nd.y, 4), groups(nd.z, 4)});
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+  counts.read(out.data(), cells * sizeof(GLuint));  // one host wait, once per density
+  checkGl("occupied voxels per cell");
+  return out;
+}
+
 void GpuFrame::forgetOccupancy() {
   countedGrids_.clear();
   cellWords_ = 0;

@@ -62,6 +62,9 @@ class GpuFrame : public Frame {
   std::vector<long long> countOccupiedCells(std::span<const IVec3> grids) override;
   /// The grid's bits read back (cells / 8 bytes), counted first if this render has not.
   std::vector<int> occupiedCellList(IVec3 dims) override;
+  /// One pass over the density volume (cell_occupancy.comp.glsl, SL_VOXEL_COUNTS) and one read
+  /// of 4 bytes per cell: never the volume.
+  std::vector<int> occupiedVoxelsPerCell(IVec3 dims) override;
   bool countsGridsTogether() const override { return true; }
 
   void keepImageOnDevice(bool on) override { imageOnDevice = on; }

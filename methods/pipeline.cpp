@@ -128,26 +128,23 @@ class PipelineMethod : public Method {
     // The whole-scene fallback: a medium so sparse that per-voxel traces less than the
     // refiner's first level would is rendered as per-voxel renders it. Per-voxel traces the
     // occupied voxels that some light reaches: where only spot lights shine, at most those of
-    // the occupied cells of a coarse grid that a cone reaches (LitReach::voxelBound). The
-    // counts and the cells are taken once per density (on a GPU one pass, two small reads); the
-    // cones are host geometry, so the decision follows the lights from frame to frame with no
-    // wait.
+    // the occupied voxels of the cells of a coarse grid that a cone reaches
+    // (LitReach::voxelBound). The count and the cells' counts are taken once per density (on a
+    // GPU a pass and a small read each); the cones are host geometry, so the decision follows
+    // the lights from frame to frame with no wait.
     if (voxelReconstruction) {
       const IVec3 res = scene.medium.resolution;
       const IVec3 cells = LitReach::boundCells(res);
       if (!reuse || !keptOccupied_) {
-        const std::array<IVec3, 2> grids{res, cells};  // one pass on a GPU
-        keptOccupied_ = frame->countOccupiedCells(grids)[0];
+        keptOccupied_ = frame->countOccupiedCells(std::span(&res, 1))[0];
         keptOccupiedCells_.clear();
       }
       const LitReach lit(scene.lights);
       long long traced = *keptOccupied_;
       st.extra["occupied_voxels"] = traced;
       if (!lit.everywhere()) {
-        if (keptOccupiedCells_.empty()) {  // read once per density, when spots alone shine
-          keptOccupiedCells_.assign(std::size_t(cells.x) * cells.y * cells.z, 0);
-          for (int c : frame->occupiedCellList(cells)) keptOccupiedCells_[std::size_t(c)] = 1;
-        }
+        if (keptOccupiedCells_.empty())  // read once per density, when spots alone shine
+          keptOccupiedCells_ = frame->occupiedVoxelsPerCell(cells);
         const long long bound = lit.voxelBound(scene.medium.bounds, res, &keptOccupiedCells_);
         st.extra["lit_voxels"] = bound;
         traced = std::min(traced, bound);
@@ -273,9 +270,9 @@ class PipelineMethod : public Method {
   /// The kept density's occupied voxels (Frame::countOccupiedCells), which the whole-scene
   /// fallback's decision starts from.
   std::optional<long long> keptOccupied_;
-  /// Per cell of a LitReach::boundCells grid, whether it holds density (for the cones' bound;
-  /// empty until a frame lit by spots alone needs it).
-  std::vector<char> keptOccupiedCells_;
+  /// Per cell of a LitReach::boundCells grid, its voxels that hold density (for the cones'
+  /// bound; empty until a frame lit by spots alone needs it).
+  std::vector<int> keptOccupiedCells_;
   /// The refiner left the final samples on the device (RenderResult::samples is empty; the
   /// backend's report counts them).
   bool samplesOnDevice_ = false;

@@ -357,11 +357,12 @@ class LitReach {
   /// half-diagonal, counted by the cells of a boundCells(dims) grid (occupiedCells()' voxel →
   /// cell map, core/stages.h), each tested whole with a ball around its voxels; blocks of 4³
   /// cells are tested first and only the cells of blocks a cone reaches are tested again, so a
-  /// narrow cone costs a few hundred tests. Host geometry only. `occupied` (one char per cell,
-  /// as indexed by occupiedCells(); null: every cell): only the cells that hold density count.
-  /// Every voxel of those cells when everywhere().
+  /// narrow cone costs a few hundred tests. Host geometry only. `occupied` (per cell, as indexed
+  /// by occupiedCells(), how many of its voxel centres hold density: occupiedVoxelsPerCell();
+  /// null: all of them): a reached cell counts its occupied voxels. Every voxel of the cells
+  /// when everywhere().
   long long voxelBound(const Box& box, IVec3 dims,
-                       const std::vector<char>* occupied = nullptr) const {
+                       const std::vector<int>* occupied = nullptr) const {
     const IVec3 c = boundCells(dims);
     const Vec3 cell = box.extent() / Vec3(dims);
     const float reach = glm::length(cell);
@@ -396,9 +397,11 @@ class LitReach {
           for (int z = b0.z; z < b1.z; ++z)
             for (int y = b0.y; y < b1.y; ++y)
               for (int x = b0.x; x < b1.x; ++x) {
-                if (occupied && !(*occupied)[std::size_t((z * c.y + y) * c.x + x)]) continue;
+                const int held = occupied ? (*occupied)[std::size_t((z * c.y + y) * c.x + x)] : -1;
+                if (held == 0) continue;
                 long long voxels = 0;
-                if (reached(IVec3(x, y, z), IVec3(x, y, z) + 1, &voxels)) n += voxels;
+                if (reached(IVec3(x, y, z), IVec3(x, y, z) + 1, &voxels))
+                  n += held < 0 ? voxels : std::min<long long>(voxels, held);
               }
         }
     return n;

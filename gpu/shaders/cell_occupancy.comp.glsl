@@ -17,6 +17,19 @@ layout(std430, binding = BINDING_COUNTERS) buffer Occupied { uint occupied[]; };
 uniform ivec3 uVoxels;  // the density's dims
 uniform int uGrids;     // how many grids
 
+#ifdef SL_VOXEL_COUNTS
+// Frame::occupiedVoxelsPerCell: one grid (uGrids 1, its maps at 0), and per cell how many of its
+// voxels hold density, in occupied[] (zeroed by the host).
+void main() {
+  ivec3 u = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(u, uVoxels))) return;
+  if (!(texelFetch(uDensity, u, 0).r > 0.0)) return;
+  ivec4 grid = grids[0];
+  uint c = uint(cellOf[u.x]) + uint(grid.x) * (uint(cellOf[uVoxels.x + u.y]) +
+                                               uint(grid.y) * uint(cellOf[uVoxels.x + uVoxels.y + u.z]));
+  atomicAdd(occupied[c], 1u);
+}
+#else
 void main() {
   ivec3 u = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(u, uVoxels))) return;
@@ -34,3 +47,4 @@ void main() {
       atomicAdd(occupied[g], 1u);
   }
 }
+#endif

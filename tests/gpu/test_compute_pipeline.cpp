@@ -567,6 +567,10 @@ TEST(GpuComputePipeline, CellOccupancyEqualsTheCpus) {
   EXPECT_EQ(gpu::passCounts().dispatches, dispatches1);  // the lists need no new pass
   // A grid not counted yet is counted for its list.
   EXPECT_EQ(frame.occupiedCellList(IVec3(5, 5, 5)), occupiedCells(d, IVec3(5, 5, 5)));
+  // The occupied voxels per cell (the whole-scene fallback's bound under spots), cell by cell.
+  for (const IVec3& dims : grids)
+    EXPECT_EQ(frame.occupiedVoxelsPerCell(dims), occupiedVoxelsPerCell(d, dims))
+        << dims.x << "x" << dims.y << "x" << dims.z;
   gpu::checkGl("cell occupancy");
 }
 

@@ -76,6 +76,44 @@ TEST(VoxelSwitch, WhereOnlySpotsShinePerVoxelTracesWhatTheConesReach) {
   EXPECT_LT(bound, 3 * reached);  // blocks of 2³ voxels, not the whole box
 }
 
+TEST(VoxelSwitch, TheConesBoundCountsTheOccupiedVoxelsOfTheCellsTheyReach) {
+  // A blob in the shaft's box: the cells at its edge are partly filled. Counting their occupied
+  // voxels instead of all of them keeps a bound (at least every occupied voxel a cone reaches,
+  // voxel by voxel) and tightens it (measured 2026-11-28, CPU, 96³: 69 551 by the counts against
+  // 73 089 by whole cells, 53 388 reached of 172 820 occupied).
+  Json doc = shaftDoc();
+  doc["medium"]["density"] = {
+      {"type", "gaussians"},
+      {"blobs", Json::array({{{"center", {0.5, 0.45, 0.5}}, {"radius", 0.12}, {"weight", 1.0}}})}};
+  doc["medium"]["resolution"] = 96;  // cells of 3³ voxels (the bound's grid is at most 32³)
+  const Scene scene = sceneFromJson(doc);
+  DensityGrid d(scene.medium.bounds, scene.medium.resolution);
+  scene.medium.density->build(d);
+  const IVec3 res = scene.medium.resolution, cells = LitReach::boundCells(res);
+  const LitReach lit(scene.lights);
+  const std::vector<int> counts = occupiedVoxelsPerCell(d, cells);
+  std::vector<int> any(counts.size());  // the bound before: every voxel of an occupied cell
+  for (std::size_t c = 0; c < counts.size(); ++c) any[c] = counts[c] > 0 ? 1 << 30 : 0;
+  const long long whole = lit.voxelBound(scene.medium.bounds, res, &any);
+  const long long bound = lit.voxelBound(scene.medium.bounds, res, &counts);
+  const Vec3 cell = scene.medium.bounds.extent() / Vec3(res);
+  long long reached = 0, occupied = 0;
+  for (int z = 0; z < res.z; ++z)
+    for (int y = 0; y < res.y; ++y)
+      for (int x = 0; x < res.x; ++x) {
+        if (!(d.at(x, y, z) > 0.0f)) continue;
+        ++occupied;
+        reached +=
+            lit.reaches(scene.medium.bounds.min + (Vec3(x, y, z) + 0.5f) * cell, glm::length(cell));
+      }
+  std::printf("occupied %lld, reached %lld, bound by counts %lld, by whole cells %lld\n", occupied,
+              reached, bound, whole);
+  EXPECT_GT(reached, 0);
+  EXPECT_GE(bound, reached);
+  EXPECT_LT(bound, whole);
+  EXPECT_EQ(render(doc, "adaptive").stats.extra.at("lit_voxels").get<long long>(), bound);
+}
+
 TEST(VoxelSwitch, ASparseMediumIsRenderedAsPerVoxelRendersIt) {
   const RenderResult perVoxel = render(wispDoc(), "per-voxel");
   const RenderResult adaptive = render(wispDoc(), "adaptive");
