@@ -43,6 +43,14 @@ void GpuFrame::buildDensity(const Scene& scene) {
 
 namespace {
 
+/// The voxel-centre → cell maps of the three axes of a `dims` grid over `voxels`
+/// (voxelCells()), appended to the occupancy pass's map buffer.
+void appendCellMaps(std::vector<GLint>& maps, IVec3 voxels, IVec3 dims) {
+  for (const auto& [n, cells] :
+       {std::pair{voxels.x, dims.x}, {voxels.y, dims.y}, {voxels.z, dims.z}})
+    for (const int c : voxelCells(n, cells)) maps.push_back(c);
+}
+
 /// DensityGrid::sample(p) of an uploaded density volume, from the (up to) eight voxels around
 /// p read back alone (LampModel's k_l without reading the whole volume back), in the order and
 /// with the clamps of Grid3::sampleIndex.
@@ -102,8 +110,7 @@ std::vector<long long> GpuFrame::countOccupiedCells(std::span<const IVec3> grids
     added.push_back({dims, words});
     table.insert(table.end(), {dims.x, dims.y, dims.z, GLint(words)});
     words += (cells + 31) / 32;
-    for (const auto& [voxels, n] : {std::pair{nd.x, dims.x}, {nd.y, dims.y}, {nd.z, dims.z}})
-      for (const int c : voxelCells(voxels, n)) maps.push_back(c);
+    appendCellMaps(maps, nd, dims);
   }
   if (words > std::size_t(std::numeric_limits<GLint>::max()))
     throw LimitError("the cell samplers' occupancy: " + std::to_string(words) +
@@ -122,25 +129,10 @@ std::vector<long long> GpuFrame::countOccupiedCells(std::span<const IVec3> grids
                             GLsizeiptr((words - cellWords_) * sizeof(GLuint)), GL_RED_INTEGER,
                             GL_UNSIGNED_INT, &zero);
   cellWords_ = words;
-  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
-  const Buffer tableBuffer(table.size() * sizeof(GLint), table.data(), 0, "cell occupancy grids");
   const std::vector<GLuint> zeros(grids.size(), 0u);
   const Buffer counts(zeros.size() * sizeof(GLuint), zeros.data(), 0, "occupied cells");
-  const Program& p = program({.compute = {"cell_occupancy.comp.glsl"}}, "cell samplers' occupancy");
-  {
-    ScopedGpuTimer t(&timer, "cell occupancy");
-    p.use();
-    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
-    mapBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-    tableBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
-    cellBits_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
-    counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
-    setIVec3(p, "uVoxels", nd);
-    glUniform1i(p.uniform("uGrids"), GLint(grids.size()));
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    dispatch("cell occupancy", {groups(nd.x, 4), groups(nd.y, 4), groups(nd.z, 4)});
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  }
+  occupancyPass(program({.compute = {"cell_occupancy.comp.glsl"}}, "cell samplers' occupancy"),
+                maps, table, counts, &cellBits_);
   std::vector<GLuint> n(grids.size());
   counts.read(n.data(), n.size() * sizeof(GLuint));  // one host wait (a cold frame's sampler)
   checkGl("cell occupancy");
@@ -174,30 +166,34 @@ std::vector<int> GpuFrame::occupiedVoxelsPerCell(IVec3 dims) {
   std::vector<int> out(cells, 0);
   if (cells == 0 || nd.x <= 0 || nd.y <= 0 || nd.z <= 0) return out;
   std::vector<GLint> maps;
-  for (const auto& [voxels, n] : {std::pair{nd.x, dims.x}, {nd.y, dims.y}, {nd.z, dims.z}})
-    for (const int c : voxelCells(voxels, n)) maps.push_back(c);
-  const GLint table[4] = {dims.x, dims.y, dims.z, 0};
-  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
-  const Buffer tableBuffer(sizeof table, table, 0, "cell occupancy grids");
+  appendCellMaps(maps, nd, dims);
   const Buffer counts(cells * sizeof(GLuint), nullptr, 0, "occupied voxels per cell");
-  const Program& p =
-      program({.compute = {"cell_occupancy.comp.glsl"}, .defines = {"SL_VOXEL_COUNTS"}},
-              "occupied voxels per cell");
-  {
-    ScopedGpuTimer t(&timer, "cell occupancy");
-    p.use();
-    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
-    mapBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
-    tableBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
-    counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
-    setIVec3(p, "uVoxels", nd);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    dispatch("cell occupancy", {groups(nd.x, 4), groups(nd.y, 4), groups(nd.z, 4)});
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  }
+  occupancyPass(program({.compute = {"cell_occupancy.comp.glsl"}, .defines = {"SL_VOXEL_COUNTS"}},
+                        "occupied voxels per cell"),
+                maps, {dims.x, dims.y, dims.z, 0}, counts, nullptr);
   counts.read(out.data(), cells * sizeof(GLuint));  // one host wait, once per density
   checkGl("occupied voxels per cell");
   return out;
+}
+
+void GpuFrame::occupancyPass(const Program& p, const std::vector<GLint>& maps,
+                             const std::vector<GLint>& table, const Buffer& counts,
+                             const Buffer* bits) {
+  const Buffer mapBuffer(maps.size() * sizeof(GLint), maps.data(), 0, "cell occupancy maps");
+  const Buffer tableBuffer(table.size() * sizeof(GLint), table.data(), 0, "cell occupancy grids");
+  const IVec3 nd = density.dims;
+  ScopedGpuTimer t(&timer, "cell occupancy");
+  p.use();
+  glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+  mapBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
+  tableBuffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
+  if (bits) bits->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
+  counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
+  setIVec3(p, "uVoxels", nd);
+  glUniform1i(p.uniform("uGrids"), GLint(table.size() / 4));
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  dispatch("cell occupancy", {groups(nd.x, 4), groups(nd.y, 4), groups(nd.z, 4)});
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
 void GpuFrame::forgetOccupancy() {

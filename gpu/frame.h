@@ -84,6 +84,11 @@ class GpuFrame : public Frame {
   SceneShadows objects;
 
  private:
+  /// One pass of cell_occupancy.comp.glsl over the density volume: the grids' maps and table
+  /// (dims and first word of bits per grid), their counts, and the bit sets (null with
+  /// SL_VOXEL_COUNTS).
+  void occupancyPass(const Program& p, const std::vector<GLint>& maps,
+                     const std::vector<GLint>& table, const Buffer& counts, const Buffer* bits);
   GpuPipeline pipeline_ = GpuPipeline::Compute;
   bool splatted_ = false;
   std::vector<std::size_t> marks_;  ///< timer.count() at each sync() of this render
