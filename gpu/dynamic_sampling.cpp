@@ -80,7 +80,8 @@ struct CountSlots {
 };
 
 /// The most workgroups of the evaluate pass with tau "visible" (GL's least
-/// GL_MAX_COMPUTE_WORK_GROUP_COUNT; dynamic_level.comp.glsl clamps its indirect size alike).
+/// GL_MAX_COMPUTE_WORK_GROUP_COUNT): level 0's dispatch, and the count pass's indirect sizes
+/// (uMaxEvaluateGroups); the workgroups stride over the rest.
 constexpr GLuint kMaxEvaluateGroups = 65535;
 
 /// Sums per sample of the probe pass: the groups of kProbeGroup probes (`probes`: the most of
@@ -515,6 +516,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
     glUniform1ui(count.uniform("uOverflowSlot"), GLuint(CountSlots{L}.overflow()));
     glUniform1ui(count.uniform("uDispatchSlot"), GLuint(CountSlots{L}.dispatch(0)));
     glUniform1ui(count.uniform("uEvaluateSlot"), GLuint(CountSlots{L}.evaluate(0)));
+    glUniform1ui(count.uniform("uMaxEvaluateGroups"), kMaxEvaluateGroups);
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);

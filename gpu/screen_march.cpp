@@ -44,7 +44,7 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     march.use();
     pass.bind(march);
     tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
-    glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    bindScreenImage(binding::kLowResImage, low, GL_WRITE_ONLY);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_R32F);
     glUniform2i(march.uniform("uLowSize"), lw, lh);
@@ -62,10 +62,10 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     upsample.use();
     pass.bind(upsample);
     glUniform1f(upsample.uniform("uMinTransmittance"), minT_);
-    glBindImageTexture(binding::kLowResImage, low.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+    bindScreenImage(binding::kLowResImage, low, GL_READ_ONLY);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_READ_ONLY,
                        GL_R32F);
-    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    bindScreenImage(binding::kOutputImage, out, GL_WRITE_ONLY);
     glUniform2i(upsample.uniform("uLowSize"), lw, lh);
     glUniform1i(upsample.uniform("uDownsample"), d);
     glUniform1f(upsample.uniform("uDepthSigma"), kUpsampleDepthSigma);
@@ -150,7 +150,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     slicingUniforms(lookup);
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
                        GL_RGBA32F);
-    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    bindScreenImage(binding::kOutputImage, out, GL_WRITE_ONLY);
     setVec3(lookup, "uBackground", scene.background);
     dispatch("froxel lookup", {groups(cam.width, 8), groups(cam.height, 8), 1});
     glMemoryBarrier(GL_ALL_BARRIER_BITS);

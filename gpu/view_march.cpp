@@ -78,7 +78,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);
     counters->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
-    glBindImageTexture(binding::kOutputImage, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    bindScreenImage(binding::kOutputImage, out, GL_WRITE_ONLY);
     dispatch("view march", {groups(cam.width, 8), groups(cam.height, 8), 1});
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }

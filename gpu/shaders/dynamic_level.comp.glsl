@@ -37,6 +37,7 @@ uniform uint uCapacity;     // the level's sample capacity
 uniform uint uOverflowSlot; // counts[slot]: largest asked count, counts[slot + 1]: its level
 uniform uint uDispatchSlot; // counts[slot + 3·level ...]: the level's (x, 1, 1) dispatch
 uniform uint uEvaluateSlot; // likewise, its evaluate pass's with tau "visible" (8 per workgroup)
+uniform uint uMaxEvaluateGroups;  // at most this many workgroups (they stride over the rest)
 
 void main() {
   uint n = uVertexCount;
@@ -52,7 +53,7 @@ void main() {
   counts[d + 1u] = 1u;
   counts[d + 2u] = 1u;
   uint e = uEvaluateSlot + 3u * uLevel;
-  counts[e] = min((kept + 7u) / 8u, 65535u);  // the workgroups stride over the rest
+  counts[e] = min((kept + 7u) / 8u, uMaxEvaluateGroups);
   counts[e + 1u] = 1u;
   counts[e + 2u] = 1u;
 }
