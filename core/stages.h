@@ -163,6 +163,9 @@ struct PipelineSettings {
   /// kLampDepth (LampModel, shading/transport.h), so V = S / A has no cusp at the lamp
   /// (docs/fidelity.md §8). Default: on with factorLights unless `paper`.
   bool lampModel = false;
+  /// The method refines its samples where their error asks (a SampleRefiner runs: `adaptive`).
+  /// Set from the method before any key is read; defaults may follow it (log_space).
+  bool refinedSamples = false;
   /// Occlusion-aware Eq. 4 weights: W_j(x)·exp(−σt·τ(x_j, x)), τ the optical depth between the
   /// sample and the voxel, so no sample contributes across a dense occluder.
   bool occlusionWeights = false;

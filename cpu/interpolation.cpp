@@ -666,10 +666,11 @@ const std::vector<KeyDoc>& interpolationKeys() {
        "[0, 1], ln V <= 0, S >= 0) before weighting; gradient reconstruction",
        "false"},
       {"log_space", "bool",
-       "true with factor_lights and bounded_taylor in scenes without objects whose densest "
-       "voxel has an optical depth σt·D_max·h ≥ 0.5 (h the largest voxel edge; D_max from the "
-       "density model: uniform, height, grid, VDB, sums of up to 4096 Gaussians; "
-       "docs/fidelity.md §14), else false",
+       "false for methods that refine their samples (adaptive; docs/fidelity.md, \"log_space "
+       "re-checked on the population\"); for the others true with factor_lights and "
+       "bounded_taylor in scenes without objects whose densest voxel has an optical depth "
+       "σt·D_max·h ≥ 0.5 (h the largest voxel edge; D_max from the density model: uniform, "
+       "height, grid, VDB, sums of up to 4096 Gaussians; docs/fidelity.md §14), else false",
        "true, false (true needs factor_lights)",
        "interpolate ln V (a light-weighted optical depth, nearly linear) and store exp of it; "
        "dynamic sampling then measures its error on V; methods with samples",
@@ -691,20 +692,23 @@ void parseInterpolation(Params& p, const Scene& scene, PipelineSettings& s) {
   s.boundedTaylor = p.boolean("bounded_taylor", !s.paper);
   if (s.paper && s.boundedTaylor)
     p.fail("bounded_taylor", "is an extension; it cannot be true with render.paper = true");
-  // Default chosen by measurement (docs/fidelity.md §14): ln V wins where single voxels are
-  // nearly opaque (a voxel's optical depth σt·D·h >= 0.5: smoke1, chimney, the thin sheets),
-  // whose shadows a linear V between samples cannot follow, and loses in optically thin media
-  // (lamps in fog, glow, thick clouds: every voxel <= 0.25) and, badly, at the hard shadows of
-  // scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV. Not where the Taylor
-  // terms are unbounded: exp of an unbounded extrapolation of ln V overflows (§14).
+  // Default chosen by measurement (docs/fidelity.md §14): with fixed samples ln V wins where
+  // single voxels are nearly opaque (a voxel's optical depth σt·D·h >= 0.5: smoke1, chimney,
+  // the thin sheets), whose shadows a linear V between samples cannot follow, and loses in
+  // optically thin media (lamps in fog, glow, thick clouds: every voxel <= 0.25) and, badly, at
+  // the hard shadows of scene objects (window: 3.4 % -> 10.9 %), where ln V falls to ln kMinV.
+  // Not where the Taylor terms are unbounded: exp of an unbounded extrapolation of ln V
+  // overflows (§14). Where samples are refined by their error (adaptive), V wins on every
+  // population scene where the two differ (the sheets 3.8 -> 2.2 %, the clouds ~2x): never
+  // ln V by default there (docs/fidelity.md, "log_space re-checked on the population").
   const std::optional<float> peak =
       scene.medium.density ? scene.medium.density->peak() : std::optional<float>();
   const Vec3 voxel = scene.medium.bounds.extent() / Vec3(scene.medium.resolution);
   const bool opaqueVoxels =
       peak &&
       scene.medium.sigmaT * *peak * std::max({voxel.x, voxel.y, voxel.z}) >= kOpaqueVoxelDepth;
-  s.logSpace = p.boolean(
-      "log_space", s.factorLights && !s.paper && !scene.objects && opaqueVoxels && s.boundedTaylor);
+  s.logSpace = p.boolean("log_space", s.factorLights && !s.paper && !s.refinedSamples &&
+                                          !scene.objects && opaqueVoxels && s.boundedTaylor);
   if (s.logSpace && !s.factorLights)
     p.fail("log_space", "interpolates ln V of factor_lights; it needs factor_lights = true");
 }

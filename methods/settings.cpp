@@ -291,6 +291,7 @@ void checkWork(Params& p, const Scene& scene, const std::vector<const StageDecl*
 PipelineSettings parseSettings(Params& p, const Scene& scene, const MethodDesc& d,
                                const std::vector<const StageDecl*>& stages) {
   PipelineSettings s;
+  s.refinedSamples = !d.refiner.empty();
   const StageDecl& integrator = *stages.back();
   if (integrator.viewMarch) parseViewMarch(p, scene, s);
   parseCommon(p, scene, s);

@@ -32,7 +32,10 @@ the density scale (sigma_t), albedo, phase, light colours and intensities, and t
 Resolutions are 72-144 voxels per axis (48-96 drawn, times RES_SCALE 1.5), cells about cubic in
 the wide boxes. Cameras are 320x240 (the experiment renders at 160x120).
 Run from anywhere: python3 make_population.py (writes the 60 JSONs next to itself; --list prints
-their names instead)."""
+their names instead). python3 make_population.py --holdout writes 60 more from seeds K = 5..9
+(the same families and draws, so no VDB file) into holdout/ next to itself: scenes no default
+was chosen on, to check a choice made on the first 60 (data/experiments/population_holdout.json;
+docs/fidelity.md, "log_space re-checked on the population")."""
 import json
 import math
 import os
@@ -41,6 +44,7 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SEEDS = range(5)
+HOLDOUT_SEEDS = range(5, 10)
 VDB_SMOKE = "../../vdb/smoke1.vdb"
 BUNNY = "../../meshes/bun_zipper_res3.obj"
 # bun_zipper_res3.obj's bounding box (min, max), for placing it on the floor
@@ -61,8 +65,8 @@ def dumps(obj, ind=0):
     return "[\n" + ",\n".join(pad + dumps(v, ind + 1) for v in obj) + "\n" + " " * ind + "]"
 
 
-def write(name, scene):
-    with open(os.path.join(HERE, name + ".json"), "w") as f:
+def write(name, scene, out=HERE):
+    with open(os.path.join(out, name + ".json"), "w") as f:
         f.write(dumps(scene))
         f.write("\n")
 
@@ -603,12 +607,22 @@ def names():
 
 
 def main():
-    if sys.argv[1:] == ["--list"]:
+    global VDB_SMOKE, BUNNY
+    args = sys.argv[1:]
+    if args == ["--list"]:
         print("\n".join(names()))
         return
+    out, seeds = HERE, SEEDS
+    if args == ["--holdout"]:
+        out, seeds = os.path.join(HERE, "holdout"), HOLDOUT_SEEDS
+        os.makedirs(out, exist_ok=True)
+        VDB_SMOKE, BUNNY = "../" + VDB_SMOKE, "../" + BUNNY  # one directory deeper
+    elif args:
+        print("usage: make_population.py [--list | --holdout]", file=sys.stderr)
+        sys.exit(2)
     for f, fam in enumerate(FAMILIES, 1):
-        for k in SEEDS:
-            write(f"{fam.__name__}_{k}", fam(random.Random(1000 * f + k), k))
+        for k in seeds:
+            write(f"{fam.__name__}_{k}", fam(random.Random(1000 * f + k), k), out)
 
 
 if __name__ == "__main__":
