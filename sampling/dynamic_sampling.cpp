@@ -695,13 +695,13 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "most samples in the final set: each level splits its largest errors first within an "
        "equal share of the budget left (one pass)",
        "100"},
-      {"budget", "number", "0.5 (0 with max_samples given or with paper)",
+      {"budget", "number", "0.75 (0 with max_samples given or with paper)",
        "0…1000 (not with paper)",
        "the samples' budget as a share of per-voxel's cost on the same scene, B = budget × "
        "radiance voxels / (7 + probes) (a sample costs S, its six central differences and its "
        "probes; per-voxel one S per voxel): the final set may grow to max(max_samples' auto "
        "rule, B); with max_samples given, to the smaller of the two (0 on either side: the other)",
-       "0.5"},
+       "1"},
       {"split", "string", R"("cell" ("sphere" with paper))", "cell, sphere (not with paper)",
        "what a split sample is replaced by: the vertices of the next grid in its cell (the cube "
        "of edge R around it: 8 when the grid doubles) or, the paper, every vertex inside its "

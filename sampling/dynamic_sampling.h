@@ -341,8 +341,9 @@ inline constexpr long long kBudgetPerInitial = 4;
 inline constexpr long long kBudgetCap = 8000;
 
 /// Default of the cost share (key `budget`, issue 35): chosen on the population of scenes
-/// (docs/fidelity.md, "Population of scenes").
-inline constexpr double kBudgetCostShare = 0.5;
+/// (docs/fidelity.md, "Population of scenes"; 0.5 until V replaced ln V for adaptive, then
+/// 0.75: "The budget re-checked with V").
+inline constexpr double kBudgetCostShare = 0.75;
 
 /// Default of the whole-scene fallback (key `voxel_switch`): chosen on the population of scenes
 /// (docs/fidelity.md, "The whole-scene fallback").

@@ -325,7 +325,7 @@ TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   // The default budget: 4 × the initial count, at most 8000, or C below where larger; none with
   // paper or max_samples 0.
   EXPECT_EQ(sampleBudget(ext, 2000), 8000);
-  EXPECT_EQ(sampleBudget(ext, 541), 2788);  // 4 × 541 = 2164 < C = 0.5 · 64³ / 47 = 2788.8
+  EXPECT_EQ(sampleBudget(ext, 541), 4183);  // 4 × 541 = 2164 < C = 0.75 · 64³ / 47 = 4183.1
   EXPECT_EQ(sampleBudget(ext, 100000), 8000);
   EXPECT_EQ(sampleBudget(paper, 2000), 0);
   EXPECT_EQ(sampleBudget(parse({{"max_samples", 0}}, false), 2000), 0);

@@ -32,7 +32,7 @@ the density scale (sigma_t), albedo, phase, light colours and intensities, and t
 Resolutions are 72-144 voxels per axis (48-96 drawn, times RES_SCALE 1.5), cells about cubic in
 the wide boxes. Cameras are 320x240 (the experiment renders at 160x120).
 Run from anywhere: python3 make_population.py (writes the 60 JSONs next to itself; --list prints
-their names instead). python3 make_population.py --holdout writes 60 more from seeds K = 5..9
+their names instead). python3 make_population.py --holdout writes 120 more from seeds K = 5..14
 (the same families and draws, so no VDB file) into holdout/ next to itself: scenes no default
 was chosen on, to check a choice made on the first 60 (data/experiments/population_holdout.json;
 docs/fidelity.md, "log_space re-checked on the population")."""
@@ -44,7 +44,7 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SEEDS = range(5)
-HOLDOUT_SEEDS = range(5, 10)
+HOLDOUT_SEEDS = range(5, 15)
 VDB_SMOKE = "../../vdb/smoke1.vdb"
 BUNNY = "../../meshes/bun_zipper_res3.obj"
 # bun_zipper_res3.obj's bounding box (min, max), for placing it on the floor
