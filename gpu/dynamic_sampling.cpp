@@ -76,7 +76,8 @@ struct CountSlots {
   std::size_t keptOf(std::size_t k) const { return end() + 7 + L + k; }
   std::size_t childrenOf(std::size_t k) const { return end() + 8 + 2 * L + k; }
   std::size_t evaluate(std::size_t k) const { return end() + 8 + 3 * L + 3 * k; }
-  std::size_t words() const { return end() + 8 + 3 * L + 3 * (L + 1); }
+  std::size_t keptSamples() const { return end() + 8 + 3 * L + 3 * (L + 1); }
+  std::size_t words() const { return keptSamples() + 1; }
 };
 
 /// The most workgroups of the evaluate pass with tau "visible" (GL's least
@@ -214,7 +215,10 @@ std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
       finalCapacity += gridVertices(grids, k);  // the top-up's children
     }
   }
-  if (budget > 0) finalCapacity = std::min(finalCapacity, std::max(std::size_t(budget), n0));
+  // The final list: at most the budget's samples (the initial ones may be more).
+  if (budget > 0)
+    finalCapacity =
+        std::min(finalCapacity, std::max(std::size_t(budgetLimits(settings, budget).samples), n0));
   // The grid information buffer, and the final assembly's flags and offsets over a level's
   // samples or a grid's vertices.
   std::size_t vertices = n0;
@@ -382,8 +386,8 @@ void computeThreshold(DynamicSamplingWorkspace& w, const DynamicSamplingSettings
 }
 
 /// dynamic_budget.comp.glsl's cut of level k (or, with topUp, the top-up's after level L = k).
-void dispatchCut(DynamicSamplingWorkspace& w, std::size_t k, std::size_t L, long long budget,
-                 bool topUp) {
+void dispatchCut(DynamicSamplingWorkspace& w, std::size_t k, std::size_t L,
+                 const BudgetLimits& budget, bool fallback, bool topUp) {
   const CountSlots slots{L};
   const Program& cut =
       gpu::program({.compute = {"dynamic_budget.comp.glsl"}}, "dynamic sampling budget cut");
@@ -391,8 +395,12 @@ void dispatchCut(DynamicSamplingWorkspace& w, std::size_t k, std::size_t L, long
   glUniform1ui(cut.uniform("uLevel"), GLuint(k));
   glUniform1ui(cut.uniform("uSplitLevels"), GLuint(L));
   glUniform1i(cut.uniform("uTopUp"), topUp ? 1 : 0);
-  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget, INT_MAX)));
+  glUniform1i(cut.uniform("uBudget"), GLint(std::min<long long>(budget.units, INT_MAX)));
+  glUniform1i(cut.uniform("uSampleLimit"), GLint(std::min<long long>(budget.samples, INT_MAX)));
+  glUniform1i(cut.uniform("uUnit"), GLint(budget.sampleUnit));
+  glUniform1i(cut.uniform("uFallback"), fallback ? 1 : 0);
   glUniform1ui(cut.uniform("uKeptSlot"), GLuint(slots.kept()));
+  glUniform1ui(cut.uniform("uKeptSamplesSlot"), GLuint(slots.keptSamples()));
   glUniform1ui(cut.uniform("uCountSlot"), GLuint(slots.budgetCount()));
   glUniform1ui(cut.uniform("uCutSlot"), GLuint(topUp ? slots.topCut() : slots.cut(k)));
   glUniform1ui(cut.uniform("uCutsSlot"), GLuint(slots.cut(0)));
@@ -409,7 +417,7 @@ void dispatchCut(DynamicSamplingWorkspace& w, std::size_t k, std::size_t L, long
 /// histogram, and the one-workgroup cut, which leaves the level's cut, the count after it and
 /// the samples kept so far in w.counts. GPU time: "ds budget".
 void budgetLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t k,
-                 std::size_t L, long long budget, StageTimer* timer) {
+                 std::size_t L, const BudgetLimits& budget, bool fallback, StageTimer* timer) {
   const std::size_t nv = grid.vertices();
   const GLuint zero = 0;
   const GLuint histBase = GLuint(k * 2 * kErrorBins);
@@ -452,15 +460,15 @@ void budgetLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::siz
     dispatch("ds budget vertices", {groups(nv, 256), 1, 1});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
-  dispatchCut(w, k, L, budget, false);
+  dispatchCut(w, k, L, budget, fallback, false);
 }
 
 /// The top-up's cut (budgetTopUp's, on the GPU): every split level's histograms below its cut,
 /// against the budget; leaves the cut in w.counts. GPU time: "ds budget".
-void budgetTopUpCut(DynamicSamplingWorkspace& w, std::size_t L, long long budget,
-                    StageTimer* timer) {
+void budgetTopUpCut(DynamicSamplingWorkspace& w, std::size_t L, const BudgetLimits& budget,
+                    bool fallback, StageTimer* timer) {
   ScopedGpuTimer t(timer, "ds budget");
-  dispatchCut(w, L, L, budget, true);
+  dispatchCut(w, L, L, budget, fallback, true);
 }
 
 /// Split level k into the grid information buffer of G_{k+1} (cleared first): every candidate,
@@ -684,6 +692,8 @@ void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs
   const std::vector<LevelGrid> grids = levelGrids(settings);
   const std::size_t L = grids.size();
   const long long budget = sampleBudget(settings, initial.size());
+  const BudgetLimits limits = budgetLimits(settings, budget);
+  const bool fallback = L > 0 && grids[L - 1].voxels;  // level L is the per-voxel fallback's
   DynamicSamplingWorkspace::Pass& pass = w.pass;
   pass = {};
   pass.settings = settings;
@@ -725,7 +735,7 @@ void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs
     if (!final) {
       if (k == 0) computeThreshold(w, settings, timer);
       const GridGeometry grid(scene.medium.bounds, grids[k]);
-      if (budget > 0) budgetLevel(w, grid, k, L, budget, timer);
+      if (budget > 0) budgetLevel(w, grid, k, L, limits, fallback, timer);
       splitLevel(w, grid, k, L, budget > 0, timer);
       compactLevel(w, grid, k + 1, L, timer);
     }
@@ -733,7 +743,7 @@ void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs
     pass.enqueueMs[k] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
   const auto t0 = Clock::now();
-  if (budget > 0 && L > 0) budgetTopUpCut(w, L, budget, timer);
+  if (budget > 0 && L > 0) budgetTopUpCut(w, L, limits, fallback, timer);
   assembleFinal(w, inputs, scene.lights.size(), scene, grids, budget, steps,
                 {*pass.finalPoints, *pass.finalRadiance, finalCapacity}, timer);
   if (resident) {

@@ -178,6 +178,15 @@ float viewTransmittance(const Scene& scene, const DensityGrid& density, const Ve
 
 }  // namespace
 
+BudgetLimits budgetLimits(const DynamicSamplingSettings& settings, long long budget) {
+  BudgetLimits b;
+  if (budget <= 0) return b;
+  b.sampleUnit = settings.costShare > 0.0 ? 7LL + settings.probes : 1LL;
+  b.units = budget * b.sampleUnit;  // sampleBudget() caps the budget at 9e15
+  b.samples = b.sampleUnit > 1 ? kFinalListPerBudget * budget : budget;
+  return b;
+}
+
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount) {
   long long cost = 0;  // the cost cap (0: none)
   if (settings.costShare > 0.0) {
@@ -200,20 +209,35 @@ int errorBin(float e, double threshold) {
 namespace {
 
 /// The worst-first cut of a budget: with run(h) = count + Σ_{g >= h} delta[g] (the count after
-/// splitting every group from the worst down to h), the lowest group g such that run(h) <= limit
-/// for every h >= g, i.e. one above the highest group that does not fit (kErrorBins: none fits;
-/// 0: all do). `count` receives run(cut). The GPU's cut pass computes the same (a suffix scan
-/// and the highest failing group).
-int worstFirstCut(const std::vector<long long>& delta, long long& count, long long limit) {
-  long long run = count;
+/// splitting every group from the worst down to h, in units and in samples), the lowest group g
+/// such that run(h) fits both limits for every h >= g, i.e. one above the highest group that
+/// does not fit (kErrorBins: none fits; 0: all do). `count` receives run(cut). The GPU's cut
+/// pass computes the same (suffix scans and the highest failing group).
+int worstFirstCut(const std::vector<long long>& deltaUnits,
+                  const std::vector<long long>& deltaSamples, BudgetCount& count,
+                  long long unitLimit, long long sampleLimit) {
+  BudgetCount run = count;
   int cut = kErrorBins;
   for (int g = kErrorBins - 1; g >= 0; --g) {
-    run += delta[std::size_t(g)];
-    if (run > limit) break;
+    run.units += deltaUnits[std::size_t(g)];
+    run.samples += deltaSamples[std::size_t(g)];
+    if (run.units > unitLimit || run.samples > sampleLimit) break;
     cut = g;
     count = run;
   }
   return cut;
+}
+
+/// The budget's deltas of one split level's groups: in units (its vertices of G_{k+1} at their
+/// weight, less its candidates at a sample's) and in samples.
+void addLevelDeltas(const SplitDecision& d, bool voxels, long long sampleUnit, int below,
+                    std::vector<long long>& units, std::vector<long long>& samples) {
+  const long long vertexUnit = voxels ? 1 : sampleUnit;
+  for (int g = 0; g < below && g < kErrorBins; ++g) {
+    const long long v = d.vertexGroups[std::size_t(g)], c = d.candidates[std::size_t(g)];
+    units[std::size_t(g)] += v * vertexUnit - c * sampleUnit;
+    samples[std::size_t(g)] += v - c;
+  }
 }
 
 }  // namespace
@@ -221,7 +245,7 @@ int worstFirstCut(const std::vector<long long>& delta, long long& count, long lo
 SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
                             const std::vector<Vec3>& centres, const std::vector<float>& radii,
                             const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
-                            double threshold, long long countBefore, long long budget,
+                            double threshold, BudgetCount countBefore, const BudgetLimits& budget,
                             std::size_t splitLevelsLeft) {
   const std::size_t n = centres.size();
   SplitDecision d;
@@ -244,14 +268,14 @@ SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
   }
   for (const std::uint32_t k : d.vertexKey)
     if (k > 0) ++d.vertexGroups[k - 1];
-  // This level's allotment: an equal share of the headroom among the split levels left.
-  const long long headroom = std::max(0LL, budget - countBefore);
+  // This level's allotment: an equal share of the headroom (in units) among the split levels
+  // left; the final list's limit in samples holds for the whole pass.
+  const long long headroom = std::max(0LL, budget.units - countBefore.units);
   const long long limit =
-      countBefore + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
-  std::vector<long long> delta(kErrorBins);
-  for (std::size_t g = 0; g < delta.size(); ++g)
-    delta[g] = (long long)d.vertexGroups[g] - (long long)d.candidates[g];
-  d.cut = worstFirstCut(delta, d.count, limit);
+      countBefore.units + headroom / (long long)std::max<std::size_t>(1, splitLevelsLeft);
+  std::vector<long long> units(kErrorBins, 0), samples(kErrorBins, 0);
+  addLevelDeltas(d, next.voxels, budget.sampleUnit, kErrorBins, units, samples);
+  d.cut = worstFirstCut(units, samples, d.count, limit, budget.samples);
   for (std::size_t j = 0; j < n; ++j) {
     if (group[j] >= d.cut) {
       d.split[j] = 1;
@@ -274,19 +298,17 @@ SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
   return d;
 }
 
-TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long count,
-                  long long budget) {
+TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, BudgetCount count,
+                  const BudgetLimits& budget) {
   TopUp t;
   t.toppedUp.assign(levels.size(), 0);
-  if (budget <= 0 || count >= budget) return t;
+  if (budget.units <= 0 || count.units >= budget.units) return t;
   // The levels' histograms below their cuts: the capped candidates and the unmarked vertices.
-  std::vector<long long> delta(kErrorBins, 0);
+  std::vector<long long> units(kErrorBins, 0), samples(kErrorBins, 0);
   for (const BudgetLevel& L : levels)
-    for (int g = 0; g < L.decision.cut && g < kErrorBins; ++g)
-      delta[std::size_t(g)] += (long long)L.decision.vertexGroups[std::size_t(g)] -
-                               (long long)L.decision.candidates[std::size_t(g)];
-  long long after = count;
-  t.cut = worstFirstCut(delta, after, budget);
+    addLevelDeltas(L.decision, L.grid.voxels, budget.sampleUnit, L.decision.cut, units, samples);
+  BudgetCount after = count;
+  t.cut = worstFirstCut(units, samples, after, budget.units, budget.samples);
   for (std::size_t k = 0; k < levels.size(); ++k) {
     BudgetLevel& L = levels[k];
     SplitDecision& d = L.decision;
@@ -374,6 +396,8 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
   using Clock = std::chrono::steady_clock;
   const DensityGrid& density = frame.hostDensity();
   const long long budget = sampleBudget(settings, current.size());
+  const BudgetLimits limits = budgetLimits(settings, budget);
+  BudgetCount inResult;                   // the budget's count of the samples in the result so far
   std::vector<BudgetLevel> budgetLevels;  // the split levels, for the top-up
   DynamicSamplingResult result;
   // τ of every level-0 sample; descendants index it through their ancestor.
@@ -404,12 +428,15 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
     LevelStats ls = level == 0 ? LevelStats{} : emptyStats(level);
     ls.samples = (long long)current.size();
     for (auto& s : current) s.level = int(level);
+    const long long levelUnit = level > 0 && grids[level - 1].voxels ? 1 : limits.sampleUnit;
     // The voxel level's samples (final) need no ∇S: each reaches its own voxel centre only.
     evaluator.evaluate(frame, scene, current, /*gradients=*/!ls.voxels);
 
     if (level == nLevels || current.empty()) {
       // The finest level is not split further.
       result.samples.insert(result.samples.end(), current.begin(), current.end());
+      inResult.units += (long long)current.size() * levelUnit;
+      inResult.samples += (long long)current.size();
       ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       result.levels.push_back(ls);
       if (current.empty()) {
@@ -495,14 +522,20 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         radii[j] = current[j].radius;
       }
       BudgetLevel& bl = budgetLevels.emplace_back();
-      bl.decision = budgetedSplit(scene.medium.bounds, grids[level], centres, radii, anc, errors,
-                                  threshold, (long long)(result.samples.size() + current.size()),
-                                  budget, nLevels - level);
+      bl.decision =
+          budgetedSplit(scene.medium.bounds, grids[level], centres, radii, anc, errors, threshold,
+                        {inResult.units + (long long)current.size() * levelUnit,
+                         inResult.samples + (long long)current.size()},
+                        limits, nLevels - level);
       const SplitDecision& d = bl.decision;
       bl.offset = result.samples.size();
       bl.grid = grids[level];
       for (std::size_t j = 0; j < current.size(); ++j)
-        if (!d.split[j] || grids[level].voxels) result.samples.push_back(current[j]);
+        if (!d.split[j] || grids[level].voxels) {
+          result.samples.push_back(current[j]);
+          inResult.units += levelUnit;
+          ++inResult.samples;
+        }
       ls.split = d.splits;
       ls.capped = d.capped;
       ls.maxLeft = d.maxLeft;
@@ -561,8 +594,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
   if (budget > 0 && !budgetLevels.empty()) {
     // The top-up: the budget the shares left unused, to the capped candidates, worst first.
     const auto t0 = Clock::now();
-    TopUp t =
-        budgetTopUp(scene.medium.bounds, budgetLevels, (long long)result.samples.size(), budget);
+    TopUp t = budgetTopUp(scene.medium.bounds, budgetLevels, inResult, limits);
     evaluateTopUp(frame, scene, evaluator, grids, t);
     applyTopUp(result, budgetLevels, std::move(t));
     result.levels.back().ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -700,7 +732,9 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "the samples' budget as a share of per-voxel's cost on the same scene, B = budget × "
        "radiance voxels / (7 + probes) (a sample costs S, its six central differences and its "
        "probes; per-voxel one S per voxel): the final set may grow to max(max_samples' auto "
-       "rule, B); with max_samples given, to the smaller of the two (0 on either side: the other)",
+       "rule, B); with max_samples given, to the smaller of the two (0 on either side: the "
+       "other). The per-voxel fallback's voxels are paid at their cost, one S each (the pass "
+       "may use B × (7 + probes) S evaluations), the final set at most 4 × B samples",
        "1"},
       {"split", "string", R"("cell" ("sphere" with paper))", "cell, sphere (not with paper)",
        "what a split sample is replaced by: the vertices of the next grid in its cell (the cube "

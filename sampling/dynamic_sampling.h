@@ -46,11 +46,12 @@
 /// once, plus at most one batch of top-up children: never a re-run. Default budget
 /// (render.max_samples absent): kBudgetPerInitial × the initial count, at most kBudgetCap, raised
 /// where per-voxel is dear to a share of its cost (costShare, key `budget`, issue 35;
-/// sampleBudget()). The error left is reported: per level the candidates left unsplit
-/// (LevelStats::capped) and the largest E of a sample left unsplit (LevelStats::maxLeft;
-/// / threshold > 1: the budget stopped the refinement there). The finest level is not probed,
-/// so its errors are not known (with voxelFallback the finest of `levels` is probed, and the
-/// voxel level, exact at its voxels, is the one not probed).
+/// sampleBudget()); with the budget a cost, the count is in S evaluations, so the per-voxel
+/// fallback's voxels are paid at their cost (BudgetLimits). The error left is reported: per level
+/// the candidates left unsplit (LevelStats::capped) and the largest E of a sample left unsplit
+/// (LevelStats::maxLeft; / threshold > 1: the budget stopped the refinement there). The finest
+/// level is not probed, so its errors are not known (with voxelFallback the finest of `levels` is
+/// probed, and the voxel level, exact at its voxels, is the one not probed).
 ///
 /// Issue 24 (docs/fidelity.md §8): the allocation between levels was measured against other
 /// shares (top-up as a share, shares growing per level, greedy) and kept; what bound the budget
@@ -98,7 +99,8 @@ struct DynamicSamplingSettings {
   /// radiance voxel (voxelDims), a sample of dynamic sampling 1 + 6 (its ∇S by central differences)
   /// + probes times. So the most final samples are costShare · voxels / (7 + probes)
   /// (sampleBudget()): many on a large volume, where per-voxel is dear, few on a small one, and
-  /// fewer the more probes each sample has. How it combines with maxSamples: sampleBudget().
+  /// fewer the more probes each sample has. How it combines with maxSamples: sampleBudget();
+  /// how the fallback's voxels count against it: BudgetLimits.
   double costShare = 0.0;
   /// Per-voxel fallback (extension, issue 24; key `fallback`): after `levels` one more split
   /// grid, the voxels of the radiance volume (voxelDims per axis). The finest of `levels` is then
@@ -355,6 +357,31 @@ inline constexpr double kVoxelSwitch = 4.0;
 /// per-voxel is dear; else the smaller of maxSamples and C, where one of them is 0 the other.
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount);
 
+/// With the budget a cost, the final list holds at most this many × the budget's samples (see
+/// BudgetLimits::samples; smoke.json at the defaults: 3.6×).
+inline constexpr long long kFinalListPerBudget = 4;
+
+/// A budget of B samples as the pass applies it (issue 35 item 3: the fallback inside the same
+/// cost budget). Where the budget is a cost (costShare > 0) its unit is an S evaluation: a
+/// sample weighs sampleUnit = 7 + probes (S, its six differences and its probes: what
+/// sampleBudget()'s cost cap counts per sample) and a voxel of the per-voxel fallback 1 (one S,
+/// no ∇S, no probes), so the fallback is paid at its cost, not as a sample, and `units` = B ×
+/// sampleUnit. As each voxel is still a record of the final list, the list is also held to
+/// `samples` = kFinalListPerBudget × B (the GPU's final-list capacity). With a count cap
+/// (max_samples alone) every final sample weighs 1 and both limits are B. Zero: no budget.
+struct BudgetLimits {
+  long long units = 0;       ///< the most units the pass may use
+  long long sampleUnit = 1;  ///< a sample's weight in units (a fallback voxel's: 1)
+  long long samples = 0;     ///< the most samples in the final list
+};
+BudgetLimits budgetLimits(const DynamicSamplingSettings& settings, long long budget);
+
+/// The budget's running count: units (BudgetLimits) and samples.
+struct BudgetCount {
+  long long units = 0;
+  long long samples = 0;
+};
+
 /// The group of an error E > threshold for the budget's worst-first order (see the header
 /// comment): its float's bits above the lowest kErrorBinShift (the exponent and 6 mantissa bits:
 /// 1/64 of an octave) counted from the threshold's, at most kErrorBins − 1 (64 octaves above the
@@ -369,7 +396,7 @@ struct SplitDecision {
   std::vector<std::uint8_t> split;      ///< per sample of level k
   std::vector<std::uint32_t> vertices;  ///< linear indices of G_{k+1}, ascending
   std::vector<std::int32_t> ancestors;  ///< per vertex
-  long long count = 0;                  ///< final count after these splits (see countBefore)
+  BudgetCount count;                    ///< final count after these splits (see countBefore)
   long long splits = 0, capped = 0;     ///< split; candidates left unsplit by the allotment
   float maxLeft = 0.0f;                 ///< largest E of a sample left unsplit
   float maxBelow = 0.0f;                ///< largest E of a non-candidate (E <= threshold)
@@ -412,8 +439,8 @@ struct TopUp {
 
 /// Decides the top-up (updates each level's decision: split, splits, capped, maxLeft).
 /// `count`: the final count of the pass.
-TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, long long count,
-                  long long budget);
+TopUp budgetTopUp(const Box& bounds, std::vector<BudgetLevel>& levels, BudgetCount count,
+                  const BudgetLimits& budget);
 
 /// Applies an evaluated top-up to the result: removes the parents, appends the children (in
 /// the top-up's order), and updates the level stats (split, capped, toppedUp, maxLeft, and
@@ -424,11 +451,12 @@ void applyTopUp(DynamicSamplingResult& result, const std::vector<BudgetLevel>& l
 /// The budgeted split of level k on the CPU (the GPU's dynamic_budget.comp.glsl decides the same
 /// cut from the same histograms). centres/radii/anc/errors: the level's samples; `threshold`:
 /// the absolute one; countBefore: kept samples of the coarser levels + this level's count;
-/// budget; splitLevelsLeft: L − k (this level included). Deterministic.
+/// budget; splitLevelsLeft: L − k (this level included): the level's allotment of units is an
+/// equal share of the headroom left, the samples' limit the pass's. Deterministic.
 SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
                             const std::vector<Vec3>& centres, const std::vector<float>& radii,
                             const std::vector<std::int32_t>& anc, const std::vector<float>& errors,
-                            double threshold, long long countBefore, long long budget,
+                            double threshold, BudgetCount countBefore, const BudgetLimits& budget,
                             std::size_t splitLevelsLeft);
 
 /// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's

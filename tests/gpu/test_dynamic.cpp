@@ -354,8 +354,17 @@ TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
   ds.voxelFallback = true;
   ds.voxelDims = IVec3(24);
   ds.visibleTau = true;  // tau "visible" (the default without paper): six more τ traces
-  for (long long cap : {0LL, 400LL, kAutoBudget}) {
+  // The count caps, and a cost budget (issue 35 item 3) where the fallback's voxels weigh 1 and a
+  // sample 7 + 40: C = 0.7 × 24³ / 47 = 205 samples, 9 635 units, at most 4 × 205 final samples.
+  struct Budget {
+    long long cap;
+    double share;
+  };
+  for (const Budget b :
+       {Budget{0, 0.0}, Budget{400, 0.0}, Budget{kAutoBudget, 0.0}, Budget{0, 0.7}}) {
+    const long long cap = b.cap;
     ds.maxSamples = cap;
+    ds.costShare = b.share;
     const DynamicSamplingResult cpu =
         dynamicSampling(scene, density, latticeSamples(), *cpuEval, ds);
     std::vector<std::vector<float>> errors;
@@ -382,6 +391,22 @@ TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
     }
     if (cap > 0) {
       EXPECT_LE((long long)cpu.samples.size(), cap);
+    }
+    if (b.share > 0.0) {
+      const long long budget = sampleBudget(ds, latticeSamples().size());
+      EXPECT_EQ(budget, 205);
+      const BudgetLimits limits = budgetLimits(ds, budget);
+      EXPECT_EQ(limits.sampleUnit, 47);
+      long long units = 0, capped = 0;
+      for (const RadianceSample& c : cpu.samples) units += c.level == 3 ? 1 : 47;
+      for (const LevelStats& l : cpu.levels) capped += l.capped;
+      std::printf("cost budget: %zu samples, %lld units of %lld, %lld capped\n", cpu.samples.size(),
+                  units, limits.units, capped);
+      EXPECT_GT(capped, 0) << "the cost budget must bind";
+      EXPECT_LE(units, std::max(limits.units, 47 * (long long)latticeSamples().size()));
+      EXPECT_LE((long long)cpu.samples.size(), std::max<long long>(limits.samples, 64));
+      // Paid at their cost, the voxels outnumber what the budget's samples alone could buy.
+      EXPECT_GT((long long)cpu.samples.size(), budget);
     }
     ASSERT_EQ(g.samples.size(), cpu.samples.size());
     int bad = 0, badS = 0, voxels = 0;

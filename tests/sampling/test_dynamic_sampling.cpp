@@ -538,23 +538,28 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   ASSERT_EQ(fresh, 8);
   // Room for exactly one split (count 3 → 3 + fresh − 1): the worst (E = 5) splits, the others
   // are capped.
-  SplitDecision d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
-                                  3 + fresh - 1, 1);
+  // A count cap (max_samples): every sample weighs 1, the units and the samples are one count.
+  const auto cap = [](long long b) {
+    return BudgetLimits{.units = b, .sampleUnit = 1, .samples = b};
+  };
+  SplitDecision d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0,
+                                  {3, 3}, cap(3 + fresh - 1), 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
   EXPECT_EQ(d.splits, 1);
   EXPECT_EQ(d.capped, 2);
-  EXPECT_EQ(d.count, 3 + fresh - 1);
+  EXPECT_EQ(d.count.units, 3 + fresh - 1);
+  EXPECT_EQ(d.count.samples, 3 + fresh - 1);
   EXPECT_EQ((long long)d.vertices.size(), fresh);
   for (std::int32_t a : d.ancestors) EXPECT_EQ(a, 1);
   EXPECT_FLOAT_EQ(d.maxLeft, 3.0f);
   // Room for two: E = 5 and 3, not 2.
-  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
-                    3 + 2 * (fresh - 1), 1);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, {3, 3},
+                    cap(3 + 2 * (fresh - 1)), 1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_FLOAT_EQ(d.maxLeft, 2.0f);
   // The same budget with two split levels left: this level may use half the headroom: one.
-  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, 3,
-                    3 + 2 * (fresh - 1), 2);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 1.0, {3, 3},
+                    cap(3 + 2 * (fresh - 1)), 2);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 0}));
   // The top-up: that share left the budget of one split unused (no finer level here); after
   // the pass it goes to the next worst capped candidate (E = 3, the second kept sample in the
@@ -566,7 +571,7 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   levels[0].anc = anc;
   levels[0].errors = errors;
   levels[0].grid = LevelGrid{IVec3(10)};
-  TopUp t = budgetTopUp(box, levels, d.count, 3 + 2 * (fresh - 1));
+  TopUp t = budgetTopUp(box, levels, d.count, cap(3 + 2 * (fresh - 1)));
   EXPECT_EQ(t.removed, (std::vector<std::size_t>{1}));
   EXPECT_EQ((long long)t.children.size(), fresh);
   for (const RadianceSample& c : t.children) {
@@ -578,9 +583,60 @@ TEST(DynamicSampling, BudgetSplitsTheLargestErrorFirst) {
   EXPECT_EQ(levels[0].decision.capped, 1);
   EXPECT_FLOAT_EQ(levels[0].decision.maxLeft, 2.0f);
   // The threshold still rules: E = 2 is not a candidate at a threshold of 2.5.
-  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 2.5, 3, 1000, 1);
+  d = budgetedSplit(box, LevelGrid{IVec3(10)}, centres, radii, anc, errors, 2.5, {3, 3}, cap(1000),
+                    1);
   EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));
   EXPECT_EQ(d.capped, 0);
+}
+
+TEST(DynamicSampling, TheFallbacksVoxelsArePaidAtTheirCost) {
+  // Issue 35 item 3: with the budget a cost, a voxel of the per-voxel fallback weighs 1 unit (one
+  // S) and a sample 7 + probes; a split into the fallback keeps its sample and adds its cell's
+  // voxels. The same three samples as above (E = 2, 5, 3), the next grid the fallback's voxels.
+  const Box box{Vec3(0.0f), Vec3(1.0f)};
+  const std::vector<Vec3> centres = {Vec3(0.2f), Vec3(0.5f), Vec3(0.8f)};
+  const std::vector<float> radii(3, 0.12f), errors = {2.0f, 5.0f, 3.0f};
+  const std::vector<std::int32_t> anc = {0, 1, 2};
+  const LevelGrid voxels{IVec3(10), true, true};
+  GridInfoBuffer g(box, voxels);
+  long long cell = 0;
+  g.forEachChild(centres[1], radii[1], [&](std::size_t) { ++cell; });
+  ASSERT_GT(cell, 1);
+  DynamicSamplingSettings st;
+  st.probes = 40;
+  st.costShare = 0.75;
+  // A budget of 4 samples: 188 units, at most 16 final samples.
+  const BudgetLimits b = budgetLimits(st, 4);
+  EXPECT_EQ(b.sampleUnit, 47);
+  EXPECT_EQ(b.units, 4 * 47);
+  EXPECT_EQ(b.samples, kFinalListPerBudget * 4);
+  // The three samples use 141 of the 188 units: room for 47 voxels, i.e. every split, where as
+  // samples (one unit each: a count cap of 4) the 3 + 2 × cell voxels would not fit.
+  const BudgetCount before{3 * 47, 3};
+  BudgetLimits roomy = b;
+  roomy.samples = 1000;
+  SplitDecision d = budgetedSplit(box, voxels, centres, radii, anc, errors, 1.0, before, roomy, 1);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{1, 1, 1}));
+  EXPECT_EQ(d.count.units, 3 * 47 + 3 * cell);  // the samples stay, the voxels are added
+  EXPECT_EQ(d.count.samples, 3 + 3 * cell);
+  d = budgetedSplit(box, voxels, centres, radii, anc, errors, 1.0, {3, 3},
+                    BudgetLimits{.units = 4, .sampleUnit = 1, .samples = 4}, 1);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 0, 0}));
+  // The final list's limit in samples binds where the units would not: room for 2 × cell voxels.
+  BudgetLimits list = roomy;
+  list.samples = 3 + 2 * cell;
+  d = budgetedSplit(box, voxels, centres, radii, anc, errors, 1.0, before, list, 1);
+  EXPECT_EQ(d.split, (std::vector<std::uint8_t>{0, 1, 1}));  // the worst two: E = 5 and 3
+  EXPECT_EQ(d.count.samples, 3 + 2 * cell);
+  // A count cap (max_samples, where the cost share is 0): one unit per sample, both limits the cap.
+  st.maxSamples = 100;
+  st.costShare = 0.0;
+  const BudgetLimits count = budgetLimits(st, 100);
+  EXPECT_EQ(count.sampleUnit, 1);
+  EXPECT_EQ(count.units, 100);
+  EXPECT_EQ(count.samples, 100);
+  EXPECT_EQ(budgetLimits(st, 0).units, 0);  // no budget
+  EXPECT_EQ(budgetLimits(st, 0).samples, 0);
 }
 
 TEST(DynamicSampling, BudgetStatKeysAreDocumented) {
