@@ -184,6 +184,8 @@ BudgetLimits budgetLimits(const DynamicSamplingSettings& settings, long long bud
   b.sampleUnit = settings.costShare > 0.0 ? 7LL + settings.probes : 1LL;
   b.units = budget * b.sampleUnit;  // sampleBudget() caps the budget at 9e15
   b.samples = b.sampleUnit > 1 ? kFinalListPerBudget * budget : budget;
+  // A max_samples the user gave stays the most samples of the final set.
+  if (settings.maxSamples > 0) b.samples = std::min(b.samples, settings.maxSamples);
   return b;
 }
 
@@ -734,7 +736,8 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "probes; per-voxel one S per voxel): the final set may grow to max(max_samples' auto "
        "rule, B); with max_samples given, to the smaller of the two (0 on either side: the "
        "other). The per-voxel fallback's voxels are paid at their cost, one S each (the pass "
-       "may use B × (7 + probes) S evaluations), the final set at most 4 × B samples",
+       "may use B × (7 + probes) S evaluations), the final set at most 4 × B samples and at most "
+       "max_samples where given",
        "1"},
       {"split", "string", R"("cell" ("sphere" with paper))", "cell, sphere (not with paper)",
        "what a split sample is replaced by: the vertices of the next grid in its cell (the cube "

@@ -367,8 +367,9 @@ inline constexpr long long kFinalListPerBudget = 4;
 /// sampleBudget()'s cost cap counts per sample) and a voxel of the per-voxel fallback 1 (one S,
 /// no ∇S, no probes), so the fallback is paid at its cost, not as a sample, and `units` = B ×
 /// sampleUnit. As each voxel is still a record of the final list, the list is also held to
-/// `samples` = kFinalListPerBudget × B (the GPU's final-list capacity). With a count cap
-/// (max_samples alone) every final sample weighs 1 and both limits are B. Zero: no budget.
+/// `samples` = kFinalListPerBudget × B (the GPU's final-list capacity), and to max_samples where
+/// the user gave one. With a count cap (max_samples alone) every final sample weighs 1 and both
+/// limits are B. Zero: no budget.
 struct BudgetLimits {
   long long units = 0;       ///< the most units the pass may use
   long long sampleUnit = 1;  ///< a sample's weight in units (a fallback voxel's: 1)

@@ -635,6 +635,11 @@ TEST(DynamicSampling, TheFallbacksVoxelsArePaidAtTheirCost) {
   EXPECT_EQ(count.sampleUnit, 1);
   EXPECT_EQ(count.units, 100);
   EXPECT_EQ(count.samples, 100);
+  // Both given: the cost counts the units, max_samples stays the most final samples.
+  st.costShare = 0.75;
+  const BudgetLimits both = budgetLimits(st, 60);
+  EXPECT_EQ(both.units, 60 * 47);
+  EXPECT_EQ(both.samples, 100);             // not 4 × 60
   EXPECT_EQ(budgetLimits(st, 0).units, 0);  // no budget
   EXPECT_EQ(budgetLimits(st, 0).samples, 0);
 }
