@@ -116,14 +116,15 @@ const Program& errorProgram(const TracingInputs& inputs, const TracerSteps& step
                             const DynamicSamplingSettings& settings, ErrorPass pass,
                             std::size_t lights) {
   if (pass == ErrorPass::Combine)
-    return program(
-        {.compute = {"common.glsl", "dynamic_error.comp.glsl"}, .defines = {"SL_COMBINE"}},
-        "dynamic sampling error (combine)");
+    return program(ProgramVariant{.compute = {"common.glsl", "dynamic_error.comp.glsl"},
+                                  .defines = {"SL_COMBINE"}}
+                       .define("SL_ERROR_BIAS", settings.biasWeight > 0.0),
+                   "dynamic sampling error (combine)");
   const TracerVariant space = valueSpace(steps, false);
   ProgramVariant variant;
   if (pass == ErrorPass::Probes) {
     variant = tracerProgramVariant(probeShape(lights), space);
-    variant.define("SL_PROBES");
+    variant.define("SL_PROBES").define("SL_ERROR_BIAS", settings.biasWeight > 0.0);
   } else {
     variant.compute = {"common.glsl", "dynamic_error.comp.glsl"};
     variant.define(settings.visibleTau ? "SL_TAU_LANES 8" : "SL_TAU_LANES 1")
@@ -238,7 +239,9 @@ std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
            "dynamic sampling error-group histograms");
   std::size_t probed = 0;  // the largest level that is probed (all but the last)
   for (std::size_t k = 0; k < L; ++k) probed = std::max(probed, w.levels[k].capacity);
-  ensure(w.probeSums, probed * std::size_t(probeGroups(settings.probes)) * sizeof(float),
+  ensure(w.probeSums,
+         probed * std::size_t(probeGroups(settings.probes)) * (settings.biasWeight > 0.0 ? 2 : 1) *
+             sizeof(float),
          "dynamic sampling probe sums");
   ensure(w.counts, slots.words() * sizeof(GLuint), "dynamic sampling counts");
   std::vector<GLuint> counts(slots.words(), 0u);
@@ -358,6 +361,8 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     glUniform1ui(program.uniform("uLevel"), GLuint(k));
     glUniform1i(program.uniform("uProbes"), probes);
     glUniform1i(program.uniform("uProbeGroups"), groupsPerSample);
+    if (settings.biasWeight > 0.0)
+      glUniform1f(program.uniform("uBiasWeight"), float(settings.biasWeight));
     l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSamples);
     l.errors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kErrors);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);

@@ -125,12 +125,12 @@ Vec3 lightFactorTowardsEye(const LightFactor& A, const Vec3& p, const Vec3& eye)
 
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
                         int count, const DynamicSamplingSettings::ErrorSpace& space,
-                        const Vec3* probeA) {
+                        const Vec3* probeA, float biasWeight) {
   Vec3 p[kMaxProbes];
   probePoints(s, p, count);
-  float sum = 0.0f;
+  float sum = 0.0f, bias = 0.0f;
   for (int g = 0; g < count; g += kProbeGroup) {
-    float group = 0.0f;
+    float group = 0.0f, groupBias = 0.0f;
     for (int i = g; i < std::min(count, g + kProbeGroup); ++i) {
       Vec3 est = s.taylor(p[i]), truth = probeS[i];
       if (space.bounds) est = space.bounds->clamp(est);
@@ -138,12 +138,19 @@ float localShadingError(const RadianceSample& s, const Vec3* probeS, const float
         est = glm::exp(est);
         truth = glm::exp(truth);
       }
-      Vec3 diff = glm::abs(est - truth);
-      if (probeA) diff *= probeA[i];  // the error of S = A ⊙ V
+      Vec3 signedDiff = est - truth;
+      Vec3 diff = glm::abs(signedDiff);
+      if (probeA) {  // the error of S = A ⊙ V
+        diff *= probeA[i];
+        signedDiff *= probeA[i];
+      }
       group += (diff.x + diff.y + diff.z) / 3.0f * probeD[i];
+      groupBias += (signedDiff.x + signedDiff.y + signedDiff.z) / 3.0f * probeD[i];
     }
     sum += group;
+    bias += groupBias;
   }
+  if (biasWeight > 0.0f) sum += biasWeight * std::abs(bias);
   return s.radius * s.radius * s.radius * sum / float(count) * tau;
 }
 
@@ -496,8 +503,8 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         for (int i = 0; i < 6; ++i)
           tau = std::max(tau, viewTransmittance(scene, density, pp[i], settings.delta1));
       }
-      errors[j] =
-          localShadingError(current[j], S, D, tau, np, settings.space, lightFactor ? A : nullptr);
+      errors[j] = localShadingError(current[j], S, D, tau, np, settings.space,
+                                    lightFactor ? A : nullptr, float(settings.biasWeight));
       if (!contributions.empty()) {
         const Vec3 a =
             lightFactor ? lightFactorTowardsEye(*lightFactor, current[j].position, eye) : Vec3(1);
@@ -676,6 +683,7 @@ void addDynamicSamplingStats(RenderStats& st, const DynamicSamplingResult& resul
     st.extra["error_left"] = threshold > 0.0 ? double(maxLeft) / threshold : 0.0;
   }
   st.extra["fallback"] = settings.voxelFallback;
+  if (settings.biasWeight > 0.0) st.extra["bias_weight"] = settings.biasWeight;
   st.extra["split_rule"] = settings.splitCells ? "cell" : "sphere";
   st.extra["tau"] =
       settings.visibleTau ? "visible" : (settings.perSampleTau ? "sample" : "ancestor");
@@ -751,6 +759,12 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "sees (with factor_lights the error of V weighted per probe by the lights' analytic "
        "unshadowed A = S / V there, docs/fidelity.md §12), or the samples' V = S / A itself",
        R"("transmittance")"},
+      {"bias_weight", "number", "0", "0…100 (not with paper)",
+       "weight k of the probes' signed error in Eq. 5: E_j uses mean D·|L̃ − L| + k·|mean "
+       "D·(L̃ − L)|, so a sample whose probes all err the same way (a bias the image adds up: "
+       "Taylor's tangents under a convex V on a dense sheet) splits at up to 1 + k times its "
+       "error; 0 is Eq. 5 (docs/fidelity.md, \"The probes' signed bias in Eq. 5\")",
+       "3"},
       {"fallback", "bool", "true (false with paper)", "true, false (not with paper)",
        "per-voxel fallback: the finest level is probed too (with fallback_probes), and where a "
        "cell of it still fails the error test S is evaluated directly at the voxels inside it "
@@ -801,6 +815,9 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   // The cost share: its default with the max_samples rule (auto), none beside an explicit count.
   s.costShare = p.number("budget", paper || p.has("max_samples") ? 0.0 : kBudgetCostShare,
                          Interval::closed(0.0, 1000.0));
+  if (paper && p.has("bias_weight"))
+    p.fail("bias_weight", "is an extension; it cannot be set with render.paper = true");
+  s.biasWeight = p.number("bias_weight", 0.0, Interval::closed(0.0, 100.0));
   if (paper && p.has("fallback"))
     p.fail("fallback", "is an extension; it cannot be set with render.paper = true");
   // On by default since issue 35 (docs/fidelity.md, "Population of scenes"): the worst scenes'

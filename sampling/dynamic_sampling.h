@@ -90,6 +90,9 @@ struct DynamicSamplingSettings {
   /// for shading boundaries that pass between the axis probes (a light shaft beside a large
   /// initial sphere, or through its inside), which Eq. 5 can miss.
   int probes = 6;
+  /// Weight k of the probes' signed error in E_j (key `bias_weight`, extension; 0: Eq. 5):
+  /// see localShadingError().
+  double biasWeight = 0.0;
   /// Most samples in the final set (0: no cap; kAutoBudget: sampleBudget() of the initial
   /// count): see budgetedSplit().
   long long maxSamples = 0;
@@ -318,10 +321,14 @@ const Vec3* probeOffsets();
 /// clamped to its bounds, and in log space both sides are exponentiated before they are compared
 /// (extensions; the default is the paper's Eq. 5). `probeA` (ErrorSpace::weightA; null: none):
 /// A at each probe (lightFactorTowardsEye()), multiplying the probe's |L̃ − L| per RGB channel
-/// before the channel mean: the error of S = A ⊙ V when the samples hold V.
+/// before the channel mean: the error of S = A ⊙ V when the samples hold V. `biasWeight` k
+/// (key `bias_weight`, extension; 0: Eq. 5): the mean becomes mean D·|L̃ − L| + k·|mean
+/// D·(L̃ − L)| — the signed errors summed in the same groups — so a sample whose probes all err
+/// the same way (a Taylor tangent under a convex V: a bias the image adds up) counts up to
+/// (1 + k)× Eq. 5's error, one whose errors cancel as before.
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
                         int count = 6, const DynamicSamplingSettings::ErrorSpace& space = {},
-                        const Vec3* probeA = nullptr);
+                        const Vec3* probeA = nullptr, float biasWeight = 0.0f);
 
 class LightFactor;
 

@@ -48,13 +48,25 @@ uniform uint uLevel;            // k: the level's sample count is counts[k]
 layout(std430, binding = BINDING_PROBE_SUMS) readonly buffer ProbeSums { float probeSums[]; };
 uniform int uProbes;            // 6, 14, 26 or 40
 uniform int uProbeGroups;       // ceil(uProbes / kProbeGroup): sums per sample
+#ifdef SL_ERROR_BIAS
+uniform float uBiasWeight;      // bias_weight k: the groups' sums come in pairs (|·|, signed)
+#endif
 
 void main() {
   uint j = gl_GlobalInvocationID.x;
   if (j >= counts[uLevel]) return;
   float R = samples[j].w;
   precise float sum = 0.0;
+#ifdef SL_ERROR_BIAS
+  precise float bias = 0.0;
+  for (int g = 0; g < uProbeGroups; ++g) {
+    sum += probeSums[2u * (j * uint(uProbeGroups) + uint(g))];
+    bias += probeSums[2u * (j * uint(uProbeGroups) + uint(g)) + 1u];
+  }
+  sum += uBiasWeight * abs(bias);
+#else
   for (int g = 0; g < uProbeGroups; ++g) sum += probeSums[j * uint(uProbeGroups) + uint(g)];
+#endif
   precise float E = R * R * R * sum / float(uProbes) * errors[j];  // errors[j]: τ of pass 1
   errors[j] = E;
 }

@@ -29,6 +29,11 @@ uniform vec3 uProbeDirs[40];    // probeOffsets() of the CPU
 uniform vec2 uTaylorBounds;     // TaylorBounds (lo, hi): the Taylor estimate is clamped to it
 #endif
 shared float term[SL_SLOTS][SL_ROWS];
+#ifdef SL_ERROR_BIAS
+// bias_weight > 0: each group's sum of mean_RGB(L̃ − L)·D (signed; with SL_WEIGHT_A times A) too,
+// at probeSums[2·(sample's group index) + 1], its sum of |·| at [2·… + 0].
+shared float termBias[SL_SLOTS][SL_ROWS];
+#endif
 #else
 layout(std430, binding = BINDING_RADIANCE) writeonly buffer Results { RadianceRecord results[]; };
 uniform float uDelta2;
@@ -170,7 +175,7 @@ void main() {
     barrier();
 #ifdef SL_PROBES
     if (lane == 0u) {
-      float t = 0.0;
+      float t = 0.0, b = 0.0;
       if (traced) {
         const vec3 Sp = value[slot][row];
         const vec3 S = results[i].S.xyz;
@@ -182,16 +187,23 @@ void main() {
 #endif
 #ifdef SL_LOG_SPACE
         // ln V held: compared on V, what the image sees (localShadingError's ErrorSpace::log).
-        precise vec3 diff = abs(exp(taylor) - exp(Sp));
+        precise vec3 signedDiff = exp(taylor) - exp(Sp);
 #else
-        precise vec3 diff = abs(taylor - Sp);
+        precise vec3 signedDiff = taylor - Sp;
 #endif
+        precise vec3 diff = abs(signedDiff);
 #ifdef SL_WEIGHT_A
-        diff *= lightFactorTowardsEye(q);  // the error of S = A ⊙ V (ErrorSpace::weightA)
+        const vec3 A = lightFactorTowardsEye(q);  // the error of S = A ⊙ V (ErrorSpace::weightA)
+        diff *= A;
+        signedDiff *= A;
 #endif
         t = (diff.x + diff.y + diff.z) / 3.0 * D;
+        b = (signedDiff.x + signedDiff.y + signedDiff.z) / 3.0 * D;
       }
       term[slot][row] = t;
+#ifdef SL_ERROR_BIAS
+      termBias[slot][row] = b;
+#endif
     }
     memoryBarrierShared();
     barrier();
@@ -199,7 +211,14 @@ void main() {
       // The group's terms in probe order (a term of 0 adds nothing: the CPU skips it).
       precise float sum = 0.0;
       for (int r = 0; r < SL_ROWS; ++r) sum += term[slot][r];
+#ifdef SL_ERROR_BIAS
+      precise float bias = 0.0;
+      for (int r = 0; r < SL_ROWS; ++r) bias += termBias[slot][r];
+      probeSums[2u * (i * gl_NumWorkGroups.y + gl_WorkGroupID.y)] = sum;
+      probeSums[2u * (i * gl_NumWorkGroups.y + gl_WorkGroupID.y) + 1u] = bias;
+#else
       probeSums[i * gl_NumWorkGroups.y + gl_WorkGroupID.y] = sum;
+#endif
     }
 #else
     if (live && lane == 0u && row == 0u) {

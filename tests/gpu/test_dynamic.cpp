@@ -186,16 +186,23 @@ TEST(GpuDynamicSampling, ManyLightsFortyProbesErrorsAsOnCpu) {
   std::vector<RadianceSample> s = initial;
   evaluateSamples(scene, density, steps, s, /*gradients=*/true);
   // Unweighted (error_weight "transmittance") and weighted by A at each probe ("radiance", the
-  // default with factor_lights: SL_WEIGHT_A).
+  // default with factor_lights: SL_WEIGHT_A); and weighted with the probes' signed bias added
+  // (bias_weight 3: SL_ERROR_BIAS).
   const LightFactor A(scene);
-  for (const bool weighted : {false, true}) {
+  struct Case {
+    bool weighted;
+    float bias;
+  };
+  for (const Case c : {Case{false, 0.0f}, Case{true, 0.0f}, Case{true, 3.0f}}) {
+    const bool weighted = c.weighted;
     ds.space.weightA = weighted;
+    ds.biasWeight = c.bias;
     std::vector<std::vector<float>> errors;
     gpu::dynamicSamplingGpu(scene, d, initial, steps, ds, nullptr, &errors);
     expectNoGlError();
     ASSERT_EQ(errors.size(), 1u);
     ASSERT_EQ(errors[0].size(), initial.size());
-    double worst = 0.0;
+    double worst = 0.0, raised = 0.0;
     for (std::size_t j = 0; j < s.size(); ++j) {
       Vec3 p[kMaxProbes], S[kMaxProbes], probeA[kMaxProbes];
       float D[kMaxProbes];
@@ -211,15 +218,22 @@ TEST(GpuDynamicSampling, ManyLightsFortyProbesErrorsAsOnCpu) {
       const float tau =
           std::exp(-scene.medium.sigmaT *
                    opticalDepth(density, s[j].position, scene.camera.position, ds.delta1));
-      const float cpu =
-          localShadingError(s[j], S, D, tau, ds.probes, ds.space, weighted ? probeA : nullptr);
+      const float cpu = localShadingError(s[j], S, D, tau, ds.probes, ds.space,
+                                          weighted ? probeA : nullptr, c.bias);
       ASSERT_GT(cpu, 0.0f) << "sample " << j;
       worst = std::max(worst, std::abs(double(errors[0][j]) / cpu - 1.0));
+      const float plain =
+          localShadingError(s[j], S, D, tau, ds.probes, ds.space, weighted ? probeA : nullptr);
+      raised = std::max(raised, double(cpu) / double(plain));
     }
-    std::printf("24 lamps, 40 probes, weighted by A %d: worst relative E difference %.3g\n",
-                int(weighted), worst);
+    std::printf(
+        "24 lamps, 40 probes, weighted by A %d, bias weight %g: worst relative E difference "
+        "%.3g, E raised up to %.3gx\n",
+        int(weighted), double(c.bias), worst, raised);
+    if (c.bias > 0.0f) EXPECT_GT(raised, 1.5) << "the bias term must count somewhere";
     // Measured on llvmpipe 2026-11-26: 7.79e-5 unweighted (E is a mean of |L̃ − L|, differences
-    // of nearby values: S's float noise, ~1e-6, grows ~100×), 7.97e-5 weighted by A;
+    // of nearby values: S's float noise, ~1e-6, grows ~100×), 7.97e-5 weighted by A (2026-11-29:
+    // 7.12e-5, 7.24e-5, and 1.31e-4 with the signed bias at weight 3);
     // before the probe pass 0.582. Not run on hardware; the analogous arithmetic differed
     // 60–120× more on an NVIDIA H200 than on llvmpipe (GpuGradientMethod 9.1e-5 vs 1.46e-6,
     // GpuOcclusionWeights 3.3e-5 vs 2.8e-7, issue 23): ×1.5 of 7.79e-5 × 120. The truncated

@@ -111,6 +111,13 @@ TEST(LocalShadingError, ZeroForALinearFieldAndScalesWithRCubed) {
   probePoints(s, p);
   for (int i = 0; i < 6; ++i) S[i] = lin(p[i]) + Vec3(0.3f);
   EXPECT_NEAR(localShadingError(s, S, D, 0.5f), 8e-3f * 0.3f * 0.5f, 1e-8);
+  // bias_weight k: the same offset at every probe is a bias, E = (1 + k)·Eq. 5's ...
+  const DynamicSamplingSettings::ErrorSpace plain{};
+  EXPECT_NEAR(localShadingError(s, S, D, 0.5f, 6, plain, nullptr, 3.0f), 4.0f * 8e-3f * 0.3f * 0.5f,
+              4e-8);
+  // ... and offsets of alternating sign cancel in it: Eq. 5's E.
+  for (int i = 0; i < 6; ++i) S[i] = lin(p[i]) + Vec3(i % 2 ? -0.3f : 0.3f);
+  EXPECT_NEAR(localShadingError(s, S, D, 0.5f, 6, plain, nullptr, 3.0f), 8e-3f * 0.3f * 0.5f, 1e-8);
 }
 
 TEST(DynamicSampling, LinearFieldIsNotSplit) {
