@@ -158,8 +158,8 @@ std::size_t gridVertices(const std::vector<LevelGrid>& grids, std::size_t k) {
 /// Sizes the workspace for `n0` initial samples and `levels`, and uploads level 0 (positions,
 /// radii, each sample its own ancestor) and the counts (n0, zeros; the top-up's cut: none).
 /// Returns the final list's capacity: every level's capacity (and with a budget the top-up's
-/// children), at most max(budget, n0) with a budget (a cut never ends above the larger of the
-/// two).
+/// children), at most max(BudgetLimits::samples, n0) with a budget (a cut never ends above the
+/// larger of the two).
 /// One part of the final list (assembleFinal): level `level`'s kept samples (group 0; keepAll:
 /// the final level and a level split into the fallback's voxels, where every sample stays), or
 /// the top-up's children of grid `level` (group 1: with ∇S; 2: the fallback's voxels). Its
