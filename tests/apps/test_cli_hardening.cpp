@@ -35,7 +35,7 @@ using scatterlab::kAddressSanitizer;
 /// (a FIFO read forever, /dev/zero read into memory) fails the test instead of hanging it. Under
 /// AddressSanitizer only the timeout applies (see kAddressSanitizer); ASan's own allocator
 /// limits still turn a runaway allocation into a failure.
-RunResult run(const std::string& args, int seconds = 120, long addressSpaceKiB = 2097152) {
+RunResult runLimited(const std::string& args, int seconds = 120, long addressSpaceKiB = 2097152) {
   const std::string limit =
       kAddressSanitizer ? "" : "ulimit -v " + std::to_string(addressSpaceKiB) + "; ";
   const std::string cmd = limit + "timeout -s KILL " + std::to_string(seconds) + " " +
@@ -73,7 +73,7 @@ class Hardening : public scatterlab::testing::TempDirTest {
   void expectFails(const std::string& args, std::initializer_list<std::string> fragments,
                    int code = 1) {
     const std::string exr = out("o.exr");
-    const RunResult r = run("render " + args + " -q -o " + exr);
+    const RunResult r = runLimited("render " + args + " -q -o " + exr);
     EXPECT_EQ(r.code, code) << r.output;
     EXPECT_NE(r.output.find("scatterlab: error:"), std::string::npos) << r.output;
     for (const auto& f : fragments)
@@ -115,7 +115,7 @@ TEST_F(FarGeometry, ObjectsBeyondTheCoordinateBoundAreRefusedNotAnAbort) {
   // The bound is inclusive of ordinary far scenes: a box 1e14 away renders.
   j = tinyScene();
   j["objects"] = Json::array({{{"type", "box"}, {"min", {0, 0, 1e14}}, {"max", {1, 1, 2e14}}}});
-  const RunResult ok = run("render " + scene(j) + " -q -o " + out("ok.exr"));
+  const RunResult ok = runLimited("render " + scene(j) + " -q -o " + out("ok.exr"));
   EXPECT_EQ(ok.code, 0) << ok.output;
 }
 
@@ -187,7 +187,7 @@ TEST_F(CompareNonFinite, NonFinitePixelsInEitherImageAreAnError) {
         std::tuple{"good.exr", "inf.exr", "inf.exr", "0 NaN, 1 inf; the first at pixel (3, 2)"}}) {
     for (const char* json : {"", " --json"}) {
       const RunResult r =
-          run("compare " + out(a) + " " + out(b) + json + " --diff " + out("d.png"));
+          runLimited("compare " + out(a) + " " + out(b) + json + " --diff " + out("d.png"));
       EXPECT_EQ(r.code, 1) << r.output;
       EXPECT_NE(r.output.find("scatterlab: error: image '" + out(bad) + "' has 1 non-finite"),
                 std::string::npos)
@@ -207,7 +207,8 @@ TEST_F(CompareNonFinite, NonFinitePixelsInEitherImageAreAnError) {
   }
   EXPECT_THROW(scatterlab::compareImages(scatterlab::Image(0, 0), scatterlab::Image(0, 0)),
                scatterlab::ConfigError);
-  const RunResult same = run("compare " + out("good.exr") + " " + out("good.exr") + " --json");
+  const RunResult same =
+      runLimited("compare " + out("good.exr") + " " + out("good.exr") + " --json");
   ASSERT_EQ(same.code, 0) << same.output;
   EXPECT_EQ(Json::parse(same.output)["rel_l2"], 0.0);
 }
@@ -225,7 +226,7 @@ TEST_F(OutputPaths, OneNewFileUnderTwoSpellingsIsAUsageError) {
       {d + "/o.png", d + "/./o.png"},
   };
   for (const auto& [a, b] : pairs) {
-    const RunResult r = run("render " + s + " -q -o " + a + " --png " + b);
+    const RunResult r = runLimited("render " + s + " -q -o " + a + " --png " + b);
     EXPECT_EQ(r.code, 2) << a << " " << b << ": " << r.output;
     EXPECT_NE(r.output.find("--output and --png name the same file"), std::string::npos)
         << r.output;
@@ -234,9 +235,9 @@ TEST_F(OutputPaths, OneNewFileUnderTwoSpellingsIsAUsageError) {
   // Relative against relative and absolute, from the working directory (the issue's cases).
   const fs::path cwd = fs::current_path();
   fs::current_path(dir_);
-  const RunResult dot = run("render " + s + " -q -o o.png --png ./o.png");
-  const RunResult abs = run("render " + s + " -q -o o.png --png " + d + "/o.png");
-  const RunResult up = run("render " + s + " -q -o o.png --png sub/../o.png");
+  const RunResult dot = runLimited("render " + s + " -q -o o.png --png ./o.png");
+  const RunResult abs = runLimited("render " + s + " -q -o o.png --png " + d + "/o.png");
+  const RunResult up = runLimited("render " + s + " -q -o o.png --png sub/../o.png");
   fs::current_path(cwd);
   for (const RunResult& r : {dot, abs, up}) {
     EXPECT_EQ(r.code, 2) << r.output;
@@ -247,8 +248,8 @@ TEST_F(OutputPaths, OneNewFileUnderTwoSpellingsIsAUsageError) {
   // An existing file and a link to it are one file too.
   std::ofstream(dir_ / "stats.json") << "{}";
   fs::create_symlink(dir_ / "stats.json", dir_ / "stats-link.json");
-  const RunResult l = run("render " + s + " -q -o " + d + "/x.exr --stats " + d +
-                          "/stats-link.json --samples-png " + d + "/stats.json");
+  const RunResult l = runLimited("render " + s + " -q -o " + d + "/x.exr --stats " + d +
+                                 "/stats-link.json --samples-png " + d + "/stats.json");
   EXPECT_EQ(l.code, 2) << l.output;
 }
 
@@ -257,14 +258,15 @@ TEST_F(SpecialFiles, StatsAreWrittenThroughDevicesFifosAndLinks) {
   const std::string s = scene(tinyScene());
   // A link to /proc/self/fd/1: the tool's standard output.
   fs::create_symlink("/proc/self/fd/1", dir_ / "stdout.json");
-  RunResult r = run("render " + s + " -q -o " + out("a.exr") + " --stats " + out("stdout.json"));
+  RunResult r =
+      runLimited("render " + s + " -q -o " + out("a.exr") + " --stats " + out("stdout.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::is_symlink(dir_ / "stdout.json"));
   const Json stats = Json::parse(r.output);
   EXPECT_EQ(stats["width"], 16);
   // A link to /dev/null.
   fs::create_symlink("/dev/null", dir_ / "null.json");
-  r = run("render " + s + " -q -o " + out("b.exr") + " --stats " + out("null.json"));
+  r = runLimited("render " + s + " -q -o " + out("b.exr") + " --stats " + out("null.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::is_symlink(dir_ / "null.json"));
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
@@ -273,7 +275,7 @@ TEST_F(SpecialFiles, StatsAreWrittenThroughDevicesFifosAndLinks) {
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   std::string got;
   std::thread reader([&] { got = scatterlab::testing::drainFifo(fifo, std::chrono::seconds(60)); });
-  r = run("render " + s + " -q -o " + out("c.exr") + " --stats " + fifo, 60);
+  r = runLimited("render " + s + " -q -o " + out("c.exr") + " --stats " + fifo, 60);
   reader.join();
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::is_fifo(fifo));
@@ -282,7 +284,7 @@ TEST_F(SpecialFiles, StatsAreWrittenThroughDevicesFifosAndLinks) {
   EXPECT_TRUE(fs::exists(out("c.exr")));
   // -o onto a dangling link: refused before rendering, the link left alone.
   fs::create_symlink(dir_ / "gone" / "x.exr", dir_ / "dangling.exr");
-  r = run("render " + s + " -q -o " + out("dangling.exr"));
+  r = runLimited("render " + s + " -q -o " + out("dangling.exr"));
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("output '" + out("dangling.exr") + "' is a symbolic link to '" +
                           (dir_ / "gone" / "x.exr").string() + "', which does not exist"),
@@ -311,10 +313,10 @@ TEST_F(ObjMaterialLib, TheMtlIsCheckedLikeEveryOtherFileAndIndicesAreRangeChecke
   // A regular .mtl beside the OBJ still gives the faces its Kd; a missing one the default.
   write("good.mtl", "newmtl red\nKd 0.9 0.1 0.1\n");
   write("m.obj", "mtllib good.mtl\n" + tri + "usemtl red\nf 1 2 3\n");
-  RunResult r = run("render " + s + " -q -o " + out("a.exr"));
+  RunResult r = runLimited("render " + s + " -q -o " + out("a.exr"));
   EXPECT_EQ(r.code, 0) << r.output;
   write("m.obj", "mtllib missing.mtl\n" + tri + "f 1 2 3\n");
-  r = run("render " + s + " -q -o " + out("b.exr"));
+  r = runLimited("render " + s + " -q -o " + out("b.exr"));
   EXPECT_EQ(r.code, 0) << r.output;
 }
 
@@ -322,11 +324,11 @@ TEST_F(ObjMaterialLib, TheMtlIsCheckedLikeEveryOtherFileAndIndicesAreRangeChecke
 TEST_F(Messages, WrongInputIsNamedNotSilentOrInternal) {
   const std::string s = scene(tinyScene());
   // --exposure nan wrote an all-black PNG with exit 0; --fps nan exited 1 without naming it.
-  RunResult r = run("render " + s + " -q -o " + out("a.png") + " --exposure nan");
+  RunResult r = runLimited("render " + s + " -q -o " + out("a.png") + " --exposure nan");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--exposure"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out("a.png")));
-  r = run("render " + s + " -q -o " + out("a.exr") + " --frames 0:1 --fps nan");
+  r = runLimited("render " + s + " -q -o " + out("a.exr") + " --frames 0:1 --fps nan");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--fps"), std::string::npos) << r.output;
   // A moving density's time of the wrong type became 0.
@@ -336,31 +338,32 @@ TEST_F(Messages, WrongInputIsNamedNotSilentOrInternal) {
   expectFails(scene(j, "moving.json"), {"'medium.density.time': expected a number, got \"soon\""});
   // A value with a line break printed a second, fake `scatterlab: error:` line; a 100 KB value
   // was echoed whole.
-  r = run("render " + s + " -q -o " + out("b.exr") +
-          " --method \"$(printf 'nonsense\\nscatterlab: error: fake')\"");
+  r = runLimited("render " + s + " -q -o " + out("b.exr") +
+                 " --method \"$(printf 'nonsense\\nscatterlab: error: fake')\"");
   EXPECT_EQ(r.code, 2) << r.output;  // an unknown --method is a usage error (issue 25)
   EXPECT_EQ(r.output.rfind("scatterlab: error:", 0), 0u) << r.output;
   EXPECT_EQ(r.output.find("\nscatterlab: error:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("nonsense\n  scatterlab: error: fake"), std::string::npos) << r.output;
-  r = run("render " + s + " -q -o " + out("b.exr") + " --method " + std::string(100000, 'm'));
+  r = runLimited("render " + s + " -q -o " + out("b.exr") + " --method " +
+                 std::string(100000, 'm'));
   EXPECT_EQ(r.code, 2);
   EXPECT_LT(r.output.size(), 2500u);
   EXPECT_NE(r.output.find("characters left out"), std::string::npos) << r.output.substr(0, 300);
   // A loop of links was "does not exist".
   fs::create_symlink(dir_ / "loop2.json", dir_ / "loop1.json");
   fs::create_symlink(dir_ / "loop1.json", dir_ / "loop2.json");
-  r = run("render " + out("loop1.json") + " -q -o " + out("c.exr"));
+  r = runLimited("render " + out("loop1.json") + " -q -o " + out("c.exr"));
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("is a loop of symbolic links"), std::string::npos) << r.output;
   // An output name of 250 bytes (valid) failed with "File name too long" for its temporary.
   const std::string longName = out(std::string(246, 'n') + ".exr");
-  r = run("render " + s + " -q -o " + longName);
+  r = runLimited("render " + s + " -q -o " + longName);
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::exists(longName));
   // experiment -o onto an existing file: "internal error: filesystem error: ..." before.
   write("exp.json", Json{{"scene", "scene.json"}, {"methods", {"exact"}}}.dump());
   std::ofstream(out("file")) << "x";
-  r = run("experiment " + out("exp.json") + " -o " + out("file"));
+  r = runLimited("experiment " + out("exp.json") + " -o " + out("file"));
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("output directory '" + out("file") + "' exists and is not a directory"),
@@ -372,9 +375,9 @@ TEST_F(Messages, TheDefaultMemoryLimitFollowsAnAddressSpaceLimit) {
   if (kAddressSanitizer) GTEST_SKIP() << "AddressSanitizer cannot start under ulimit -v";
   // Under ulimit -v 1.5 GiB, per-voxel at 320^3 (about 1.1 GiB planned) ran 11 s and died with
   // "internal error: std::bad_alloc": the default limit was 75 % of physical memory.
-  const RunResult r = run("render " + scene(tinyScene()) + " -q -o " + out("a.exr") +
-                              " --method per-voxel --set medium.resolution=320",
-                          120, 1536 * 1024);
+  const RunResult r = runLimited("render " + scene(tinyScene()) + " -q -o " + out("a.exr") +
+                                     " --method per-voxel --set medium.resolution=320",
+                                 120, 1536 * 1024);
   EXPECT_EQ(r.code, 1) << r.output;
   EXPECT_NE(r.output.find("above the memory limit"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;

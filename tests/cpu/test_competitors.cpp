@@ -14,6 +14,7 @@
 
 using namespace scatterlab;
 using scatterlab::testing::homogeneousBoxDoc;
+using scatterlab::testing::relL2;
 using scatterlab::testing::sceneFromJson;
 
 namespace {
@@ -57,10 +58,6 @@ Image render(Scene s, const Json& render) {
 /// exact with march_step = 1/4 voxel: the reference of these tests.
 Image reference(const Scene& s) {
   return render(s, {{"method", "exact"}, {"backend", "cpu"}, {"march_step", 1.0 / 128}});
-}
-
-double relL2(const Image& a, const Image& b) {
-  return compareImages(a, b).relL2;
 }
 
 TEST(JitteredMarch, ConvergesToExactAsStepsGrow) {

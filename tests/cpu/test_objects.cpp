@@ -15,13 +15,14 @@
 
 using namespace scatterlab;
 using scatterlab::testing::homogeneousBoxDoc;
+using scatterlab::testing::relL2;
 using scatterlab::testing::sceneFromJson;
 
 namespace {
 
 using DVec3 = glm::dvec3;
 
-double integrate(const std::function<double(double)>& f, double a, double b) {
+double integrateTight(const std::function<double(double)>& f, double a, double b) {
   return scatterlab::testing::integrate(f, a, b, 1e-11, 40);
 }
 
@@ -48,10 +49,6 @@ bool segmentHitsSphere(const DVec3& a, const DVec3& b, const DVec3& c, double r)
   const DVec3 u = d / len;
   const double t = std::clamp(glm::dot(c - a, u), 0.0, len);
   return glm::length(a + t * u - c) < r;
-}
-
-double relL2(const Image& a, const Image& b) {
-  return compareImages(a, b).relL2;
 }
 
 /// A unit box of uniform density lit by a point light above it, with a sphere between the
@@ -109,7 +106,8 @@ Image shadowOracle(const Scene& s, bool sphere) {
       }
       cuts.push_back(t1);
       double L = 0;
-      for (std::size_t k = 0; k + 1 < cuts.size(); ++k) L += integrate(f, cuts[k], cuts[k + 1]);
+      for (std::size_t k = 0; k + 1 < cuts.size(); ++k)
+        L += integrateTight(f, cuts[k], cuts[k + 1]);
       img.at(x, y) = Vec3(float(L));
     }
   return img;

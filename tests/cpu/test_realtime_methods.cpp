@@ -13,13 +13,10 @@
 
 using namespace scatterlab;
 using scatterlab::testing::homogeneousBoxDoc;
+using scatterlab::testing::relL2;
 using scatterlab::testing::sceneFromJson;
 
 namespace {
-
-double relL2(const Image& a, const Image& b) {
-  return compareImages(a, b).relL2;
-}
 
 /// Homogeneous fog in the unit box lit by a spot light from above (inner 20°, outer 30°).
 Json spotFogDoc(int width, int height) {

@@ -55,9 +55,10 @@ inline Json blobSceneDoc(int resolution, int width, int height) {
       {"render", {{"method", "per-voxel"}}}};
 }
 
-/// Relative L2 of a against the reference b (core's definition, docs/metrics.md).
-inline double relL2(const Image& a, const Image& b) {
-  return compareImages(a, b).relL2;
+/// One render of `doc` on `backend` ("cpu" or "gpu"), the method and settings the document gives.
+inline RenderResult renderOn(const Json& doc, const char* backend) {
+  const Scene s = sceneFromJson(doc);
+  return createMethod(s, "", backend)->render(s, nullptr);
 }
 
 }  // namespace scatterlab::testing

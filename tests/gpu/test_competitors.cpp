@@ -15,7 +15,7 @@ namespace {
 
 /// relative L2 of the GPU image against the CPU one for `render` keys on the blob scene (a
 /// point light inside the medium, a spot above it), 40x30.
-double gpuVsCpu(const Json& render) {
+double blobGpuVsCpu(const Json& render) {
   Json doc = blobSceneDoc(24, 40, 30);
   doc["render"] = render;
   const Scene scene = sceneFromJson(doc);
@@ -37,7 +37,7 @@ TEST(GpuJitteredMarch, MatchesCpuForEveryJitterAndDownsample) {
   for (const Json& r : {Json{{"method", m}}, Json{{"method", m}, {"jitter", "none"}, {"steps", 7}},
                         Json{{"method", m}, {"jitter", "blue-noise"}, {"downsample", 2}},
                         Json{{"method", m}, {"jitter", "ign"}, {"downsample", 4}}})
-    EXPECT_LT(gpuVsCpu(r), 5.0e-6) << r.dump();
+    EXPECT_LT(blobGpuVsCpu(r), 5.0e-6) << r.dump();
 }
 
 TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
@@ -52,7 +52,7 @@ TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
              {"froxel_grid", {13, 11, 24}},
              {"light_transmittance", "map"},
              {"transmittance_map_resolution", 16}}})
-    EXPECT_LT(gpuVsCpu(r), 4.2e-6) << r.dump();
+    EXPECT_LT(blobGpuVsCpu(r), 4.2e-6) << r.dump();
 }
 
 }  // namespace

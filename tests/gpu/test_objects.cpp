@@ -36,13 +36,9 @@ Json shadowDoc(const std::string& type) {
   return doc;
 }
 
-RenderResult renderOn(const Json& doc, const char* backend) {
-  const Scene s = sceneFromJson(doc);
-  return createMethod(s, "", backend)->render(s, nullptr);
-}
-
 /// Relative L2 of the GPU image against the CPU's on `doc` (the same method and settings).
-double gpuVsCpu(const Json& doc, RenderResult* gpuOut = nullptr, RenderResult* cpuOut = nullptr) {
+double sceneGpuVsCpu(const Json& doc, RenderResult* gpuOut = nullptr,
+                     RenderResult* cpuOut = nullptr) {
   RenderResult gpu = renderOn(doc, "gpu");
   RenderResult cpu = renderOn(doc, "cpu");
   EXPECT_EQ(gpu.stats.backend, "gpu");
@@ -59,7 +55,7 @@ TEST_P(GpuObjectShadow, PerVoxelMatchesCpu) {
   const std::string type = GetParam();
   const Json doc = shadowDoc(type);
   RenderResult gpu, cpu;
-  const double err = gpuVsCpu(doc, &gpu, &cpu);
+  const double err = sceneGpuVsCpu(doc, &gpu, &cpu);
   // What the objects do to the image (CPU, sphere and floor against none): the scale the
   // differences are measured against.
   Json free = doc;
@@ -100,11 +96,11 @@ TEST(GpuObjects, SurfaceThroughFogMatchesCpu) {
         {"max", {2, 2, 0.8}},
         {"albedo", {0.7, 0.6, 0.5}}}});
   RenderResult gpu, cpu;
-  const double err = gpuVsCpu(doc, &gpu, &cpu);
+  const double err = sceneGpuVsCpu(doc, &gpu, &cpu);
   // The paper's view-plane slabs, clipped at the wall where they straddle it.
   doc["render"]["gpu_pipeline"] = "raster";
   doc["render"]["slicing"] = "view-planes";
-  const double planes = gpuVsCpu(doc);
+  const double planes = sceneGpuVsCpu(doc);
   std::printf("surface through fog: gpu vs cpu %.4g, view-planes %.4g\n", err, planes);
   // Measured on llvmpipe, 2026-11-23: 0.002819 (the sphere's shadow edge on the wall and in
   // the fog); view-planes 0.002867; ×1.5.
@@ -130,7 +126,7 @@ TEST(GpuObjects, DepthCompareAndVsmConvergeToCpuAsResolutionGrows) {
     for (int res : {32, 128, 512}) {
       Json doc = shadowDoc("spot");
       doc["render"]["shadow_map"] = {{"type", type}, {"resolution", res}};
-      errs.push_back(gpuVsCpu(doc));
+      errs.push_back(sceneGpuVsCpu(doc));
     }
     std::printf("%s: 32² %.4g, 128² %.4g, 512² %.4g\n", type, errs[0], errs[1], errs[2]);
     // Measured on llvmpipe, 2026-11-23: depth 0.3027, 0.1438, 0.09691; vsm 0.5543, 0.2326,
@@ -178,7 +174,7 @@ TEST_P(GpuObjectSamples, MatchesCpu) {
     doc["render"]["levels"] = {8};
     doc["render"]["voxel_switch"] = 0;  // dynamic sampling itself, not the whole-scene fallback
   }
-  const double err = gpuVsCpu(doc);
+  const double err = sceneGpuVsCpu(doc);
   std::printf("%s: gpu vs cpu %.4g\n", method.c_str(), err);
   // Measured on llvmpipe, 2026-11-23: gradient 0.1048, adaptive 0.08027 (samples next to the
   // shadow cone, as for per-voxel); ×1.5.

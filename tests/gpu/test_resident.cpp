@@ -309,21 +309,25 @@ TEST_P(GpuSteadyFrame, ALightMovedWaitsForNothing) {
 }
 
 /// The resident adaptive frame where the budget binds: levels [4, 8, 16] and the fallback on a
-/// 40³ blob scene, max_samples 2160 (2089 initial samples): levels are capped and the top-up
-/// splits (measured on the CPU: 1 top-up split of level 2 in frame 0). Each steady frame's image,
-/// count and levels' stats equal a fresh render's, with no host wait.
+/// 40³ blob scene, max_samples 2140 (2089 initial samples), Eq. 5's 6 probes (40 took this test
+/// 43 s in CI, 6 take 9 s on llvmpipe): levels are capped and the top-up splits (measured: 6 and
+/// 43 capped in levels 2 and 3 and 1 top-up split of level 2 in frame 0). Each steady frame's
+/// image, count and levels' stats equal a fresh render's, with no host wait.
 TEST(GpuSteadyFrame, AdaptiveUnderABindingBudgetAsAFreshRender) {
   SCATTERLAB_REQUIRE_GPU();
   const auto doc = [](int f) {
     Json d = blobSceneDoc(40, 32, 24);
     d["lights"][1]["position"] = {0.5 + 0.1 * f, 1.4, 0.5 - 0.05 * f};
-    d["render"] = {
-        {"method", "adaptive"}, {"levels", {4, 8, 16}}, {"max_samples", 2160}, {"voxel_switch", 0}};
+    d["render"] = {{"method", "adaptive"},
+                   {"levels", {4, 8, 16}},
+                   {"max_samples", 2140},
+                   {"voxel_switch", 0},
+                   {"probes", 6}};
     return d;
   };
   Renderer r(doc(0), ".", "adaptive", "gpu");
   r.keepImageOnDevice(true);
-  long long capped = 0, toppedUp = 0;
+  long long capped = 0, toppedUp = 0, lastCount = 0;
   for (int f = 0; f < 3; ++f) {
     if (f > 0) r.set("lights.1.position=" + doc(f)["lights"][1]["position"].dump());
     const RenderResult res = r.render();
@@ -334,6 +338,7 @@ TEST(GpuSteadyFrame, AdaptiveUnderABindingBudgetAsAFreshRender) {
     const RenderResult fresh = freshRender(doc(f), "adaptive");
     ASSERT_TRUE(res.stats.samples.has_value());
     EXPECT_EQ(*res.stats.samples, *fresh.stats.samples) << "frame " << f;
+    lastCount = *fresh.stats.samples;
     const Json& levels = fresh.stats.extra.at("levels");
     for (std::size_t l = 0; l < levels.size(); ++l) {
       for (const char* key : {"evaluated", "split", "capped", "topped_up", "kept"})
@@ -350,11 +355,10 @@ TEST(GpuSteadyFrame, AdaptiveUnderABindingBudgetAsAFreshRender) {
   EXPECT_GT(capped, 0);
   EXPECT_GT(toppedUp, 0);
   // Nothing changed: the radiance volume is reused, and the count is its render's.
-  const long long last = *freshRender(doc(2), "adaptive").stats.samples;
   const RenderResult again = r.render();
   EXPECT_TRUE(again.stats.extra.at("radiance_reused").get<bool>());
   ASSERT_TRUE(again.stats.samples.has_value());
-  EXPECT_EQ(*again.stats.samples, last);
+  EXPECT_EQ(*again.stats.samples, lastCount);
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, GpuSteadyFrame,

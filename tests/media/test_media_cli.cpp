@@ -11,11 +11,12 @@
 #include "media/sog.h"
 #include "media/temp_dir.h"
 #include "media/vdb.h"
+#include "support/scenes.h"
 
 namespace scatterlab {
 namespace {
 
-const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
+using testing::kVdb;
 
 struct CliRun {
   int code;

@@ -18,7 +18,7 @@
 namespace scatterlab {
 namespace {
 
-const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
+using testing::kVdb;
 
 /// smoke1.vdb at half resolution (56x111x56), loaded once for the whole suite.
 const DensityGrid& smokeHalf() {

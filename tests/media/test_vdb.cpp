@@ -17,7 +17,7 @@
 namespace scatterlab {
 namespace {
 
-const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
+using testing::kVdb;
 
 const VdbGridInfo& only(const std::vector<VdbGridInfo>& v) {
   EXPECT_EQ(v.size(), 1u);

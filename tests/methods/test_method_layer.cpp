@@ -15,7 +15,7 @@
 namespace scatterlab {
 namespace {
 
-const std::string kGlow = SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json";
+using testing::kGlow;
 const std::vector<std::string> kSmall = {"camera.width=24", "camera.height=18",
                                          "medium.resolution=16"};
 

@@ -12,11 +12,12 @@
 #include "core/method.h"
 #include "core/scene.h"
 #include "core/work_limits.h"
+#include "support/scenes.h"
 
 namespace scatterlab {
 namespace {
 
-const std::string kGlow = SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json";
+using testing::kGlow;
 
 /// Sets the process's memory limit for one test and restores the default after it.
 struct MemoryLimit {

@@ -12,6 +12,15 @@ inline Scene sceneFromJson(const Json& doc) {
   return parseScene(doc, SCATTERLAB_SOURCE_DIR "/data");
 }
 
+/// Relative L2 of a against the reference b (core's definition, docs/metrics.md).
+inline double relL2(const Image& a, const Image& b) {
+  return compareImages(a, b).relL2;
+}
+
+/// The shipped VDB files' folder and the glow scene (data/).
+inline const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
+inline const std::string kGlow = SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json";
+
 /// Homogeneous unit box [0,1]³ of density `density`, one isotropic point light of intensity
 /// `I` at `light`, camera at (0.5, 0.5, -2) looking at the box centre.
 inline Json homogeneousBoxDoc(float density, float sigmaT, float albedo, Vec3 light, float I,
