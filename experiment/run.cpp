@@ -3,12 +3,16 @@
 // record failures and go on, with a progress bar and one log line per run.
 
 #include <sys/resource.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 
 #include "core/error.h"
 #include "core/metrics.h"
@@ -69,6 +73,29 @@ bool resetPeakRss() {
   f << "5";
   f.close();
   return bool(f);
+}
+
+/// The process's heap for timing runs one after another (glibc): freed memory stays in the heap
+/// (no block of its own per large allocation, no trimming), and each run starts by returning the
+/// free memory to the system (startRun). Without this a run's time depended on what the runs
+/// before it had left: glibc maps a large block afresh or takes it from the heap by a threshold
+/// that moves with the sizes freed, and a fresh block costs its page faults (a 120³ scene's
+/// per-voxel render 88 ms warm, 204 ms as the first of a process after its warm-up; the
+/// population's cold/warm ratios 0.38–8.64, docs/fidelity.md "Times with and without a
+/// warm-up"). So each run's warm-up pays the faults and its timed repetitions reuse the memory,
+/// whatever ran before, and the memory measured from startRun is the run's own.
+void keepFreedMemory() {
+#ifdef __GLIBC__
+  mallopt(M_MMAP_MAX, 0);
+  mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+#endif
+}
+
+/// Returns the heap's free memory to the system before a run (glibc; see keepFreedMemory).
+void startRun() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
 }
 
 /// A run's record before it is rendered: what it is and how it is configured.
@@ -203,6 +230,7 @@ class Runner {
     const Scene scene = buildRunScene(r.sceneSpec->file, r.sets, r.lights);
     std::unique_ptr<Method> method = createMethod(scene, m.method, m.backend);
     const int reps = r.sweepSpec->repetitions, warm = r.sweepSpec->warmup;
+    startRun();
     rec.baseHostMiB = procStatusMiB("VmRSS");
     resetPeakRss();
     for (int i = 0; i < warm; ++i) method->render(scene, nullptr);
@@ -387,6 +415,7 @@ MemoryMeasure chooseMemoryMeasure() {
 void runAll(ExperimentResult& res, OutputDir& out, ReferenceCache& refs, const MemoryMeasure& mem,
             const ExperimentOptions& opt, bool progressBar, const std::vector<char>& selected,
             const Json& machine) {
+  keepFreedMemory();
   Runner(res, out, refs, mem, opt, progressBar, selected, machine).runAll();
 }
 
