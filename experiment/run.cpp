@@ -82,8 +82,9 @@ bool resetPeakRss() {
 /// that moves with the sizes freed, and a fresh block costs its page faults (a 120³ scene's
 /// per-voxel render 88 ms warm, 204 ms as the first of a process after its warm-up; the
 /// population's cold/warm ratios 0.38–8.64, docs/fidelity.md "Times with and without a
-/// warm-up"). So each run's warm-up pays the faults and its timed repetitions reuse the memory,
-/// whatever ran before, and the memory measured from startRun is the run's own.
+/// warm-up, and the heap between runs"). So each run's warm-up pays the faults and its timed
+/// repetitions reuse the memory, whatever ran before, and the memory measured from startRun is
+/// the run's own.
 void keepFreedMemory() {
 #ifdef __GLIBC__
   mallopt(M_MMAP_MAX, 0);
