@@ -33,32 +33,33 @@ struct FusedMarchState {
   float wt;  ///< Σ T·(1 − a)·t (the depth's numerator)
 };
 
-/// Marches steps [i, end) of `ray`.
-using FusedSpanKernel = void (*)(const FusedVolumeView& v, const FusedMarchConstants& c,
-                                 const FusedRay& ray, int i, int end, FusedMarchState& s);
+/// The lights' factor of the factored march (the volume holds V = S / A, shading/transport.h):
+/// `scale(ctx, i, count, V)` multiplies S = (V[q][1], V[q][2], V[q][3]) of steps i, …,
+/// i + count − 1 of the ray by A at their points; only steps with D = V[q][0] > 0 and S ≠ 0
+/// need it (the others add nothing). Called once per group of steps, before their exp.
+struct FusedFactor {
+  void (*scale)(const void* ctx, int i, int count, float (*V)[4]);
+  const void* ctx;
+};
 
-/// The lookups alone, for the march that multiplies the lights' factor in: (D, S.r, S.g, S.b)
-/// of steps i, …, i + count − 1 (count <= 8) to out[0 … count − 1].
-using FusedLookupKernel = void (*)(const FusedVolumeView& v, const FusedRay& ray, int i, int count,
-                                   float (*out)[4]);
+/// Marches steps [i, end) of `ray`; `factor`: null, or the lights' factor to multiply S by.
+using FusedSpanKernel = void (*)(const FusedVolumeView& v, const FusedMarchConstants& c,
+                                 const FusedRay& ray, int i, int end, FusedMarchState& s,
+                                 const FusedFactor* factor);
 
 /// Whether this CPU runs the avx2 kernel (AVX2, FMA and F16C).
 bool cpuHasAvx2Kernel();
 /// The kernel for `simd` (Auto: avx2 where the CPU has it). Throws ConfigError naming
 /// render.march_simd when avx2 is asked for and the CPU lacks it.
 FusedSpanKernel fusedSpanKernel(MarchSimd simd);
-/// The lookup kernel of the same instruction set as fusedSpanKernel(simd).
-FusedLookupKernel fusedLookupKernel(MarchSimd simd);
 /// "sse2" or "avx2": the kernel fusedSpanKernel(simd) returns.
 std::string fusedKernelName(MarchSimd simd);
 
 namespace detail {
 void fusedSpanSse2(const FusedVolumeView&, const FusedMarchConstants&, const FusedRay&, int, int,
-                   FusedMarchState&);
+                   FusedMarchState&, const FusedFactor*);
 void fusedSpanAvx2(const FusedVolumeView&, const FusedMarchConstants&, const FusedRay&, int, int,
-                   FusedMarchState&);
-void fusedLookupsSse2(const FusedVolumeView&, const FusedRay&, int, int, float (*)[4]);
-void fusedLookupsAvx2(const FusedVolumeView&, const FusedRay&, int, int, float (*)[4]);
+                   FusedMarchState&, const FusedFactor*);
 }  // namespace detail
 
 }  // namespace scatterlab

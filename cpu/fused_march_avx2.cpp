@@ -47,21 +47,11 @@ inline void lookupAt(const FusedVolumeView& v, std::ptrdiff_t o, float fx, float
   _mm_store_ps(out, res);
 }
 
-/// One lookup at index coordinates u (the factored march's lookups).
-template <bool Half>
-struct Lookup {
-  void operator()(const FusedVolumeView& v, const float* u, float* out) const {
-    float f[3];
-    const std::ptrdiff_t o = 4 * cellOf(v, u, f);
-    lookupAt<Half>(v, o, f[0], f[1], f[2], out);
-  }
-};
-
 /// spanLoop<8> with the cells of the eight steps of a group found 8 wide (clamp, base corner,
 /// fractions and offsets of cellOf as vectors; offsets in 32 bits: at most 512³ · 4 < 2³¹).
 template <bool Half>
 void spanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const FusedRay& r, int i,
-              int end, FusedMarchState& s) {
+              int end, FusedMarchState& s, const FusedFactor* factor) {
   using B8 = xsimd::make_sized_batch_t<float, 8>;
   const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7), zero = _mm256_setzero_ps();
   __m256 u0[3], du[3], maxI[3];
@@ -97,6 +87,7 @@ void spanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const Fuse
       lookupAt<Half>(v, O[q], F[0][q], F[1][q], F[2][q], V[q]);
       D[q] = V[q][0] > 0.0f ? V[q][0] : 0.0f;
     }
+    if (factor) factor->scale(factor->ctx, i, q1, V);
     alignas(32) float a[8];
     (xsimd::exp(B8(-c.sigmaT) * B8::load_aligned(D) * B8(r.dt))).store_aligned(a);
     accumulateGroup<8>(V, D, a, i, q1, r, ratio, minT, L0, L1, L2, T, wt);
@@ -112,21 +103,11 @@ void spanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const Fuse
 
 namespace detail {
 void fusedSpanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const FusedRay& r, int i,
-                   int end, FusedMarchState& s) {
+                   int end, FusedMarchState& s, const FusedFactor* factor) {
   if (v.f16)
-    avx2_kernel::spanAvx2<true>(v, c, r, i, end, s);
+    avx2_kernel::spanAvx2<true>(v, c, r, i, end, s, factor);
   else
-    avx2_kernel::spanAvx2<false>(v, c, r, i, end, s);
-}
-void fusedLookupsAvx2(const FusedVolumeView& v, const FusedRay& r, int i, int count,
-                      float (*out)[4]) {
-  alignas(16) float tmp[8][4];
-  if (v.f16)
-    avx2_kernel::lookupSteps(v, r, i, count, tmp, avx2_kernel::Lookup<true>{});
-  else
-    avx2_kernel::lookupSteps(v, r, i, count, tmp, avx2_kernel::Lookup<false>{});
-  for (int q = 0; q < count; ++q)
-    for (int c = 0; c < 4; ++c) out[q][c] = tmp[q][c];
+    avx2_kernel::spanAvx2<false>(v, c, r, i, end, s, factor);
 }
 }  // namespace detail
 
@@ -138,12 +119,8 @@ void fusedLookupsAvx2(const FusedVolumeView& v, const FusedRay& r, int i, int co
 
 namespace scatterlab::detail {
 void fusedSpanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const FusedRay& r, int i,
-                   int end, FusedMarchState& s) {
-  fusedSpanSse2(v, c, r, i, end, s);
-}
-void fusedLookupsAvx2(const FusedVolumeView& v, const FusedRay& r, int i, int count,
-                      float (*out)[4]) {
-  fusedLookupsSse2(v, r, i, count, out);
+                   int end, FusedMarchState& s, const FusedFactor* factor) {
+  fusedSpanSse2(v, c, r, i, end, s, factor);
 }
 }  // namespace scatterlab::detail
 

@@ -26,11 +26,11 @@ inline void accumulateGroup(const float (&V)[G][4], const float (&D)[G], const f
 }
 
 /// Marches steps [i, end) with `lookup(v, u, out)` writing (D, S.r, S.g, S.b) at index
-/// coordinates u to out; exp of G steps at once.
+/// coordinates u to out, S scaled by `factor` where there is one; exp of G steps at once.
 template <int G, class Lookup>
 inline void spanLoop(const scatterlab::FusedVolumeView& v, const scatterlab::FusedMarchConstants& c,
                      const scatterlab::FusedRay& r, int i, int end, scatterlab::FusedMarchState& s,
-                     const Lookup& lookup) {
+                     const scatterlab::FusedFactor* factor, const Lookup& lookup) {
   using Batch = xsimd::make_sized_batch_t<float, G>;
   float L0 = s.L[0], L1 = s.L[1], L2 = s.L[2], T = s.T, wt = s.wt;
   const float minT = c.minT, ratio = c.ratio;
@@ -44,6 +44,7 @@ inline void spanLoop(const scatterlab::FusedVolumeView& v, const scatterlab::Fus
       lookup(v, u, V[q]);
       D[q] = V[q][0] > 0.0f ? V[q][0] : 0.0f;
     }
+    if (factor) factor->scale(factor->ctx, i, q1, V);
     (xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(r.dt))).store_aligned(a);
     accumulateGroup<G>(V, D, a, i, q1, r, ratio, minT, L0, L1, L2, T, wt);
   }
@@ -52,17 +53,6 @@ inline void spanLoop(const scatterlab::FusedVolumeView& v, const scatterlab::Fus
   s.L[2] = L2;
   s.T = T;
   s.wt = wt;
-}
-
-/// Lookups of steps i … i + count − 1 into out.
-template <class Lookup>
-inline void lookupSteps(const scatterlab::FusedVolumeView& v, const scatterlab::FusedRay& r, int i,
-                        int count, float (*out)[4], const Lookup& lookup) {
-  for (int q = 0; q < count; ++q) {
-    const float k = float(i + q);
-    const float u[3] = {r.u0[0] + k * r.du[0], r.u0[1] + k * r.du[1], r.u0[2] + k * r.du[2]};
-    lookup(v, u, out[q]);
-  }
 }
 
 /// Clamped base corner, fractions and voxel offset of index coordinates u (Grid3::sampleIndex).

@@ -63,21 +63,11 @@ struct LookupF16 {
 
 namespace detail {
 void fusedSpanSse2(const FusedVolumeView& v, const FusedMarchConstants& c, const FusedRay& r, int i,
-                   int end, FusedMarchState& s) {
+                   int end, FusedMarchState& s, const FusedFactor* factor) {
   if (v.f16)
-    sse2_kernel::spanLoop<4>(v, c, r, i, end, s, sse2_kernel::LookupF16{});
+    sse2_kernel::spanLoop<4>(v, c, r, i, end, s, factor, sse2_kernel::LookupF16{});
   else
-    sse2_kernel::spanLoop<4>(v, c, r, i, end, s, sse2_kernel::LookupF32{});
-}
-void fusedLookupsSse2(const FusedVolumeView& v, const FusedRay& r, int i, int count,
-                      float (*out)[4]) {
-  alignas(16) float tmp[8][4];
-  if (v.f16)
-    sse2_kernel::lookupSteps(v, r, i, count, tmp, sse2_kernel::LookupF16{});
-  else
-    sse2_kernel::lookupSteps(v, r, i, count, tmp, sse2_kernel::LookupF32{});
-  for (int q = 0; q < count; ++q)
-    for (int c = 0; c < 4; ++c) out[q][c] = tmp[q][c];
+    sse2_kernel::spanLoop<4>(v, c, r, i, end, s, factor, sse2_kernel::LookupF32{});
 }
 }  // namespace detail
 
@@ -97,11 +87,6 @@ FusedSpanKernel fusedSpanKernel(MarchSimd simd) {
         "sse2)");
   if (simd == MarchSimd::Sse2 || !cpuHasAvx2Kernel()) return &detail::fusedSpanSse2;
   return &detail::fusedSpanAvx2;
-}
-
-FusedLookupKernel fusedLookupKernel(MarchSimd simd) {
-  return fusedSpanKernel(simd) == &detail::fusedSpanAvx2 ? &detail::fusedLookupsAvx2
-                                                         : &detail::fusedLookupsSse2;
 }
 
 std::string fusedKernelName(MarchSimd simd) {

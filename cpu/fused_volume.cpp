@@ -19,7 +19,7 @@ bool FusedVolume::compatible(const DensityGrid& d, const RadianceGrid& r) {
          d.bounds().max == r.bounds().max && glm::all(glm::greaterThanEqual(d.dims(), IVec3(2)));
 }
 
-FusedVolume::FusedVolume(const DensityGrid& d, const RadianceGrid& r, bool half) {
+void FusedVolume::build(const DensityGrid& d, const RadianceGrid& r, bool half) {
   const IVec3 n = d.dims();
   const std::size_t count = d.size();
   checkMemory("render.half_float_volumes",
@@ -35,7 +35,14 @@ FusedVolume::FusedVolume(const DensityGrid& d, const RadianceGrid& r, bool half)
   const float* D = d.data().data();
   const Vec3* S = r.data().data();
   if (!half) {
-    f32_.resize(4 * count);
+    if (!f32_ || size_ != 4 * count) {
+      f16_.reset();
+      f32_.reset();  // before the new one: never both at once
+      size_ = 4 * count;
+      f32_.reset(new float[size_]);
+    }
+    view_.f16 = nullptr;
+    for (float& c : view_.scale) c = 1.0f;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 14),
                       [&](const tbb::blocked_range<std::size_t>& b) {
                         for (std::size_t i = b.begin(); i < b.end(); ++i) {
@@ -46,7 +53,7 @@ FusedVolume::FusedVolume(const DensityGrid& d, const RadianceGrid& r, bool half)
                           p[3] = S[i].b;
                         }
                       });
-    view_.f32 = f32_.data();
+    view_.f32 = f32_.get();
     return;
   }
   // Largest magnitude per channel -> scale so that it is stored as 1024 (half keeps 11
@@ -70,7 +77,13 @@ FusedVolume::FusedVolume(const DensityGrid& d, const RadianceGrid& r, bool half)
     view_.scale[c] = mx[c] > 0.0f && std::isfinite(mx[c]) ? mx[c] / 1024.0f : 1.0f;
     inv[c] = 1.0f / view_.scale[c];
   }
-  f16_.resize(4 * count);
+  if (!f16_ || size_ != 4 * count) {
+    f32_.reset();
+    f16_.reset();
+    size_ = 4 * count;
+    f16_.reset(new std::uint16_t[size_]);
+  }
+  view_.f32 = nullptr;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 14),
                     [&](const tbb::blocked_range<std::size_t>& b) {
                       for (std::size_t i = b.begin(); i < b.end(); ++i) {
@@ -80,7 +93,7 @@ FusedVolume::FusedVolume(const DensityGrid& d, const RadianceGrid& r, bool half)
                           p[c + 1] = imath_float_to_half(S[i][c] * inv[c + 1]);
                       }
                     });
-  view_.f16 = f16_.data();
+  view_.f16 = f16_.get();
 }
 
 void FusedVolume::sample(Vec3 u, float out[4]) const {

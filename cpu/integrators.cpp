@@ -1,7 +1,5 @@
 #include "cpu/integrators.h"
 
-#include <xsimd/xsimd.hpp>
-
 #include "core/stages.h"
 #include "cpu/froxel.h"
 #include "cpu/fused_march.h"
@@ -20,15 +18,13 @@ namespace scatterlab {
 namespace {
 
 /// The march's lookups through a FusedVolume by the SIMD kernels (cpu/fused_march.h), in
-/// runs of steps (MarchesSpans in cpu/ray_marcher.h). Without a light factor the span
-/// kernel marches a run itself; with one (the volume holds V = S / A) the lookup kernel gives
-/// four steps at a time, S = V·A(x, ω) per step, then exp of the four at once and the sums in
-/// the plain march's order.
+/// runs of steps (MarchesSpans in cpu/ray_marcher.h). With a light factor (the volume holds
+/// V = S / A) the span kernel hands each group of steps to scaleByFactor, which multiplies S of
+/// the steps that contribute by A(x, ω): the same lookups, exp and sums as without one.
 struct FusedLookup {
   const FusedVolume& volume;
   const LightFactor* factor;
   FusedSpanKernel span;
-  FusedLookupKernel lookups;
   FusedMarchConstants c;
   /// One step (DensitySourceLookup's interface; the fast march calls marchSpan instead).
   bool operator()(const Vec3& u, const Ray& r, float t, float& D, Vec3& S) const {
@@ -43,36 +39,32 @@ struct FusedLookup {
   void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
                  Vec3& L, float& T, float& wt) const {
     const FusedRay fr{{u0.x, u0.y, u0.z}, {du.x, du.y, du.z}, t0, dt};
-    if (!factor) {
-      FusedMarchState s{{L.x, L.y, L.z}, T, wt};
-      span(volume.view(), c, fr, i, end, s);
-      L = Vec3(s.L[0], s.L[1], s.L[2]);
-      T = s.T;
-      wt = s.wt;
-      return;
-    }
-    using Batch = xsimd::make_sized_batch_t<float, 4>;
-    for (; i < end && T > c.minT; i += 4) {
-      const int q1 = std::min(4, end - i);
-      alignas(16) float V[4][4], D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
-      Vec3 S[4];
-      lookups(volume.view(), fr, i, q1, V);
-      for (int q = 0; q < q1; ++q) {
-        if (!(V[q][0] > 0.0f)) continue;
-        D[q] = V[q][0];
-        S[q] = Vec3(V[q][1], V[q][2], V[q][3]);
-        // V = 0 (outside every spot cone, or fully shadowed): S = 0 without evaluating A.
-        if (S[q] == Vec3(0.0f)) continue;
-        const float t = t0 + (float(i + q) + 0.5f) * dt;
-        S[q] *= (*factor)(r.at(t), -r.dir);
-      }
-      xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
-      for (int q = 0; q < q1 && T > c.minT; ++q) {
-        if (!(D[q] > 0.0f)) continue;
-        L += (T * c.ratio * (1.0f - a[q])) * S[q];
-        wt += T * (1.0f - a[q]) * (t0 + (float(i + q) + 0.5f) * dt);
-        T *= a[q];
-      }
+    const FactorSteps steps{factor, &r, t0, dt};
+    const FusedFactor f{&scaleByFactor, &steps};
+    FusedMarchState s{{L.x, L.y, L.z}, T, wt};
+    span(volume.view(), c, fr, i, end, s, factor ? &f : nullptr);
+    L = Vec3(s.L[0], s.L[1], s.L[2]);
+    T = s.T;
+    wt = s.wt;
+  }
+
+ private:
+  /// The ray whose steps scaleByFactor scales: step k at distance t0 + (k + ½)·dt.
+  struct FactorSteps {
+    const LightFactor* factor;
+    const Ray* ray;
+    float t0, dt;
+  };
+  static void scaleByFactor(const void* ctx, int i, int count, float (*V)[4]) {
+    const FactorSteps& f = *static_cast<const FactorSteps*>(ctx);
+    for (int q = 0; q < count; ++q) {
+      // D = 0 adds nothing; V = 0 (outside every spot cone, or fully shadowed): S = 0 as it is.
+      if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
+      const float t = f.t0 + (float(i + q) + 0.5f) * f.dt;
+      const Vec3 a = (*f.factor)(f.ray->at(t), -f.ray->dir);
+      V[q][1] *= a.x;
+      V[q][2] *= a.y;
+      V[q][3] *= a.z;
     }
   }
 };
@@ -94,18 +86,16 @@ class RayMarcher : public Integrator {
   }
 
  private:
-  Image march(const HostFrame& f, const Scene& scene, Progress* progress,
-              MarchCounts& counts) const {
+  Image march(const HostFrame& f, const Scene& scene, Progress* progress, MarchCounts& counts) {
     const RadianceGrid& radiance = *f.radiance;
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LightFactor A(scene, lampModel_ ? LampModel(scene, *f.density) : LampModel());
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
-      const FusedVolume volume(*f.density, radiance, keys_.halfFloat);
-      const FusedLookup lookup{volume,
+      fused_.build(*f.density, radiance, keys_.halfFloat);
+      const FusedLookup lookup{fused_,
                                factored_ ? &A : nullptr,
                                fusedSpanKernel(keys_.simd),
-                               fusedLookupKernel(keys_.simd),
                                {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
       return marchWith(scene, *f.density, lookup, march_, progress, delta1_, &counts);
     }
@@ -123,6 +113,9 @@ class RayMarcher : public Integrator {
 
   MarchSettings march_;
   RayMarcherSettings keys_;
+  /// The fast march's volume, kept from render to render: its storage is written again, not
+  /// allocated and faulted in anew (a Renderer's frames, the harness's repetitions).
+  FusedVolume fused_;
   bool factored_;
   bool lampModel_;  ///< A includes LampModel's m_l (PipelineSettings::lampModel)
   float delta1_;
