@@ -5,12 +5,9 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -18,6 +15,7 @@
 #include "api/scatterlab.h"
 #include "core/sanitizers.h"
 #include "support/cli.h"
+#include "support/scenes.h"
 
 namespace fs = std::filesystem;
 using scatterlab::Json;
@@ -38,14 +36,7 @@ using scatterlab::kAddressSanitizer;
 RunResult runLimited(const std::string& args, int seconds = 120, long addressSpaceKiB = 2097152) {
   const std::string limit =
       kAddressSanitizer ? "" : "ulimit -v " + std::to_string(addressSpaceKiB) + "; ";
-  const std::string cmd = limit + "timeout -s KILL " + std::to_string(seconds) + " " +
-                          std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  return scatterlab::testing::run(args, limit + "timeout -s KILL " + std::to_string(seconds) + " ");
 }
 
 const std::string kSource = SCATTERLAB_SOURCE_DIR;
@@ -141,7 +132,7 @@ TEST_F(FarGeometry, GaussianCentresUsedAsSamplePointsAreBounded) {
 
 // 2. Each wrote an image with inf or NaN pixels with exit 0 before.
 TEST_F(FiniteImages, HugeButFiniteValuesAreRefusedWithTheirKey) {
-  const std::string glow = kSource + "/data/scenes/glow.json" + kSmall;
+  const std::string glow = scatterlab::testing::kGlow + kSmall;
   for (const char* method : {"exact", "radial-blur", "per-voxel"})
     expectFails(glow + "--method " + std::string(method) + " --set lights.0.intensity=1e36",
                 {"'lights[0].intensity'", "1e+36", "allowed: [0, 1e+20]"});

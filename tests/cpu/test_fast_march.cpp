@@ -20,7 +20,7 @@ namespace {
 /// The glow's Gaussian smoke (mostly empty space) at `res`³, a small image.
 Scene glowScene(int res, const std::string& method) {
   initialize();
-  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json");
+  Scene s = loadScene(scatterlab::testing::kGlow);
   s.medium.resolution = IVec3(res);
   s.camera.width = 96;
   s.camera.height = 72;

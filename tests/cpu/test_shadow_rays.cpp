@@ -17,7 +17,7 @@ namespace {
 
 Scene glowScene(int res) {
   initialize();
-  Scene s = loadScene(SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json");
+  Scene s = loadScene(scatterlab::testing::kGlow);
   s.medium.resolution = IVec3(res);
   s.camera.width = 96;
   s.camera.height = 72;

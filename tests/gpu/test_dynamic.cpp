@@ -649,8 +649,8 @@ TEST(GpuAdaptiveMethod, VisibleTauTracesTheSampleAndItsProbesInParallel) {
 TEST(GpuPerVoxelMethod, GlowSceneWithinHalfAPercent) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
-  const Scene scene = loadScene(std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/glow.json",
-                                {"medium.resolution=32", "camera.width=80", "camera.height=60"});
+  const Scene scene =
+      loadScene(kGlow, {"medium.resolution=32", "camera.width=80", "camera.height=60"});
   const Json render{{"method", "per-voxel"}};
   const RenderResult cpu = renderWith(scene, render, "cpu");
   const RenderResult compute = renderWith(scene, render, "gpu");

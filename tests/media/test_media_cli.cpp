@@ -109,7 +109,7 @@ TEST(MediaCli, BadInputsFailWithMessageAndNoOutput) {
 
 TEST(MediaCli, RenderExportsDensityAndRadianceVolumesAsVdb) {
   testing::TempDir tmp("exportvdb");
-  const std::string scene = std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/glow.json";
+  const std::string scene = testing::kGlow;
   const std::string sets =
       " --set medium.resolution=16 --set camera.width=16 --set camera.height=12 -q";
   const CliRun r =

@@ -34,9 +34,10 @@ struct RunResult {
   std::string output;  ///< stdout and stderr together
 };
 
-/// Runs `scatterlab ARGS` through the shell; code is the exit status (-1 when killed).
-inline RunResult run(const std::string& args) {
-  const std::string cmd = std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
+/// Runs `PREFIX scatterlab ARGS` through the shell (`prefix`: shell words before the tool, e.g.
+/// "timeout 60 "); code is the exit status (-1 when killed).
+inline RunResult run(const std::string& args, const std::string& prefix = "") {
+  const std::string cmd = prefix + std::string(SCATTERLAB_CLI) + " " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf;
