@@ -141,6 +141,10 @@ struct TracerSteps {
   /// its V is never multiplied by a non-zero A. It holds V = 0 (ln V = ln kMinV). Points of
   /// radius 0 (dynamic sampling's probes) are always traced. 0: every sample is traced.
   float reach = 0.0f;
+  /// CPU: the shadow rays traced 4 or 8 steps at once (cpu/shadow_rays.h, SIMD over a ray's
+  /// steps) and stopped where no light gets through (kShadowDepthCutoff), as `exact`'s; false:
+  /// shading/transport.h's scalar opticalDepth (the reference). render.fast_march.
+  bool simdShadows = false;
   /// Whether the values are ln V: the one place where factorLights and logSpace combine.
   bool logValues() const { return factorLights && logSpace; }
 };
@@ -196,7 +200,8 @@ struct PipelineSettings {
             factorLights,
             logSpace,
             factorLights && lampModel,
-            factorLights ? radianceReach : 0.0f};
+            factorLights ? radianceReach : 0.0f,
+            march.fast};
   }
   /// The samples and the radiance volume hold ln V (TracerSteps::logValues()).
   bool logValues() const { return tracerSteps().logValues(); }

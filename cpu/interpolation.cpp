@@ -632,8 +632,8 @@ class PerVoxelReconstruction : public Reconstruction {
  public:
   /// `factored`, `lampModel`: the volume holds what the pipeline's march expects (V = S / A with
   /// factor_lights: adaptive's whole-scene fallback; per-voxel itself holds S).
-  PerVoxelReconstruction(float delta1, bool factored, bool lampModel)
-      : delta1_(delta1), factored_(factored), lampModel_(lampModel) {}
+  PerVoxelReconstruction(float delta1, bool factored, bool lampModel, bool simdShadows)
+      : delta1_(delta1), factored_(factored), lampModel_(lampModel), simdShadows_(simdShadows) {}
   bool needsGradients() const override { return false; }
   bool usesSamples() const override { return false; }
   ReconstructionStats reconstruct(Frame& frame, const Scene& scene, std::span<const RadianceSample>,
@@ -641,7 +641,7 @@ class PerVoxelReconstruction : public Reconstruction {
     if (progress) progress->restart("per-voxel S", dims.z);
     const PerVoxelStats pv =
         buildPerVoxelRadiance(scene, frame.hostDensity(), delta1_, newRadiance(frame, scene, dims),
-                              progress, factored_, lampModel_);
+                              progress, factored_, lampModel_, simdShadows_);
     ReconstructionStats st;
     st.traced = pv.traced;
     st.skipped = pv.skipped;
@@ -650,7 +650,7 @@ class PerVoxelReconstruction : public Reconstruction {
 
  private:
   float delta1_;
-  bool factored_, lampModel_;
+  bool factored_, lampModel_, simdShadows_;
 };
 
 /// The keys of the reconstructions from samples (gradient, rbf, nearest; the extensions of
@@ -733,8 +733,8 @@ void registerReconstructions() {
   }
   reconstructions().declare("per-voxel", {.lightWork = LightWork::EveryVoxel});
   reconstructions().addVariant("per-voxel", Backend::Cpu, [](const PipelineSettings& s) {
-    return std::unique_ptr<Reconstruction>(
-        new PerVoxelReconstruction(s.delta1, s.factorLights, s.tracerSteps().lampModel));
+    return std::unique_ptr<Reconstruction>(new PerVoxelReconstruction(
+        s.delta1, s.factorLights, s.tracerSteps().lampModel, s.tracerSteps().simdShadows));
   });
 }
 

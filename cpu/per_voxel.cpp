@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 
+#include "cpu/shadow_rays.h"
 #include "shading/transport.h"
 
 namespace scatterlab {
@@ -96,14 +97,19 @@ PerVoxelStats tracePerVoxel(const Scene& scene, const DensityGrid& density, cons
 
 PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
                                     RadianceGrid& radiance, Progress* progress, bool factored,
-                                    bool lampModel) {
+                                    bool lampModel, bool simdShadows) {
+  const SimdShadowRays shadows(density);
+  const ShadowDepthFn shadow = simdShadows ? shadows.fn() : ShadowDepthFn{};
   if (factored) {
     // V is multiplied by A in the march: where no spot cone reaches a voxel's support, nothing.
     const LitReach lit(scene.lights);
-    return tracePerVoxel(scene, density, FactoredSourceRadiance(scene, density, delta1, lampModel),
+    return tracePerVoxel(scene, density,
+                         FactoredSourceRadiance(scene, density, delta1, lampModel, shadow),
                          radiance, progress, lit.everywhere() ? nullptr : &lit);
   }
-  return tracePerVoxel(scene, density, SourceRadiance(scene, density, delta1), radiance, progress);
+  return tracePerVoxel(scene, density,
+                       SourceRadiance(scene, density, delta1, nullptr, simdShadows, shadow),
+                       radiance, progress);
 }
 
 }  // namespace scatterlab

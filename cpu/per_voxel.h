@@ -66,8 +66,11 @@ struct PerVoxelStats {
 /// instead of S (FactoredSourceRadiance, A with the lamp model where `lampModel`), which the
 /// factored march multiplies by A again; a voxel no spot cone reaches within its half-diagonal
 /// is then skipped too (LitReach, shading/transport.h: A is 0 wherever the march reads it).
+/// `simdShadows` (TracerSteps::simdShadows, render.fast_march): the shadow rays of
+/// cpu/shadow_rays.h instead of the scalar opticalDepth.
 PerVoxelStats buildPerVoxelRadiance(const Scene& scene, const DensityGrid& density, float delta1,
                                     RadianceGrid& radiance, Progress* progress,
-                                    bool factored = false, bool lampModel = false);
+                                    bool factored = false, bool lampModel = false,
+                                    bool simdShadows = false);
 
 }  // namespace scatterlab

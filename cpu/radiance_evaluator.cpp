@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "cpu/shadow_rays.h"
 #include "shading/transport.h"
 
 namespace scatterlab {
@@ -46,22 +47,24 @@ void evaluateWith(const Source& source, const Scene& scene, float delta2,
 
 void evaluateSamples(const Scene& scene, const DensityGrid& density, TracerSteps steps,
                      std::span<RadianceSample> samples, bool gradients) {
+  const SimdShadowRays shadows(density);
+  const ShadowDepthFn shadow = steps.simdShadows ? shadows.fn() : ShadowDepthFn{};
   const LitReach lit(scene.lights);
   const LitReach* skip =
       steps.factorLights && steps.reach > 0.0f && !lit.everywhere() ? &lit : nullptr;
   if (steps.logValues()) {
-    const FactoredSourceRadiance v(scene, density, steps.delta1, steps.lampModel);
+    const FactoredSourceRadiance v(scene, density, steps.delta1, steps.lampModel, shadow);
     const auto logV = [&](const Vec3& x, const Vec3& toViewer) {
       return glm::log(glm::max(v(x, toViewer), Vec3(kMinV)));
     };
     evaluateWith(logV, scene, steps.delta2, samples, gradients, skip, steps.reach,
                  Vec3(std::log(kMinV)));
   } else if (steps.factorLights)
-    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1, steps.lampModel), scene,
-                 steps.delta2, samples, gradients, skip, steps.reach);
+    evaluateWith(FactoredSourceRadiance(scene, density, steps.delta1, steps.lampModel, shadow),
+                 scene, steps.delta2, samples, gradients, skip, steps.reach);
   else
-    evaluateWith(SourceRadiance(scene, density, steps.delta1), scene, steps.delta2, samples,
-                 gradients);
+    evaluateWith(SourceRadiance(scene, density, steps.delta1, nullptr, steps.simdShadows, shadow),
+                 scene, steps.delta2, samples, gradients);
 }
 
 namespace {

@@ -88,8 +88,9 @@ const std::vector<KeyDoc>& viewMarchKeys() {
        "a view ray stops when its transmittance falls below this", "0.5"},
       {"fast_march", "bool", "true", "true, false",
        "CPU march: skip blocks of zero density, march in tiles, one fused density + radiance "
-       "lookup per step, exact's shadow rays 4 or 8 steps at once (SIMD) (same images within "
-       "1e-6); false: the plain march (reference)",
+       "lookup per step; every CPU shadow ray (exact's, the voxels' and the samples') 4 or 8 "
+       "steps at once (SIMD), stopped where no light gets through (same images within 1e-6); "
+       "false: the plain march and scalar shadow rays (reference)",
        "false", nullptr, "cpu"},
       {"march_scale", "int", "1", "1, 2, 4 (2 and 4 need camera.spp = 1)",
        "CPU view march at 1/scale of the resolution per axis (one ray per scale × scale pixels), "

@@ -441,17 +441,20 @@ class LitReach {
 class FactoredSourceRadiance {
  public:
   /// `delta1`: volume tracing step (world units). `lampModel`: A includes LampModel's m_l,
-  /// so V = S / A divides it out (PipelineSettings::lampModel). References must outlive this
-  /// object.
+  /// so V = S / A divides it out (PipelineSettings::lampModel). `shadow` (optional): traces the
+  /// shadow rays instead of opticalDepth, stopping at SourceRadiance's cutoff. References must
+  /// outlive this object.
   FactoredSourceRadiance(const Scene& scene, const DensityGrid& density, float delta1,
-                         bool lampModel = false)
+                         bool lampModel = false, ShadowDepthFn shadow = {})
       : lights_(scene.lights),
         phase_(scene.medium.phase),
         sigmaT_(scene.medium.sigmaT),
         density_(density),
         delta1_(delta1),
         objects_(scene.objects.get()),
-        lamp_(lampModel ? LampModel(scene, density) : LampModel()) {
+        lamp_(lampModel ? LampModel(scene, density) : LampModel()),
+        shadow_(shadow),
+        depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {
     for (const Light& l : lights_) lit_ = glm::max(lit_, l.intensity);
   }
 
@@ -512,7 +515,9 @@ class FactoredSourceRadiance {
   /// V_l·T towards the light of `t` (objects block it entirely).
   float transmittance(const Vec3& x, const Term& t) const {
     if (objects_ && objects_->occluded(x, t.toLight, 0.0f, t.distance)) return 0.0f;
-    return std::exp(-sigmaT_ * opticalDepth(density_, x, t.end, delta1_));
+    const float tau = shadow_.fn ? shadow_.fn(shadow_.ctx, x, t.end, delta1_, depthCutoff_)
+                                 : opticalDepth(density_, x, t.end, delta1_);
+    return std::exp(-sigmaT_ * tau);
   }
   /// V with every cone ignored (every light traced).
   Vec3 freeV(const Vec3& x, const Vec3& toViewer) const {
@@ -535,7 +540,9 @@ class FactoredSourceRadiance {
   float delta1_;
   const SceneObjects* objects_;
   LampModel lamp_;
-  Vec3 lit_{0.0f};  ///< channels some light emits in
+  ShadowDepthFn shadow_;  ///< the shadow rays' tracer, when given
+  float depthCutoff_;     ///< τ at which it stops a shadow ray
+  Vec3 lit_{0.0f};        ///< channels some light emits in
 };
 
 }  // namespace scatterlab
