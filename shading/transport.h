@@ -89,6 +89,10 @@ inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, fl
 /// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
 /// gets through, below what the float sums of a pixel resolve.
 inline constexpr float kShadowDepthCutoff = 25.0f;
+/// The density integral ∫D at which a shadow ray stops: kShadowDepthCutoff / σt (never for σt = 0).
+inline float shadowDepthCutoff(float sigmaT) {
+  return sigmaT > 0.0f ? kShadowDepthCutoff / sigmaT : kInfinity;
+}
 
 /// opticalDepth(g, a, b, step) skipping the steps in blocks of `skip` (built from g) whose
 /// maximum is zero: the same steps are summed in the same order, so the result is the same,
@@ -159,7 +163,7 @@ class SourceRadiance {
         skip_(skip),
         shadow_(shadow),
         cutoff_(cutoff || skip || shadow.fn),
-        depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {}
+        depthCutoff_(shadowDepthCutoff(sigmaT_)) {}
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -454,7 +458,7 @@ class FactoredSourceRadiance {
         objects_(scene.objects.get()),
         lamp_(lampModel ? LampModel(scene, density) : LampModel()),
         shadow_(shadow),
-        depthCutoff_(sigmaT_ > 0.0f ? kShadowDepthCutoff / sigmaT_ : kInfinity) {
+        depthCutoff_(shadowDepthCutoff(sigmaT_)) {
     for (const Light& l : lights_) lit_ = glm::max(lit_, l.intensity);
   }
 
