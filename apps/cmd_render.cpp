@@ -409,8 +409,7 @@ Action addRender(CLI::App& app) {
       if (st.extra.value("voxels_instead", false))
         std::printf(
             "rendered as per-voxel renders it: the medium's %lld occupied voxels cost less "
-            "to trace than dynamic sampling's first level (render.voxel_switch; 0 turns "
-            "it off)\n",
+            "to trace than the method's samples (render.voxel_switch; 0 turns it off)\n",
             st.extra["occupied_voxels"].get<long long>());
       const int f0 = frames.front(), f1 = frames.back();
       const auto shown = [&](const std::string& p) {

@@ -170,6 +170,11 @@ struct PipelineSettings {
   /// The method refines its samples where their error asks (a SampleRefiner runs: `adaptive`).
   /// Set from the method before any key is read; defaults may follow it (log_space).
   bool refinedSamples = false;
+  /// The whole-scene fallback (key `voxel_switch`, methods whose row has one: gradient,
+  /// adaptive; 0 = off, the paper's): where the medium's lit occupied voxels are at most
+  /// voxelSwitch × the traces of the sampled path (PipelineMethod), the scene is rendered as
+  /// per-voxel renders it.
+  double voxelSwitch = 0.0;
   /// Occlusion-aware Eq. 4 weights: W_j(x)·exp(−σt·τ(x_j, x)), τ the optical depth between the
   /// sample and the voxel, so no sample contributes across a dense occluder.
   bool occlusionWeights = false;

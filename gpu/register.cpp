@@ -50,9 +50,7 @@ class GpuRefiner : public SampleRefiner {
     r.onDevice = true;
     return r;
   }
-  bool voxelsInstead(long long occupied, long long initial) const override {
-    return scatterlab::voxelsInstead(s_, occupied, initial);
-  }
+  double tracesPerSample() const override { return 1.0 + s_.probes; }
   void describe(RenderStats& stats, const DynamicSamplingResult& result) const override {
     addDynamicSamplingStats(stats, result, s_);
   }

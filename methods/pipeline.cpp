@@ -86,9 +86,9 @@ class PipelineMethod : public Method {
   std::unique_ptr<RadianceEvaluator> evaluator;
   std::unique_ptr<SampleRefiner> refiner;
   std::unique_ptr<Reconstruction> reconstruction;
-  /// With a refiner: the row's whole-scene fallback (MethodDesc::wholeSceneFallback: per-voxel's
+  /// The row's whole-scene fallback (MethodDesc::wholeSceneFallback: per-voxel's
   /// reconstruction, of what this pipeline's volume holds, V = S / A with factor_lights), for a
-  /// medium the refiner would trace more of than it (SampleRefiner::voxelsInstead).
+  /// medium whose samples would trace more than it (voxelsInstead()).
   std::unique_ptr<Reconstruction> voxelReconstruction;
   std::unique_ptr<Integrator> integrator;
 
@@ -126,13 +126,15 @@ class PipelineMethod : public Method {
       return r;
     }
     // The whole-scene fallback: a medium so sparse that per-voxel traces less than the
-    // refiner's first level would is rendered as per-voxel renders it. Per-voxel traces the
+    // samples would is rendered as per-voxel renders it. Per-voxel traces the
     // occupied voxels that some light reaches: where only spot lights shine, at most those of
     // the occupied voxels of the cells of a coarse grid that a cone reaches
     // (LitReach::voxelBound). The count and the cells' counts are taken once per density (on a
     // GPU a pass and a small read each); the cones are host geometry, so the decision follows
     // the lights from frame to frame with no wait.
-    if (voxelReconstruction) {
+    // Off (voxel_switch 0, render.paper): nothing counted, no pass, no read.
+    if (voxelReconstruction && settings_.voxelSwitch <= 0.0) st.extra["voxels_instead"] = false;
+    if (voxelReconstruction && settings_.voxelSwitch > 0.0) {
       const IVec3 res = scene.medium.resolution;
       const IVec3 cells = LitReach::boundCells(res);
       if (!reuse || !keptOccupied_) {
@@ -149,9 +151,15 @@ class PipelineMethod : public Method {
         st.extra["lit_voxels"] = bound;
         traced = std::min(traced, bound);
       }
-      const bool voxelsInstead = refiner->voxelsInstead(traced, plan_.plannedSamples);
-      st.extra["voxels_instead"] = voxelsInstead;
-      if (voxelsInstead) {
+      // The sampled path's traces: a refiner's first level (SampleRefiner::tracesPerSample),
+      // else S and, for a reconstruction that reads it, the six differences of ∇S.
+      const double perSample = refiner                            ? refiner->tracesPerSample()
+                               : reconstruction->needsGradients() ? 7.0
+                                                                  : 1.0;
+      const bool instead = scatterlab::voxelsInstead(settings_.voxelSwitch, traced,
+                                                     double(plan_.plannedSamples) * perSample);
+      st.extra["voxels_instead"] = instead;
+      if (instead) {
         samplesOnDevice_ = false;
         ReconstructionStats rs;
         stage("radiance", [&] {
@@ -317,7 +325,7 @@ std::unique_ptr<Method> makePipelineMethod(const MethodDesc& d, Params& p, const
                            "radiance evaluator")(settings);
   if (!d.refiner.empty())
     m->refiner = variant(refiners(), d.refiner, b, p.keyPath("method"), "sample refiner")(settings);
-  if (m->refiner && !d.wholeSceneFallback.empty())
+  if (!d.wholeSceneFallback.empty())
     m->voxelReconstruction = variant(reconstructions(), d.wholeSceneFallback, b,
                                      p.keyPath("method"), "reconstruction")(settings);
   if (d.radianceVolume())

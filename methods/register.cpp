@@ -26,6 +26,7 @@ const std::vector<MethodDesc>& builtinMethods() {
        .summary = "samples with S and ∇S, first-order Taylor splatting (paper Eq. 4)",
        .sampler = true,
        .reconstruction = "gradient",
+       .wholeSceneFallback = "per-voxel",
        .integrator = "ray-marcher",
        .extended = true,
        .extendedSampler = {.type = "jittered", .count = kGradientCount, .atMost = true}},

@@ -163,6 +163,34 @@ void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool 
     p.fail("lamp_model", "is part of factor_lights' A; it needs factor_lights = true");
 }
 
+/// Methods whose row has a whole-scene fallback (MethodDesc::wholeSceneFallback).
+const std::vector<KeyDoc>& wholeSceneFallbackKeys() {
+  static const std::vector<KeyDoc> keys = {
+      {"voxel_switch", "number", "4 (0 with paper)", "0…1000 (not with paper)",
+       "`gradient` and `adaptive`: the whole-scene fallback: where the medium's occupied voxels "
+       "(D > 0) that a light reaches — under spot lights only, at most the voxels holding "
+       "density in the cells that a cone reaches (stat `lit_voxels`: a bound from the lights and "
+       "the occupied voxels per cell of a ≤ 32³ grid, taken once per density) — are at most "
+       "`voxel_switch` × the traces of the method's samples (gradient: the planned samples × 7, "
+       "S and the six differences of ∇S; adaptive: the initial samples × (1 + `probes`), the "
+       "first level's alone), per-voxel traces less than the samples would (a sparse medium: "
+       "wisps, small puffs; a narrow shaft through fog; a small volume), and the scene is "
+       "rendered as per-voxel renders it, its voxels holding V = S / A with `factor_lights` "
+       "(stats `voxels_instead`, `occupied_voxels`); 0: never. Chosen on the population "
+       "(docs/fidelity.md, \"The whole-scene fallback\", \"gradient's whole-scene fallback, "
+       "built\")",
+       "0"},
+  };
+  return keys;
+}
+
+void parseWholeSceneFallback(Params& p, PipelineSettings& s) {
+  if (s.paper && p.has("voxel_switch"))
+    p.fail("voxel_switch", "is an extension; it cannot be set with render.paper = true");
+  s.voxelSwitch =
+      p.number("voxel_switch", s.paper ? 0.0 : kVoxelSwitch, Interval::closed(0.0, 1000.0));
+}
+
 /// Methods with a source-radiance volume.
 const std::vector<KeyDoc>& radianceVolumeKeys() {
   static const std::vector<KeyDoc> keys = {
@@ -226,6 +254,7 @@ std::vector<const std::vector<KeyDoc>*> keyTables(const MethodDesc& d,
   t.push_back(&commonKeys());
   if (d.sampler) t.push_back(&sampleKeys());
   if (d.radianceVolume()) t.push_back(&radianceVolumeKeys());
+  if (!d.wholeSceneFallback.empty()) t.push_back(&wholeSceneFallbackKeys());
   if (d.integratorSelectable) t.push_back(&integratorChoiceKeys());
   for (const StageDecl* st : stages)
     for (const KeyGroup& g : st->keys) t.push_back(&g.table());
@@ -298,6 +327,7 @@ PipelineSettings parseSettings(Params& p, const Scene& scene, const MethodDesc& 
   parseCommon(p, scene, s);
   if (d.sampler) parseSampleValues(p, scene, s, d.extended);
   if (d.radianceVolume()) parseRadianceVolume(p, scene, s);
+  if (!d.wholeSceneFallback.empty()) parseWholeSceneFallback(p, s);
   for (const StageDecl* st : stages)
     for (const KeyGroup& g : st->keys) g.parse(p, scene, s);
   // The integrators that march one ray per (low-resolution) pixel or froxel column.
@@ -310,6 +340,11 @@ PipelineSettings parseSettings(Params& p, const Scene& scene, const MethodDesc& 
 }
 
 }  // namespace
+
+bool voxelsInstead(double voxelSwitch, long long litVoxels, double sampledTraces) {
+  return voxelSwitch > 0.0 && sampledTraces > 0.0 &&
+         double(litVoxels) <= voxelSwitch * sampledTraces;
+}
 
 std::vector<KeyDoc> methodKeyTable(const MethodDesc& d) {
   std::vector<KeyDoc> rows;

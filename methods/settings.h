@@ -32,8 +32,8 @@ struct MethodDesc {
   std::string evaluator = "volume-tracer";
   std::string refiner = {};         ///< a SampleRefiner between them ("dynamic"), or empty
   std::string reconstruction = {};  ///< reconstructions() entry, or empty (no radiance volume)
-  /// With a refiner: the reconstructions() entry the whole scene falls back to where it costs
-  /// less than refining (SampleRefiner::voxelsInstead, key voxel_switch), or empty.
+  /// The reconstructions() entry the whole scene falls back to where tracing it costs less
+  /// than the sampled path (voxelsInstead(), key voxel_switch), or empty.
   std::string wholeSceneFallback = {};
   std::string integrator = {};       ///< default integrators() entry (render.integrator)
   bool integratorSelectable = true;  ///< whether render.integrator may replace it
@@ -90,6 +90,18 @@ std::vector<KeyDoc> methodKeyTable(const MethodDesc& desc);
 /// The top-level render keys a method with `desc` reads (the names of methodKeyTable()): for
 /// createMethod's tolerance of other methods' keys.
 std::vector<std::string> methodKeys(const MethodDesc& desc);
+
+/// Default of the whole-scene fallback (key `voxel_switch`, PipelineSettings::voxelSwitch):
+/// chosen on the population of scenes, for adaptive (docs/fidelity.md, "The whole-scene
+/// fallback") and for gradient ("gradient's whole-scene fallback").
+inline constexpr double kVoxelSwitch = 4.0;
+
+/// The whole-scene fallback's rule, one for every method and backend: whether per-voxel, tracing
+/// S at `litVoxels` (the occupied voxels a light reaches), costs at most `voxelSwitch` × the
+/// `sampledTraces` of the method's own sampled path (gradient: its samples × 7, S and the six
+/// differences of ∇S; adaptive: its initial samples × (1 + probes)). 0 turns it off; no traces,
+/// nothing to compare.
+bool voxelsInstead(double voxelSwitch, long long litVoxels, double sampledTraces);
 
 /// Key table of render.shadow_map (ShadowMapSettings).
 const std::vector<KeyDoc>& shadowMapKeys();

@@ -774,12 +774,6 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "probe points on the level the fallback follows (the finest of levels): probing it is "
        "what the fallback costs where nothing fails",
        "14"},
-      {"voxel_switch", "number", "4 (0 with paper)", "0…1000 (not with paper)",
-       "the whole-scene fallback: where the medium's occupied voxels (D > 0) are at most "
-       "voxel_switch × the initial samples × (1 + probes), the traces of the first level alone "
-       "(a sparse medium: wisps, small puffs), the scene is rendered as per-voxel renders it (its "
-       "voxels holding V = S / A with factor_lights); 0: never",
-       "0"},
   };
   return keys;
 }
@@ -827,10 +821,6 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   if (paper && p.has("fallback_probes"))
     p.fail("fallback_probes", "is an extension; it cannot be set with render.paper = true");
   s.fallbackProbes = probeCount(p, "fallback_probes", 6);
-  if (paper && p.has("voxel_switch"))
-    p.fail("voxel_switch", "is an extension; it cannot be set with render.paper = true");
-  s.voxelSwitch =
-      p.number("voxel_switch", paper ? 0.0 : kVoxelSwitch, Interval::closed(0.0, 1000.0));
   s.voxelDims = scene.medium.resolution;
   const IVec3 res = scene.medium.resolution;
   const int finestAllowed = std::max(2, std::max(res.x, std::max(res.y, res.z)) / 2);
@@ -888,12 +878,6 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   return s;
 }
 
-bool voxelsInstead(const DynamicSamplingSettings& s, long long occupiedVoxels,
-                   long long initialSamples) {
-  return s.voxelSwitch > 0.0 && initialSamples > 0 &&
-         double(occupiedVoxels) <= s.voxelSwitch * double(initialSamples) * (1.0 + s.probes);
-}
-
 namespace {
 
 class CpuRefiner : public SampleRefiner {
@@ -904,9 +888,7 @@ class CpuRefiner : public SampleRefiner {
                                RadianceEvaluator& evaluator) override {
     return dynamicSampling(frame, scene, std::move(initial), evaluator, s_);
   }
-  bool voxelsInstead(long long occupied, long long initial) const override {
-    return scatterlab::voxelsInstead(s_, occupied, initial);
-  }
+  double tracesPerSample() const override { return 1.0 + s_.probes; }
   void describe(RenderStats& stats, const DynamicSamplingResult& result) const override {
     addDynamicSamplingStats(stats, result, s_);
   }

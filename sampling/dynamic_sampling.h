@@ -118,11 +118,6 @@ struct DynamicSamplingSettings {
   /// the fallback; key `fallback_probes`): levelProbes().
   int fallbackProbes = 6;
   IVec3 voxelDims{0};  ///< the fallback grid (the radiance volume's dims; withPipeline())
-  /// The whole-scene fallback (extension, key `voxel_switch`; 0 = off, the paper's): where the
-  /// medium's occupied voxels are at most voxelSwitch × the initial samples × (1 + probes), the
-  /// traces of the first level alone, per-voxel traces less than adaptive would, and the
-  /// pipeline renders the scene as per-voxel does (voxelsInstead()).
-  double voxelSwitch = 0.0;
   /// Split into the cell (extension, key `split`: "cell"): a split sample is replaced by the
   /// vertices of G_{k+1} in its cell, the cube of edge R_j centred on it (for a cubic grid the
   /// cell of the partition: 8 children when the next grid is twice as fine), instead of every
@@ -354,10 +349,6 @@ inline constexpr long long kBudgetCap = 8000;
 /// 0.75: "The budget re-checked with V").
 inline constexpr double kBudgetCostShare = 0.75;
 
-/// Default of the whole-scene fallback (key `voxel_switch`): chosen on the population of scenes
-/// (docs/fidelity.md, "The whole-scene fallback").
-inline constexpr double kVoxelSwitch = 4.0;
-
 /// The budget applied to `initialCount` initial samples (0: none). The cost cap C =
 /// costShare · voxels / (7 + probes) when costShare > 0 (at least 1). For kAutoBudget
 /// max(min(kBudgetPerInitial · initialCount, kBudgetCap), C): the count rule's floor, raised where
@@ -482,12 +473,6 @@ DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& den
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings);
 
-/// Whether a scene whose density has `occupiedVoxels` voxels with D > 0 is rendered as per-voxel
-/// does instead (DynamicSamplingSettings::voxelSwitch), from `initialSamples` initial samples:
-/// the one rule of both backends' refiners.
-bool voxelsInstead(const DynamicSamplingSettings& s, long long occupiedVoxels,
-                   long long initialSamples);
-
 /// Stage: dynamic sampling between the sampler and the reconstruction (method `adaptive`).
 /// Returns the final sample set with S and ∇S evaluated. The CPU variant is dynamicSampling()
 /// with the pipeline's evaluator; the GPU one (gpu/) runs its own passes.
@@ -497,9 +482,10 @@ class SampleRefiner {
   virtual DynamicSamplingResult refine(Frame& frame, const Scene& scene,
                                        std::vector<RadianceSample> initial,
                                        RadianceEvaluator& evaluator) = 0;
-  /// Whether per-voxel, tracing S at the medium's `occupiedVoxels`, costs less than refining
-  /// `initialSamples` would: then the pipeline renders as per-voxel does (voxelsInstead()).
-  virtual bool voxelsInstead(long long occupiedVoxels, long long initialSamples) const = 0;
+  /// The traces per initial sample that the whole-scene fallback (key `voxel_switch`) weighs
+  /// against per-voxel's: 1 + probes, the first level's S and probes (its ∇S left out: the
+  /// rule as chosen on the population, docs/fidelity.md).
+  virtual double tracesPerSample() const = 0;
   /// Writes what refine() did into the stats (addDynamicSamplingStats with its settings); a
   /// result left on the device (DynamicSamplingResult::onDevice) is reported after the frame
   /// by the variant itself instead.

@@ -157,10 +157,13 @@ TEST(LampModel, OnByDefaultWithFactorLightsAndRejectedWithoutIt) {
     s.render = r;
     return createMethod(s)->render(s, nullptr).image;
   };
+  // The samples (voxel_switch 0: not the whole-scene fallback of so small a volume).
   const Json sampler = {{"type", "jittered"}, {"count", 200}};
-  const Image def = render({{"method", "gradient"}, {"sampler", sampler}});
-  const Image on = render({{"method", "gradient"}, {"sampler", sampler}, {"lamp_model", true}});
-  const Image off = render({{"method", "gradient"}, {"sampler", sampler}, {"lamp_model", false}});
+  const Image def = render({{"method", "gradient"}, {"sampler", sampler}, {"voxel_switch", 0}});
+  const Image on = render(
+      {{"method", "gradient"}, {"sampler", sampler}, {"voxel_switch", 0}, {"lamp_model", true}});
+  const Image off = render(
+      {{"method", "gradient"}, {"sampler", sampler}, {"voxel_switch", 0}, {"lamp_model", false}});
   EXPECT_EQ(compareImages(def, on).relL2, 0.0);
   EXPECT_GT(compareImages(def, off).relL2, 0.0);
   const auto error = [&](const Json& r) {
@@ -191,6 +194,7 @@ TEST(LogSpace, OnByDefaultWhereTheDensestVoxelIsNearlyOpaque) {
     const auto render = [&](Json r) {
       r["method"] = "gradient";
       r["sampler"] = {{"type", "jittered"}, {"count", 200}};
+      r["voxel_switch"] = 0;  // the samples, not the whole-scene fallback
       for (const auto& [k, v] : extra.items()) r[k] = v;
       s.render = r;
       return createMethod(s)->render(s, nullptr).image;
@@ -206,7 +210,9 @@ TEST(LogSpace, OnByDefaultWhereTheDensestVoxelIsNearlyOpaque) {
   {  // the stats say which it was
     Scene s = testing::sceneFromJson(
         testing::homogeneousBoxDoc(1.0f, 9.6f, 0.6f, Vec3(0.5f, 0.6f, 0.45f), 2.0f, 8, 6, 16));
-    s.render = {{"method", "gradient"}, {"sampler", {{"type", "jittered"}, {"count", 50}}}};
+    s.render = {{"method", "gradient"},
+                {"sampler", {{"type", "jittered"}, {"count", 50}}},
+                {"voxel_switch", 0}};
     const RenderStats st = createMethod(s)->render(s, nullptr).stats;
     EXPECT_EQ(st.extra.at("log_space"), true);
     EXPECT_EQ(st.extra.at("factor_lights"), true);
@@ -257,7 +263,8 @@ TEST(LightFactorization, ALampInsideTheMediumAgainstExact) {
     return compareImages(img, exact, lightMask(s, 2.0f));
   };
   const Json sampler = {{"type", "jittered"}, {"count", 800}};
-  const ImageError factored = error({{"method", "gradient"}, {"sampler", sampler}});
+  const ImageError factored =
+      error({{"method", "gradient"}, {"sampler", sampler}, {"voxel_switch", 0}});
   const ImageError paper = error({{"method", "gradient"}, {"sampler", sampler}, {"paper", true}});
   std::printf("lamp inside: factored %.4f (masked %.4f), paper %.4f (masked %.4f)\n",
               factored.relL2, factored.maskedRelL2, paper.relL2, paper.maskedRelL2);

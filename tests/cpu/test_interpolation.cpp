@@ -255,7 +255,8 @@ TEST(SampledMethods, LightsInsideAndOutsideTheBox) {
     doc["render"] = {{"method", "per-voxel"}};
     const RenderResult ref = renderWith(doc);
     for (const char* m : {"gradient", "rbf", "nearest"}) {
-      doc["render"] = {{"method", m}, {"sampler", {{"type", "grid"}, {"count", 512}}}};
+      doc["render"] =
+          testing::sampledPath({{"method", m}, {"sampler", {{"type", "grid"}, {"count", 512}}}});
       const RenderResult r = renderWith(doc);
       const double err = compareImages(r.image, ref.image).relL2;
       std::printf("%s, light %s: relL2 %.4g\n", m, light.y > 1.0f ? "outside" : "inside", err);

@@ -128,10 +128,11 @@ TEST(LitReach, TheImageIsThatOfEverySampleTraced) {
   Json dark = shaftDoc();
   dark["lights"].push_back({{"type", "point"}, {"position", {3, 3, 3}}, {"intensity", 0}});
   const Scene withDark = testing::sceneFromJson(dark);
-  for (const Json& r :
-       {Json{{"method", "gradient"}, {"sampler", {{"type", "jittered"}, {"count", 300}}}},
-        Json{{"method", "adaptive"}, {"voxel_switch", 0}},
-        Json{{"method", "adaptive"}, {"voxel_switch", 1000}}}) {
+  for (const Json& r : {Json{{"method", "gradient"},
+                             {"sampler", {{"type", "jittered"}, {"count", 300}}},
+                             {"voxel_switch", 0}},
+                        Json{{"method", "adaptive"}, {"voxel_switch", 0}},
+                        Json{{"method", "adaptive"}, {"voxel_switch", 1000}}}) {
     Scene a = spotOnly, b = withDark;
     a.render = b.render = r;
     const RenderResult ra = createMethod(a)->render(a, nullptr);

@@ -466,10 +466,11 @@ TEST(GpuComputePipeline, WhereNoConeReachesTheGpuSkipsAsTheCpu) {
   doc["lights"] = Json::parse(R"([{"type": "spot", "position": [0.45, 1.4, 0.55],
       "direction": [0.1, -1, 0], "intensity": [3, 2.5, 2], "inner_deg": 6, "outer_deg": 9}])");
   doc["camera"]["position"] = {0.5, 0.6, -1.6};
-  for (const Json& r :
-       {Json{{"method", "gradient"}, {"sampler", {{"type", "jittered"}, {"count", 200}}}},
-        Json{{"method", "adaptive"}, {"voxel_switch", 0}, {"levels", {4, 8}}},
-        Json{{"method", "adaptive"}, {"voxel_switch", 1000}}}) {
+  for (const Json& r : {Json{{"method", "gradient"},
+                             {"sampler", {{"type", "jittered"}, {"count", 200}}},
+                             {"voxel_switch", 0}},
+                        Json{{"method", "adaptive"}, {"voxel_switch", 0}, {"levels", {4, 8}}},
+                        Json{{"method", "adaptive"}, {"voxel_switch", 1000}}}) {
     doc["render"] = r;
     const Scene scene = parseScene(doc, ".");
     const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
@@ -512,7 +513,10 @@ TEST(GpuComputePipeline, NoSamplerReadsTheDensityBack) {
   SCATTERLAB_REQUIRE_GPU();
   initialize();
   Json doc = blobSceneDoc(16, 16, 12);
-  doc["render"] = {{"method", "gradient"}, {"sampler", {{"type", "gaussian-centres"}}}};
+  // The samplers themselves (voxel_switch 0: not the whole-scene fallback, whose occupancy
+  // count is a pass of its own).
+  doc["render"] = {
+      {"method", "gradient"}, {"sampler", {{"type", "gaussian-centres"}}}, {"voxel_switch", 0}};
   const Scene centres = parseScene(doc, ".");
   const RenderResult a = createMethod(centres, "", "gpu")->render(centres, nullptr);
   EXPECT_FALSE(a.stats.extra["gpu_ms"].contains("density read-back")) << a.stats.extra["gpu_ms"];

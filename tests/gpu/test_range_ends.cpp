@@ -14,7 +14,8 @@
 namespace scatterlab::testing {
 namespace {
 
-/// The blob scene at 16x12 with `lights` point lights on a ring above the medium (0: its own
+/// The blob scene at 16x12 (gradient with voxel_switch 0: its samples, not the whole-scene
+/// fallback of so small a volume) with `lights` point lights on a ring above the medium (0: its own
 /// two lights).
 Json rangeScene(const Json& render, int lights) {
   Json doc = blobSceneDoc(16, 16, 12);
@@ -82,7 +83,7 @@ INSTANTIATE_TEST_SUITE_P(
                  0,
                  "'render.march_step'"},
         RangeEnd{"gradient_short_step",
-                 {{"method", "gradient"}, {"march_step", 2e-5}},
+                 {{"method", "gradient"}, {"march_step", 2e-5}, {"voxel_switch", 0}},
                  0,
                  "'render.march_step'"},
         RangeEnd{"light_space_march_most_steps",
@@ -94,7 +95,10 @@ INSTANTIATE_TEST_SUITE_P(
                  150,
                  "the lights"},
         RangeEnd{"jittered_march_many_lights", {{"method", "jittered-march"}}, 150, "the lights"},
-        RangeEnd{"gradient_many_lights", {{"method", "gradient"}}, 400, "lights"}),
+        RangeEnd{"gradient_many_lights",
+                 {{"method", "gradient"}, {"voxel_switch", 0}},  // its samples' tracer
+                 400,
+                 "lights"}),
     [](const ::testing::TestParamInfo<RangeEnd>& i) { return std::string(i.param.name); });
 
 }  // namespace

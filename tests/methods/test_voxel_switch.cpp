@@ -1,6 +1,6 @@
-/// The whole-scene fallback of `adaptive` (key voxel_switch, docs/fidelity.md): a medium so
-/// sparse that per-voxel traces less than adaptive's first level would is rendered as per-voxel
-/// renders it — its stages, its image bit for bit — and the rule is the one documented.
+/// The whole-scene fallback of `adaptive` and `gradient` (key voxel_switch, docs/fidelity.md): a
+/// medium so sparse that per-voxel traces less than the method's samples would is rendered as
+/// per-voxel renders it — its stages, its image bit for bit — and the rule is the one documented.
 
 #include <algorithm>
 
@@ -149,16 +149,48 @@ TEST(VoxelSwitch, ASparseMediumIsRenderedAsPerVoxelRendersIt) {
   EXPECT_FALSE(paper.stats.extra.at("voxels_instead").get<bool>());
 }
 
-TEST(VoxelSwitch, TheRuleComparesTheOccupiedVoxelsWithTheFirstLevelsTraces) {
-  DynamicSamplingSettings s;
-  s.probes = 40;
-  s.voxelSwitch = 3.0;
-  // 3 × 100 initial samples × (1 + 40 probes) = 12 300 traces.
-  EXPECT_TRUE(voxelsInstead(s, 12300, 100));
-  EXPECT_FALSE(voxelsInstead(s, 12301, 100));
-  EXPECT_FALSE(voxelsInstead(s, 0, 0));  // no samples: nothing to compare
-  s.voxelSwitch = 0.0;
-  EXPECT_FALSE(voxelsInstead(s, 1, 100));
+TEST(VoxelSwitch, GradientFallsBackAsAdaptiveDoesWhereItsSamplesTraceMore) {
+  // gradient's sampled path traces 7 points per sample (S and the six differences of ∇S): its
+  // default 8 000 jittered samples at most on the wisp's 48³ box trace far more than the few
+  // thousand voxels holding density, so it renders as per-voxel renders them: the same image as
+  // adaptive's fallback (the same V = S / A per voxel, the same march).
+  const RenderResult adaptive = render(wispDoc(), "adaptive");
+  const RenderResult gradient = render(wispDoc(), "gradient");
+  EXPECT_TRUE(gradient.stats.extra.at("voxels_instead").get<bool>());
+  EXPECT_EQ(stages(gradient), (std::vector<std::string>{"density", "radiance", "march"}));
+  EXPECT_EQ(*gradient.stats.samples, 0);
+  EXPECT_EQ(compareImages(gradient.image, adaptive.image).maxAbs, 0.0);
+  // The rule's edge, with the Gaussian centres (one sample: 7 traces): voxel_switch × 7 against
+  // the occupied voxels.
+  const long long occupied = gradient.stats.extra.at("occupied_voxels").get<long long>();
+  ASSERT_LT(occupied, 7000);  // within the key's range of 1000 × 7
+  const auto centres = [&](double k) {
+    Json doc = wispDoc();
+    doc["render"]["sampler"] = {{"type", "gaussian-centres"}};
+    doc["render"]["voxel_switch"] = k;
+    return render(doc, "gradient");
+  };
+  const double edge = double(occupied) / 7.0;
+  EXPECT_TRUE(centres(edge).stats.extra.at("voxels_instead").get<bool>());
+  const RenderResult below = centres(edge * (1.0 - 1e-6));
+  EXPECT_FALSE(below.stats.extra.at("voxels_instead").get<bool>());
+  EXPECT_EQ(*below.stats.samples, 1);
+  // Off, and under the paper's algorithm (which never switches and counts nothing): samples.
+  const RenderResult off = render(wispDoc(), "gradient", "render.voxel_switch=0");
+  EXPECT_FALSE(off.stats.extra.at("voxels_instead").get<bool>());
+  EXPECT_FALSE(off.stats.extra.contains("occupied_voxels"));
+  EXPECT_GT(*off.stats.samples, 0);
+  const RenderResult paper = render(wispDoc(), "gradient", "render.paper=true");
+  EXPECT_FALSE(paper.stats.extra.at("voxels_instead").get<bool>());
+  EXPECT_GT(*paper.stats.samples, 0);
+}
+
+TEST(VoxelSwitch, TheRuleComparesTheLitVoxelsWithTheSamplesTraces) {
+  // adaptive with 40 probes: 3 × 100 initial samples × (1 + 40 probes) = 12 300 traces.
+  EXPECT_TRUE(voxelsInstead(3.0, 12300, 100 * 41.0));
+  EXPECT_FALSE(voxelsInstead(3.0, 12301, 100 * 41.0));
+  EXPECT_FALSE(voxelsInstead(3.0, 0, 0.0));  // no samples: nothing to compare
+  EXPECT_FALSE(voxelsInstead(0.0, 1, 100 * 41.0));
 }
 
 TEST(VoxelSwitch, BadValuesAreNamed) {

@@ -21,6 +21,15 @@ inline double relL2(const Image& a, const Image& b) {
 inline const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
 inline const std::string kGlow = SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json";
 
+/// A render object that keeps the sampled path of `gradient` and `adaptive` (their samples, not
+/// the whole-scene fallback that renders a small test volume as per-voxel does: key
+/// voxel_switch 0) for tests of the samples themselves; other methods' objects unchanged.
+inline Json sampledPath(Json render) {
+  const std::string m = render.value("method", "");
+  if (m == "gradient" || m == "adaptive") render["voxel_switch"] = 0;
+  return render;
+}
+
 /// Homogeneous unit box [0,1]³ of density `density`, one isotropic point light of intensity
 /// `I` at `light`, camera at (0.5, 0.5, -2) looking at the box centre.
 inline Json homogeneousBoxDoc(float density, float sigmaT, float albedo, Vec3 light, float I,
