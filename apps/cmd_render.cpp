@@ -1,4 +1,5 @@
 #include <sys/resource.h>
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -406,11 +407,20 @@ Action addRender(CLI::App& app) {
         std::printf(" in %.1f ms\n", total);
       if (st.extra.contains("backend_choice"))
         std::printf("%s\n", st.extra["backend_choice"].get<std::string>().c_str());
-      if (st.extra.value("voxels_instead", false))
+      if (st.extra.value("voxels_instead", false)) {
+        // Under spot lights only, the voxels traced are at most those the cones reach.
+        const long long occupied = st.extra["occupied_voxels"].get<long long>();
+        const std::string lit =
+            st.extra.contains("lit_voxels")
+                ? " (at most " +
+                      std::to_string(std::min(occupied, st.extra["lit_voxels"].get<long long>())) +
+                      " of them inside the spot cones)"
+                : "";
         std::printf(
-            "rendered as per-voxel renders it: the medium's %lld occupied voxels cost less "
+            "rendered as per-voxel renders it: the medium's %lld occupied voxels%s cost less "
             "to trace than the method's samples (render.voxel_switch; 0 turns it off)\n",
-            st.extra["occupied_voxels"].get<long long>());
+            occupied, lit.c_str());
+      }
       const int f0 = frames.front(), f1 = frames.back();
       const auto shown = [&](const std::string& p) {
         return sequence ? framePath(p, f0) + " .. " + framePath(p, f1) : p;
