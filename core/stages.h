@@ -224,6 +224,11 @@ inline constexpr float kSingularEps = 1e-9f;
 /// measurement among 0.25, 0.5, 1, 2, 4, 8 (docs/fidelity.md §8).
 inline constexpr float kLampDepth = 2.0f;
 
+/// Optical depth σt·τ at which a shadow ray stops (shadowDepthCutoff(), shading/transport.h; on
+/// the GPU the shadow rays that skip empty space, common.glsl opticalDepth): exp(−25) ≈ 1.4e-11
+/// of the light gets through, below what the float sums of a pixel resolve.
+inline constexpr float kShadowDepthCutoff = 25.0f;
+
 /// Dynamic sampling's error groups (sampling/dynamic_sampling.h errorBin(): a sample budget
 /// splits worst group first): the bits of E's float below these are dropped (the exponent and 6
 /// mantissa bits stay: 1/64 of an octave per group), and a group is counted from the threshold's,
@@ -246,6 +251,7 @@ inline constexpr SharedConstant kSharedConstants[] = {
     {"SL_MIN_V", kMinV},
     {"SL_SINGULAR_EPS", kSingularEps},
     {"SL_LAMP_DEPTH", kLampDepth},
+    {"SL_SHADOW_DEPTH_CUTOFF", kShadowDepthCutoff},
     {"SL_BLOCK", float(MaxDensityGrid::kBlock)},  // voxels per edge of an empty-space block
     {"SL_ERROR_BIN_SHIFT", float(kErrorBinShift)},
     {"SL_ERROR_BINS", float(kErrorBins)},

@@ -86,10 +86,8 @@ inline float opticalDepth(const DensityGrid& g, const Vec3& a, const Vec3& b, fl
   return opticalDepth(g, a, b, step, std::numeric_limits<float>::infinity());
 }
 
-/// Optical depth at which SourceRadiance stops a shadow ray: exp(−25) ≈ 1.4e-11 of the light
-/// gets through, below what the float sums of a pixel resolve.
-inline constexpr float kShadowDepthCutoff = 25.0f;
-/// The density integral ∫D at which a shadow ray stops: kShadowDepthCutoff / σt (never for σt = 0).
+/// The density integral ∫D at which a shadow ray stops: kShadowDepthCutoff (core/stages.h) / σt
+/// (never for σt = 0).
 inline float shadowDepthCutoff(float sigmaT) {
   return sigmaT > 0.0f ? kShadowDepthCutoff / sigmaT : kInfinity;
 }

@@ -136,9 +136,10 @@ float densityAtPoint(vec3 p) {
   return densityAtIndex(u);
 }
 
-// opticalDepth(DensityGrid, a, b, step): midpoint rule in index space. With SL_SKIP_SHADOWS
-// (gpu::addShadowRaySkip) empty blocks are jumped over.
-float opticalDepth(vec3 a, vec3 b, float stepLen) {
+// opticalDepth(DensityGrid, a, b, step, maxDepth): midpoint rule in index space. With
+// SL_SKIP_SHADOWS (gpu::addShadowRaySkip) empty blocks are jumped over, and the sum stops after
+// the block where it passes maxDepth (the CPU's shadow rays: shading/transport.h).
+float opticalDepth(vec3 a, vec3 b, float stepLen, float maxDepth) {
   vec3 d = b - a;
   float len = length(d);
   if (len <= 0.0) return 0.0;
@@ -152,9 +153,10 @@ float opticalDepth(vec3 a, vec3 b, float stepLen) {
   float sum = 0.0;
 #ifdef SL_SKIP_SHADOWS
   // The steps in blocks of zero density add exactly 0 (block_walk.glsl, compiled before this
-  // file): jumped over, the same sum bit for bit.
+  // file): jumped over, the same sum bit for bit up to maxDepth.
+  float sumMax = maxDepth / dt;
   BlockWalk walk = blockWalk(u0, du, n);
-  for (int i = 0; i < n;) {
+  for (int i = 0; i < n && sum <= sumMax;) {
     bool empty;
     int end = blockSpan(walk, i, empty);
     if (!empty)
@@ -166,6 +168,13 @@ float opticalDepth(vec3 a, vec3 b, float stepLen) {
 #endif
   return sum * dt;
 }
+
+float opticalDepth(vec3 a, vec3 b, float stepLen) { return opticalDepth(a, b, stepLen, kInf); }
+
+// shadowDepthCutoff(σt) (shading/transport.h): the density integral at which a shadow ray to a
+// light stops where empty space is skipped, σt·τ = SL_SHADOW_DEPTH_CUTOFF (exp(−25) ≈ 1.4e-11
+// of the light gets through), as the CPU's shadow rays stop.
+float shadowDepthCutoff() { return uSigmaT > 0.0 ? SL_SHADOW_DEPTH_CUTOFF / uSigmaT : kInf; }
 
 // Light::geometry (core/light.h): direction and distance towards light l from x, and the spot
 // cone factor (1 for point and directional lights); false only at a point or spot light itself.
@@ -239,7 +248,7 @@ vec3 sourceRadiancePart(vec3 x, vec3 toViewer, int first, int stride) {
 #else
     const float vis = 1.0;
 #endif
-    float tau = opticalDepth(x, segEnd, uDelta1);
+    float tau = opticalDepth(x, segEnd, uDelta1, shadowDepthCutoff());
     s += irradiance * (vis * phaseEvalCos(dot(-toLight, toViewer)) * exp(-uSigmaT * tau));
   }
   return s;
@@ -298,7 +307,7 @@ float lightTransmittance(int li, vec3 x, vec3 segEnd) {
 #else
   const float vis = 1.0;
 #endif
-  return vis * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
+  return vis * exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1, shadowDepthCutoff()));
 }
 
 // LightFactor::operator() (shading/transport.h): A(x, ω), the lights' analytic, unshadowed source
