@@ -459,10 +459,10 @@ TEST(GpuSteadyFrame, ASpotWhoseConeWidensLeavesTheWholeSceneFallbackAndComesBack
 namespace scatterlab::testing {
 namespace {
 
-/// adaptive's whole-scene fallback on the GPU (docs/fidelity.md): a sparse medium (one small
-/// blob at 48³) is rendered as per-voxel renders it (the voxels holding V = S / A), on the same
-/// rule as the CPU's and within the CPU's image; the decision is made once per density, so a
-/// steady frame (a light moved) waits for nothing and equals a fresh render.
+/// adaptive's and gradient's whole-scene fallback on the GPU (docs/fidelity.md): a sparse medium
+/// (one small blob at 48³) is rendered as per-voxel renders it (the voxels holding V = S / A), on
+/// the same rule as the CPU's and within the CPU's image; the decision is made once per density, so
+/// a steady frame (a light moved) waits for nothing and equals a fresh render.
 TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
   SCATTERLAB_REQUIRE_GPU();
   const auto doc = [](int f) {
@@ -474,28 +474,32 @@ TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
     return d;
   };
   initialize();
-  const Scene cpuScene = parseScene(doc(0), ".");
-  const RenderResult cpu = createMethod(cpuScene, "adaptive", "cpu")->render(cpuScene, nullptr);
-  Renderer r(doc(0), ".", "adaptive", "gpu");
-  r.keepImageOnDevice(true);
-  for (int f = 0; f < 3; ++f) {
-    if (f > 0) r.set("lights.0.position=" + doc(f)["lights"][0]["position"].dump());
-    const RenderResult res = r.render();
-    EXPECT_TRUE(res.stats.extra.at("voxels_instead").get<bool>()) << "frame " << f;
-    EXPECT_EQ(res.stats.extra.at("occupied_voxels"), cpu.stats.extra.at("occupied_voxels"));
-    if (f > 0) {
-      EXPECT_EQ(res.stats.extra.at("host_waits").get<long long>(), 0) << "frame " << f;
+  for (const std::string method : {"adaptive", "gradient"}) {
+    SCOPED_TRACE(method);
+    const Scene cpuScene = parseScene(doc(0), ".");
+    const RenderResult cpu = createMethod(cpuScene, method, "cpu")->render(cpuScene, nullptr);
+    Renderer r(doc(0), ".", method, "gpu");
+    r.keepImageOnDevice(true);
+    for (int f = 0; f < 3; ++f) {
+      if (f > 0) r.set("lights.0.position=" + doc(f)["lights"][0]["position"].dump());
+      const RenderResult res = r.render();
+      EXPECT_TRUE(res.stats.extra.at("voxels_instead").get<bool>()) << "frame " << f;
+      EXPECT_EQ(res.stats.extra.at("occupied_voxels"), cpu.stats.extra.at("occupied_voxels"));
+      if (f > 0) {
+        EXPECT_EQ(res.stats.extra.at("host_waits").get<long long>(), 0) << "frame " << f;
+      }
+      ASSERT_TRUE(res.deviceImage.has_value());
+      const Image fresh = freshRender(doc(f), method).image;
+      if (f == 0) {
+        const double toCpu = compareImages(fresh, cpu.image).relL2;
+        std::printf("switched %s, gpu vs cpu: relative L2 %.3g\n", method.c_str(), toCpu);
+        // Measured on llvmpipe: 1.94e-7 (2026-11-28), 2.05e-7 for both (2026-11-29); 1e-6
+        // leaves a GPU's float rounding room.
+        EXPECT_LT(toCpu, 1e-6);
+      }
+      // The same passes as a fresh render.
+      EXPECT_EQ(compareImages(deviceImage(res), fresh).maxAbs, 0.0) << "frame " << f;
     }
-    ASSERT_TRUE(res.deviceImage.has_value());
-    const Image fresh = freshRender(doc(f), "adaptive").image;
-    if (f == 0) {
-      const double toCpu = compareImages(fresh, cpu.image).relL2;
-      std::printf("switched adaptive, gpu vs cpu: relative L2 %.3g\n", toCpu);
-      // Measured on llvmpipe, 2026-11-28: 1.94e-7; 1e-6 leaves a GPU's float rounding room.
-      EXPECT_LT(toCpu, 1e-6);
-    }
-    // The same passes as a fresh render.
-    EXPECT_EQ(compareImages(deviceImage(res), fresh).maxAbs, 0.0) << "frame " << f;
   }
 }
 
