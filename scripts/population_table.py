@@ -2,7 +2,9 @@
 """The population table of an experiment directory (issue 35, docs/fidelity.md "Population of
 scenes"): per method, over every scene it rendered, the median and the worst scene's error
 against the headline reference (masked relative L2, visibly wrong) and its time as a ratio to
-per-voxel's on the same scene (both measured in the same run), with how many scenes miss the
+per-voxel's on the same scene (both measured in the same run), how many scenes the whole-scene
+fallback rendered as per-voxel renders them (`gradient` and `adaptive` runs without samples,
+render.voxel_switch), with how many scenes miss the
 issue's targets, and how many of those miss on error alone (times within ±20 % of per-voxel's
 vary between runs of the same work on a small machine; errors do not):
   adaptive-like methods: masked rel L2 <= max(1 %, 1.2 x per-voxel's), visibly wrong <=
@@ -59,9 +61,9 @@ def main():
     print(f"{len(base)} scenes; errors against `{ref}` (masked relative L2, %; visibly wrong, % "
           f"of pixels); time as a ratio to {a.baseline}'s on the same scene (same run)\n")
     print("| method | scenes | masked rel L2 median | worst | worst / per-voxel's | visibly wrong "
-          "median | worst | time / per-voxel median | worst | samples median | misses target | "
-          "of them on error |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "median | worst | time / per-voxel median | worst | samples median | per-voxel instead | "
+          "misses target | of them on error |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     worst_lists = {}
     for m in methods:
         rs = [r for r in ok if r["method"] == m and r["scene"] in base]
@@ -73,6 +75,9 @@ def main():
         ratio = [number(r, "total_ms") / number(base[r["scene"]], "total_ms") for r in rs]
         erel = [number(r, err) / max(number(base[r["scene"]], err), 1e-12) for r in rs]
         samples = [number(r, "samples") for r in rs if number(r, "samples")]
+        # The whole-scene fallback leaves a sampled method without samples.
+        instead = (str(sum(1 for r in rs if not number(r, "samples")))
+                   if kind in ("adaptive", "gradient") else "—")
         misses = error_misses = 0
         for r, ei, vi, ti in zip(rs, e, v, ratio):
             be = 100 * number(base[r["scene"]], err)
@@ -90,7 +95,7 @@ def main():
         print(f"| {m} | {len(rs)} | {statistics.median(e):.2f} | {max(e):.2f} | "
               f"{max(erel):.2f} | {statistics.median(v):.2f} | {max(v):.2f} | "
               f"{statistics.median(ratio):.2f} | {max(ratio):.2f} | "
-              f"{statistics.median(samples) if samples else 0:.0f} | {target} |")
+              f"{statistics.median(samples) if samples else 0:.0f} | {instead} | {target} |")
     if failed:
         print(f"\n{len(failed)} runs failed: " +
               ", ".join(f"{r['scene']}/{r['method']}" for r in failed))
