@@ -2,6 +2,7 @@
 /// Scenes built in code for tests and benchmarks.
 
 #include "api/scatterlab.h"
+#include "methods/register.h"
 
 namespace scatterlab::testing {
 
@@ -21,12 +22,14 @@ inline double relL2(const Image& a, const Image& b) {
 inline const std::string kVdb = SCATTERLAB_SOURCE_DIR "/data/vdb/";
 inline const std::string kGlow = SCATTERLAB_SOURCE_DIR "/data/scenes/glow.json";
 
-/// A render object that keeps the sampled path of `gradient` and `adaptive` (their samples, not
-/// the whole-scene fallback that renders a small test volume as per-voxel does: key
-/// voxel_switch 0) for tests of the samples themselves; other methods' objects unchanged.
+/// A render object that keeps the sampled path of a method with a whole-scene fallback
+/// (MethodDesc::wholeSceneFallback: gradient, adaptive), not the fallback that renders a small
+/// test volume as per-voxel does (key voxel_switch 0), for tests of the samples themselves; other
+/// methods' objects unchanged.
 inline Json sampledPath(Json render) {
   const std::string m = render.value("method", "");
-  if (m == "gradient" || m == "adaptive") render["voxel_switch"] = 0;
+  for (const MethodDesc& d : builtinMethods())
+    if (d.name == m && !d.wholeSceneFallback.empty()) render["voxel_switch"] = 0;
   return render;
 }
 
