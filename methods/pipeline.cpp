@@ -154,7 +154,7 @@ class PipelineMethod : public Method {
       // The sampled path's traces: a refiner's first level (SampleRefiner::tracesPerSample),
       // else S and, for a reconstruction that reads it, the six differences of ∇S.
       const double perSample = refiner                            ? refiner->tracesPerSample()
-                               : reconstruction->needsGradients() ? 7.0
+                               : reconstruction->needsGradients() ? kGradientSampleTraces
                                                                   : 1.0;
       const bool instead = scatterlab::voxelsInstead(settings_.voxelSwitch, traced,
                                                      double(plan_.plannedSamples) * perSample);

@@ -488,7 +488,7 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodPlan& plan, bool
   const double diag = glm::length(glm::dvec3(scene.medium.bounds.extent()));
   const double perTrace =
       std::ceil(diag / s.delta1) * double(std::max<size_t>(1, scene.lights.size()));
-  const double points = 1.0 + (traced ? 6.0 : 0.0) + probes;
+  const double points = (traced ? kGradientSampleTraces : 1.0) + probes;
   const double steps = double(samples) * points * perTrace;
   if (steps > kMaxLightSteps) {
     std::string keys = "'" + p.keyPath("sampler.count") + "', '" + p.keyPath("delta1") + "'";

@@ -96,6 +96,10 @@ std::vector<std::string> methodKeys(const MethodDesc& desc);
 /// fallback") and for gradient ("gradient's whole-scene fallback").
 inline constexpr double kVoxelSwitch = 4.0;
 
+/// The points a sample whose gradient is evaluated traces: S and the six central differences of
+/// ∇S (the work check of checkRenderPlan, the whole-scene fallback's count of gradient's traces).
+inline constexpr double kGradientSampleTraces = 7.0;
+
 /// The whole-scene fallback's rule, one for every method and backend: whether per-voxel, tracing
 /// S at `litVoxels` (the occupied voxels a light reaches), costs at most `voxelSwitch` × the
 /// `sampledTraces` of the method's own sampled path (gradient: its samples × 7, S and the six
