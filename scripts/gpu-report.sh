@@ -14,6 +14,8 @@
 #   bash .gpu-bundle/run.sh bash scripts/gpu-report.sh
 #   (where the bundle's run.sh sets B= to a relative path, make it absolute first: the links it
 #   makes to build/bin are relative to where they lie, and the CLI tests then find no binary.)
+# Then, as a second device call: scripts/cpu-gpu-population.sh (CPU ≡ GPU on the population's 60
+# scenes, every method; its CPU half a few minutes on 16 cores).
 # Writes OUT_DIR/device.txt, frames.json (+ frames.txt), stages.json (+ stages.txt),
 # test_gpu.txt, and prints a summary. Took 2.5 minutes on an H200 (2026-11-27); set
 # SCATTERLAB_GPU_BENCH_ITERS to change the iterations (default 30). On llvmpipe use
