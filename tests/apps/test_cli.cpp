@@ -685,6 +685,23 @@ TEST_F(Cli, InfoListsTheRenderKeys) {
       << j["delta1"].dump();
 }
 
+// Every experiment config the repository ships is checked by the tool as it would run it
+// (`experiment CONFIG --list`: keys, scenes, methods, sweeps, baselines; nothing rendered), so
+// a config that names a method, a key or a scene file that is gone fails here, not hours into
+// a run. Each lists at least one run.
+TEST_F(Cli, EveryShippedExperimentConfigIsValid) {
+  int configs = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(SCATTERLAB_SOURCE_DIR) +
+                                                           "/data/experiments")) {
+    if (e.path().extension() != ".json") continue;
+    const RunResult r = run("experiment " + e.path().string() + " --list");
+    EXPECT_EQ(r.code, 0) << e.path() << ": " << r.output;
+    EXPECT_FALSE(r.output.empty()) << e.path();  // one run id a line
+    ++configs;
+  }
+  EXPECT_GE(configs, 12);
+}
+
 // Issue 25: the shipped fig3 config runs without a terminal warning (its scene's render.sampler
 // is ignored by the references by design; log.txt notes it).
 TEST_F(Cli, ShippedFig3ConfigPrintsNoWarning) {
