@@ -11,9 +11,11 @@
 /// T *= a per step with D > 0, stopping once T <= minT.
 
 #include <string>
+#include <vector>
 
 #include "core/stages.h"
 #include "cpu/fused_volume.h"
+#include "shading/transport.h"
 #include "shading/view_march.h"
 
 namespace scatterlab {
@@ -33,13 +35,39 @@ struct FusedMarchState {
   float wt;  ///< Σ T·(1 − a)·t (the depth's numerator)
 };
 
-/// The lights' factor of the factored march (the volume holds V = S / A, shading/transport.h):
-/// `scale(ctx, i, count, V)` multiplies S = (V[q][1], V[q][2], V[q][3]) of steps i, …,
-/// i + count − 1 of the ray by A at their points; only steps with D = V[q][0] > 0 and S ≠ 0
-/// need it (the others add nothing). Called once per group of steps, before their exp.
+/// The lights of the factored march (the volume holds V = S / A): A(x, ω) of LightFactor
+/// (shading/transport.h) with the same terms, laid out for the kernels, which evaluate the point
+/// and spot lights SIMD over a group of steps (cpu/fused_march_impl.h, factorGroup) instead of
+/// light by light and step by step. Directional lights give the same A all along a view ray
+/// (ω is the ray's, the irradiance constant): directional() sums them once per ray.
+class FusedLights {
+ public:
+  /// `lamp`: LampModel's m_l (off: every m = 1), as LightFactor's.
+  FusedLights(const Scene& scene, const LampModel& lamp);
+  /// A of the directional lights towards `toViewer`.
+  Vec3 directional(const Vec3& toViewer) const;
+
+  int count = 0;  ///< point and spot lights, in the scene's order
+  /// Per point or spot light: position, intensity (RGB), spot axis and smoothstep edges
+  /// (cosOuter, cosInner; a point light: edges −2, −1, so its falloff is 1 everywhere), and
+  /// LampModel's k (0: m = 1).
+  std::vector<float> px, py, pz, ir, ig, ib, ax, ay, az, e0, e1, k;
+  bool hg = false;  ///< Henyey–Greenstein (else isotropic, kInvFourPi)
+  float g = 0.0f;
+
+ private:
+  std::vector<Light> directional_;
+  Phase phase_;
+};
+
+/// The factor of one view ray (the volume holds V = S / A): `lights` at its steps, step i at
+/// world point origin + (t0 + (i + ½)·dt)·dir (FusedRay's t0, dt), seen along toViewer = −dir,
+/// plus `constant`, A of the directional lights along this ray. The kernels multiply S of the
+/// steps that contribute (D > 0, S ≠ 0) by A there, before the group's exp.
 struct FusedFactor {
-  void (*scale)(const void* ctx, int i, int count, float (*V)[4]);
-  const void* ctx;
+  const FusedLights* lights;
+  float origin[3], dir[3], toViewer[3];
+  float constant[3];
 };
 
 /// Marches steps [i, end) of `ray`; `factor`: null, or the lights' factor to multiply S by.

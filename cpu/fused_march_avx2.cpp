@@ -87,7 +87,7 @@ void spanAvx2(const FusedVolumeView& v, const FusedMarchConstants& c, const Fuse
       lookupAt<Half>(v, O[q], F[0][q], F[1][q], F[2][q], V[q]);
       D[q] = V[q][0] > 0.0f ? V[q][0] : 0.0f;
     }
-    if (factor) factor->scale(factor->ctx, i, q1, V);
+    if (factor) factorGroup<8>(*factor, r, i, q1, V);
     alignas(32) float a[8];
     (xsimd::exp(B8(-c.sigmaT) * B8::load_aligned(D) * B8(r.dt))).store_aligned(a);
     accumulateGroup<8>(V, D, a, i, q1, r, ratio, minT, L0, L1, L2, T, wt);

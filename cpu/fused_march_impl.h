@@ -25,6 +25,74 @@ inline void accumulateGroup(const float (&V)[G][4], const float (&D)[G], const f
   }
 }
 
+/// S = (V[q][1], V[q][2], V[q][3]) of steps i … i + q1 − 1 multiplied by A at their points
+/// (FusedFactor): the point and spot lights G steps at once, light by light, each term as
+/// LightFactor's (shading/transport.h; Light::incident, Phase::evalCos, LampModel), then the
+/// directional lights' constant. Only steps with D > 0 and S ≠ 0 are scaled (the others add
+/// nothing), and none is computed where no step of the group needs it.
+template <int G>
+inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::FusedRay& r, int i,
+                        int q1, float (&V)[G][4]) {
+  using B = xsimd::make_sized_batch_t<float, G>;
+  bool any = false;
+  for (int q = 0; q < q1; ++q)
+    any |= V[q][0] > 0.0f && (V[q][1] != 0.0f || V[q][2] != 0.0f || V[q][3] != 0.0f);
+  if (!any) return;
+  alignas(32) float tq[G];
+  for (int q = 0; q < G; ++q) tq[q] = r.t0 + (float(i + q) + 0.5f) * r.dt;
+  const B t = B::load_aligned(tq);
+  const B x = B(f.origin[0]) + t * B(f.dir[0]), y = B(f.origin[1]) + t * B(f.dir[1]),
+          z = B(f.origin[2]) + t * B(f.dir[2]);
+  const B vx(f.toViewer[0]), vy(f.toViewer[1]), vz(f.toViewer[2]);
+  const scatterlab::FusedLights& l = *f.lights;
+  const float g = l.g, gg = 1.0f + g * g, g2 = 2.0f * g,
+              hgNum = scatterlab::kInvFourPi * (1.0f - g * g);
+  B a0(0.0f), a1(0.0f), a2(0.0f);
+  for (int j = 0; j < l.count; ++j) {
+    const B dx = B(l.px[j]) - x, dy = B(l.py[j]) - y, dz = B(l.pz[j]) - z;
+    const B d2 = dx * dx + dy * dy + dz * dz;
+    const B dist = xsimd::sqrt(d2);
+    const B tx = dx / dist, ty = dy / dist, tz = dz / dist;  // towards the light
+    // Falloff: smoothstep of cos(from the light, axis) between the edges (1 for point lights).
+    B cone(1.0f);
+    const float e0 = l.e0[j], e1 = l.e1[j];
+    if (e0 == e1) {
+      const B c = -tx * B(l.ax[j]) + -ty * B(l.ay[j]) + -tz * B(l.az[j]);
+      cone = xsimd::select(c < B(e0), B(0.0f), B(1.0f));
+    } else if (e0 > -2.0f) {
+      const B c = -tx * B(l.ax[j]) + -ty * B(l.ay[j]) + -tz * B(l.az[j]);
+      const B u = xsimd::min(xsimd::max((c - B(e0)) / B(e1 - e0), B(0.0f)), B(1.0f));
+      cone = u * u * (B(3.0f) - B(2.0f) * u);
+    }
+    B phase(scatterlab::kInvFourPi);
+    if (l.hg) {
+      const B cosT = -tx * vx + -ty * vy + -tz * vz;
+      const B denom = B(gg) - B(g2) * cosT;
+      phase = B(hgNum) / (denom * xsimd::sqrt(denom));
+    }
+    if (l.k[j] > 0.0f) {
+      const B q = B(l.k[j]) * dist;
+      phase = phase * xsimd::exp(B(-scatterlab::kLampDepth) * q / (q + B(scatterlab::kLampDepth)));
+    }
+    const B s = cone / d2;
+    // Light::incident's cut: nothing at the light's own position or outside the cone.
+    const auto lit = (d2 > B(0.0f)) & (cone > B(0.0f));
+    a0 += xsimd::select(lit, B(l.ir[j]) * s * phase, B(0.0f));
+    a1 += xsimd::select(lit, B(l.ig[j]) * s * phase, B(0.0f));
+    a2 += xsimd::select(lit, B(l.ib[j]) * s * phase, B(0.0f));
+  }
+  alignas(32) float A[3][G];
+  (a0 + B(f.constant[0])).store_aligned(A[0]);
+  (a1 + B(f.constant[1])).store_aligned(A[1]);
+  (a2 + B(f.constant[2])).store_aligned(A[2]);
+  for (int q = 0; q < q1; ++q) {
+    if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
+    V[q][1] *= A[0][q];
+    V[q][2] *= A[1][q];
+    V[q][3] *= A[2][q];
+  }
+}
+
 /// Marches steps [i, end) with `lookup(v, u, out)` writing (D, S.r, S.g, S.b) at index
 /// coordinates u to out, S scaled by `factor` where there is one; exp of G steps at once.
 template <int G, class Lookup>
@@ -44,7 +112,7 @@ inline void spanLoop(const scatterlab::FusedVolumeView& v, const scatterlab::Fus
       lookup(v, u, V[q]);
       D[q] = V[q][0] > 0.0f ? V[q][0] : 0.0f;
     }
-    if (factor) factor->scale(factor->ctx, i, q1, V);
+    if (factor) factorGroup<G>(*factor, r, i, q1, V);
     (xsimd::exp(Batch(-c.sigmaT) * Batch::load_aligned(D) * Batch(r.dt))).store_aligned(a);
     accumulateGroup<G>(V, D, a, i, q1, r, ratio, minT, L0, L1, L2, T, wt);
   }

@@ -19,11 +19,13 @@ namespace {
 
 /// The march's lookups through a FusedVolume by the SIMD kernels (cpu/fused_march.h), in
 /// runs of steps (MarchesSpans in cpu/ray_marcher.h). With a light factor (the volume holds
-/// V = S / A) the span kernel hands each group of steps to scaleByFactor, which multiplies S of
-/// the steps that contribute by A(x, ω): the same lookups, exp and sums as without one.
+/// V = S / A) the span kernel multiplies S of the steps that contribute by A(x, ω), the point
+/// and spot lights SIMD over each group of steps (`lights`) and the directional ones once per
+/// ray: the same lookups, exp and sums as without one.
 struct FusedLookup {
   const FusedVolume& volume;
-  const LightFactor* factor;
+  const LightFactor* factor;  ///< A for one step (operator()); null: unfactored
+  const FusedLights* lights;  ///< the same A for the span kernels; null exactly when factor is
   FusedSpanKernel span;
   FusedMarchConstants c;
   /// One step (DensitySourceLookup's interface; the fast march calls marchSpan instead).
@@ -39,33 +41,21 @@ struct FusedLookup {
   void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
                  Vec3& L, float& T, float& wt) const {
     const FusedRay fr{{u0.x, u0.y, u0.z}, {du.x, du.y, du.z}, t0, dt};
-    const FactorSteps steps{factor, &r, t0, dt};
-    const FusedFactor f{&scaleByFactor, &steps};
     FusedMarchState s{{L.x, L.y, L.z}, T, wt};
-    span(volume.view(), c, fr, i, end, s, factor ? &f : nullptr);
+    if (lights) {
+      const Vec3 toViewer = -r.dir, a = lights->directional(toViewer);
+      const FusedFactor f{lights,
+                          {r.origin.x, r.origin.y, r.origin.z},
+                          {r.dir.x, r.dir.y, r.dir.z},
+                          {toViewer.x, toViewer.y, toViewer.z},
+                          {a.x, a.y, a.z}};
+      span(volume.view(), c, fr, i, end, s, &f);
+    } else {
+      span(volume.view(), c, fr, i, end, s, nullptr);
+    }
     L = Vec3(s.L[0], s.L[1], s.L[2]);
     T = s.T;
     wt = s.wt;
-  }
-
- private:
-  /// The ray whose steps scaleByFactor scales: step k at distance t0 + (k + ½)·dt.
-  struct FactorSteps {
-    const LightFactor* factor;
-    const Ray* ray;
-    float t0, dt;
-  };
-  static void scaleByFactor(const void* ctx, int i, int count, float (*V)[4]) {
-    const FactorSteps& f = *static_cast<const FactorSteps*>(ctx);
-    for (int q = 0; q < count; ++q) {
-      // D = 0 adds nothing; V = 0 (outside every spot cone, or fully shadowed): S = 0 as it is.
-      if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
-      const float t = f.t0 + (float(i + q) + 0.5f) * f.dt;
-      const Vec3 a = (*f.factor)(f.ray->at(t), -f.ray->dir);
-      V[q][1] *= a.x;
-      V[q][2] *= a.y;
-      V[q][3] *= a.z;
-    }
   }
 };
 
@@ -90,11 +80,14 @@ class RayMarcher : public Integrator {
     const RadianceGrid& radiance = *f.radiance;
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
-    const LightFactor A(scene, lampModel_ ? LampModel(scene, *f.density) : LampModel());
+    const LampModel lamp = lampModel_ ? LampModel(scene, *f.density) : LampModel();
+    const LightFactor A(scene, lamp);
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       fused_.build(*f.density, radiance, keys_.halfFloat);
+      const FusedLights lights(scene, lamp);
       const FusedLookup lookup{fused_,
                                factored_ ? &A : nullptr,
+                               factored_ ? &lights : nullptr,
                                fusedSpanKernel(keys_.simd),
                                {scene.medium.sigmaT, scene.medium.albedo, march_.minTransmittance}};
       return marchWith(scene, *f.density, lookup, march_, progress, delta1_, &counts);

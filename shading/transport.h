@@ -255,6 +255,9 @@ class LampModel {
     }
   }
   bool on() const { return on_; }
+  /// k_l = σt·D(s_l) of light i: m_l = exp(−kLampDepth·q / (q + kLampDepth)), q = k_l·distance;
+  /// 0 where m_l = 1 (off, directional lights, lights outside the box).
+  float k(std::size_t i) const { return on_ ? k_[i] : 0.0f; }
   /// m_l at `distance` from light i.
   float operator()(std::size_t i, float distance) const {
     const float k = k_[i];

@@ -180,7 +180,102 @@ float stateDifference(const FusedMarchState& a, const FusedMarchState& b) {
   return m;
 }
 
+/// plainSums with S multiplied by A(x, −dir) of `A` at each step's world point
+/// origin + (t0 + (i + ½)·dt)·dir (the factored march, as FusedLookup's one-step lookup).
+FusedMarchState plainFactoredSums(const RandomFused& g, const FusedRay& ray, int n,
+                                  const FusedMarchConstants& c, const LightFactor& A,
+                                  const Ray& world) {
+  FusedMarchState s{{0, 0, 0}, 1.0f, 0.0f};
+  for (int i = 0; i < n && s.T > c.minT; ++i) {
+    const Vec3 u =
+        Vec3(ray.u0[0], ray.u0[1], ray.u0[2]) + float(i) * Vec3(ray.du[0], ray.du[1], ray.du[2]);
+    const float D = g.d.sampleIndex(u);
+    if (D <= 0.0f) continue;
+    Vec3 S = g.r.sampleIndex(u);
+    if (S != Vec3(0.0f)) S *= A(world.at(ray.t0 + (float(i) + 0.5f) * ray.dt), -world.dir);
+    const float a = std::exp(-c.sigmaT * D * ray.dt);
+    for (int k = 0; k < 3; ++k) s.L[k] += s.T * c.ratio * (1.0f - a) * S[k];
+    s.wt += s.T * (1.0f - a) * (ray.t0 + (float(i) + 0.5f) * ray.dt);
+    s.T *= a;
+  }
+  return s;
+}
+
 }  // namespace
+
+TEST(FusedMarch, LightsFactorAsLightFactor) {
+  // The kernels' A (FusedLights, point and spot lights SIMD over a group of steps, directional
+  // ones once per ray) against LightFactor's, step by step: two point lights (one inside the
+  // box with the lamp model, one outside), a spot with a soft edge, a spot with a hard one
+  // (inner = outer), a directional light; Henyey–Greenstein and isotropic. World rays of 40
+  // steps through the lights' neighbourhood, each kernel against plainFactoredSums; largest
+  // relative difference of L, T, wt over 2000 rays. Measured (GCC 12): 2.6e-6 for HG and
+  // isotropic, sse2 and avx2 alike (the lookups' rounding, as KernelsMatchThePlainSums; A
+  // scaled by 0.999 for the directional light alone gives 7e-4 and 1e-3).
+  const RandomFused g(5);
+  Scene scene;
+  scene.medium.sigmaT = 4.0f;
+  Light inside, outside, soft, hard, sun;
+  inside.position = Vec3(0.5f, 0.45f, 0.55f);
+  inside.intensity = Vec3(1.0f, 0.8f, 0.6f);
+  outside.position = Vec3(1.6f, 0.3f, -0.4f);
+  outside.intensity = Vec3(3.0f);
+  soft.type = hard.type = Light::Type::Spot;
+  soft.position = Vec3(0.2f, 1.3f, 0.5f);
+  soft.direction = glm::normalize(Vec3(0.2f, -1.0f, 0.1f));
+  soft.cosOuter = 0.8f;
+  soft.cosInner = 0.9f;
+  soft.intensity = Vec3(2.0f, 2.0f, 1.0f);
+  hard.position = Vec3(0.9f, -0.3f, 0.4f);
+  hard.direction = glm::normalize(Vec3(-0.3f, 1.0f, 0.2f));
+  hard.cosOuter = hard.cosInner = 0.85f;
+  sun.type = Light::Type::Directional;
+  sun.direction = glm::normalize(Vec3(0.3f, -1.0f, 0.4f));
+  sun.intensity = Vec3(0.7f, 0.7f, 0.9f);
+  scene.lights = {inside, outside, soft, hard, sun};
+  // The lamp model's k_l = σt·D(s_l) with D = 2 everywhere: m ≠ 1 for the light inside.
+  const LampModel lamp(scene, Box{}, [](const Vec3&) { return 2.0f; });
+  ASSERT_GT(lamp.k(0), 0.0f);
+  ASSERT_EQ(lamp.k(1), 0.0f);
+  const FusedMarchConstants c{0.9f, 0.7f, 1e-6f};
+  const FusedVolume vol(g.d, g.r, false);
+  for (const bool hg : {true, false}) {
+    scene.medium.phase = hg ? Phase{Phase::Type::HenyeyGreenstein, 0.6f} : Phase{};
+    const LightFactor A(scene, lamp);
+    const FusedLights lights(scene, lamp);
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> u(-2.0f, 24.0f), step(0.3f, 1.7f), dir(-1.0f, 1.0f),
+        w(-0.3f, 1.3f);
+    float worst[2] = {0.0f, 0.0f};
+    for (int k = 0; k < 2000; ++k) {
+      Vec3 d(dir(rng), dir(rng), dir(rng));
+      d = glm::normalize(d) * step(rng);
+      const FusedRay ray{{u(rng), u(rng) * 0.7f, u(rng) * 0.8f}, {d.x, d.y, d.z}, 0.05f, 0.03f};
+      const Ray world{Vec3(w(rng), w(rng), w(rng)),
+                      glm::normalize(Vec3(dir(rng), dir(rng), dir(rng)))};
+      const Vec3 toViewer = -world.dir, a = lights.directional(toViewer);
+      const FusedFactor f{&lights,
+                          {world.origin.x, world.origin.y, world.origin.z},
+                          {world.dir.x, world.dir.y, world.dir.z},
+                          {toViewer.x, toViewer.y, toViewer.z},
+                          {a.x, a.y, a.z}};
+      const int n = 40;
+      const FusedMarchState plain = plainFactoredSums(g, ray, n, c, A, world);
+      for (const MarchSimd simd : {MarchSimd::Sse2, MarchSimd::Avx2}) {
+        if (simd == MarchSimd::Avx2 && !cpuHasAvx2Kernel()) continue;
+        FusedMarchState s{{0, 0, 0}, 1.0f, 0.0f};
+        fusedSpanKernel(simd)(vol.view(), c, ray, 0, 11, s, &f);
+        fusedSpanKernel(simd)(vol.view(), c, ray, 11, n, s, &f);
+        float& m = worst[simd == MarchSimd::Avx2];
+        m = std::max(m, stateDifference(s, plain));
+      }
+    }
+    std::printf("%s: sse2 vs LightFactor %.3g, avx2 %.3g\n", hg ? "HG" : "isotropic", worst[0],
+                worst[1]);
+    EXPECT_LT(worst[0], 4e-6f) << hg;
+    EXPECT_LT(worst[1], 4e-6f) << hg;
+  }
+}
 
 TEST(FusedMarch, KernelsMatchThePlainSums) {
   // Random rays (steps of 0.3-1.7 voxels, inside and partly outside the index box, where the
