@@ -759,12 +759,15 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "sees (with factor_lights the error of V weighted per probe by the lights' analytic "
        "unshadowed A = S / V there, docs/fidelity.md §12), or the samples' V = S / A itself",
        R"("transmittance")"},
-      {"bias_weight", "number", "0", "0…100 (not with paper)",
+      {"bias_weight", "number",
+       "3 where a light is a point or spot light (0 with directional "
+       "lights only, and with paper)",
+       "0…100 (not with paper)",
        "weight k of the probes' signed error in Eq. 5: E_j uses mean D·|L̃ − L| + k·|mean "
        "D·(L̃ − L)|, so a sample whose probes all err the same way (a bias the image adds up: "
        "Taylor's tangents under a convex V on a dense sheet) splits at up to 1 + k times its "
        "error; 0 is Eq. 5 (docs/fidelity.md, \"The probes' signed bias in Eq. 5\")",
-       "3"},
+       "1"},
       {"fallback", "bool", "true (false with paper)", "true, false (not with paper)",
        "per-voxel fallback: the finest level is probed too (with fallback_probes), and where a "
        "cell of it still fails the error test S is evaluated directly at the voxels inside it "
@@ -811,7 +814,12 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
                          Interval::closed(0.0, 1000.0));
   if (paper && p.has("bias_weight"))
     p.fail("bias_weight", "is an extension; it cannot be set with render.paper = true");
-  s.biasWeight = p.number("bias_weight", 0.0, Interval::closed(0.0, 100.0));
+  // Where a point or spot light makes A singular (as error_weight's default below): 3.
+  const bool singular = std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) {
+    return l.type != Light::Type::Directional;
+  });
+  s.biasWeight = p.number("bias_weight", !paper && singular ? kSingularBiasWeight : 0.0,
+                          Interval::closed(0.0, 100.0));
   if (paper && p.has("fallback"))
     p.fail("fallback", "is an extension; it cannot be set with render.paper = true");
   // On by default since issue 35 (docs/fidelity.md, "Population of scenes"): the worst scenes'
@@ -864,9 +872,6 @@ DynamicSamplingSettings parseDynamicSampling(Params& p, const Scene& scene, bool
   // directional lights only A varies by the phase function alone and it never won (cloud,
   // thick_cloud slightly worse, thick_cloud_iso identical), so it is off there. Without
   // factor_lights the samples hold S and "radiance" is Eq. 5 itself.
-  const bool singular = std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) {
-    return l.type != Light::Type::Directional;
-  });
   const bool onV =
       p.choice("error_weight", {"radiance", "transmittance"},
                factorLights && !singular ? "transmittance" : "radiance") == "transmittance";
