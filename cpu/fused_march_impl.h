@@ -56,13 +56,14 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
     // Falloff: smoothstep of cos(from the light, axis) between the edges (1 for point lights).
     B cone(1.0f);
     const float e0 = l.e0[j], e1 = l.e1[j];
-    if (e0 == e1) {
+    if (e0 > -2.0f) {  // a spot light (a point light's edges are −2, −1)
       const B c = -tx * B(l.ax[j]) + -ty * B(l.ay[j]) + -tz * B(l.az[j]);
-      cone = xsimd::select(c < B(e0), B(0.0f), B(1.0f));
-    } else if (e0 > -2.0f) {
-      const B c = -tx * B(l.ax[j]) + -ty * B(l.ay[j]) + -tz * B(l.az[j]);
-      const B u = xsimd::min(xsimd::max((c - B(e0)) / B(e1 - e0), B(0.0f)), B(1.0f));
-      cone = u * u * (B(3.0f) - B(2.0f) * u);
+      if (e0 == e1) {
+        cone = xsimd::select(c < B(e0), B(0.0f), B(1.0f));
+      } else {
+        const B u = xsimd::min(xsimd::max((c - B(e0)) / B(e1 - e0), B(0.0f)), B(1.0f));
+        cone = u * u * (B(3.0f) - B(2.0f) * u);
+      }
     }
     B phase(scatterlab::kInvFourPi);
     if (l.hg) {

@@ -28,6 +28,7 @@ status=0
 
 # A top-level key of a run record ("  \"key\": value,") or one of its stats ("    ...").
 field() { sed -n "s/^$2\"$3\": \([^,]*\),\{0,1\}$/\1/p" "$1" | head -n 1; }
+max() { awk -v r="$1" -v w="$2" 'BEGIN { print (r > w ? r : w) }'; }
 pairs=0 over=0 differ=0 worst=0 objects=0 worstObjects=0 table=$OUT/cpu_gpu.txt.tmp
 : >"$table"
 : >"$table.objects"
@@ -40,7 +41,6 @@ for gpu in "$OUT"/images/*-gpu.exr; do
   gr=$OUT/runs/$id-gpu.json cr=$OUT/runs/$id-cpu.json
   gs=$(field "$gr" '  ' samples) cs=$(field "$cr" '  ' samples)
   gv=$(field "$gr" '    ' voxels_instead) cv=$(field "$cr" '    ' voxels_instead)
-  max() { awk -v r="$1" -v w="$2" 'BEGIN { print (r > w ? r : w) }'; }
   note=""
   if grep -q '"shadow_map": {' "$gr"; then  # objects: shadow maps, not held to the bound
     note=" (objects: GPU shadow maps${gs:+; GPU samples $gs})"
