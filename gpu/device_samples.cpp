@@ -18,12 +18,16 @@ bool DeviceSamples::setPoints(std::span<const RadianceSample> samples) {
   std::vector<GpuSamplePoint> packed;
   packed.reserve(spheres.size());
   for (const glm::vec4& p : spheres) packed.push_back({Vec3(p), p.w});
-  points = Buffer();  // the old storage goes back to the recycler first
-  points = Buffer(packed.size() * sizeof(GpuSamplePoint), packed.data(), 0, "sample positions");
-  radiance = Buffer();
-  radiance = Buffer(spheres.size() * sizeof(GpuRadianceRecord), nullptr, 0, "sample S and grad S");
+  // The last set's buffers where they are large enough (a set that grows by a few samples
+  // from frame to frame makes no buffer), else grown with headroom.
+  ensure(points, packed.size() * sizeof(GpuSamplePoint), "sample positions", Growth::Varies);
+  if (!packed.empty())
+    glNamedBufferSubData(points.id(), 0, GLsizeiptr(packed.size() * sizeof(GpuSamplePoint)),
+                         packed.data());
+  ensure(radiance, spheres.size() * sizeof(GpuRadianceRecord), "sample S and grad S",
+         Growth::Varies);
   radianceCurrent = false;
-  bins_.reset();
+  binsCurrent_ = false;
   fill.reset();
   return true;
 }
@@ -48,7 +52,8 @@ std::size_t binsPerSphere(float r, const Vec3& cell, IVec3 bins) {
 void DeviceSamples::reserveOnDevice(std::size_t capacity,
                                     std::vector<std::pair<std::size_t, float>> radii) {
   spheres.clear();
-  bins_.reset();
+  binsCurrent_ = false;
+  if (deviceBins_) spareBins_ = std::move(*deviceBins_);  // their buffers serve the next bins
   deviceBins_.reset();
   fill.reset();
   radianceCurrent = false;
@@ -92,23 +97,25 @@ const BinBuffers& DeviceSamples::binsFor(const Box& bounds, IVec3 dims, IVec3* b
       largest = std::max(largest, radius);
     }
     most = onDevice->capacity * binsPerSphere(largest, cell, nBins);
-    bins_.reset();
+    binsCurrent_ = false;
+    GpuBins previous = deviceBins_ ? std::move(*deviceBins_) : std::move(spareBins_);
     deviceBins_.reset();
     deviceBins_.emplace(binSpheresGpu(points, onDevice->count, 0, onDevice->capacity, bounds, dims,
-                                      std::min(items, most), scratch_, pass));
+                                      std::min(items, most), scratch_, pass, std::move(previous)));
     *binCount = deviceBins_->bins;
     return *deviceBins_;
   }
-  if (!bins_ || binBounds_.min != bounds.min || binBounds_.max != bounds.max || binDims_ != dims) {
-    bins_.reset();
+  if (!binsCurrent_ || binBounds_.min != bounds.min || binBounds_.max != bounds.max ||
+      binDims_ != dims) {
     const SphereBins b = binSpheres(spheres, bounds, dims, pass);
-    bins_.emplace(b);
+    bins_.upload(b);  // into the buffers of the last sample set where they are large enough
+    binsCurrent_ = true;
     binBounds_ = bounds;
     binDims_ = dims;
     binCount_ = b.bins;
   }
   *binCount = binCount_;
-  return *bins_;
+  return bins_;
 }
 
 }  // namespace scatterlab::gpu

@@ -69,8 +69,10 @@ struct DeviceSamples {
   const GpuBins* deviceBins() const { return deviceBins_ ? &*deviceBins_ : nullptr; }
 
  private:
-  std::optional<BinBuffers> bins_;
+  BinBuffers bins_;  ///< host-built bins of `spheres` (their buffers kept for the next set)
+  bool binsCurrent_ = false;  ///< bins_ holds the bins of `spheres` over (binBounds_, binDims_)
   std::optional<GpuBins> deviceBins_;  ///< an onDevice list's, built each frame
+  GpuBins spareBins_;                  ///< the last ones' buffers, for the next (reserveOnDevice)
   ScanScratch scratch_;                ///< the GPU binning's scan scratch
   Box binBounds_;
   IVec3 binDims_{0}, binCount_{0};

@@ -57,6 +57,10 @@ struct Recycler {
   std::size_t freeBytes = 0;
   std::deque<std::pair<detail::ObjectKey, GLuint>> free;  ///< oldest first
   GlObjectCounts counts;
+  /// readBuffers' staging buffer, kept while a scope is open (a name and its storage in bytes;
+  /// not in `free`: no other request takes it).
+  GLuint staging = 0;
+  std::size_t stagingBytes = 0;
 };
 
 Recycler& recycler() {
@@ -120,10 +124,15 @@ RecyclingScope::~RecyclingScope() {
   Recycler& r = recycler();
   if (--r.scopes > 0) return;
   // Without a current context the names are left to the driver (see GlObject's destructor).
-  if (detail::contextCurrent())
+  if (detail::contextCurrent()) {
     for (const auto& [key, id] : r.free) deleteObject(key, id);
+    if (r.staging) glDeleteBuffers(1, &r.staging);
+  }
+  if (r.staging) --r.counts.live;
   r.free.clear();
   r.freeBytes = 0;
+  r.staging = 0;
+  r.stagingBytes = 0;
 }
 
 namespace detail {
@@ -214,6 +223,11 @@ std::size_t Buffer::storageFor(std::size_t bytes) {
   return (bytes + step - 1) / step * step;
 }
 
+std::size_t Buffer::grownFor(std::size_t bytes) {
+  const std::size_t grown = bytes + bytes / 4, limit = maxStorageBlock();
+  return bytes <= limit ? std::min(grown, limit) : grown;
+}
+
 Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view name)
     : size_(bytes), storage_(storageFor(bytes)), flags_(flags | GL_DYNAMIC_STORAGE_BIT) {
   id_ = detail::takeRecycled(key());
@@ -238,11 +252,7 @@ Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::strin
 
 void Buffer::bindBase(GLenum target, GLuint index) const {
   if (target == GL_SHADER_STORAGE_BUFFER) {
-    static const std::size_t limit = [] {
-      GLint64 v = 0;
-      glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &v);
-      return v > 0 ? std::size_t(v) : std::size_t(1) << 24;  // GL's minimum
-    }();
+    const std::size_t limit = maxStorageBlock();
     if (size_ > limit) {
       char name[256] = {};
       GLsizei n = 0;
@@ -270,22 +280,54 @@ void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
+std::size_t maxStorageBlock() {
+  static const std::size_t limit = [] {
+    GLint64 v = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &v);
+    return v > 0 ? std::size_t(v) : std::size_t(1) << 24;  // GL's minimum
+  }();
+  return limit;
+}
+
 void readBuffers(std::span<const BufferRange> ranges) {
   std::size_t total = 0;
   for (const BufferRange& r : ranges) total += r.bytes;
   if (total == 0) return;
   if (ranges.size() == 1) return ranges[0].buffer->read(ranges[0].dst, total, ranges[0].offset);
-  const Buffer staging(total, nullptr, 0, "read-back staging");
+  // The staging buffer: the scope's kept one (grown with headroom when too small), or one for
+  // this call outside every scope.
+  Recycler& rec = recycler();
+  Buffer temporary;
+  GLuint staging = 0;
+  if (rec.scopes > 0) {
+    if (rec.stagingBytes < total) {
+      if (rec.staging) {
+        glDeleteBuffers(1, &rec.staging);
+        detail::countDeleted();
+      }
+      rec.stagingBytes = Buffer::grownFor(total);
+      glCreateBuffers(1, &rec.staging);
+      detail::countCreated();
+      glNamedBufferStorage(rec.staging, GLsizeiptr(rec.stagingBytes), nullptr, 0);
+      label(GL_BUFFER, rec.staging, "read-back staging");
+    }
+    staging = rec.staging;
+  } else {
+    temporary = Buffer(total, nullptr, 0, "read-back staging");
+    staging = temporary.id();
+  }
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // the copies see every shader write before
   std::size_t at = 0;
   for (const BufferRange& r : ranges) {
     if (r.bytes)
-      glCopyNamedBufferSubData(r.buffer->id(), staging.id(), GLintptr(r.offset), GLintptr(at),
+      glCopyNamedBufferSubData(r.buffer->id(), staging, GLintptr(r.offset), GLintptr(at),
                                GLsizeiptr(r.bytes));
     at += r.bytes;
   }
   std::vector<unsigned char> bytes(total);
-  staging.read(bytes.data(), total);
+  countHostWait("buffer read-back");
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(staging, 0, GLsizeiptr(total), bytes.data());
   at = 0;
   for (const BufferRange& r : ranges) {
     if (r.bytes) std::memcpy(r.dst, bytes.data() + at, r.bytes);

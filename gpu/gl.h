@@ -18,6 +18,7 @@
 
 #include <epoxy/gl.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -171,7 +172,19 @@ class Buffer : public GlObject<BufferDeleter> {
   /// moves) reuses its buffers instead of creating new ones (tests/gpu/test_resident.cpp,
   /// GpuRendererReuse).
   static std::size_t storageFor(std::size_t bytes);
+  /// The bytes to ask for when a buffer kept between frames is too small for `bytes`: a quarter
+  /// more, so that a set that grows a little from frame to frame (adaptive's samples as a light
+  /// moves) grows its buffers once, not in every frame that crosses a size class; never above
+  /// maxStorageBlock() where `bytes` is not.
+  static std::size_t grownFor(std::size_t bytes);
   std::size_t size() const { return size_; }
+  /// Makes size() at least `bytes` where the storage holds them (the size class's room) and
+  /// returns true; returns false and changes nothing where it does not.
+  bool extendTo(std::size_t bytes) {
+    if (!id_ || bytes > storage_) return false;
+    size_ = std::max(size_, bytes);
+    return true;
+  }
   /// Copies bytes [offset, offset + n) back to host memory.
   void read(void* dst, std::size_t n, std::size_t offset = 0) const;
   /// Binds the buffer to `index` of `target`. A shader storage binding above the device's
@@ -190,6 +203,10 @@ class Buffer : public GlObject<BufferDeleter> {
   GLbitfield flags_ = 0;
 };
 
+/// GL_MAX_SHADER_STORAGE_BLOCK_SIZE of the device (GL's minimum, 16 MiB, where it reports
+/// none): the most bytes one storage buffer binding may hold. Needs the context.
+std::size_t maxStorageBlock();
+
 /// One range of a buffer to read back, and where it goes.
 struct BufferRange {
   const Buffer* buffer;
@@ -198,7 +215,9 @@ struct BufferRange {
 };
 
 /// Reads every range back with one host wait: the ranges are copied on the GPU into one staging
-/// buffer, which is read once.
+/// buffer, which is read once. Inside a RecyclingScope the staging buffer is kept until the
+/// scope ends and grown with headroom (Buffer::grownFor), so a frame's statistics read, whose
+/// size follows the frame's sample counts, makes no buffer in a steady frame.
 void readBuffers(std::span<const BufferRange> ranges);
 
 /// Texture object (glCreateTextures) with immutable storage.

@@ -60,10 +60,13 @@ void scanAt(const Buffer& in, const Buffer& out, GLuint n, bool flags, ScanScrat
 
 }  // namespace
 
-void ensure(Buffer& buffer, std::size_t bytes, const std::string& label) {
+void ensure(Buffer& buffer, std::size_t bytes, const std::string& label, Growth growth) {
   bytes = std::max<std::size_t>(bytes, 4);
-  if (buffer && buffer.size() >= bytes) return;
-  buffer = Buffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, label);
+  if (buffer.extendTo(bytes)) return;
+  // A buffer that grows takes headroom; the first one too where its size varies per frame.
+  const std::size_t size = buffer || growth == Growth::Varies ? Buffer::grownFor(bytes) : bytes;
+  buffer = Buffer();  // the old storage goes back to the recycler first
+  buffer = Buffer(size, nullptr, GL_DYNAMIC_STORAGE_BIT, label);
 }
 
 void scanBuffer(const Buffer& in, const Buffer& out, GLuint n, bool flags, ScanScratch& sums) {

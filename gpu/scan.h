@@ -13,9 +13,16 @@
 
 namespace scatterlab::gpu {
 
-/// `buffer` with at least `bytes` of storage (re-created only when smaller, never shrunk).
-/// Dynamic storage, so that the host may update it (glNamedBufferSubData).
-void ensure(Buffer& buffer, std::size_t bytes, const std::string& label);
+/// How a buffer kept between frames is sized (ensure): `Fixed`: the first one holds what is
+/// asked; `Varies`: its size follows a count that changes from frame to frame (a sample set, its
+/// bins), so the first one takes Buffer::grownFor's headroom as well.
+enum class Growth { Fixed, Varies };
+
+/// `buffer` with at least `bytes` of storage (re-created only when smaller, never shrunk; a
+/// re-created one gets Buffer::grownFor's headroom). Dynamic storage, so that the host may update
+/// it (glNamedBufferSubData). Its contents are undefined after a call.
+void ensure(Buffer& buffer, std::size_t bytes, const std::string& label,
+            Growth growth = Growth::Fixed);
 
 /// Scratch of scanBuffer: the block sums per recursion depth, grown as needed and kept.
 using ScanScratch = std::vector<Buffer>;

@@ -35,13 +35,11 @@ std::string mib(std::size_t bytes) {
 /// Throws GpuError naming `pass` when `entries` list entries (`what`: whose) do not fit one
 /// storage buffer of the device (GL_MAX_SHADER_STORAGE_BLOCK_SIZE) or 32-bit offsets.
 void checkListSize(std::size_t entries, const std::string& what, const char* pass) {
-  GLint64 maxBlock = 0;
-  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxBlock);
+  const std::size_t maxBlock = maxStorageBlock();
   const std::size_t itemBytes = entries * sizeof(GLuint);
-  if (entries > 0xffffffffu || (maxBlock > 0 && itemBytes > std::size_t(maxBlock)))
+  if (entries > 0xffffffffu || itemBytes > maxBlock)
     throw GpuError(std::string(pass) + ": " + what + " need " + mib(itemBytes) +
-                   " in one storage buffer; the device allows " +
-                   mib(std::size_t(std::max<GLint64>(maxBlock, 0))) +
+                   " in one storage buffer; the device allows " + mib(maxBlock) +
                    " (GL_MAX_SHADER_STORAGE_BLOCK_SIZE, 32-bit offsets); use fewer or smaller "
                    "spheres (samples), a coarser volume, or render.gpu_pipeline = raster");
 }
@@ -120,9 +118,19 @@ SphereBins binSpheres(std::span<const glm::vec4> spheres, const Box& bounds, IVe
   return out;
 }
 
-BinBuffers::BinBuffers(const SphereBins& bins)
-    : offsets(bins.offsets.size() * sizeof(GLuint), bins.offsets.data(), 0, "bin offsets"),
-      items(bins.items.size() * sizeof(GLuint), bins.items.data(), 0, "bin lists") {}
+BinBuffers::BinBuffers(const SphereBins& bins) {
+  upload(bins);
+}
+
+void BinBuffers::upload(const SphereBins& bins) {
+  const auto put = [](Buffer& b, const std::vector<GLuint>& v, const char* label) {
+    ensure(b, v.size() * sizeof(GLuint), label, Growth::Varies);
+    if (!v.empty())
+      glNamedBufferSubData(b.id(), 0, GLsizeiptr(v.size() * sizeof(GLuint)), v.data());
+  };
+  put(offsets, bins.offsets, "bin offsets");
+  put(items, bins.items, "bin lists");
+}
 
 void BinBuffers::bind() const {
   offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kBinOffsets);
@@ -137,16 +145,19 @@ GLuint GpuBins::readOverflow() const {
 
 GpuBins binSpheresGpu(const Buffer& points, const Buffer& counts, GLuint countSlot,
                       std::size_t capacity, const Box& bounds, IVec3 dims, std::size_t itemCapacity,
-                      ScanScratch& scratch, const char* pass) {
+                      ScanScratch& scratch, const char* pass, GpuBins previous) {
   checkListSize(itemCapacity,
                 "the bin lists' capacity of " + std::to_string(itemCapacity) + " entries", pass);
-  GpuBins out;
+  GpuBins out = std::move(previous);
   out.bins = (dims + IVec3(kBinVoxels - 1)) / kBinVoxels;
   const std::size_t nBins = std::size_t(out.bins.x) * out.bins.y * out.bins.z;
   const GLuint zero = 0;
-  out.offsets = Buffer((nBins + 1) * sizeof(GLuint), nullptr, 0, "bin offsets");
-  out.items = Buffer(itemCapacity * sizeof(GLuint), nullptr, 0, "bin lists");
-  out.overflow = Buffer(sizeof(GLuint), &zero, 0, "bin overflow");
+  // Every offset and every entry read later is written below: the previous buffers serve where
+  // they are large enough (the lists' bound follows the sample count: Growth::Varies).
+  ensure(out.offsets, (nBins + 1) * sizeof(GLuint), "bin offsets");
+  ensure(out.items, itemCapacity * sizeof(GLuint), "bin lists", Growth::Varies);
+  ensure(out.overflow, sizeof(GLuint), "bin overflow");
+  glClearNamedBufferData(out.overflow.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   // Per bin the entries counted, then the slots the fill has yet to take; one more, left at 0,
   // so that the scan's last offset is the total.
   Buffer binCounts((nBins + 1) * sizeof(GLuint), nullptr, 0, "bin counts");

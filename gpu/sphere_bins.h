@@ -40,6 +40,9 @@ struct BinBuffers {
   Buffer offsets, items;
   BinBuffers() = default;
   explicit BinBuffers(const SphereBins& bins);
+  /// Uploads `bins` into the buffers held, re-creating one only where it is too small (with
+  /// headroom: gpu::ensure). A gather reads the lists through the offsets, never past them.
+  void upload(const SphereBins& bins);
   void bind() const;
 };
 
@@ -66,9 +69,11 @@ struct GpuBins : BinBuffers {
 /// barrier it ends with. Throws GpuError naming `pass` when `itemCapacity` entries exceed what
 /// the device can bind, before any work. Uses the bindings of binding::kSamples, kBinOffsets,
 /// kBinItems, kBinSphereCount, kBinCounts and kBinOverflow, and the scan's; the caller binds
-/// the gather's buffers afterwards (GpuBins::bind). Needs the context.
+/// the gather's buffers afterwards (GpuBins::bind). `previous`: the bins of an earlier frame,
+/// whose buffers are reused where they are large enough (a steady frame makes none). Needs the
+/// context.
 GpuBins binSpheresGpu(const Buffer& points, const Buffer& counts, GLuint countSlot,
                       std::size_t capacity, const Box& bounds, IVec3 dims, std::size_t itemCapacity,
-                      ScanScratch& scratch, const char* pass);
+                      ScanScratch& scratch, const char* pass, GpuBins previous = {});
 
 }  // namespace scatterlab::gpu

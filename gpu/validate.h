@@ -28,7 +28,8 @@ void installValidation();
 
 /// Leaves buffer `id` of the current context out of the checks: for a buffer that shaders reach
 /// only through atomics whose order does not matter and that the host reads after its own
-/// barrier (the loop guard of gpu/shaders.cpp). No effect when validation is off.
+/// barrier (the loop guard of gpu/shaders.cpp). Recorded also while validation is off, so that
+/// installing it later in the process leaves the buffer out as well.
 void exemptFromValidation(unsigned id);
 
 /// Whether validation is on in this process.

@@ -175,9 +175,12 @@ TEST(GpuShaders, CompileErrorNamesTheFileAndQuotesTheLog) {
 TEST(GpuPassLayer, AMisspeltUniformIsAnErrorAndARemovedOneIsIgnored) {
   SCATTERLAB_REQUIRE_GPU();
   // The gather declares uTaylorBounds only under SL_BOUNDED (removed otherwise) and never
-  // declares uTaylorBound.
+  // declares uTaylorBound. A define no source reads makes it a program of this test's own, built
+  // under this label (a program keeps the label it was first built under: in one process with
+  // the other tests the plain gather is 'radiance gather').
   const gpu::Program& p =
-      gpu::program({.compute = {"radiance_gather.comp.glsl"}}, "pass layer test");
+      gpu::program({.compute = {"radiance_gather.comp.glsl"}, .defines = {"SL_PASS_LAYER_TEST"}},
+                   "pass layer test");
   EXPECT_GE(p.uniform("uGridDims"), 0);
   EXPECT_EQ(p.uniform("uTaylorBounds"), -1);
   try {
