@@ -123,6 +123,32 @@ Vec3 lightFactorTowardsEye(const LightFactor& A, const Vec3& p, const Vec3& eye)
   return A(p, towardsEye(eye, p));
 }
 
+float mostVisibleTau(const Scene& scene, const DensityGrid& density, float tau, const Vec3* points,
+                     int n, float delta1) {
+  const float sigmaT = scene.medium.sigmaT;
+  if (!(sigmaT > 0.0f)) return std::max(tau, 1.0f);  // no extinction: every point sees 1
+  constexpr float kMargin = 1.0f + 1e-4f;
+  // The depth a point must stay below to see more than `tau`.
+  float bound = tau > 0.0f ? -std::log(std::min(tau, 1.0f)) / sigmaT * kMargin : kInfinity;
+  for (int k = 0; k < n; ++k) {
+    const IndexSteps st = indexSteps(density, points[k], scene.camera.position, delta1);
+    float depth = 0.0f;
+    if (st.n > 0) {
+      const float sumMax = bound / st.dt;
+      float sum = 0.0f;
+      int i = 0;
+      while (i < st.n && sum <= sumMax)
+        for (const int e = std::min(st.n, i + 8); i < e; ++i)
+          sum += density.sampleIndex(st.u0 + float(i) * st.du);
+      if (i < st.n) continue;  // stopped: deeper than the best, cannot raise tau
+      depth = sum * st.dt;
+    }
+    tau = std::max(tau, std::exp(-sigmaT * depth));
+    bound = std::min(bound, depth * kMargin);
+  }
+  return tau;
+}
+
 float localShadingError(const RadianceSample& s, const Vec3* probeS, const float* probeD, float tau,
                         int count, const DynamicSamplingSettings::ErrorSpace& space,
                         const Vec3* probeA, float biasWeight) {
@@ -500,8 +526,7 @@ DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
         // τ of the most visible of the sample and its six axis probes (tau "visible").
         Vec3 pp[6];
         probePoints(current[j], pp, 6);
-        for (int i = 0; i < 6; ++i)
-          tau = std::max(tau, viewTransmittance(scene, density, pp[i], settings.delta1));
+        tau = mostVisibleTau(scene, density, tau, pp, 6, settings.delta1);
       }
       errors[j] = localShadingError(current[j], S, D, tau, np, settings.space,
                                     lightFactor ? A : nullptr, float(settings.biasWeight));

@@ -332,6 +332,15 @@ class LightFactor;
 /// V is the S of the image there. The weights of ErrorSpace::weightA.
 Vec3 lightFactorTowardsEye(const LightFactor& A, const Vec3& p, const Vec3& eye);
 
+/// τ of tau "visible": the largest of `tau` and the transmittances exp(−σt·∫D) from each of the
+/// n `points` to the camera (opticalDepth(density, p, camera, delta1)), with less work than n
+/// whole marches: a point's march stops once its optical depth passes the smallest one found so
+/// far (and the depth of `tau`), with 1e-4 of margin — its transmittance is then below the
+/// largest and cannot be the result. The marches that finish sum the same steps in the same order
+/// as opticalDepth, so the result is that of the n whole marches bit for bit.
+float mostVisibleTau(const Scene& scene, const DensityGrid& density, float tau, const Vec3* points,
+                     int n, float delta1);
+
 /// The probe points x_j + R_j·d of a sample, d = probeOffsets()[0 … count): +X −X +Y −Y +Z −Z
 /// (the paper's six), then the 8 cube diagonals, the 12 edge diagonals, and the inner shell at
 /// R/2. count is 6, 14, 26 or 40.

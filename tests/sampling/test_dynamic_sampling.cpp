@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -1016,4 +1018,39 @@ TEST(DynamicSampling, DefaultProbesBoundTheLightTracesPerSample) {
   EXPECT_EQ(probes(32, Json::object(), false), 14);
   EXPECT_EQ(probes(32, Json::object(), true), 6);
   EXPECT_EQ(probes(32, Json{{"probes", 40}}, false), 40);
+}
+
+TEST(DynamicSampling, MostVisibleTauIsTheWholeMarchesMaximumBitForBit) {
+  // A dense perforated sheet in thin fog (the population's sheet_3: optical depth 3–12 across
+  // the sheet), points all over its box: marches from behind the sheet stop once they pass the
+  // depth of a point in front, those that finish must sum exactly as opticalDepth does.
+  std::ifstream in(SCATTERLAB_SOURCE_DIR "/data/scenes/population/sheet_3.json");
+  const Scene scene = sceneFromJson(Json::parse(in));
+  const DensityGrid density = densityOf(scene);
+  const Box& box = scene.medium.bounds;
+  const float delta1 = scene.medium.voxelSize();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const auto whole = [&](const Vec3& p) {
+    return std::exp(-scene.medium.sigmaT * opticalDepth(density, p, scene.camera.position, delta1));
+  };
+  int raisedByAPoint = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    // The sample and its six axis probes at a radius of 1–8 voxels, as tau "visible" has them.
+    const Vec3 c = box.min + box.extent() * Vec3(u(rng), u(rng), u(rng));
+    RadianceSample s;
+    s.position = c;
+    s.radius = delta1 * (1.0f + 7.0f * u(rng));
+    Vec3 p[6];
+    probePoints(s, p, 6);
+    // tau from the sample itself, or an ancestor's (any value in [0, 1], 0 and 1 included).
+    const float tau0 = trial % 4 == 0 ? whole(c) : trial % 4 == 1 ? u(rng) : float(trial % 4 - 2);
+    float expected = tau0;
+    for (const Vec3& q : p) expected = std::max(expected, whole(q));
+    const float got = mostVisibleTau(scene, density, tau0, p, 6, delta1);
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(got), std::bit_cast<std::uint32_t>(expected))
+        << "trial " << trial << ": " << got << " against " << expected;
+    raisedByAPoint += expected > tau0;
+  }
+  EXPECT_GT(raisedByAPoint, 100);  // the probes decide the result often, not only tau0
 }
