@@ -131,18 +131,10 @@ float mostVisibleTau(const Scene& scene, const DensityGrid& density, float tau, 
   // The depth a point must stay below to see more than `tau`.
   float bound = tau > 0.0f ? -std::log(std::min(tau, 1.0f)) / sigmaT * kMargin : kInfinity;
   for (int k = 0; k < n; ++k) {
-    const IndexSteps st = indexSteps(density, points[k], scene.camera.position, delta1);
-    float depth = 0.0f;
-    if (st.n > 0) {
-      const float sumMax = bound / st.dt;
-      float sum = 0.0f;
-      int i = 0;
-      while (i < st.n && sum <= sumMax)
-        for (const int e = std::min(st.n, i + 8); i < e; ++i)
-          sum += density.sampleIndex(st.u0 + float(i) * st.du);
-      if (i < st.n) continue;  // stopped: deeper than the best, cannot raise tau
-      depth = sum * st.dt;
-    }
+    // Stopped once past the bound (its depth is then above it): deeper than the best, it cannot
+    // raise tau. A march that finishes is opticalDepth's without a bound, bit for bit.
+    const float depth = opticalDepth(density, points[k], scene.camera.position, delta1, bound);
+    if (depth > bound) continue;
     tau = std::max(tau, std::exp(-sigmaT * depth));
     bound = std::min(bound, depth * kMargin);
   }
