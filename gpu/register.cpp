@@ -51,6 +51,7 @@ class GpuRefiner : public SampleRefiner {
     return r;
   }
   double tracesPerSample() const override { return 1.0 + s_.probes; }
+  void setPerVoxelTraces(long long traces) override { s_.perVoxelTraces = traces; }
   void describe(RenderStats& stats, const DynamicSamplingResult& result) const override {
     addDynamicSamplingStats(stats, result, s_);
   }

@@ -158,6 +158,12 @@ class PipelineMethod : public Method {
                                                                   : 1.0;
       const bool instead = scatterlab::voxelsInstead(settings_.voxelSwitch, traced,
                                                      double(plan_.plannedSamples) * perSample);
+      if (refiner) {
+        // Per-voxel's traces, in radiance voxels: the unit of dynamic sampling's cost budget.
+        const IVec3 rv = settings_.radianceResolution.x > 0 ? settings_.radianceResolution : res;
+        const double scale = (double(rv.x) * rv.y * rv.z) / (double(res.x) * res.y * res.z);
+        refiner->setPerVoxelTraces(std::max(1LL, (long long)std::llround(double(traced) * scale)));
+      }
       st.extra["voxels_instead"] = instead;
       if (instead) {
         samplesOnDevice_ = false;

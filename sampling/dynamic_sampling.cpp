@@ -217,8 +217,12 @@ BudgetLimits budgetLimits(const DynamicSamplingSettings& settings, long long bud
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount) {
   long long cost = 0;  // the cost cap (0: none)
   if (settings.costShare > 0.0) {
+    // Per-voxel's S evaluations: the voxels it traces where the pipeline counted them, else
+    // every voxel of the radiance volume.
     const IVec3 v = settings.voxelDims;
-    const double voxels = double(std::max(v.x, 0)) * std::max(v.y, 0) * std::max(v.z, 0);
+    const double voxels = settings.perVoxelTraces > 0
+                              ? double(settings.perVoxelTraces)
+                              : double(std::max(v.x, 0)) * std::max(v.y, 0) * std::max(v.z, 0);
     const double samples = settings.costShare * voxels / (7.0 + settings.probes);
     cost = std::max((long long)std::min(samples, 9e15), 1LL);
   }
@@ -679,8 +683,10 @@ void addDynamicSamplingStats(RenderStats& st, const DynamicSamplingResult& resul
   st.extra["error"] = settings.relative ? "relative" : "absolute";
   st.extra["threshold"] = levelStats.empty() ? settings.epsilon : levelStats[0].threshold;
   if (settings.relative && !levelStats.empty()) st.extra["error_scale"] = levelStats[0].errorScale;
-  if (settings.costShare > 0.0)
+  if (settings.costShare > 0.0) {
     st.extra["budget_share"] = settings.costShare;  // the `budget` key: a share of per-voxel
+    if (settings.perVoxelTraces > 0) st.extra["budget_voxels"] = settings.perVoxelTraces;
+  }
   if (settings.maxSamples == kAutoBudget)
     st.extra["max_samples"] = "auto";
   else
@@ -757,8 +763,10 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
       {"budget", "number", "0.75 (0 with max_samples given or with paper)",
        "0…1000 (not with paper)",
        "the samples' budget as a share of per-voxel's cost on the same scene, B = budget × "
-       "radiance voxels / (7 + probes) (a sample costs S, its six central differences and its "
-       "probes; per-voxel one S per voxel): the final set may grow to max(max_samples' auto "
+       "per-voxel's voxels / (7 + probes) (a sample costs S, its six central differences and its "
+       "probes; per-voxel one S per radiance voxel it traces: the occupied ones a light reaches, "
+       "stat `budget_voxels`; every voxel with voxel_switch 0): the final set may grow to "
+       "max(max_samples' auto "
        "rule, B); with max_samples given, to the smaller of the two (0 on either side: the "
        "other). The per-voxel fallback's voxels are paid at their cost, one S each (the pass "
        "may use B × (7 + probes) S evaluations), the final set at most 4 × B samples and at most "
@@ -911,6 +919,7 @@ class CpuRefiner : public SampleRefiner {
     return dynamicSampling(frame, scene, std::move(initial), evaluator, s_);
   }
   double tracesPerSample() const override { return 1.0 + s_.probes; }
+  void setPerVoxelTraces(long long traces) override { s_.perVoxelTraces = traces; }
   void describe(RenderStats& stats, const DynamicSamplingResult& result) const override {
     addDynamicSamplingStats(stats, result, s_);
   }

@@ -99,8 +99,9 @@ struct DynamicSamplingSettings {
   /// The budget as a cost (extension, issue 35; key `budget`; 0: none; default kBudgetCostShare):
   /// the final samples may cost costShare × what per-voxel's radiance stage costs on the same
   /// scene, counted in S evaluations (each traces every light): per-voxel evaluates S once per
-  /// radiance voxel (voxelDims), a sample of dynamic sampling 1 + 6 (its ∇S by central differences)
-  /// + probes times. So the most final samples are costShare · voxels / (7 + probes)
+  /// radiance voxel it traces (perVoxelTraces: the occupied ones a light reaches; where not
+  /// counted, every voxel of voxelDims), a sample of dynamic sampling 1 + 6 (its ∇S by central
+  /// differences) + probes times. So the most final samples are costShare · voxels / (7 + probes)
   /// (sampleBudget()): many on a large volume, where per-voxel is dear, few on a small one, and
   /// fewer the more probes each sample has. How it combines with maxSamples: sampleBudget();
   /// how the fallback's voxels count against it: BudgetLimits.
@@ -118,6 +119,10 @@ struct DynamicSamplingSettings {
   /// the fallback; key `fallback_probes`): levelProbes().
   int fallbackProbes = 6;
   IVec3 voxelDims{0};  ///< the fallback grid (the radiance volume's dims; withPipeline())
+  /// Per-voxel's S evaluations on the scene being refined (the occupied radiance voxels some
+  /// light reaches; SampleRefiner::setPerVoxelTraces(), from the pipeline's occupancy count),
+  /// the unit of the cost budget (costShare); 0: unknown, every voxel of voxelDims counts.
+  long long perVoxelTraces = 0;
   /// Split into the cell (extension, key `split`: "cell"): a split sample is replaced by the
   /// vertices of G_{k+1} in its cell, the cube of edge R_j centred on it (for a cubic grid the
   /// cell of the partition: 8 children when the next grid is twice as fine), instead of every
@@ -366,7 +371,8 @@ inline constexpr double kBudgetCostShare = 0.75;
 inline constexpr double kSingularBiasWeight = 3.0;
 
 /// The budget applied to `initialCount` initial samples (0: none). The cost cap C =
-/// costShare · voxels / (7 + probes) when costShare > 0 (at least 1). For kAutoBudget
+/// costShare · voxels / (7 + probes) when costShare > 0 (at least 1), voxels being per-voxel's
+/// traces (perVoxelTraces, else the whole voxelDims grid). For kAutoBudget
 /// max(min(kBudgetPerInitial · initialCount, kBudgetCap), C): the count rule's floor, raised where
 /// per-voxel is dear; else the smaller of maxSamples and C, where one of them is 0 the other.
 long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t initialCount);
@@ -502,6 +508,10 @@ class SampleRefiner {
   /// against per-voxel's: 1 + probes, the first level's S and probes (its ∇S left out: the
   /// rule as chosen on the population, docs/fidelity.md).
   virtual double tracesPerSample() const = 0;
+  /// What per-voxel would trace on the scene about to be refined (S evaluations: the occupied
+  /// radiance voxels some light reaches; 0: unknown), the unit of the cost budget
+  /// (DynamicSamplingSettings::perVoxelTraces). The pipeline sets it before each refine().
+  virtual void setPerVoxelTraces(long long traces) = 0;
   /// Writes what refine() did into the stats (addDynamicSamplingStats with its settings); a
   /// result left on the device (DynamicSamplingResult::onDevice) is reported after the frame
   /// by the variant itself instead.

@@ -76,6 +76,28 @@ TEST(VoxelSwitch, WhereOnlySpotsShinePerVoxelTracesWhatTheConesReach) {
   EXPECT_LT(bound, 3 * reached);  // blocks of 2³ voxels, not the whole box
 }
 
+TEST(VoxelSwitch, TheCostBudgetIsAShareOfTheVoxelsPerVoxelTraces) {
+  // adaptive's cost budget (key `budget`) is a share of per-voxel's S evaluations: the voxels
+  // the switch rule counted (under the spot, the bound of those the cone reaches), in radiance
+  // voxels; with voxel_switch 0 nothing is counted and every radiance voxel counts. Eight
+  // initial samples, so that the count rule's floor (4 × 8 = 32) is below the cost cap.
+  Json doc = shaftDoc();
+  doc["render"]["sampler"]["count"] = 8;
+  doc["render"]["voxel_switch"] = 0.01;  // never switches here
+  const Scene scene = sceneFromJson(doc);
+  const long long bound = LitReach(scene.lights).voxelBound(scene.medium.bounds, IVec3(32));
+  const RenderResult lit = render(doc, "adaptive");
+  EXPECT_FALSE(lit.stats.extra.at("voxels_instead").get<bool>());
+  EXPECT_EQ(lit.stats.extra.at("budget_voxels").get<long long>(), bound);
+  EXPECT_EQ(lit.stats.extra.at("budget").get<long long>(), (long long)(0.75 * bound / 47.0));
+  // A radiance volume twice as fine per axis: 8 radiance voxels per counted density voxel.
+  const RenderResult fine = render(doc, "adaptive", "render.radiance_resolution=64");
+  EXPECT_EQ(fine.stats.extra.at("budget_voxels").get<long long>(), 8 * bound);
+  const RenderResult whole = render(doc, "adaptive", "render.voxel_switch=0");
+  EXPECT_FALSE(whole.stats.extra.contains("budget_voxels"));
+  EXPECT_EQ(whole.stats.extra.at("budget").get<long long>(), (long long)(0.75 * 32768 / 47.0));
+}
+
 TEST(VoxelSwitch, TheConesBoundCountsTheOccupiedVoxelsOfTheCellsTheyReach) {
   // A blob in the shaft's box: the cells at its edge are partly filled. Counting their occupied
   // voxels instead of all of them keeps a bound (at least every occupied voxel a cone reaches,

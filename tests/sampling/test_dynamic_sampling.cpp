@@ -360,6 +360,15 @@ TEST(DynamicSampling, ParsedDefaultsPaperAndExtended) {
   both.maxSamples = 0;
   EXPECT_EQ(sampleBudget(both, 2000), 22310);                          // no count cap: the cost's
   EXPECT_EQ(sampleBudget(parse({{"budget", 0}}, false), 2000), 8000);  // the count rule alone
+  // Per-voxel's traces where the pipeline counted them (the occupied radiance voxels a light
+  // reaches), not the whole grid: a sparse medium's per-voxel is cheaper, and so is the budget.
+  DynamicSamplingSettings sparse = parse({{"budget", 0.5}}, false);
+  sparse.voxelDims = IVec3(128);
+  sparse.perVoxelTraces = 1000000;
+  EXPECT_EQ(sampleBudget(sparse, 2000), 10638);  // 0.5 · 10⁶ / 47 = 10638.3, not 22310
+  sparse.perVoxelTraces = 300000;
+  EXPECT_EQ(sampleBudget(sparse, 2000), 8000);  // C = 3191 < the count rule's 8000
+  EXPECT_EQ(sampleBudget(sparse, 500), 3191);   // C > the count rule's 2000
   EXPECT_THROW(parse({{"budget", 0.5}}, true), ConfigError);
   EXPECT_THROW(parse({{"budget", -0.5}}, false), ConfigError);
   EXPECT_THROW(parse({{"max_samples", -1}}, false), ConfigError);
@@ -666,9 +675,13 @@ TEST(DynamicSampling, BudgetStatKeysAreDocumented) {
   DynamicSamplingSettings st;
   st.relative = true;
   st.maxSamples = kAutoBudget;
+  st.costShare = 0.75;
+  st.perVoxelTraces = 5000;
   RenderStats rs;
   addDynamicSamplingStats(rs, {.levels = levels}, st);
   EXPECT_EQ(rs.extra["budget"], 100);
+  EXPECT_EQ(rs.extra["budget_share"], 0.75);
+  EXPECT_EQ(rs.extra["budget_voxels"], 5000);
   EXPECT_EQ(rs.extra["capped"], 8);
   EXPECT_DOUBLE_EQ(rs.extra["error_left"].get<double>(), 2.5);
   EXPECT_EQ(rs.extra["budget_runs"], 1);
