@@ -1,6 +1,12 @@
 #include "core/stages.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
+#include <cstdint>
+#include <functional>
 
 namespace scatterlab {
 
@@ -64,6 +70,40 @@ std::vector<int> voxelCells(int voxels, int cells) {
   return c;
 }
 
+std::vector<int> cellStarts(int voxels, int cells) {
+  const std::vector<int> map = voxelCells(voxels, cells);
+  std::vector<int> first(std::size_t(cells) + 1, voxels);
+  for (int u = voxels - 1; u >= 0; --u) first[std::size_t(map[std::size_t(u)])] = u;
+  for (int c = cells - 1; c >= 0; --c)
+    first[std::size_t(c)] = std::min(first[std::size_t(c)], first[std::size_t(c) + 1]);
+  return first;
+}
+
+namespace {
+
+/// Calls f(cell index, voxel count) for each (cell, row of voxel centres with D > 0 in it),
+/// layer by layer of cells along z in parallel: the voxels of a layer of cells are a slab of
+/// whole z slices, so two tasks never touch one cell.
+template <class F>
+void forOccupiedRuns(const DensityGrid& g, IVec3 dims, const F& f) {
+  const IVec3 nd = g.dims();
+  const std::vector<int> ci = voxelCells(nd.x, dims.x), cj = voxelCells(nd.y, dims.y);
+  const std::vector<int> z0 = cellStarts(nd.z, dims.z);
+  const float* data = g.data().data();
+  tbb::parallel_for(0, dims.z, [&](int cz) {
+    for (int k = z0[std::size_t(cz)]; k < z0[std::size_t(cz) + 1]; ++k)
+      for (int j = 0; j < nd.y; ++j) {
+        const std::size_t row =
+            std::size_t(dims.x) * (std::size_t(cj[std::size_t(j)]) + std::size_t(dims.y) * cz);
+        const float* d = data + std::size_t(nd.x) * (std::size_t(j) + std::size_t(nd.y) * k);
+        for (int i = 0; i < nd.x; ++i)
+          if (d[i] > 0.0f) f(row + std::size_t(ci[std::size_t(i)]));
+      }
+  });
+}
+
+}  // namespace
+
 std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims) {
   const std::vector<int> used = occupiedVoxelsPerCell(g, dims);
   std::vector<int> out;
@@ -72,21 +112,24 @@ std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims) {
   return out;
 }
 
+long long countOccupiedCells(const DensityGrid& g, IVec3 dims) {
+  const std::vector<float>& d = g.data();
+  if (dims == g.dims())  // a cell per voxel: the voxels with D > 0
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, d.size()), 0LL,
+        [&](const tbb::blocked_range<std::size_t>& r, long long n) {
+          for (std::size_t i = r.begin(); i < r.end(); ++i) n += d[i] > 0.0f;
+          return n;
+        },
+        std::plus<>());
+  std::vector<std::uint8_t> used(std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z));
+  forOccupiedRuns(g, dims, [&](std::size_t c) { used[c] = 1; });
+  return (long long)std::count(used.begin(), used.end(), std::uint8_t(1));
+}
+
 std::vector<int> occupiedVoxelsPerCell(const DensityGrid& g, IVec3 dims) {
-  const std::size_t n = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
-  std::vector<int> used(n, 0);
-  const IVec3 nd = g.dims();
-  const std::vector<int> ci = voxelCells(nd.x, dims.x), cj = voxelCells(nd.y, dims.y),
-                         ck = voxelCells(nd.z, dims.z);
-  const float* d = g.data().data();
-  for (int k = 0; k < nd.z; ++k)
-    for (int j = 0; j < nd.y; ++j) {
-      const std::size_t rowCell =
-          std::size_t(dims.x) *
-          (std::size_t(cj[std::size_t(j)]) + std::size_t(dims.y) * std::size_t(ck[std::size_t(k)]));
-      for (int i = 0; i < nd.x; ++i, ++d)
-        if (*d > 0.0f) ++used[rowCell + std::size_t(ci[std::size_t(i)])];
-    }
+  std::vector<int> used(std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z), 0);
+  forOccupiedRuns(g, dims, [&](std::size_t c) { ++used[c]; });
   return used;
 }
 
@@ -97,8 +140,7 @@ std::vector<RadianceSample> Sampler::generate(Frame& frame, const Scene& scene) 
 
 std::vector<long long> Frame::countOccupiedCells(std::span<const IVec3> grids) {
   std::vector<long long> n;
-  for (const IVec3& dims : grids)
-    n.push_back((long long)scatterlab::occupiedCells(hostDensity(), dims).size());
+  for (const IVec3& dims : grids) n.push_back(scatterlab::countOccupiedCells(hostDensity(), dims));
   return n;
 }
 

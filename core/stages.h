@@ -327,10 +327,16 @@ class Frame {
 /// in cell min(cells − 1, int((u + 0.5) / voxels · cells)) (float arithmetic as written; the GPU
 /// pass looks the maps up instead of recomputing them).
 std::vector<int> voxelCells(int voxels, int cells);
+/// The first voxel of each of those cells and one past the last (`cells` + 1 entries; a cell
+/// that holds no voxel centre starts where the next one does): cell c holds voxels
+/// [first[c], first[c + 1]).
+std::vector<int> cellStarts(int voxels, int cells);
 
 /// The cells of a regular `dims` grid over `g`'s box that hold a voxel centre with D > 0 (linear
 /// indices i + nx·(j + ny·k), ascending).
 std::vector<int> occupiedCells(const DensityGrid& g, IVec3 dims);
+/// How many they are (occupiedCells(g, dims).size(), without the list).
+long long countOccupiedCells(const DensityGrid& g, IVec3 dims);
 /// Per cell of that grid (linear index as occupiedCells()), its voxel centres with D > 0.
 std::vector<int> occupiedVoxelsPerCell(const DensityGrid& g, IVec3 dims);
 

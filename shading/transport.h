@@ -373,13 +373,7 @@ class LitReach {
     const float reach = glm::length(cell);
     // Per axis, the first voxel of each cell (and one past the last).
     std::array<std::vector<int>, 3> first;
-    for (int a = 0; a < 3; ++a) {
-      const std::vector<int> map = voxelCells(dims[a], c[a]);
-      first[a].assign(std::size_t(c[a]) + 1, dims[a]);
-      for (int u = dims[a] - 1; u >= 0; --u) first[a][std::size_t(map[std::size_t(u)])] = u;
-      for (int k = c[a] - 1; k >= 0; --k)  // a cell with no voxel starts where the next does
-        first[a][std::size_t(k)] = std::min(first[a][std::size_t(k)], first[a][std::size_t(k) + 1]);
-    }
+    for (int a = 0; a < 3; ++a) first[a] = cellStarts(dims[a], c[a]);
     // Cells [k0, k1) per axis: whether a cone reaches the ball around their voxels; their
     // voxels in `count`.
     const auto reached = [&](IVec3 k0, IVec3 k1, long long* count) {

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/grid.h"
 #include "core/image.h"
+#include "core/stages.h"
 
 using namespace scatterlab;
 namespace fs = std::filesystem;
@@ -147,5 +148,38 @@ TEST(ToneCurve, PublishedValues) {
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("allowed: linear, filmic, aces"), std::string::npos);
+  }
+}
+
+TEST(Grid, OccupiedCellsCountAsTheVoxelByVoxelDefinition) {
+  // occupiedCells / countOccupiedCells / occupiedVoxelsPerCell (parallel over layers of cells)
+  // against the definition, voxel by voxel through voxelCells: a sparse pseudo-random field on
+  // an odd grid, with cell grids coarser, equal and finer (empty cells) per axis.
+  DensityGrid g(Box{Vec3(0), Vec3(1)}, IVec3(23, 17, 29));
+  std::uint32_t x = 12345u;
+  for (float& v : g.data()) {
+    x = x * 1664525u + 1013904223u;
+    v = (x >> 24) < 20 ? 1.0f : 0.0f;  // ~8 % occupied
+  }
+  for (const IVec3 dims : {IVec3(5, 4, 7), IVec3(23, 17, 29), IVec3(40, 3, 31), IVec3(1)}) {
+    std::vector<int> want(std::size_t(dims.x) * dims.y * dims.z, 0);
+    const std::vector<int> ci = voxelCells(23, dims.x), cj = voxelCells(17, dims.y),
+                           ck = voxelCells(29, dims.z);
+    for (int k = 0; k < 29; ++k)
+      for (int j = 0; j < 17; ++j)
+        for (int i = 0; i < 23; ++i)
+          if (g.at(i, j, k) > 0.0f)
+            ++want[std::size_t(ci[i]) +
+                   std::size_t(dims.x) * (cj[j] + std::size_t(dims.y) * ck[k])];
+    EXPECT_EQ(occupiedVoxelsPerCell(g, dims), want);
+    std::vector<int> list;
+    for (std::size_t c = 0; c < want.size(); ++c)
+      if (want[c]) list.push_back(int(c));
+    EXPECT_EQ(occupiedCells(g, dims), list);
+    EXPECT_EQ(countOccupiedCells(g, dims), (long long)list.size());
+    for (int c = 0; c < dims.z; ++c) {  // cellStarts: cell c holds the voxels that map to it
+      const std::vector<int> first = cellStarts(29, dims.z);
+      for (int k = first[c]; k < first[c + 1]; ++k) EXPECT_EQ(ck[k], c);
+    }
   }
 }
