@@ -884,7 +884,7 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
   context();
   if (resident && !workspace)
     throw GpuError("dynamicSamplingGpu: a resident pass needs a workspace to be read from");
-  TracingInputs inputs(scene, density, steps.delta1, shadows);
+  TracingInputs inputs(scene, density, steps.delta1, shadows, timer);
   inputs.skipEmptySpace(timer);
   DynamicSamplingWorkspace local;
   DynamicSamplingWorkspace& w = workspace ? *workspace : local;

@@ -113,6 +113,11 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
   const BinBuffers* bins = nullptr;
   IVec3 binDims{0};
   if (gather) bins = &gathered->binsFor(bounds, dims, &binDims, "radiance gather");
+  // The lights for the lamps' bound or the cones' reach, made before the gather is in use (with a
+  // lamp inside the box they run the lamp model's pass).
+  std::optional<TracingInputs> lights;
+  if (lampBounds || lit)
+    lights.emplace(lampBounds ? *lampScene_ : *litScene_, density, 0.0f, nullptr, timer);
   {
     std::optional<ScopedGpuTimer> t;  // the compute gather times its own dispatch
     if (!gather) t.emplace(timer, "radiance splat");
@@ -124,13 +129,7 @@ Volume GradientSplatGpu::reconstruct(const Volume& density, std::span<const Radi
       packedSamples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kSplatSamples);
     }
     if (bounds_) glUniform2f(splat.uniform("uTaylorBounds"), bounds_->lo, bounds_->hi);
-    std::optional<TracingInputs> lights;
-    if (lampBounds || lit) {
-      lights.emplace(lampBounds ? *lampScene_ : *litScene_, density, 0.0f);
-      lights->apply(splat);
-    }
-    if (lampBounds)
-      glUniform1f(splat.uniform("uBoxDiagonal"), glm::length(density.bounds.extent()));
+    if (lights) lights->apply(splat);
     if (lit) glUniform1f(splat.uniform("uReach"), glm::length(cell));
     if (occlusion) {
       glBindTextureUnit(binding::kDensityTexture, density.texture.id());
@@ -233,7 +232,7 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
                                   Texture::Contents::Overwritten);  // one store per voxel
   const GpuPerVoxelCounters zeros;
   Buffer counters(sizeof zeros, &zeros, 0, "per-voxel counters");
-  TracingInputs inputs(scene, density, delta1_, shadows);
+  TracingInputs inputs(scene, density, delta1_, shadows, timer);
   inputs.skipEmptySpace(timer);
   {
     program.use();

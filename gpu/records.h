@@ -22,7 +22,7 @@ struct PaddedVec3 {
 static_assert(sizeof(PaddedVec3) == 16);
 
 /// common.glsl `GpuLight` (lights[] at BINDING_LIGHTS). std430: positionType 0,
-/// directionCosInner 16, intensityCosOuter 32; stride 48.
+/// directionCosInner 16, intensityCosOuter 32, lamp 48; stride 64.
 struct GpuLight {
   Vec3 position{0.0f};   // positionType.xyz
   float type = 0.0f;     // positionType.w: Light::Type order (0 point, 1 spot, 2 directional)
@@ -30,11 +30,19 @@ struct GpuLight {
   float cosInner = 0.0f;
   Vec3 intensity{0.0f};  // intensityCosOuter.rgb
   float cosOuter = 0.0f;
+  /// lamp.x: k_l of the lamp model (LampModel::k), written on the device by the lamp model's
+  /// pass (gpu::deviceLights; 0 until then, and for a light the model leaves at 1).
+  float lampK = 0.0f;
+  /// lamp.y of lights[0]: min_l m_l at the box's diagonal (1 / LampModel::vBound), by the same
+  /// pass; 1 (no lamp inside the box) until then. Unused in the other lights.
+  float lampMin = 1.0f;
+  float unused[2] = {0.0f, 0.0f};
 };
-static_assert(sizeof(GpuLight) == 48);
+static_assert(sizeof(GpuLight) == 64);
 static_assert(offsetof(GpuLight, position) == 0 && offsetof(GpuLight, type) == 12);
 static_assert(offsetof(GpuLight, direction) == 16 && offsetof(GpuLight, cosInner) == 28);
 static_assert(offsetof(GpuLight, intensity) == 32 && offsetof(GpuLight, cosOuter) == 44);
+static_assert(offsetof(GpuLight, lampK) == 48 && offsetof(GpuLight, lampMin) == 52);
 
 inline GpuLight packLight(const Light& l) {
   const float type = l.type == Light::Type::Point  ? 0.0f

@@ -12,7 +12,7 @@ ScreenPass::ScreenPass(const Scene& scene, const Volume& density, float delta1,
                        const ShadowMapSettings& shadowMap, StageTimer* timer)
     : scene_(scene),
       shadows_((context(), objects_.build(scene, shadowMap, timer))),
-      inputs_(scene, density, delta1, shadows_) {
+      inputs_(scene, density, delta1, shadows_, timer) {
   surfaces_.build(scene, objects_, inputs_, timer);
 }
 

@@ -127,7 +127,7 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
   const Framebuffer fbo("slice marcher target");
   glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT0, target.id(), 0);
   const VertexArray vao("attribute-less");
-  const TracingInputs inputs(scene, density, surfaces ? delta1_ : 0.0f, shadows);
+  const TracingInputs inputs(scene, density, surfaces ? delta1_ : 0.0f, shadows, timer);
   const SliceLayout layout =
       sliceLayout(cam.rayGenerator(), density.bounds, scene.medium.sigmaT, settings_.step);
   if (sliceCount) *sliceCount = raySteps_ ? layout.layers : layout.slabs;

@@ -1,5 +1,7 @@
 #include "gpu/tracing.h"
 
+#include <algorithm>
+#include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 #include <vector>
 
@@ -13,14 +15,59 @@
 
 namespace scatterlab::gpu {
 
-TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1,
-                             const ShadowMaps* shadows)
-    : scene_(scene), density_(density), delta1_(delta1), shadows_(shadows) {
+std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volume& density,
+                                                 StageTimer* timer) {
   std::vector<GpuLight> packed;
   packed.reserve(scene.lights.size());
   for (const Light& l : scene.lights) packed.push_back(packLight(l));
-  lights_ = Buffer(packed.size() * sizeof(GpuLight), packed.data(), 0, "lights");
+  const float sigmaT = scene.medium.sigmaT;
+  if (const auto& kept = density.lights;
+      kept && kept->sigmaT == sigmaT && kept->packed.size() == packed.size() &&
+      std::memcmp(kept->packed.data(), packed.data(), packed.size() * sizeof(GpuLight)) == 0)
+    return kept;
+  // Dropped first: where nothing else holds them, their buffer goes back to the recycler for the
+  // new lights (a light moved from frame to frame makes no GL object).
+  density.lights.reset();
+  auto lights = std::make_shared<DeviceLights>();
+  lights->buffer = Buffer(packed.size() * sizeof(GpuLight), packed.data(), 0, "lights");
+  // The lamp model's k_l (lamp.x) and min_l m_l (lights[0].lamp.y), where a point or spot light
+  // is inside the box: one small pass here, where every program that evaluates the model read
+  // the density at each light per march step, sample and probe (and the gather at every voxel).
+  const bool lampInside =
+      std::any_of(scene.lights.begin(), scene.lights.end(), [&](const Light& l) {
+        return l.type != Light::Type::Directional && density.bounds.contains(l.position);
+      });
+  if (lampInside) {
+    const Program& p =
+        program({.compute = {"common.glsl", "lamp_k.comp.glsl"}, .defines = {"SL_LAMP_MODEL"}},
+                "lamp model");
+    p.use();
+    lights->buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
+    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    glUniform1i(p.uniform("uLightCount"), GLint(scene.lights.size()));
+    glUniform1f(p.uniform("uSigmaT"), sigmaT);
+    setVec3(p, "uBoxMin", density.bounds.min);
+    setVec3(p, "uBoxMax", density.bounds.max);
+    setVec3(p, "uDensityScale", density.indexScale());
+    setVec3(p, "uDensityOffset", density.indexOffset());
+    setIVec3(p, "uDensityDims", density.dims);
+    glUniform1f(p.uniform("uBoxDiagonal"), glm::length(density.bounds.extent()));
+    dispatch("lamp model", {1, 1, 1}, timer);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+  lights->packed = std::move(packed);
+  lights->sigmaT = sigmaT;
+  density.lights = lights;
+  return lights;
 }
+
+TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float delta1,
+                             const ShadowMaps* shadows, StageTimer* timer)
+    : scene_(scene),
+      density_(density),
+      delta1_(delta1),
+      shadows_(shadows),
+      lights_(deviceLights(scene, density, timer)) {}
 
 void TracingInputs::skipEmptySpace(StageTimer* timer) {
   blockMax_ = &blockMaxGrid(density_, timer);
@@ -28,7 +75,7 @@ void TracingInputs::skipEmptySpace(StageTimer* timer) {
 
 void TracingInputs::apply(const Program& p) const {
   const Medium& m = scene_.medium;
-  lights_.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
+  lights_->buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
   glBindTextureUnit(binding::kDensityTexture, density_.texture.id());
   glUniform1i(p.uniform("uLightCount"), GLint(scene_.lights.size()));
   glUniform1i(p.uniform("uPhaseType"), m.phase.type == Phase::Type::Isotropic ? 0 : 1);

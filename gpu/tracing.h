@@ -4,9 +4,11 @@
 /// surface pass of the camera. Every function needs a GL context (gpu::context()).
 
 #include <memory>
+#include <vector>
 
 #include "core/stages.h"
 #include "gpu/objects.h"
+#include "gpu/records.h"
 #include "gpu/shadow_maps.h"
 #include "gpu/timer.h"
 #include "gpu/volume.h"
@@ -16,12 +18,31 @@ namespace scatterlab::gpu {
 /// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
 /// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs
 /// a current context.
+/// The scene's lights as the shaders read them (GpuLight[] at BINDING_LIGHTS), with the lamp
+/// model's k_l of `density` in lamp.x and min_l m_l at its box's diagonal in lights[0].lamp.y
+/// (lamp_k.comp.glsl; only where a point or spot light is inside the box, else 0). Kept on the
+/// density volume (Volume::lights) while the lights, σt and the volume stay the same.
+struct DeviceLights {
+  std::vector<GpuLight> packed;  ///< as uploaded (packLight; lamp 0), the key with sigmaT
+  float sigmaT = 0.0f;
+  Buffer buffer;
+};
+
+/// The lights of `scene` for `density`: the volume's kept ones where they are the same, else
+/// uploaded and (with a lamp inside the box) completed by the lamp model's pass, timed on
+/// `timer`; the pass leaves its program in use.
+std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volume& density,
+                                                 StageTimer* timer);
+
 class TracingInputs {
  public:
   /// `shadows`: the scene objects' shadow maps (null without objects); programs that trace
   /// with these inputs must then be built with addShadowVariant(shadows(), ...).
+  /// The lights come from deviceLights(): where they changed and a point or spot light is inside
+  /// the density's box, that runs the lamp model's pass (timed on `timer`) and leaves another
+  /// program in use, so make the program current after this.
   TracingInputs(const Scene& scene, const Volume& density, float delta1,
-                const ShadowMaps* shadows = nullptr);
+                const ShadowMaps* shadows = nullptr, StageTimer* timer = nullptr);
   /// Shadow rays that jump over blocks of zero density (programs built with
   /// addShadowRaySkip): builds the density's empty-space grid (gpu/empty_space.h) unless it is
   /// built, so call it before the program is made current; apply() then binds it.
@@ -35,7 +56,7 @@ class TracingInputs {
   const Volume& density_;
   float delta1_;
   const ShadowMaps* shadows_;
-  Buffer lights_;
+  std::shared_ptr<const DeviceLights> lights_;
   const Texture* blockMax_ = nullptr;
 };
 

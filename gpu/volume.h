@@ -19,6 +19,8 @@ class SogDensity;
 
 namespace scatterlab::gpu {
 
+struct DeviceLights;
+
 /// A 3D texture over `bounds`: voxel i's centre at bounds.min + (i + ½)·cell, GL_LINEAR with
 /// CLAMP_TO_EDGE (so lookups match Grid3::sample inside the box). Density volumes are R32F,
 /// radiance volumes RGBA32F (rgb = S; a = the density of the same grid where densityInAlpha).
@@ -33,6 +35,10 @@ struct Volume {
   /// A density volume's empty-space grid (gpu/empty_space.h), built by its first use: a new
   /// density is a new Volume, so the grid never outlives the voxels it was built from.
   mutable std::shared_ptr<const Texture> blockMax;
+  /// A density volume's last lights on the device (gpu/tracing.h), with the lamp model's k_l
+  /// looked up in this density: the passes of a frame share them, and a frame whose lights did
+  /// not change uploads and looks up nothing.
+  mutable std::shared_ptr<const DeviceLights> lights;
 
   Vec3 cellSize() const { return bounds.extent() / Vec3(dims); }
   Vec3 indexScale() const { return Vec3(1.0f) / cellSize(); }

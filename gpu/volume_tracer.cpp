@@ -96,7 +96,7 @@ void VolumeTracerGpu::trace(const Scene& scene, const Volume& density, const Buf
                               .logSpace = log_,
                               .reach = reach_};
   const Program& program = tracerProgram(shape, variant, shadows, false);
-  TracingInputs inputs(scene, density, delta1_, shadows);
+  TracingInputs inputs(scene, density, delta1_, shadows, timer);
   inputs.skipEmptySpace(timer);
   useTracer(program, inputs, delta2_, variant, points, results);
   glUniform1ui(program.uniform("uCount"), GLuint(count));

@@ -19,6 +19,7 @@ struct GpuLight {
   vec4 positionType;       // xyz position, w type
   vec4 directionCosInner;  // xyz direction (unit), w cos of the inner half-angle
   vec4 intensityCosOuter;  // rgb intensity / irradiance, w cos of the outer half-angle
+  vec4 lamp;  // x: k_l of the lamp model, y (lights[0]): min_l m_l (lamp_k.comp.glsl); zw unused
 };
 layout(std430, binding = BINDING_LIGHTS) readonly buffer Lights { GpuLight lights[]; };
 uniform int uLightCount;
@@ -261,14 +262,9 @@ vec3 sourceRadiance(vec3 x, vec3 toViewer) { return sourceRadiancePart(x, toView
 const float kLampDepth = SL_LAMP_DEPTH;  // kLampDepth of core/stages.h, injected
 // LampModel (shading/transport.h): m_l = exp(−κ·q / (q + κ)), q = k_l·d, k_l = σt·D(s_l) for a
 // point or spot light inside the medium's box; 1 otherwise.
-// k_l of light li: σt·D(s_l) inside the box, 0 for a directional light or one outside.
-float lampK(int li) {
-  GpuLight l = lights[li];
-  if (int(l.positionType.w) == 2) return 0.0;
-  vec3 p = l.positionType.xyz;
-  if (any(lessThan(p, uBoxMin)) || any(greaterThan(p, uBoxMax))) return 0.0;
-  return uSigmaT * densityAtIndex(p * uDensityScale + uDensityOffset);
-}
+// k_l of light li: σt·D(s_l) inside the box, 0 for a directional light or one outside; looked
+// up once per light by lamp_k.comp.glsl (TracingInputs), not per light and step.
+float lampK(int li) { return lights[li].lamp.x; }
 // m_l at distance d from a lamp of k_l = k.
 float lampModelAt(float k, float d) {
   if (!(k > 0.0)) return 1.0;

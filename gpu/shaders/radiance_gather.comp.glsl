@@ -35,12 +35,11 @@ uniform vec2 uTaylorBounds;  // TaylorBounds (lo, hi): each Taylor estimate is c
 #ifdef SL_LAMP_BOUNDS
 // After common.glsl (its lamp functions): the clamp's hi tightened for this frame on the GPU, as
 // shading/transport.h lampBounds does on the host: hi = min(hi, 1 / min_l m_l(box diagonal)),
-// its ln for ln V (SL_LOG_SPACE), from the lights and the density at each lamp, so that the
-// host never reads the density around the lamps inside a frame.
-uniform float uBoxDiagonal;
+// its ln for ln V (SL_LOG_SPACE), from the lights and the density at each lamp (min_l m_l from
+// the lamp model's pass, lights[0].lamp.y: lamp_k.comp.glsl), so that the host never reads the
+// density around the lamps inside a frame.
 float lampTaylorHi(float hi) {
-  float m = 1.0;
-  for (int i = 0; i < uLightCount; ++i) m = min(m, lampModelAt(lampK(i), uBoxDiagonal));
+  float m = uLightCount > 0 ? lights[0].lamp.y : 1.0;
 #ifdef SL_LOG_SPACE
   return min(hi, log(1.0 / m));
 #else

@@ -20,6 +20,7 @@
 #include "gpu/volume_tracer.h"
 #include "gpu_support.h"
 #include "media/procedural.h"
+#include "shading/transport.h"
 
 namespace scatterlab::testing {
 namespace {
@@ -576,6 +577,68 @@ TEST(GpuComputePipeline, CellOccupancyEqualsTheCpus) {
     EXPECT_EQ(frame.occupiedVoxelsPerCell(dims), occupiedVoxelsPerCell(d, dims))
         << dims.x << "x" << dims.y << "x" << dims.z;
   gpu::checkGl("cell occupancy");
+}
+
+// The lamp model's k_l (LampModel::k: σt·D at a point or spot light inside the box, 0 for one
+// outside and a directional light) and min_l m_l at the box's diagonal are looked up on the
+// device once per lights and density (gpu::deviceLights, lamp_k.comp.glsl), not by every pass at
+// every step: the values are the CPU's, a second request keeps them without a pass, and a moved
+// light makes one pass more.
+TEST(GpuComputePipeline, TheLampModelIsLookedUpOncePerLightsAndDensity) {
+  SCATTERLAB_REQUIRE_GPU();
+  Json doc = homogeneousBoxDoc(1.0f, 3.0f, 0.8f, Vec3(0.3f, 0.4f, 0.5f), 1.0f, 16, 12, 20);
+  doc["medium"]["density"] = {
+      {"type", "gaussians"},
+      {"blobs", Json::array({{{"center", {0.35, 0.45, 0.5}}, {"radius", 0.2}, {"weight", 2.0}},
+                             {{"center", {0.7, 0.6, 0.4}}, {"radius", 0.15}, {"weight", 1.0}}})}};
+  doc["lights"].push_back({{"type", "spot"},
+                           {"position", {0.72, 0.61, 0.41}},
+                           {"direction", {0, -1, 0}},
+                           {"intensity", {1, 1, 1}},
+                           {"inner_deg", 20},
+                           {"outer_deg", 30}});
+  doc["lights"].push_back({{"type", "point"}, {"position", {2, 2, 2}}, {"intensity", {1, 1, 1}}});
+  doc["lights"].push_back(
+      {{"type", "directional"}, {"direction", {0, -1, 0}}, {"irradiance", {1, 1, 1}}});
+  const Scene scene = sceneFromJson(doc);
+  ASSERT_EQ(scene.lights.size(), 4u);
+  const DensityGrid density = buildDensityVolume(scene);
+  const gpu::Volume v = gpu::uploadDensity(density);
+  const long long before = gpu::passCounts().dispatches;
+  const auto lights = gpu::deviceLights(scene, v, nullptr);
+  EXPECT_EQ(gpu::passCounts().dispatches - before, 1);
+  EXPECT_EQ(gpu::deviceLights(scene, v, nullptr), lights);  // kept: no upload, no pass
+  EXPECT_EQ(gpu::passCounts().dispatches - before, 1);
+  std::vector<gpu::GpuLight> got(scene.lights.size());
+  lights->buffer.read(got.data(), got.size() * sizeof(gpu::GpuLight));
+  const LampModel cpu(scene, density);
+  float m = 1.0f;
+  const float diagonal = glm::length(scene.medium.bounds.extent());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    // The GPU's trilinear lookup against Grid3::sample (densityAtIndex's CPU twin).
+    EXPECT_NEAR(got[i].lampK, cpu.k(i), 1e-6f * std::max(1.0f, cpu.k(i))) << "light " << i;
+    m = std::min(m, cpu(i, diagonal));
+  }
+  EXPECT_GT(cpu.k(0), 0.0f);
+  EXPECT_GT(cpu.k(1), 0.0f);
+  EXPECT_EQ(got[2].lampK, 0.0f);  // outside the box
+  EXPECT_EQ(got[3].lampK, 0.0f);  // directional
+  EXPECT_LT(m, 1.0f);
+  EXPECT_NEAR(got[0].lampMin, m, 1e-6f);  // lights[0].lamp.y: min_l m_l(diagonal)
+  Scene moved = scene;
+  moved.lights[0].position += Vec3(0.01f);
+  EXPECT_NE(gpu::deviceLights(moved, v, nullptr), lights);
+  EXPECT_EQ(gpu::passCounts().dispatches - before, 2);
+  // No lamp inside the box: no pass, k_l = 0 and min_l m_l = 1 as packed.
+  Scene outside = scene;
+  outside.lights.erase(outside.lights.begin(), outside.lights.begin() + 2);
+  const auto far = gpu::deviceLights(outside, v, nullptr);
+  EXPECT_EQ(gpu::passCounts().dispatches - before, 2);
+  gpu::GpuLight first;
+  far->buffer.read(&first, sizeof first);
+  EXPECT_EQ(first.lampK, 0.0f);
+  EXPECT_EQ(first.lampMin, 1.0f);
+  gpu::checkGl("lamp model");
 }
 
 }  // namespace
