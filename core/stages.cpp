@@ -81,9 +81,9 @@ std::vector<int> cellStarts(int voxels, int cells) {
 
 namespace {
 
-/// Calls f(cell index, voxel count) for each (cell, row of voxel centres with D > 0 in it),
-/// layer by layer of cells along z in parallel: the voxels of a layer of cells are a slab of
-/// whole z slices, so two tasks never touch one cell.
+/// Calls f(c) for every voxel centre with D > 0, c its cell's linear index in a `dims` grid
+/// (occupiedCells()' map), in parallel over the layers of cells along z: the voxels of a layer
+/// are a slab of whole z slices (cellStarts), so two tasks never touch one cell.
 template <class F>
 void forOccupiedRuns(const DensityGrid& g, IVec3 dims, const F& f) {
   const IVec3 nd = g.dims();
