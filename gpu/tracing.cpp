@@ -15,6 +15,20 @@
 
 namespace scatterlab::gpu {
 
+namespace {
+
+/// The density texture and common.glsl's uniforms of its lookups (densityAtIndex, the box).
+void bindDensityLookup(const Program& p, const Volume& density) {
+  glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+  setVec3(p, "uBoxMin", density.bounds.min);
+  setVec3(p, "uBoxMax", density.bounds.max);
+  setVec3(p, "uDensityScale", density.indexScale());
+  setVec3(p, "uDensityOffset", density.indexOffset());
+  setIVec3(p, "uDensityDims", density.dims);
+}
+
+}  // namespace
+
 std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volume& density,
                                                  StageTimer* timer) {
   std::vector<GpuLight> packed;
@@ -43,14 +57,9 @@ std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volum
                 "lamp model");
     p.use();
     lights->buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
-    glBindTextureUnit(binding::kDensityTexture, density.texture.id());
+    bindDensityLookup(p, density);
     glUniform1i(p.uniform("uLightCount"), GLint(scene.lights.size()));
     glUniform1f(p.uniform("uSigmaT"), sigmaT);
-    setVec3(p, "uBoxMin", density.bounds.min);
-    setVec3(p, "uBoxMax", density.bounds.max);
-    setVec3(p, "uDensityScale", density.indexScale());
-    setVec3(p, "uDensityOffset", density.indexOffset());
-    setIVec3(p, "uDensityDims", density.dims);
     glUniform1f(p.uniform("uBoxDiagonal"), glm::length(density.bounds.extent()));
     dispatch("lamp model", {1, 1, 1}, timer);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -76,17 +85,12 @@ void TracingInputs::skipEmptySpace(StageTimer* timer) {
 void TracingInputs::apply(const Program& p) const {
   const Medium& m = scene_.medium;
   lights_->buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
-  glBindTextureUnit(binding::kDensityTexture, density_.texture.id());
+  bindDensityLookup(p, density_);
   glUniform1i(p.uniform("uLightCount"), GLint(scene_.lights.size()));
   glUniform1i(p.uniform("uPhaseType"), m.phase.type == Phase::Type::Isotropic ? 0 : 1);
   glUniform1f(p.uniform("uPhaseG"), m.phase.g);
   glUniform1f(p.uniform("uSigmaT"), m.sigmaT);
   glUniform1f(p.uniform("uDelta1"), delta1_);
-  setVec3(p, "uBoxMin", density_.bounds.min);
-  setVec3(p, "uBoxMax", density_.bounds.max);
-  setVec3(p, "uDensityScale", density_.indexScale());
-  setVec3(p, "uDensityOffset", density_.indexOffset());
-  setIVec3(p, "uDensityDims", density_.dims);
   setVec3(p, "uEye", scene_.camera.position);
   if (shadows_) shadows_->bind(p);
   if (p.declares("uBlocks")) {
