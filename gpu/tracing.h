@@ -15,15 +15,14 @@
 
 namespace scatterlab::gpu {
 
-/// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
-/// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs
-/// a current context.
 /// The scene's lights as the shaders read them (GpuLight[] at BINDING_LIGHTS), with the lamp
 /// model's k_l of `density` in lamp.x and min_l m_l at its box's diagonal in lights[0].lamp.y
-/// (lamp_k.comp.glsl; only where a point or spot light is inside the box, else 0). Kept on the
-/// density volume (Volume::lights) while the lights, σt and the volume stay the same.
+/// (lamp_k.comp.glsl; only where a point or spot light is inside the box, else k_l 0 and the
+/// minimum 1 as packed). Kept on the density volume (Volume::lights) while the lights, σt and
+/// the volume stay the same.
 struct DeviceLights {
-  std::vector<GpuLight> packed;  ///< as uploaded (packLight; lamp 0), the key with sigmaT
+  std::vector<GpuLight>
+      packed;  ///< as uploaded (packLight: lampK 0, lampMin 1), the key with sigmaT
   float sigmaT = 0.0f;
   Buffer buffer;
 };
@@ -34,6 +33,9 @@ struct DeviceLights {
 std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volume& density,
                                                  StageTimer* timer);
 
+/// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
+/// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs
+/// a current context.
 class TracingInputs {
  public:
   /// `shadows`: the scene objects' shadow maps (null without objects); programs that trace

@@ -766,8 +766,8 @@ const std::vector<KeyDoc>& dynamicSamplingKeys() {
        "per-voxel's voxels / (7 + probes) (a sample costs S, its six central differences and its "
        "probes; per-voxel one S per radiance voxel it traces: the occupied ones a light reaches, "
        "stat `budget_voxels`; every voxel with voxel_switch 0): the final set may grow to "
-       "max(max_samples' auto "
-       "rule, B); with max_samples given, to the smaller of the two (0 on either side: the "
+       "max(max_samples' auto rule, B); with max_samples given, to the smaller of the two (0 on "
+       "either side: the "
        "other). The per-voxel fallback's voxels are paid at their cost, one S each (the pass "
        "may use B × (7 + probes) S evaluations), the final set at most 4 × B samples and at most "
        "max_samples where given",

@@ -263,7 +263,8 @@ const float kLampDepth = SL_LAMP_DEPTH;  // kLampDepth of core/stages.h, injecte
 // LampModel (shading/transport.h): m_l = exp(−κ·q / (q + κ)), q = k_l·d, k_l = σt·D(s_l) for a
 // point or spot light inside the medium's box; 1 otherwise.
 // k_l of light li: σt·D(s_l) inside the box, 0 for a directional light or one outside; looked
-// up once per light by lamp_k.comp.glsl (TracingInputs), not per light and step.
+// up once per lights and density by lamp_k.comp.glsl (gpu::deviceLights), not per light and
+// step.
 float lampK(int li) { return lights[li].lamp.x; }
 // m_l at distance d from a lamp of k_l = k.
 float lampModelAt(float k, float d) {
