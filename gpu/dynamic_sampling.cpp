@@ -278,16 +278,13 @@ void dispatchOverLevel(const char* pass, const DynamicSamplingWorkspace& w, std:
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
 }
 
-/// How a level is evaluated: split level (S, ∇S, E_j), final (S, ∇S), or final without ∇S
-/// (the per-voxel fallback's voxels).
-enum class Evaluation { Split = 0, Final = 1, FinalNoGradient = 2 };
-
 /// Evaluate level k (its count on the GPU after level 0): S and ∇S by the tracer's pass
 /// (traceLevel); unless final, then (dynamic_error.comp.glsl) τ and on level 0 the
 /// contributions, the probes in groups of kProbeGroup, and E_j. GPU time: "ds evaluate+error".
 void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, const Volume& density,
-                   std::size_t lights, std::size_t k, Evaluation mode, const TracerSteps& steps,
-                   const DynamicSamplingSettings& settings, StageTimer* timer) {
+                   std::size_t lights, std::size_t k, LevelEvaluation mode,
+                   const TracerSteps& steps, const DynamicSamplingSettings& settings,
+                   StageTimer* timer) {
   const Vec3* dirs = probeOffsets();  // the CPU's probe offsets of a unit sphere
   const DynamicSamplingWorkspace::Level& l = w.levels[k];
   const std::vector<LevelGrid> grids = levelGrids(settings);
@@ -298,9 +295,9 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
   ScopedGpuTimer t(timer, "ds evaluate+error");
   // pass 0: S and ∇S, parallel over (sample, point, light) (∇S = 0 for the per-voxel fallback's
   // voxels, as the CPU's gradients = false)
-  traceLevel(inputs, lights, valueSpace(steps, mode != Evaluation::FinalNoGradient), steps.delta2,
+  traceLevel(inputs, lights, valueSpace(steps, mode != LevelEvaluation::FinalVoxels), steps.delta2,
              l.samples, l.radiance, w.counts, k, l.capacity);
-  if (mode != Evaluation::Split) {  // a final level has S and ∇S, and no E
+  if (mode != LevelEvaluation::Split) {  // a final level has S and ∇S, and no E
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return;
   }
@@ -687,26 +684,73 @@ void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-/// One splitting pass on the GPU, enqueued without a wait (the budget's decisions included);
-/// the final list goes to `out`. Records the pass in w.pass for readDynamicSamplingGpu.
-void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs& inputs,
-                  const std::vector<RadianceSample>& initial, TracerSteps steps,
-                  const DynamicSamplingSettings& settings, StageTimer* timer,
-                  DynamicSamplingWorkspace& w, DeviceSamples* resident) {
-  using Clock = std::chrono::steady_clock;
-  const std::vector<LevelGrid> grids = levelGrids(settings);
-  const std::size_t L = grids.size();
-  const long long budget = sampleBudget(settings, initial.size());
-  const BudgetLimits limits = budgetLimits(settings, budget);
-  const bool fallback = L > 0 && grids[L - 1].voxels;  // level L is the per-voxel fallback's
+/// One splitting pass as GPU passes (runSplitPass()'s steps), enqueued without a wait, the
+/// budget's decisions included; the final list goes to `out`.
+class GpuSplitPass final : public SplitPassSteps {
+ public:
+  struct Inputs {
+    const Scene& scene;
+    const Volume& density;
+    const TracingInputs& tracing;
+    const TracerSteps& steps;
+    const DynamicSamplingSettings& settings;
+    const SplitPassPlan& plan;
+    StageTimer* timer;
+  };
+  GpuSplitPass(const Inputs& in, DynamicSamplingWorkspace& w, FinalList out,
+               DeviceSamples* resident)
+      : in_(in), w_(w), out_(out), resident_(resident) {}
+
+  void evaluate(std::size_t k, LevelEvaluation e) override {
+    evaluateLevel(w_, in_.tracing, in_.density, in_.scene.lights.size(), k, e, in_.steps,
+                  in_.settings, in_.timer);
+  }
+  void threshold() override { computeThreshold(w_, in_.settings, in_.timer); }
+  void split(std::size_t k) override {
+    const SplitPassPlan& plan = in_.plan;
+    const std::size_t L = plan.levels();
+    const GridGeometry grid(in_.scene.medium.bounds, plan.grids[k]);
+    if (plan.budget > 0) budgetLevel(w_, grid, k, L, plan.limits, plan.fallback(), in_.timer);
+    splitLevel(w_, grid, k, L, plan.budget > 0, in_.timer);
+    compactLevel(w_, grid, k + 1, L, in_.timer);
+  }
+  void endLevel(std::size_t k) override { checkGl("dynamic sampling: level " + std::to_string(k)); }
+  void topUp() override {
+    budgetTopUpCut(w_, in_.plan.levels(), in_.plan.limits, in_.plan.fallback(), in_.timer);
+  }
+  void finish() override {
+    assembleFinal(w_, in_.tracing, in_.scene.lights.size(), in_.scene, in_.plan.grids,
+                  in_.plan.budget, in_.steps, out_, in_.timer);
+    if (resident_) {
+      copyCount(w_.counts, CountSlots{in_.plan.levels()}.end(), resident_->onDevice->count, 0);
+      resident_->radianceCurrent = true;
+    }
+    checkGl("dynamic sampling: final list");
+  }
+
+ private:
+  Inputs in_;
+  DynamicSamplingWorkspace& w_;
+  FinalList out_;
+  DeviceSamples* resident_;
+};
+
+/// One splitting pass on the GPU, enqueued without a wait. Records the pass in w.pass for
+/// readDynamicSamplingGpu.
+void enqueueSplitPass(const Scene& scene, const Volume& density, const TracingInputs& inputs,
+                      const std::vector<RadianceSample>& initial, TracerSteps steps,
+                      const DynamicSamplingSettings& settings, StageTimer* timer,
+                      DynamicSamplingWorkspace& w, DeviceSamples* resident) {
+  const SplitPassPlan plan = splitPassPlan(settings, initial.size());
+  const std::size_t L = plan.levels();
   DynamicSamplingWorkspace::Pass& pass = w.pass;
   pass = {};
   pass.settings = settings;
   pass.initial = initial.size();
-  pass.budget = budget;
+  pass.budget = plan.budget;
   pass.enqueueMs.assign(L + 1, 0.0);
   if (initial.empty()) return;
-  const std::size_t finalCapacity = prepareWorkspace(w, initial, settings, budget);
+  const std::size_t finalCapacity = prepareWorkspace(w, initial, settings, plan.budget);
   pass.finalCapacity = finalCapacity;
   if (resident) {
     // Per part of the list its most samples and their radius, for the bound on the gather's
@@ -716,9 +760,10 @@ void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs
     for (const RadianceSample& s : initial) r0 = std::max(r0, s.radius);
     radii.emplace_back(std::min(initial.size(), finalCapacity), r0);
     for (std::size_t k = 0; k < L; ++k) {
-      const float R = GridGeometry(scene.medium.bounds, grids[k]).radius();
+      const float R = GridGeometry(scene.medium.bounds, plan.grids[k]).radius();
       radii.emplace_back(std::min(w.levels[k + 1].capacity, finalCapacity), R);
-      if (budget > 0) radii.emplace_back(std::min(gridVertices(grids, k), finalCapacity), R);
+      if (plan.budget > 0)
+        radii.emplace_back(std::min(gridVertices(plan.grids, k), finalCapacity), R);
     }
     resident->reserveOnDevice(finalCapacity, std::move(radii));
     pass.finalPoints = &resident->points;
@@ -729,34 +774,15 @@ void splitOnceGpu(const Scene& scene, const Volume& density, const TracingInputs
     pass.finalPoints = &w.finalPoints;
     pass.finalRadiance = &w.finalRadiance;
   }
-  for (std::size_t k = 0; k <= L; ++k) {
-    const auto t0 = Clock::now();
-    const bool final = k == L;
-    evaluateLevel(w, inputs, density, scene.lights.size(), k,
-                  !final                         ? Evaluation::Split
-                  : k > 0 && grids[k - 1].voxels ? Evaluation::FinalNoGradient
-                                                 : Evaluation::Final,
-                  steps, settings, timer);
-    if (!final) {
-      if (k == 0) computeThreshold(w, settings, timer);
-      const GridGeometry grid(scene.medium.bounds, grids[k]);
-      if (budget > 0) budgetLevel(w, grid, k, L, limits, fallback, timer);
-      splitLevel(w, grid, k, L, budget > 0, timer);
-      compactLevel(w, grid, k + 1, L, timer);
-    }
-    checkGl("dynamic sampling: level " + std::to_string(k));
-    pass.enqueueMs[k] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  }
-  const auto t0 = Clock::now();
-  if (budget > 0 && L > 0) budgetTopUpCut(w, L, limits, fallback, timer);
-  assembleFinal(w, inputs, scene.lights.size(), scene, grids, budget, steps,
-                {*pass.finalPoints, *pass.finalRadiance, finalCapacity}, timer);
-  if (resident) {
-    copyCount(w.counts, CountSlots{L}.end(), resident->onDevice->count, 0);
-    resident->radianceCurrent = true;
-  }
-  checkGl("dynamic sampling: final list");
-  pass.enqueueMs[L] += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  GpuSplitPass gpuPass({.scene = scene,
+                        .density = density,
+                        .tracing = inputs,
+                        .steps = steps,
+                        .settings = settings,
+                        .plan = plan,
+                        .timer = timer},
+                       w, {*pass.finalPoints, *pass.finalRadiance, finalCapacity}, resident);
+  pass.enqueueMs = runSplitPass(gpuPass, plan);
 }
 
 }  // namespace
@@ -890,7 +916,7 @@ DynamicSamplingResult dynamicSamplingGpu(const Scene& scene, const Volume& densi
   DynamicSamplingWorkspace& w = workspace ? *workspace : local;
   if (errorsOut) errorsOut->clear();
   const DynamicSamplingSettings s = forInitialSamples(settings, scene.medium.bounds, initial);
-  splitOnceGpu(scene, density, inputs, initial, steps, s, timer, w, resident);
+  enqueueSplitPass(scene, density, inputs, initial, steps, s, timer, w, resident);
   if (resident) return {};
   ScopedGpuTimer readTime(timer, "ds read-back");
   return readDynamicSamplingGpu(w, true, errorsOut);

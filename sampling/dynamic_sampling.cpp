@@ -11,6 +11,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "sampling/scan.h"
 #include "shading/transport.h"
@@ -232,6 +233,44 @@ long long sampleBudget(const DynamicSamplingSettings& settings, std::size_t init
   return count > 0 && cost > 0 ? std::min(count, cost) : std::max(count, cost);
 }
 
+LevelEvaluation SplitPassPlan::evaluation(std::size_t k) const {
+  if (k < grids.size()) return LevelEvaluation::Split;
+  return k > 0 && grids[k - 1].voxels ? LevelEvaluation::FinalVoxels : LevelEvaluation::Final;
+}
+
+SplitPassPlan splitPassPlan(const DynamicSamplingSettings& settings, std::size_t initialCount) {
+  SplitPassPlan plan;
+  plan.grids = levelGrids(settings);
+  plan.budget = sampleBudget(settings, initialCount);
+  plan.limits = budgetLimits(settings, plan.budget);
+  return plan;
+}
+
+std::vector<double> runSplitPass(SplitPassSteps& steps, const SplitPassPlan& plan) {
+  using Clock = std::chrono::steady_clock;
+  const auto since = [](Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
+  const std::size_t L = plan.levels();
+  std::vector<double> ms(L + 1, 0.0);
+  for (std::size_t k = 0; k <= L; ++k) {
+    const auto t0 = Clock::now();
+    const LevelEvaluation e = plan.evaluation(k);
+    steps.evaluate(k, e);
+    if (e == LevelEvaluation::Split) {
+      if (k == 0) steps.threshold();
+      steps.split(k);
+    }
+    steps.endLevel(k);
+    ms[k] = since(t0);
+  }
+  const auto t0 = Clock::now();
+  if (plan.budget > 0 && L > 0) steps.topUp();
+  steps.finish();
+  ms[L] += since(t0);
+  return ms;
+}
+
 int errorBin(float e, double threshold) {
   const auto key = [](float x) { return int(std::bit_cast<std::uint32_t>(x) >> kErrorBinShift); };
   return std::clamp(key(e) - key(float(threshold)), 0, kErrorBins - 1);
@@ -419,219 +458,255 @@ void evaluateTopUp(Frame& frame, const Scene& scene, RadianceEvaluator& evaluato
   }
 }
 
-/// One pass of recursive splitting: dynamicSampling(). With a budget (budget > 0) the splits
-/// of each level are budgetedSplit()'s; without one every E > threshold splits (the paper).
-DynamicSamplingResult splitOnce(Frame& frame, const Scene& scene,
-                                std::vector<RadianceSample> current, RadianceEvaluator& evaluator,
-                                const DynamicSamplingSettings& settings) {
-  using Clock = std::chrono::steady_clock;
-  const DensityGrid& density = frame.hostDensity();
-  const long long budget = sampleBudget(settings, current.size());
-  const BudgetLimits limits = budgetLimits(settings, budget);
-  BudgetCount inResult;                   // the budget's count of the samples in the result so far
-  std::vector<BudgetLevel> budgetLevels;  // the split levels, for the top-up
-  DynamicSamplingResult result;
-  // τ of every level-0 sample; descendants index it through their ancestor.
-  std::vector<float> rootTau(current.size());
-  std::vector<std::int32_t> anc(current.size());
-  tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t i) {
-    rootTau[i] = viewTransmittance(scene, density, current[i].position, settings.delta1);
-    anc[i] = std::int32_t(i);
-  });
+/// One pass of recursive splitting on the host (dynamicSampling()): runSplitPass()'s steps. With
+/// a budget the splits of each level are budgetedSplit()'s; without one every E > threshold
+/// splits (the paper).
+class HostSplitPass final : public SplitPassSteps {
+ public:
+  HostSplitPass(Frame& frame, const Scene& scene, std::vector<RadianceSample> initial,
+                RadianceEvaluator& evaluator, const DynamicSamplingSettings& settings,
+                const SplitPassPlan& plan)
+      : frame_(frame),
+        scene_(scene),
+        density_(frame.hostDensity()),
+        evaluator_(evaluator),
+        settings_(settings),
+        plan_(plan),
+        current_(std::move(initial)),
+        threshold_(settings.epsilon) {
+    // τ of every level-0 sample; descendants index it through their ancestor.
+    rootTau_.resize(current_.size());
+    anc_.resize(current_.size());
+    tbb::parallel_for(std::size_t(0), current_.size(), [&](std::size_t i) {
+      rootTau_[i] = viewTransmittance(scene_, density_, current_[i].position, settings_.delta1);
+      anc_[i] = std::int32_t(i);
+    });
+    // A towards the camera, the weights of the error of S = A ⊙ V (ErrorSpace::weightA).
+    if (settings_.space.weightA)
+      lightFactor_.emplace(scene_,
+                           settings_.space.lampModel ? LampModel(scene_, density_) : LampModel());
+  }
 
-  // A towards the camera, the weights of the error of S = A ⊙ V (ErrorSpace::weightA).
-  std::optional<LightFactor> lightFactor;
-  if (settings.space.weightA)
-    lightFactor.emplace(scene, settings.space.lampModel ? LampModel(scene, density) : LampModel());
-  const Vec3 eye = scene.camera.position;
-
-  double threshold = settings.epsilon, errorScale = 0.0;  // set on level 0
-  const std::vector<LevelGrid> grids = levelGrids(settings);
-  const std::size_t nLevels = grids.size();
-  const auto emptyStats = [&](std::size_t l) {
-    LevelStats e;
-    e.resolution = grids[l - 1].dims.x;
-    e.voxels = grids[l - 1].voxels;
-    return e;
-  };
-  for (std::size_t level = 0; level <= nLevels; ++level) {
-    const auto t0 = Clock::now();
-    LevelStats ls = level == 0 ? LevelStats{} : emptyStats(level);
-    ls.samples = (long long)current.size();
-    for (auto& s : current) s.level = int(level);
-    const long long levelUnit = level > 0 && grids[level - 1].voxels ? 1 : limits.sampleUnit;
-    // The voxel level's samples (final) need no ∇S: each reaches its own voxel centre only.
-    evaluator.evaluate(frame, scene, current, /*gradients=*/!ls.voxels);
-
-    if (level == nLevels || current.empty()) {
-      // The finest level is not split further.
-      result.samples.insert(result.samples.end(), current.begin(), current.end());
-      inResult.units += (long long)current.size() * levelUnit;
-      inResult.samples += (long long)current.size();
-      ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      result.levels.push_back(ls);
-      if (current.empty()) {
-        for (std::size_t l = level + 1; l <= nLevels; ++l) result.levels.push_back(emptyStats(l));
-        break;
-      }
-      continue;
+  void evaluate(std::size_t k, LevelEvaluation e) override {
+    ls_ = LevelStats{};
+    if (k > 0) {
+      ls_.resolution = plan_.grids[k - 1].dims.x;
+      ls_.voxels = plan_.grids[k - 1].voxels;
     }
+    ls_.samples = (long long)current_.size();
+    for (auto& s : current_) s.level = int(k);
+    levelUnit_ = e == LevelEvaluation::FinalVoxels ? 1 : plan_.limits.sampleUnit;
+    split_ = e == LevelEvaluation::Split && !current_.empty();
+    // The voxel level's samples (final) need no ∇S: each reaches its own voxel centre only.
+    if (!current_.empty())
+      evaluator_.evaluate(frame_, scene_, current_, e != LevelEvaluation::FinalVoxels);
+    if (split_) {
+      errors(k);
+    } else {
+      // The finest level (or an empty one) is not split further.
+      result_.samples.insert(result_.samples.end(), current_.begin(), current_.end());
+      inResult_.units += (long long)current_.size() * levelUnit_;
+      inResult_.samples += (long long)current_.size();
+      current_.clear();
+    }
+  }
 
+  void threshold() override {
+    if (!split_) return;
+    errorScale_ = settings_.relative ? relativeErrorScale(contributions_) : 0.0;
+    threshold_ = settings_.relative ? settings_.epsilon * errorScale_ : settings_.epsilon;
+  }
+
+  void split(std::size_t k) override {
+    if (!split_) return;
+    ls_.threshold = threshold_;
+    ls_.errorScale = errorScale_;
+    if (plan_.budget > 0)
+      budgetedLevel(k);
+    else
+      splitAll(k);
+  }
+
+  void endLevel(std::size_t) override { result_.levels.push_back(ls_); }
+
+  void topUp() override {
+    // The top-up: the budget the shares left unused, to the capped candidates, worst first.
+    if (budgetLevels_.empty()) return;
+    TopUp t = budgetTopUp(scene_.medium.bounds, budgetLevels_, inResult_, plan_.limits);
+    evaluateTopUp(frame_, scene_, evaluator_, plan_.grids, t);
+    applyTopUp(result_, budgetLevels_, std::move(t));
+  }
+
+  void finish() override {
+    if (!result_.levels.empty()) result_.levels[0].budget = plan_.budget;
+  }
+
+  DynamicSamplingResult take(const std::vector<double>& ms) {
+    for (std::size_t k = 0; k < result_.levels.size() && k < ms.size(); ++k)
+      result_.levels[k].ms = ms[k];
+    return std::move(result_);
+  }
+
+ private:
+  /// Probes, E_j and (level 0, relative ε) the contributions of the current level.
+  void errors(std::size_t k) {
     // Probes: S traced at x_j + R_j·d_i (one batched evaluation). A probe where the density is
     // zero adds nothing to Eq. 5 (its term is weighted by D), nor does one where the error is
     // weighted by A and A is zero (outside every spot cone), so only the others are traced.
-    const int np = levelProbes(settings, grids[level]);
-    const std::size_t nProbes = current.size() * std::size_t(np);
-    std::vector<Vec3> probeAt(nProbes), probeA(lightFactor ? nProbes : 0);
+    const int np = levelProbes(settings_, plan_.grids[k]);
+    const std::size_t nProbes = current_.size() * std::size_t(np);
+    const Vec3 eye = scene_.camera.position;
+    std::vector<Vec3> probeAt(nProbes), probeA(lightFactor_ ? nProbes : 0);
     std::vector<float> probeD(nProbes);
-    tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
+    tbb::parallel_for(std::size_t(0), current_.size(), [&](std::size_t j) {
       Vec3 p[kMaxProbes];
-      probePoints(current[j], p, np);
+      probePoints(current_[j], p, np);
       for (int i = 0; i < np; ++i) {
-        const std::size_t k = np * j + i;
-        probeAt[k] = p[i];
-        probeD[k] = density.sample(p[i]);
-        if (lightFactor)  // only where the term counts (A is large next to a lamp; D = 0: 0)
-          probeA[k] = probeD[k] != 0.0f ? lightFactorTowardsEye(*lightFactor, p[i], eye) : Vec3(0);
+        const std::size_t q = np * j + i;
+        probeAt[q] = p[i];
+        probeD[q] = density_.sample(p[i]);
+        if (lightFactor_)  // only where the term counts (A is large next to a lamp; D = 0: 0)
+          probeA[q] = probeD[q] != 0.0f ? lightFactorTowardsEye(*lightFactor_, p[i], eye) : Vec3(0);
       }
     });
     std::vector<std::uint32_t> traced;  // indices of the probes whose term can be non-zero
-    for (std::size_t k = 0; k < nProbes; ++k)
-      if (probeD[k] != 0.0f && (!lightFactor || probeA[k] != Vec3(0.0f)))
-        traced.push_back(std::uint32_t(k));
+    for (std::size_t q = 0; q < nProbes; ++q)
+      if (probeD[q] != 0.0f && (!lightFactor_ || probeA[q] != Vec3(0.0f)))
+        traced.push_back(std::uint32_t(q));
     std::vector<RadianceSample> probes(traced.size());
     for (std::size_t t = 0; t < traced.size(); ++t) probes[t].position = probeAt[traced[t]];
-    evaluator.evaluate(frame, scene, probes, /*gradients=*/false);
+    evaluator_.evaluate(frame_, scene_, probes, /*gradients=*/false);
     std::vector<Vec3> probeS(nProbes, Vec3(0.0f));
     for (std::size_t t = 0; t < traced.size(); ++t) probeS[traced[t]] = probes[t].S;
 
-    std::vector<float> errors(current.size()), contributions;
-    if (level == 0 && settings.relative) contributions.resize(current.size());
-    tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
+    errors_.assign(current_.size(), 0.0f);
+    contributions_.clear();
+    if (k == 0 && settings_.relative) contributions_.resize(current_.size());
+    tbb::parallel_for(std::size_t(0), current_.size(), [&](std::size_t j) {
       Vec3 S[kMaxProbes], A[kMaxProbes];
       float D[kMaxProbes];
       for (int i = 0; i < np; ++i) {
         S[i] = probeS[np * j + i];
         D[i] = probeD[np * j + i];
-        if (lightFactor) A[i] = probeA[np * j + i];
+        if (lightFactor_) A[i] = probeA[np * j + i];
       }
-      float tau = settings.perSampleTau && level > 0
-                      ? viewTransmittance(scene, density, current[j].position, settings.delta1)
-                      : rootTau[anc[j]];
-      if (settings.visibleTau) {
+      float tau = settings_.perSampleTau && k > 0
+                      ? viewTransmittance(scene_, density_, current_[j].position, settings_.delta1)
+                      : rootTau_[anc_[j]];
+      if (settings_.visibleTau) {
         // τ of the most visible of the sample and its six axis probes (tau "visible").
         Vec3 pp[6];
-        probePoints(current[j], pp, 6);
-        tau = mostVisibleTau(scene, density, tau, pp, 6, settings.delta1);
+        probePoints(current_[j], pp, 6);
+        tau = mostVisibleTau(scene_, density_, tau, pp, 6, settings_.delta1);
       }
-      errors[j] = localShadingError(current[j], S, D, tau, np, settings.space,
-                                    lightFactor ? A : nullptr, float(settings.biasWeight));
-      if (!contributions.empty()) {
-        const Vec3 a =
-            lightFactor ? lightFactorTowardsEye(*lightFactor, current[j].position, eye) : Vec3(1);
-        contributions[j] = sampleContribution(current[j], density.sample(current[j].position), tau,
-                                              settings.space, lightFactor ? &a : nullptr);
+      errors_[j] = localShadingError(current_[j], S, D, tau, np, settings_.space,
+                                     lightFactor_ ? A : nullptr, float(settings_.biasWeight));
+      if (!contributions_.empty()) {
+        const Vec3 a = lightFactor_
+                           ? lightFactorTowardsEye(*lightFactor_, current_[j].position, eye)
+                           : Vec3(1);
+        contributions_[j] = sampleContribution(current_[j], density_.sample(current_[j].position),
+                                               tau, settings_.space, lightFactor_ ? &a : nullptr);
       }
     });
-    ls.maxError = errors.empty() ? 0.0f : *std::max_element(errors.begin(), errors.end());
-    ls.p90Error = quantile(errors, 0.9);
-    if (level == 0) {
-      errorScale = settings.relative ? relativeErrorScale(contributions) : 0.0;
-      threshold = settings.relative ? settings.epsilon * errorScale : settings.epsilon;
-    }
-    ls.threshold = threshold;
-    ls.errorScale = errorScale;
+    ls_.maxError = *std::max_element(errors_.begin(), errors_.end());
+    ls_.p90Error = quantile(errors_, 0.9);
+  }
 
-    if (budget > 0) {
-      // Budgeted: the level's splits worst first within its allotment (budgetedSplit()).
-      std::vector<Vec3> centres(current.size());
-      std::vector<float> radii(current.size());
-      std::vector<std::int32_t> levelAnc = anc;
-      for (std::size_t j = 0; j < current.size(); ++j) {
-        centres[j] = current[j].position;
-        radii[j] = current[j].radius;
-      }
-      BudgetLevel& bl = budgetLevels.emplace_back();
-      bl.decision =
-          budgetedSplit(scene.medium.bounds, grids[level], centres, radii, anc, errors, threshold,
-                        {inResult.units + (long long)current.size() * levelUnit,
-                         inResult.samples + (long long)current.size()},
-                        limits, nLevels - level);
-      const SplitDecision& d = bl.decision;
-      bl.offset = result.samples.size();
-      bl.grid = grids[level];
-      for (std::size_t j = 0; j < current.size(); ++j)
-        if (!d.split[j] || grids[level].voxels) {
-          result.samples.push_back(current[j]);
-          inResult.units += levelUnit;
-          ++inResult.samples;
-        }
-      ls.split = d.splits;
-      ls.capped = d.capped;
-      ls.maxLeft = d.maxLeft;
-      const GridInfoBuffer grid(scene.medium.bounds, grids[level]);
-      std::vector<RadianceSample> nextSamples(d.vertices.size());
-      const float R = grid.radius();
-      for (std::size_t i = 0; i < d.vertices.size(); ++i) {
-        nextSamples[i].position = grid.vertex(d.vertices[i]);
-        nextSamples[i].radius = R;
-      }
-      current = std::move(nextSamples);
-      anc = d.ancestors;
-      bl.centres = std::move(centres);
-      bl.radii = std::move(radii);
-      bl.anc = std::move(levelAnc);
-      bl.errors = std::move(errors);
-      ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      result.levels.push_back(ls);
-      continue;
+  /// Budgeted: the level's splits worst first within its allotment (budgetedSplit()).
+  void budgetedLevel(std::size_t k) {
+    const std::size_t n = current_.size();
+    std::vector<Vec3> centres(n);
+    std::vector<float> radii(n);
+    for (std::size_t j = 0; j < n; ++j) {
+      centres[j] = current_[j].position;
+      radii[j] = current_[j].radius;
     }
+    const LevelGrid& next = plan_.grids[k];
+    BudgetLevel& bl = budgetLevels_.emplace_back();
+    bl.decision = budgetedSplit(
+        scene_.medium.bounds, next, centres, radii, anc_, errors_, threshold_,
+        {inResult_.units + (long long)n * levelUnit_, inResult_.samples + (long long)n},
+        plan_.limits, plan_.levels() - k);
+    const SplitDecision& d = bl.decision;
+    bl.offset = result_.samples.size();
+    bl.grid = next;
+    for (std::size_t j = 0; j < n; ++j)
+      if (!d.split[j] || next.voxels) {
+        result_.samples.push_back(current_[j]);
+        inResult_.units += levelUnit_;
+        ++inResult_.samples;
+      }
+    ls_.split = d.splits;
+    ls_.capped = d.capped;
+    ls_.maxLeft = d.maxLeft;
+    const GridInfoBuffer grid(scene_.medium.bounds, next);
+    std::vector<RadianceSample> children(d.vertices.size());
+    const float R = grid.radius();
+    for (std::size_t i = 0; i < d.vertices.size(); ++i) {
+      children[i].position = grid.vertex(d.vertices[i]);
+      children[i].radius = R;
+    }
+    current_ = std::move(children);
+    bl.centres = std::move(centres);
+    bl.radii = std::move(radii);
+    bl.anc = std::exchange(anc_, d.ancestors);
+    bl.errors = std::move(errors_);
+  }
 
-    // Split: mark the vertices of G_{k+1} inside every sphere with E > threshold.
-    GridInfoBuffer next(scene.medium.bounds, grids[level]);
-    std::vector<std::uint8_t> split(current.size());
-    tbb::parallel_for(std::size_t(0), current.size(), [&](std::size_t j) {
-      split[j] = double(errors[j]) > threshold ? 1 : 0;
-      if (split[j]) next.markSphere(current[j].position, current[j].radius, anc[j]);
+  /// Unbudgeted: mark the vertices of G_{k+1} inside every sphere with E > threshold.
+  void splitAll(std::size_t k) {
+    const LevelGrid& nextGrid = plan_.grids[k];
+    GridInfoBuffer next(scene_.medium.bounds, nextGrid);
+    std::vector<std::uint8_t> split(current_.size());
+    tbb::parallel_for(std::size_t(0), current_.size(), [&](std::size_t j) {
+      split[j] = double(errors_[j]) > threshold_ ? 1 : 0;
+      if (split[j]) next.markSphere(current_[j].position, current_[j].radius, anc_[j]);
     });
-    for (std::size_t j = 0; j < current.size(); ++j) {
+    for (std::size_t j = 0; j < current_.size(); ++j) {
       if (split[j]) {
-        ++ls.split;
+        ++ls_.split;
         // The fallback keeps the sample: its cell's voxels are added, the sample still serves
         // the rest of its sphere.
-        if (grids[level].voxels) result.samples.push_back(current[j]);
+        if (nextGrid.voxels) result_.samples.push_back(current_[j]);
       } else {
-        result.samples.push_back(current[j]);
-        ls.maxLeft = std::max(ls.maxLeft, errors[j]);
+        result_.samples.push_back(current_[j]);
+        ls_.maxLeft = std::max(ls_.maxLeft, errors_[j]);
       }
     }
-
     // Scan compaction of the grid information buffer into Q^{k+1}.
     const std::vector<std::uint32_t> verts = compactFlags(next.inSet);
-    std::vector<RadianceSample> nextSamples(verts.size());
-    std::vector<std::int32_t> nextAnc(verts.size());
+    std::vector<RadianceSample> children(verts.size());
+    std::vector<std::int32_t> childAnc(verts.size());
     const float R = next.radius();
     tbb::parallel_for(std::size_t(0), verts.size(), [&](std::size_t i) {
-      nextSamples[i].position = next.vertex(verts[i]);
-      nextSamples[i].radius = R;
-      nextAnc[i] = next.ancestor[verts[i]];
+      children[i].position = next.vertex(verts[i]);
+      children[i].radius = R;
+      childAnc[i] = next.ancestor[verts[i]];
     });
-    current = std::move(nextSamples);
-    anc = std::move(nextAnc);
-    ls.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    result.levels.push_back(ls);
+    current_ = std::move(children);
+    anc_ = std::move(childAnc);
   }
-  if (budget > 0 && !budgetLevels.empty()) {
-    // The top-up: the budget the shares left unused, to the capped candidates, worst first.
-    const auto t0 = Clock::now();
-    TopUp t = budgetTopUp(scene.medium.bounds, budgetLevels, inResult, limits);
-    evaluateTopUp(frame, scene, evaluator, grids, t);
-    applyTopUp(result, budgetLevels, std::move(t));
-    result.levels.back().ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  }
-  if (!result.levels.empty()) result.levels[0].budget = budget;
-  return result;
-}
+
+  Frame& frame_;
+  const Scene& scene_;
+  const DensityGrid& density_;
+  RadianceEvaluator& evaluator_;
+  const DynamicSamplingSettings& settings_;
+  const SplitPassPlan& plan_;
+  std::vector<RadianceSample> current_;  ///< the level's samples
+  std::vector<std::int32_t> anc_;        ///< their level-0 ancestors
+  std::vector<float> rootTau_;           ///< τ of every level-0 sample
+  std::optional<LightFactor> lightFactor_;
+  std::vector<float> errors_, contributions_;  ///< the level's E_j; level 0's contributions
+  double threshold_, errorScale_ = 0.0;        ///< set on level 0
+  LevelStats ls_;                              ///< the level's statistics
+  long long levelUnit_ = 1;                    ///< a sample's weight in the budget's units
+  bool split_ = false;                         ///< the level is split (not final, not empty)
+  BudgetCount inResult_;  ///< the budget's count of the samples in the result so far
+  std::vector<BudgetLevel> budgetLevels_;  ///< the split levels, for the top-up
+  DynamicSamplingResult result_;
+};
 
 }  // namespace
 
@@ -640,7 +715,10 @@ DynamicSamplingResult dynamicSampling(Frame& frame, const Scene& scene,
                                       RadianceEvaluator& evaluator,
                                       const DynamicSamplingSettings& settings) {
   const DynamicSamplingSettings s = forInitialSamples(settings, scene.medium.bounds, initial);
-  return splitOnce(frame, scene, std::move(initial), evaluator, s);
+  const SplitPassPlan plan = splitPassPlan(s, initial.size());
+  HostSplitPass pass(frame, scene, std::move(initial), evaluator, s, plan);
+  const std::vector<double> ms = runSplitPass(pass, plan);
+  return pass.take(ms);
 }
 
 DynamicSamplingResult dynamicSampling(const Scene& scene, const DensityGrid& density,

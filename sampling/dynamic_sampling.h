@@ -480,6 +480,51 @@ SplitDecision budgetedSplit(const Box& bounds, const LevelGrid& grid,
                             double threshold, BudgetCount countBefore, const BudgetLimits& budget,
                             std::size_t splitLevelsLeft);
 
+/// How level k of a splitting pass is evaluated: a split level (S and ∇S, then its probes and
+/// errors E_j), a final grid level (S and ∇S), or the per-voxel fallback's voxels (final, S
+/// only: each reaches its own voxel centre).
+enum class LevelEvaluation { Split, Final, FinalVoxels };
+
+/// What one splitting pass will do, decided once on the host for the CPU and the GPU alike: the
+/// split grids G_1..G_L (levelGrids()), the budget (sampleBudget(); 0: none, every E > threshold
+/// splits, the paper) and its limits.
+struct SplitPassPlan {
+  std::vector<LevelGrid> grids;
+  long long budget = 0;
+  BudgetLimits limits;
+  std::size_t levels() const { return grids.size(); }
+  /// Level L is the per-voxel fallback's voxels.
+  bool fallback() const { return !grids.empty() && grids.back().voxels; }
+  LevelEvaluation evaluation(std::size_t k) const;
+};
+SplitPassPlan splitPassPlan(const DynamicSamplingSettings& settings, std::size_t initialCount);
+
+/// The steps of one splitting pass, on the host (dynamicSampling()) or as GPU passes
+/// (gpu::dynamicSamplingGpu): runSplitPass() is the one level loop that calls them.
+class SplitPassSteps {
+ public:
+  virtual ~SplitPassSteps() = default;
+  /// Level k's samples evaluated as `e`; a split level's also probed, with their errors E_j.
+  virtual void evaluate(std::size_t k, LevelEvaluation e) = 0;
+  /// After level 0's errors: the error scale and the absolute threshold (relative ε).
+  virtual void threshold() = 0;
+  /// Level k's splits (with a budget: worst first within the level's allotment,
+  /// budgetedSplit()), their children compacted into level k + 1's samples.
+  virtual void split(std::size_t k) = 0;
+  /// Level k is enqueued or done.
+  virtual void endLevel(std::size_t /*k*/) {}
+  /// With a budget and a split level: the top-up (budgetTopUp()).
+  virtual void topUp() = 0;
+  /// The final list: every level's kept samples, then the top-up's children.
+  virtual void finish() = 0;
+};
+
+/// The level loop of a splitting pass (paper Sec. 5, Alg. 1): for k = 0..L evaluate level k,
+/// and unless it is the finest, split it (on level 0 after the threshold); then the top-up and
+/// the final list. Returns the host's milliseconds per level (level L's with the top-up and the
+/// final list).
+std::vector<double> runSplitPass(SplitPassSteps& steps, const SplitPassPlan& plan);
+
 /// Runs recursive splitting from `initial` (positions and radii; level 0) over the frame's
 /// density. `evaluator` (of the frame's backend) computes S and ∇S of the samples and S at the
 /// probes. Deterministic: the same input gives the same samples in the same order (level by

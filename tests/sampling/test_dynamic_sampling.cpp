@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 #include <sstream>
+#include <string>
 
 #include "cpu/interpolation.h"
 #include "cpu/radiance_evaluator.h"
@@ -885,6 +886,47 @@ TEST(DynamicSampling, FallbackGridIsTheRadianceVoxelsPerAxis) {
         EXPECT_EQ(g.vertex((std::size_t(k) * dims.y + j) * dims.x + i), rg.cellCenter(i, j, k));
   EXPECT_FLOAT_EQ(g.radius(), 0.05f);  // ½ the smallest voxel edge (0.1)
   EXPECT_LT(g.radius(), rg.cellSize().x);
+}
+
+TEST(DynamicSampling, OneLevelLoopCallsTheStepsInOrder) {
+  // runSplitPass is the level loop of the CPU and the GPU alike: what it calls, in order, for a
+  // budgeted pass with the per-voxel fallback, the paper's unbudgeted pass, and no split level.
+  struct Recorder final : SplitPassSteps {
+    std::string calls;
+    void evaluate(std::size_t k, LevelEvaluation e) override {
+      calls += "e" + std::to_string(k) + "SFV"[int(e)] + ' ';
+    }
+    void threshold() override { calls += "t "; }
+    void split(std::size_t k) override { calls += "s" + std::to_string(k) + ' '; }
+    void endLevel(std::size_t k) override { calls += "|" + std::to_string(k) + ' '; }
+    void topUp() override { calls += "top "; }
+    void finish() override { calls += "end"; }
+  };
+  const auto run = [](const SplitPassPlan& plan) {
+    Recorder r;
+    EXPECT_EQ(runSplitPass(r, plan).size(), plan.levels() + 1);
+    return r.calls;
+  };
+  SplitPassPlan budgeted;
+  budgeted.grids = {{IVec3(16), false, true}, {IVec3(32), false, true}, {IVec3(40), true, true}};
+  budgeted.budget = 8000;
+  EXPECT_TRUE(budgeted.fallback());
+  EXPECT_EQ(run(budgeted), "e0S t s0 |0 e1S s1 |1 e2S s2 |2 e3V |3 top end");
+  SplitPassPlan paper;
+  paper.grids = {{IVec3(16), false, false}, {IVec3(32), false, false}};
+  EXPECT_FALSE(paper.fallback());
+  EXPECT_EQ(run(paper), "e0S t s0 |0 e1S s1 |1 e2F |2 end");
+  SplitPassPlan none;
+  none.budget = 8000;
+  EXPECT_EQ(run(none), "e0F |0 end");
+  // The plan from the settings: the grids of levelGrids(), sampleBudget(), budgetLimits().
+  Params p(Json::object(), "render");
+  const DynamicSamplingSettings ext = parseDynamicSampling(p, spotScene(), false);
+  const SplitPassPlan plan = splitPassPlan(ext, 2000);
+  EXPECT_EQ(plan.levels(), levelGrids(ext).size());
+  EXPECT_EQ(plan.budget, sampleBudget(ext, 2000));
+  EXPECT_EQ(plan.limits.units, budgetLimits(ext, plan.budget).units);
+  EXPECT_EQ(plan.limits.samples, budgetLimits(ext, plan.budget).samples);
 }
 
 TEST(DynamicSampling, FallbackVoxelsReconstructToTheirOwnS) {
