@@ -13,12 +13,19 @@ namespace scatterlab::gpu {
 
 namespace {
 
+/// The reciprocal of the grid's voxel edges, computed once on the host: the bins are found by
+/// multiplying with it, because a float product rounds alike on every IEEE device, where a GPU's
+/// division may be off by an ulp or two (NVIDIA's) and move a bin boundary.
+Vec3 binInvCell(const Box& bounds, const IVec3& dims) {
+  return Vec3(1.0f) / (bounds.extent() / Vec3(dims));
+}
+
 /// The bin range [lo, hi] of the voxel centres within [c − r, c + r] along one axis, with one
 /// voxel of margin; empty (lo > hi) when the sphere misses the grid.
-void binRange(float c, float r, float min, float cell, int dims, int& lo, int& hi) {
+void binRange(float c, float r, float min, float invCell, int dims, int& lo, int& hi) {
   // Voxel centre i is at min + (i + 0.5)·cell.
-  const float a = std::floor((c - r - min) / cell - 0.5f) - 1.0f;
-  const float b = std::ceil((c + r - min) / cell - 0.5f) + 1.0f;
+  const float a = std::floor((c - r - min) * invCell - 0.5f) - 1.0f;
+  const float b = std::ceil((c + r - min) * invCell - 0.5f) + 1.0f;
   if (!(b >= 0.0f) || !(a <= float(dims - 1))) {  // also false for NaN
     lo = 1;
     hi = 0;
@@ -57,7 +64,7 @@ void bindSpherePass(const Program& p, const Buffer& points, const Buffer& counts
   glUniform1ui(p.uniform("uCountSlot"), countSlot);
   glUniform1ui(p.uniform("uCapacity"), GLuint(std::min<std::size_t>(capacity, 0xffffffffu)));
   setVec3(p, "uGridMin", bounds.min);
-  setVec3(p, "uGridCell", bounds.extent() / Vec3(dims));  // binSpheres' cell, to the bit
+  setVec3(p, "uGridInvCell", binInvCell(bounds, dims));  // binSpheres', to the bit
   setIVec3(p, "uGridDims", dims);
   setIVec3(p, "uBins", bins);
   glUniform1i(p.uniform("uBinVoxels"), kBinVoxels);
@@ -73,7 +80,7 @@ SphereBins binSpheres(std::span<const glm::vec4> spheres, const Box& bounds, IVe
   SphereBins out;
   out.bins = (dims + IVec3(kBinVoxels - 1)) / kBinVoxels;
   const std::size_t nBins = std::size_t(out.bins.x) * out.bins.y * out.bins.z;
-  const Vec3 cell = bounds.extent() / Vec3(dims);
+  const Vec3 invCell = binInvCell(bounds, dims);
   struct Range {
     IVec3 lo, hi;
   };
@@ -83,7 +90,7 @@ SphereBins binSpheres(std::span<const glm::vec4> spheres, const Box& bounds, IVe
     const glm::vec4& s = spheres[j];
     Range& r = ranges[j];
     for (int a = 0; a < 3; ++a)
-      binRange(s[a], s.w, bounds.min[a], cell[a], dims[a], r.lo[a], r.hi[a]);
+      binRange(s[a], s.w, bounds.min[a], invCell[a], dims[a], r.lo[a], r.hi[a]);
     if (r.lo.x > r.hi.x || r.lo.y > r.hi.y || r.lo.z > r.hi.z || !(s.w > 0.0f)) {
       r.hi = r.lo - 1;  // empty
       continue;

@@ -21,7 +21,7 @@ layout(std430, binding = BINDING_BIN_COUNTS) buffer BinCounts { uint binCounts[]
 uniform uint uCountSlot;  // the spheres are spheres[0, min(sphereCount[uCountSlot], uCapacity))
 uniform uint uCapacity;
 uniform vec3 uGridMin;
-uniform vec3 uGridCell;  // the host's extent / dims, so that the same floats go in
+uniform vec3 uGridInvCell;  // the host's 1 / (extent / dims), so that the same floats go in
 uniform ivec3 uGridDims;
 uniform ivec3 uBins;
 uniform int uBinVoxels;
@@ -29,13 +29,14 @@ uniform int uBinVoxels;
 // binRange of gpu/sphere_bins.cpp, expression for expression: the bins [lo, hi] of the voxel
 // centres within [c − r, c + r] along one axis, one voxel of margin; false when the sphere misses
 // the grid (or c or r is NaN). `precise` keeps the compiler from reassociating or contracting
-// them. The division is IEEE on llvmpipe, so the bins equal the host's there; a driver whose
-// division is off by an ulp or two (NVIDIA's) may move a boundary by that much, which the voxel
-// of margin absorbs (the gathers test the exact distance, never the bin). The comparisons are
+// them. A product, not a division: a float product rounds alike on every IEEE device, so the bins
+// equal the host's on any GPU (a division, off by an ulp or two on NVIDIA, could move a boundary:
+// the voxel of margin absorbed it, as the gathers test the exact distance, never the bin, but
+// the lists differed from the host's). The comparisons are
 // written so that NaN reads as a miss (both are false for it), never negated.
-bool binRange(float c, float r, float lower, float cell, int dims, out int lo, out int hi) {
-  precise float a = floor((c - r - lower) / cell - 0.5) - 1.0;
-  precise float b = ceil((c + r - lower) / cell - 0.5) + 1.0;
+bool binRange(float c, float r, float lower, float invCell, int dims, out int lo, out int hi) {
+  precise float a = floor((c - r - lower) * invCell - 0.5) - 1.0;
+  precise float b = ceil((c + r - lower) * invCell - 0.5) + 1.0;
   lo = 1;
   hi = 0;
   if (b >= 0.0 && a <= float(dims - 1)) {
@@ -65,9 +66,9 @@ void main() {
   if (j >= min(sphereCount[uCountSlot], uCapacity)) return;
   vec4 s = spheres[j];
   ivec3 lo, hi;
-  bool hit = binRange(s.x, s.w, uGridMin.x, uGridCell.x, uGridDims.x, lo.x, hi.x);
-  hit = binRange(s.y, s.w, uGridMin.y, uGridCell.y, uGridDims.y, lo.y, hi.y) && hit;
-  hit = binRange(s.z, s.w, uGridMin.z, uGridCell.z, uGridDims.z, lo.z, hi.z) && hit;
+  bool hit = binRange(s.x, s.w, uGridMin.x, uGridInvCell.x, uGridDims.x, lo.x, hi.x);
+  hit = binRange(s.y, s.w, uGridMin.y, uGridInvCell.y, uGridDims.y, lo.y, hi.y) && hit;
+  hit = binRange(s.z, s.w, uGridMin.z, uGridInvCell.z, uGridDims.z, lo.z, hi.z) && hit;
   if (hit && s.w > 0.0) {
     for (int z = lo.z; z <= hi.z; ++z)
       for (int y = lo.y; y <= hi.y; ++y)

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 
@@ -20,6 +22,36 @@ namespace scatterlab::testing {
     std::string why_;                                                \
     if (!::scatterlab::gpu::tryContext(&why_)) GTEST_SKIP() << why_; \
   } while (0)
+
+/// For a GPU-vs-CPU difference measured on llvmpipe and not yet on hardware: the largest ratio
+/// between an NVIDIA H200's difference and llvmpipe's for the same float arithmetic measured so
+/// far (light-space-march, traced, M = 1: 7.4e-7 on llvmpipe, 2.1e-6 on the H200, 2026-11-27;
+/// the compute pipeline's end-to-end images 1.6×). A bound is the llvmpipe figure × this × 1.5
+/// (unmeasuredOnHardware) until the hardware figure replaces it.
+inline constexpr double kUnmeasuredHardwareFactor = 2.8;
+inline double unmeasuredOnHardware(double llvmpipe) {
+  return llvmpipe * kUnmeasuredHardwareFactor * 1.5;
+}
+
+/// Where dynamic sampling decides on E (a threshold, a budget's error groups), a GPU's E and the
+/// CPU's differ by rounding (on an H200 60–120× llvmpipe's, test_dynamic.cpp), so a sample whose
+/// E lies that close to an edge may split on one and not on the other: the sample sets then
+/// differ and the image moves by about 1e-3 (issue 33, measured on an H200). An image comparison
+/// of renders whose decisions differ is held to this bound (1.5 × 1e-3) and says so; where they
+/// agree, the test's own bound holds.
+inline constexpr double kFlippedSplitBound = 1.5e-3;
+
+/// The bound for a GPU-vs-CPU image comparison of `adaptive` renders: `tight` where both made the
+/// same decisions (equal samples per level), else kFlippedSplitBound, with a note in the log.
+inline double decisionBound(const Json& gpuSamplesPerLevel, const Json& cpuSamplesPerLevel,
+                            double tight) {
+  if (gpuSamplesPerLevel == cpuSamplesPerLevel) return tight;
+  std::printf(
+      "samples per level differ (gpu %s, cpu %s): a decision at an edge flipped by "
+      "rounding; image bound %.3g\n",
+      gpuSamplesPerLevel.dump().c_str(), cpuSamplesPerLevel.dump().c_str(), kFlippedSplitBound);
+  return std::max(tight, kFlippedSplitBound);
+}
 
 /// A small Gaussian-blob medium in [0,1]³ with a point light and a spot light, HG phase.
 inline Json blobSceneDoc(int resolution, int width, int height) {

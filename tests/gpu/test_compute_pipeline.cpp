@@ -479,8 +479,12 @@ TEST(GpuComputePipeline, WhereNoConeReachesTheGpuSkipsAsTheCpu) {
     const double e = relL2(gpu.image, cpu.image);
     std::printf("%s vs CPU: %.3g (relative L2)\n", r.dump().c_str(), e);
     // Measured on llvmpipe 2026-11-28: 2.53e-6 / 2.51e-6 / 2.49e-6 (the spot's cone edge: its
-    // smoothstep rounds differently on the two); × 1.5. Not yet measured on hardware.
-    EXPECT_LT(e, 3.8e-6) << r.dump();
+    // smoothstep rounds differently on the two). Not yet measured on hardware: the hardware
+    // factor (unmeasuredOnHardware), and for adaptive the flipped-decision bound where its
+    // samples per level differ from the CPU's.
+    EXPECT_LT(e, decisionBound(gpu.stats.extra["samples_per_level"],
+                               cpu.stats.extra["samples_per_level"], unmeasuredOnHardware(2.53e-6)))
+        << r.dump();
     if (r["voxel_switch"] == 1000) {
       // The voxels traced: those the cone reaches; the cone test's trigonometry may differ by
       // an ulp between devices, so a voxel at its margin (where A is 0) may go either way.

@@ -238,9 +238,9 @@ TEST(GpuDynamicSampling, ManyLightsFortyProbesErrorsAsOnCpu) {
     // 7.12e-5, 7.24e-5, and 1.31e-4 with the signed bias at weight 3);
     // before the probe pass 0.582. Not run on hardware; the analogous arithmetic differed
     // 60–120× more on an NVIDIA H200 than on llvmpipe (GpuGradientMethod 9.1e-5 vs 1.46e-6,
-    // GpuOcclusionWeights 3.3e-5 vs 2.8e-7, issue 23): ×1.5 of 7.79e-5 × 120. The truncated
-    // loops are 40× above it.
-    EXPECT_LT(worst, 1.4e-2);
+    // GpuOcclusionWeights 3.3e-5 vs 2.8e-7, issue 23): ×1.5 of the largest case's 1.31e-4 × 120.
+    // The truncated loops are 24× above it.
+    EXPECT_LT(worst, 2.4e-2);
   }
 }
 
@@ -602,13 +602,18 @@ TEST(GpuAdaptiveMethod, DefaultLevelsFollowTheInitialSamplesAsOnCpu) {
     std::vector<int> grids;
     for (const Json& l : cpu.stats.extra["levels"]) grids.push_back(l["grid"].get<int>());
     EXPECT_EQ(grids, c.grids) << c.resolution;
-    EXPECT_EQ(gpu.stats.extra["samples_per_level"], cpu.stats.extra["samples_per_level"]);
+    // The same levels on the GPU; their counts equal unless an E at an edge flipped by rounding
+    // (decisionBound).
+    EXPECT_EQ(gpu.stats.extra["samples_per_level"].size(),
+              cpu.stats.extra["samples_per_level"].size());
     const double err = relL2(gpu.image, cpu.image);
     std::printf("%d³, %d initial: %lld samples, gpu vs cpu relative L2 %.3g\n", c.resolution,
                 c.count, *gpu.stats.samples, err);
-    // Measured on llvmpipe 2026-11-28: 4.1e-7 (56³), 1.5e-6 (64³); not yet on hardware, so the
-    // bound of EndToEndMatchesCpuMethod's extensions, whose H200 figure (3.3e-5) it carries.
-    EXPECT_LT(err, 5.0e-5);
+    // Measured on llvmpipe 2026-11-28: 4.1e-7 (56³), 1.5e-6 (64³), the same samples per level;
+    // not yet on hardware, so the bound of EndToEndMatchesCpuMethod's extensions, whose H200
+    // figure (3.3e-5) it carries, where the decisions agree.
+    EXPECT_LT(err, decisionBound(gpu.stats.extra["samples_per_level"],
+                                 cpu.stats.extra["samples_per_level"], 5.0e-5));
   }
 }
 
@@ -634,15 +639,15 @@ TEST(GpuAdaptiveMethod, VisibleTauTracesTheSampleAndItsProbesInParallel) {
   };
   EXPECT_GE(evaluate(visible), 7 * initial);
   EXPECT_LT(evaluate(sample), 2 * initial);
-  EXPECT_EQ(visible.stats.extra["samples_per_level"], cpu.stats.extra["samples_per_level"]);
   const double err = relL2(visible.image, cpu.image);
   std::printf(
       "tau visible: evaluate %lld invocations (tau sample %lld), %lld initial; gpu vs cpu "
       "%.3g\n",
       evaluate(visible), evaluate(sample), initial, err);
   // Measured on llvmpipe 2026-11-28: 5.6e-7 (4 096 invocations for 494 initial samples; 512
-  // with tau "sample"); the bound of the test above.
-  EXPECT_LT(err, 5.0e-5);
+  // with tau "sample"), the CPU's samples per level; the bound of the test above.
+  EXPECT_LT(err, decisionBound(visible.stats.extra["samples_per_level"],
+                               cpu.stats.extra["samples_per_level"], 5.0e-5));
 }
 
 /// The glow scene (a point light inside the medium) at 32³, 80×60: the compute march and the

@@ -38,6 +38,8 @@ struct RangeEnd {
   Json render;
   int lights;
   const char* key;  ///< what the loop cap's error must name
+  double bound;     ///< the largest relative L2 against the CPU's image on hardware (below)
+  double llvmpipe;  ///< measured on llvmpipe (0: refused there): its bound there, × 1.5
 };
 
 /// GoogleTest's printer gave the bytes, pointers included, and gtest_discover_tests puts the
@@ -68,37 +70,63 @@ TEST_P(GpuRangeEnds, MatchTheCpuOrRefuseTheWork) {
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const double e = relL2(gpu.image, cpu.image);
   std::printf("%s: gpu vs cpu relative L2 %.3g\n", c.name, e);
-  // Measured on llvmpipe (the cases under its cap): per-voxel at march_step 2e-5 6.0e-8,
-  // gradient with 400 lights 7.0e-6; limit 1.5x the largest. The cases llvmpipe refuses have not
-  // run on a GPU without a cap yet (no device in the session that wrote this): the next GPU
-  // report measures them.
-  EXPECT_LT(e, 1.05e-5) << c.name;
+  // llvmpipe is the driver with the loop cap (gpu::loopIterationLimit() > 0).
+  EXPECT_LT(e, gpu::loopIterationLimit() > 0 && c.llvmpipe > 0 ? 1.5 * c.llvmpipe : c.bound)
+      << c.name;
 }
+
+/// The bounds. Measured on llvmpipe (the cases under its cap): per-voxel at march_step 2e-5
+/// 6.0e-8, gradient with 400 lights 7.0e-6. The cases llvmpipe refuses have not run on a GPU
+/// without a cap yet (no device in the sessions since they were written: the next GPU report
+/// measures them), nor has any case run on hardware. Many lights: 7.0e-6 with the hardware
+/// factor (unmeasuredOnHardware). Long marches: a step's transmittance near 1 is a float whose
+/// ulp is 5.96e-8, and two devices' exp may round it to neighbours, so over a march of n steps
+/// T may differ by up to n ulps, relative, where every step rounds the same way: n × 5.96e-8,
+/// with n the longest ray's steps (√3 / 2e-5 = 86 603 at march_step 2e-5; 65 536 light-space
+/// steps). Loose, and derived, until hardware measures them.
+constexpr double kManyLights = 7.0e-6 * kUnmeasuredHardwareFactor * 1.5;
+constexpr double kShortSteps = 86603 * 5.96e-8;
+constexpr double kMostSteps = 65536 * 5.96e-8;
 
 INSTANTIATE_TEST_SUITE_P(
     Methods, GpuRangeEnds,
-    ::testing::Values(
-        RangeEnd{"per_voxel_short_step",
-                 {{"method", "per-voxel"}, {"march_step", 2e-5}},
-                 0,
-                 "'render.march_step'"},
-        RangeEnd{"gradient_short_step",
-                 {{"method", "gradient"}, {"march_step", 2e-5}, {"voxel_switch", 0}},
-                 0,
-                 "'render.march_step'"},
-        RangeEnd{"light_space_march_most_steps",
-                 {{"method", "light-space-march"}, {"steps", 65536}},
-                 0,
-                 "'render.steps'"},
-        RangeEnd{"froxel_many_lights",
-                 {{"method", "froxel"}, {"froxel_grid", {8, 6, 32}}},
-                 150,
-                 "the lights"},
-        RangeEnd{"jittered_march_many_lights", {{"method", "jittered-march"}}, 150, "the lights"},
-        RangeEnd{"gradient_many_lights",
-                 {{"method", "gradient"}, {"voxel_switch", 0}},  // its samples' tracer
-                 400,
-                 "lights"}),
+    ::testing::Values(RangeEnd{"per_voxel_short_step",
+                               {{"method", "per-voxel"}, {"march_step", 2e-5}},
+                               0,
+                               "'render.march_step'",
+                               kShortSteps,
+                               6.0e-8},
+                      RangeEnd{"gradient_short_step",
+                               {{"method", "gradient"}, {"march_step", 2e-5}, {"voxel_switch", 0}},
+                               0,
+                               "'render.march_step'",
+                               kShortSteps,
+                               0.0},
+                      RangeEnd{"light_space_march_most_steps",
+                               {{"method", "light-space-march"}, {"steps", 65536}},
+                               0,
+                               "'render.steps'",
+                               kMostSteps,
+                               0.0},
+                      RangeEnd{"froxel_many_lights",
+                               {{"method", "froxel"}, {"froxel_grid", {8, 6, 32}}},
+                               150,
+                               "the lights",
+                               kManyLights,
+                               0.0},
+                      RangeEnd{"jittered_march_many_lights",
+                               {{"method", "jittered-march"}},
+                               150,
+                               "the lights",
+                               kManyLights,
+                               0.0},
+                      RangeEnd{
+                          "gradient_many_lights",
+                          {{"method", "gradient"}, {"voxel_switch", 0}},  // its samples' tracer
+                          400,
+                          "lights",
+                          kManyLights,
+                          7.0e-6}),
     [](const ::testing::TestParamInfo<RangeEnd>& i) { return std::string(i.param.name); });
 
 }  // namespace

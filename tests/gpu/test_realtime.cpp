@@ -57,7 +57,9 @@ TEST(GpuRadialBlur, MatchesCpu) {
   const Scene scene = sceneFromJson(doc);
   // Measured on llvmpipe, 2026-11-28 (the light behind the medium): 8.16e-8 (full-resolution
   // pre-pass), 1.28e-7 (downsample 2, decay 0.95). (With the light inside, before radial-blur
-  // refused it: 1.37e-6 and 1.61e-6.)
+  // refused it: 1.37e-6 and 1.61e-6, and on an NVIDIA H200 below the 1.5× of those, 2026-11-27.)
+  // About one ulp per pixel: hardware's exp, sqrt and division round differently, so the bound
+  // carries the hardware factor (unmeasuredOnHardware) until this case is measured there.
   const std::vector<std::pair<Json, double>> cases = {
       {{{"samples", 32}}, 8.16e-8},
       {{{"samples", 24}, {"downsample", 2}, {"decay", 0.95}, {"density", 0.6}}, 1.28e-7}};
@@ -66,7 +68,7 @@ TEST(GpuRadialBlur, MatchesCpu) {
     render.update(keys);
     const double err = gpuVsCpu(scene, render);
     std::printf("radial-blur gpu vs cpu %s: relative L2 %.3g\n", keys.dump().c_str(), err);
-    EXPECT_LT(err, measured * 1.5) << keys.dump();
+    EXPECT_LT(err, unmeasuredOnHardware(measured)) << keys.dump();
   }
 }
 

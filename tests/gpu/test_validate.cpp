@@ -177,14 +177,22 @@ TEST_F(GpuValidate, AProgramAboveWhatADesktopGpuAllowsIsAnError) {
       "layout(std430, binding = 0) writeonly buffer B { float b; };\n"
       "void main() { b = 0.0" +
       sum + "; }\n";
+  // Where the device itself allows fewer than nine (NVIDIA), its compiler or linker refuses the
+  // program first, and that error names it; elsewhere the portability check does.
+  GLint deviceLimit = 0;
+  glGetIntegerv(GL_MAX_COMPUTE_IMAGE_UNIFORMS, &deviceLimit);
   try {
     program(body, "test nine images");
     FAIL() << "no error";
   } catch (const GpuError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("GL portability"), std::string::npos) << m;
-    EXPECT_NE(m.find("'test nine images' uses 9 image uniforms, above the 8"), std::string::npos)
-        << m;
+    if (deviceLimit < 9) {
+      EXPECT_NE(m.find("test nine images"), std::string::npos) << m;
+    } else {
+      EXPECT_NE(m.find("GL portability"), std::string::npos) << m;
+      EXPECT_NE(m.find("'test nine images' uses 9 image uniforms, above the 8"), std::string::npos)
+          << m;
+    }
   }
 }
 
