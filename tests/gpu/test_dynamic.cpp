@@ -1,6 +1,8 @@
 /// GPU dynamic sampling, scan and the gradient / adaptive methods against their CPU twins
 /// (issues 5 and 6), on llvmpipe in CI with tiny scenes.
 
+#include <bit>
+#include <cstdint>
 #include <random>
 
 #include "core/stages.h"
@@ -79,6 +81,51 @@ std::vector<RadianceSample> latticeSamples() {
         s.push_back(r);
       }
   return s;
+}
+
+/// Under a budget a level splits its candidates from the worst error group down to a cut
+/// (errorBin(): groups of 1/64 of an octave). A GPU's E differs from the CPU's by rounding (on an
+/// H200 60–120× more than on llvmpipe), so an E next to the edge between the highest group left
+/// unsplit and the next may cross it there. The samples of the levels the budget capped whose E
+/// lies within `margin`, relative, of that edge (the highest unsplit group is that of maxLeft, a
+/// capped candidate's E). `errors`: each split level's E, as dynamicSamplingGpu returns them.
+long long nearACut(const DynamicSamplingResult& cpu, const std::vector<std::vector<float>>& errors,
+                   double margin) {
+  const double threshold = cpu.levels[0].threshold;
+  const auto key = [](float x) { return std::bit_cast<std::uint32_t>(x) >> kErrorBinShift; };
+  long long n = 0;
+  for (std::size_t k = 0; k < errors.size() && k < cpu.levels.size(); ++k) {
+    const LevelStats& l = cpu.levels[k];
+    if (l.capped == 0) continue;
+    const int g = errorBin(l.maxLeft, threshold);
+    const float edge =
+        std::bit_cast<float>((key(float(threshold)) + std::uint32_t(g) + 1u) << kErrorBinShift);
+    for (const float e : errors[k])
+      n += double(e) > threshold && std::abs(double(e) / double(edge) - 1.0) < margin;
+  }
+  return n;
+}
+
+/// Whether the GPU's pass made the CPU's decisions (every level's counts, the final count).
+/// Where it did not, the difference must be one that rounding of E explains (issue 33 item 4):
+/// some E within 1e-3 of a cut's edge (nearACut), and no level's splits off by more than those;
+/// the caller then skips its sample-by-sample comparison.
+bool sameDecisions(const DynamicSamplingResult& g, const DynamicSamplingResult& cpu,
+                   const std::vector<std::vector<float>>& errors) {
+  bool same = g.levels.size() == cpu.levels.size() && g.samples.size() == cpu.samples.size();
+  for (std::size_t l = 0; same && l < cpu.levels.size(); ++l)
+    same = g.levels[l].samples == cpu.levels[l].samples &&
+           g.levels[l].split == cpu.levels[l].split && g.levels[l].capped == cpu.levels[l].capped &&
+           g.levels[l].toppedUp == cpu.levels[l].toppedUp;
+  if (same) return true;
+  const long long mayFlip = nearACut(cpu, errors, 1e-3);
+  std::printf("the GPU's decisions differ from the CPU's; %lld E within 1e-3 of a cut's edge\n",
+              mayFlip);
+  EXPECT_GT(mayFlip, 0) << "the decisions differ, and no E lies near a cut";
+  EXPECT_EQ(g.levels.size(), cpu.levels.size());
+  for (std::size_t l = 0; l < std::min(g.levels.size(), cpu.levels.size()); ++l)
+    EXPECT_LE(std::abs(g.levels[l].split - cpu.levels[l].split), mayFlip) << "level " << l;
+  return false;
 }
 
 TEST(GpuDynamicSampling, SameSampleSetAsCpu) {
@@ -320,17 +367,13 @@ TEST(GpuDynamicSampling, RelativeEpsilonProbesAndBudgetAsOnCpu) {
         EXPECT_GT(capped, 0);
       }
     }
-    ASSERT_EQ(g.levels.size(), cpu.levels.size());
-    for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
-      EXPECT_EQ(g.levels[l].samples, cpu.levels[l].samples) << "level " << l;
-      EXPECT_EQ(g.levels[l].split, cpu.levels[l].split) << "level " << l;
-      EXPECT_EQ(g.levels[l].capped, cpu.levels[l].capped) << "level " << l;
-      EXPECT_EQ(g.levels[l].toppedUp, cpu.levels[l].toppedUp) << "level " << l;
+    for (std::size_t l = 0; l < cpu.levels.size(); ++l)
       std::printf("  level %zu: evaluated %lld, split %lld (topped up %lld), capped %lld\n", l,
                   cpu.levels[l].samples, cpu.levels[l].split, cpu.levels[l].toppedUp,
                   cpu.levels[l].capped);
-    }
-    ASSERT_EQ(g.samples.size(), cpu.samples.size());
+    // The same decisions (or, on a device whose E rounds an E at a cut's edge across it, a
+    // difference that explains; then the samples are not compared one by one).
+    if (!sameDecisions(g, cpu, errors)) continue;
     int bad = 0, badS = 0;
     float sMax = 0.0f;
     for (const RadianceSample& c : cpu.samples)
@@ -399,12 +442,7 @@ TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
     EXPECT_TRUE(cpu.levels[3].voxels);
     EXPECT_TRUE(g.levels[3].voxels);
     EXPECT_GT(cpu.levels[2].split, 0) << "the scene must reach the fallback";
-    for (std::size_t l = 0; l < cpu.levels.size(); ++l) {
-      EXPECT_EQ(g.levels[l].samples, cpu.levels[l].samples) << "level " << l;
-      EXPECT_EQ(g.levels[l].split, cpu.levels[l].split) << "level " << l;
-      EXPECT_EQ(g.levels[l].capped, cpu.levels[l].capped) << "level " << l;
-      EXPECT_EQ(g.levels[l].toppedUp, cpu.levels[l].toppedUp) << "level " << l;
-    }
+    const bool same = sameDecisions(g, cpu, errors);
     if (cap > 0) {
       EXPECT_LE((long long)cpu.samples.size(), cap);
     }
@@ -424,7 +462,7 @@ TEST(GpuDynamicSampling, CellSplitAndFallbackAsOnCpu) {
       // Paid at their cost, the voxels outnumber what the budget's samples alone could buy.
       EXPECT_GT((long long)cpu.samples.size(), budget);
     }
-    ASSERT_EQ(g.samples.size(), cpu.samples.size());
+    if (!same) continue;  // a decision at a cut's edge flipped by rounding (sameDecisions)
     int bad = 0, badS = 0, voxels = 0;
     float sMax = 0.0f;
     for (const RadianceSample& c : cpu.samples)
