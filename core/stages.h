@@ -8,6 +8,7 @@
 /// PipelineSettings, parsed once by the method layer (methods/settings.h), so a key valid on
 /// one backend is valid on the other.
 
+#include <algorithm>
 #include <any>
 #include <array>
 #include <cmath>
@@ -224,6 +225,39 @@ inline constexpr float kSingularEps = 1e-9f;
 /// measurement among 0.25, 0.5, 1, 2, 4, 8 (docs/fidelity.md §8).
 inline constexpr float kLampDepth = 2.0f;
 
+/// The factored march's quadrature of A near a lamp (docs/fidelity.md, "Glows"): at a step of
+/// length dt whose midpoint lies at distance r from a point or spot light, that light's term of A
+/// is the mean over n = min(kGlowMaxSubsteps, ⌈kGlowRatio · dt / (r · w)⌉) points spread evenly
+/// over the step (w: 1 for a point light, a spot's transition angle in radians, at least
+/// kGlowMinAngle), not its value at the midpoint alone: 1/r², the phase function and the cone's
+/// edge vary faster than a voxel there. n = 1 elsewhere.
+inline constexpr float kGlowRatio = 4.0f;
+inline constexpr int kGlowMaxSubsteps = 32;
+inline constexpr float kGlowMinAngle = 0.02f;
+/// The substeps of a light's glow at a step `dist` from it (glowDistance): ⌈reach / dist⌉,
+/// reach = kGlowRatio · dt / w, at most kGlowMaxSubsteps; 1 where dist >= reach. The GPU's
+/// glowSubsteps (gpu/shaders/common.glsl) is the same.
+inline int glowSubsteps(float dist, float reach) {
+  if (!(dist < reach)) return 1;
+  if (!(dist > 0.0f)) return kGlowMaxSubsteps;
+  return int(std::min(std::ceil(reach / dist), float(kGlowMaxSubsteps)));
+}
+/// The distance from a light at p to the view-march step of length dt centred at x along the
+/// unit dir: what glowSubsteps is given (the ray may pass the light inside the step). The GPU's
+/// glowDistance (gpu/shaders/common.glsl) is the same.
+inline float glowDistance(const Vec3& p, const Vec3& x, const Vec3& dir, float dt) {
+  const Vec3 v = p - x;
+  const float tc = std::clamp(glm::dot(v, dir), -0.5f * dt, 0.5f * dt);
+  return glm::length(v - tc * dir);
+}
+/// w of a light for the glow's substeps: 1 for a point light, a spot's transition angle.
+inline float glowAngle(const Light& l) {
+  if (l.type != Light::Type::Spot) return 1.0f;
+  const float w = std::acos(std::clamp(l.cosOuter, -1.0f, 1.0f)) -
+                  std::acos(std::clamp(l.cosInner, -1.0f, 1.0f));
+  return std::clamp(w, kGlowMinAngle, 1.0f);
+}
+
 /// Optical depth σt·τ at which a shadow ray stops (shadowDepthCutoff(), shading/transport.h; on
 /// the GPU the shadow rays that skip empty space, common.glsl opticalDepth): exp(−25) ≈ 1.4e-11
 /// of the light gets through, below what the float sums of a pixel resolve.
@@ -257,6 +291,7 @@ inline constexpr SharedConstant kSharedConstants[] = {
     {"SL_ERROR_BINS", float(kErrorBins)},
     {"SL_LIT_MARGIN", kLitMargin},
     {"SL_LIT_GROW", kLitGrow},
+    {"SL_GLOW_MAX_SUBSTEPS", float(kGlowMaxSubsteps)},
 };
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted

@@ -2,6 +2,8 @@
 
 #include "cpu/fused_march.h"
 
+#include "core/stages.h"
+
 namespace scatterlab {
 
 FusedLights::FusedLights(const Scene& scene, const LampModel& lamp)
@@ -29,6 +31,7 @@ FusedLights::FusedLights(const Scene& scene, const LampModel& lamp)
     e0.push_back(spot ? l.cosOuter : -2.0f);
     e1.push_back(spot ? l.cosInner : -1.0f);
     k.push_back(lamp.k(i));
+    glow.push_back(kGlowRatio / glowAngle(l));
   }
 }
 

@@ -52,6 +52,8 @@ class FusedLights {
   /// (cosOuter, cosInner; a point light: edges −2, −1, so its falloff is 1 everywhere), and
   /// LampModel's k (0: m = 1).
   std::vector<float> px, py, pz, ir, ig, ib, ax, ay, az, e0, e1, k;
+  /// Per point or spot light: kGlowRatio / w, its glow's substep scale (core/stages.h).
+  std::vector<float> glow;
   bool hg = false;  ///< Henyey–Greenstein (else isotropic, kInvFourPi)
   float g = 0.0f;
 

@@ -3,6 +3,9 @@
 
 #include <Imath/half.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/cpu_features.h"
 #include "core/error.h"
 #include "cpu/fused_march.h"

@@ -29,13 +29,14 @@ struct FusedLookup {
   FusedSpanKernel span;
   FusedMarchConstants c;
   /// One step (DensitySourceLookup's interface; the fast march calls marchSpan instead).
-  bool operator()(const Vec3& u, const Ray& r, float t, float& D, Vec3& S) const {
+  bool operator()(const Vec3& u, const Ray& r, float t, float dt, float& D, Vec3& S) const {
     alignas(16) float v[4];
     volume.sample(u, v);
     D = v[0];
     if (D <= 0.0f) return false;
     S = Vec3(v[1], v[2], v[3]);
-    if (factor && S != Vec3(0.0f)) S *= (*factor)(r.at(t), -r.dir);  // V = 0: no A to evaluate
+    // V = 0: no A to evaluate
+    if (factor && S != Vec3(0.0f)) S *= factor->overStep(r, t, dt);
     return true;
   }
   void marchSpan(const Ray& r, const Vec3& u0, const Vec3& du, float t0, float dt, int i, int end,
@@ -56,6 +57,35 @@ struct FusedLookup {
     L = Vec3(s.L[0], s.L[1], s.L[2]);
     T = s.T;
     wt = s.wt;
+  }
+};
+
+/// The plain march's lookups where the volume holds V = S / A: S = V · A over the step
+/// (LightFactor::overStep, the glow).
+struct FactoredLookup {
+  const DensityGrid& density;
+  const RadianceGrid& radiance;
+  const LightFactor& A;
+  Vec3 scale, offset;  ///< the radiance volume's index space
+  bool operator()(const Vec3& u, const Ray& r, float t, float dt, float& D, Vec3& S) const {
+    D = density.sampleIndex(u);
+    if (D <= 0.0f) return false;
+    const Vec3 x = r.at(t);
+    S = radiance.sampleIndex(x * scale + offset);
+    if (S != Vec3(0.0f)) S *= A.overStep(r, t, dt);  // V = 0: no A to evaluate
+    return true;
+  }
+};
+
+/// `exact`'s lookups: S traced over the step (SourceRadiance::overStep, the glow).
+struct ExactLookup {
+  const DensityGrid& density;
+  const SourceRadiance& source;
+  bool operator()(const Vec3& u, const Ray& r, float t, float dt, float& D, Vec3& S) const {
+    D = density.sampleIndex(u);
+    if (D <= 0.0f) return false;
+    S = source.overStep(r, t, dt);
+    return true;
   }
 };
 
@@ -94,11 +124,8 @@ class RayMarcher : public Integrator {
     }
     const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
     if (factored_) {
-      const auto lookup = [&](const Vec3& x, const Vec3& toViewer) {
-        const Vec3 v = radiance.sampleIndex(x * s + o);
-        return v == Vec3(0.0f) ? v : v * A(x, toViewer);  // V = 0: no A to evaluate
-      };
-      return marchImage(scene, *f.density, lookup, march_, progress, delta1_, &counts);
+      const FactoredLookup lookup{*f.density, radiance, A, s, o};
+      return marchWith(scene, *f.density, lookup, march_, progress, delta1_, &counts);
     }
     const auto lookup = [&](const Vec3& x, const Vec3&) { return radiance.sampleIndex(x * s + o); };
     return marchImage(scene, *f.density, lookup, march_, progress, delta1_, &counts);
@@ -130,7 +157,9 @@ class ExactIntegrator : public Integrator {
     const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast,
                                 march_.fast ? shadows.fn() : ShadowDepthFn{});
     MarchCounts counts;
-    Image img = marchImage(scene, density, source, march_, progress, delta1_, &counts);
+    // S over each step (SourceRadiance::overStep): a lamp's glow averaged over substeps.
+    const ExactLookup lookup{density, source};
+    Image img = marchWith(scene, density, lookup, march_, progress, delta1_, &counts);
     if (auto* host = dynamic_cast<HostFrame*>(&frame))
       host->marchSteps = {counts.looked.load(), counts.skipped.load()};
     return img;

@@ -48,13 +48,14 @@ struct MarchCounts {
 };
 
 /// The lookups of one march step for marchImage: D at index coordinates u and, where D > 0,
-/// the source S at world point r.at(t) towards the viewer. Returns false where D <= 0 (the step
+/// the source S at world point r.at(t) towards the viewer (the step's length dt for a source
+/// that integrates over it: the factored march's glow). Returns false where D <= 0 (the step
 /// adds nothing). marchWith takes any class with this call operator (a fused volume lookup).
 template <class Source>
 struct DensitySourceLookup {
   const DensityGrid& density;
   const Source& source;
-  bool operator()(const Vec3& u, const Ray& r, float t, float& D, Vec3& S) const {
+  bool operator()(const Vec3& u, const Ray& r, float t, float /*dt*/, float& D, Vec3& S) const {
     D = density.sampleIndex(u);
     if (D <= 0.0f) return false;
     S = source(r.at(t), -r.dir);
@@ -229,7 +230,7 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
         const auto step = [&](int i) {
           float D;
           Vec3 S;
-          if (!lookup(u0 + float(i) * du, r, t0 + (float(i) + 0.5f) * dt, D, S)) return;
+          if (!lookup(u0 + float(i) * du, r, t0 + (float(i) + 0.5f) * dt, dt, D, S)) return;
           const float a = std::exp(-sigmaT * D * dt);
           L += (T * ratio * (1.0f - a)) * S;
           wt += T * (1.0f - a) * (t0 + (float(i) + 0.5f) * dt);
@@ -274,7 +275,8 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
               alignas(16) float D[4] = {0.0f, 0.0f, 0.0f, 0.0f}, a[4];
               Vec3 S[4];
               for (int q = 0; q < q1; ++q)
-                if (!lookup(u0 + float(i + q) * du, r, t0 + (float(i + q) + 0.5f) * dt, D[q], S[q]))
+                if (!lookup(u0 + float(i + q) * du, r, t0 + (float(i + q) + 0.5f) * dt, dt, D[q],
+                            S[q]))
                   D[q] = 0.0f;
               xsimd::exp(Batch(-sigmaT) * Batch::load_aligned(D) * Batch(dt)).store_aligned(a);
               for (int q = 0; q < q1 && T > minT; ++q) {

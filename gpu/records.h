@@ -36,19 +36,24 @@ struct GpuLight {
   /// lamp.y of lights[0]: min_l m_l at the box's diagonal (1 / LampModel::vBound), by the same
   /// pass; 1 (no lamp inside the box) until then. Unused in the other lights.
   float lampMin = 1.0f;
-  float unused[2] = {0.0f, 0.0f};
+  /// lamp.z: kGlowRatio / glowAngle, the glow's substep scale of the factored march
+  /// (core/stages.h); 0 for a directional light.
+  float glow = 0.0f;
+  float unused = 0.0f;
 };
 static_assert(sizeof(GpuLight) == 64);
 static_assert(offsetof(GpuLight, position) == 0 && offsetof(GpuLight, type) == 12);
 static_assert(offsetof(GpuLight, direction) == 16 && offsetof(GpuLight, cosInner) == 28);
 static_assert(offsetof(GpuLight, intensity) == 32 && offsetof(GpuLight, cosOuter) == 44);
 static_assert(offsetof(GpuLight, lampK) == 48 && offsetof(GpuLight, lampMin) == 52);
+static_assert(offsetof(GpuLight, glow) == 56);
 
 inline GpuLight packLight(const Light& l) {
   const float type = l.type == Light::Type::Point  ? 0.0f
                      : l.type == Light::Type::Spot ? 1.0f
                                                    : 2.0f;
-  return {l.position, type, l.direction, l.cosInner, l.intensity, l.cosOuter};
+  const float glow = l.type == Light::Type::Directional ? 0.0f : kGlowRatio / glowAngle(l);
+  return {l.position, type, l.direction, l.cosInner, l.intensity, l.cosOuter, 0.0f, 1.0f, glow};
 }
 
 /// A sample's position and valid radius: `vec4` (xyz, w = radius) of samples[] at

@@ -169,18 +169,53 @@ class SourceRadiance {
     for (const Light& l : lights_) {
       Light::Incident inc;
       if (!l.incident(x, inc)) continue;
-      if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) continue;
-      const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
-      const float tau = shadow_.fn ? shadow_.fn(shadow_.ctx, x, end, delta1_, depthCutoff_)
-                        : skip_    ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
-                        : cutoff_  ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
-                                   : opticalDepth(density_, x, end, delta1_);
-      s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * std::exp(-sigmaT_ * tau));
+      s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, x));
+    }
+    return s;
+  }
+
+  /// S over the view-march step of length dt centred at r.at(t), seen along −r.dir (what
+  /// `exact` marches): per light as operator(), or where the midpoint lies within a point or
+  /// spot light's glow (core/stages.h, glowSubsteps) its term (shadow ray included) averaged
+  /// over the substeps' midpoints — the factored march's quadrature of A
+  /// (LightFactor::overStep), so that the reference resolves a glow as the methods do.
+  Vec3 overStep(const Ray& r, float t, float dt) const {
+    const Vec3 x = r.at(t), toViewer = -r.dir;
+    Vec3 s(0.0f);
+    for (const Light& l : lights_) {
+      const int n = l.type == Light::Type::Directional
+                        ? 1
+                        : glowSubsteps(glowDistance(l.position, x, r.dir, dt),
+                                       kGlowRatio / glowAngle(l) * dt);
+      Light::Incident inc;
+      if (n == 1) {
+        if (l.incident(x, inc))
+          s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, x));
+        continue;
+      }
+      Vec3 a(0.0f);
+      for (int m = 0; m < n; ++m) {
+        const Vec3 xm = r.at(t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt);
+        if (l.incident(xm, inc))
+          a += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, xm));
+      }
+      s += a / float(n);
     }
     return s;
   }
 
  private:
+  /// V_l·T from x towards light l (inc: its direction and distance from x).
+  float transmittance(const Light& l, const Light::Incident& inc, const Vec3& x) const {
+    if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) return 0.0f;
+    const Vec3 end = lightSegmentEnd(l, inc, density_.bounds(), x);
+    const float tau = shadow_.fn ? shadow_.fn(shadow_.ctx, x, end, delta1_, depthCutoff_)
+                      : skip_    ? opticalDepth(density_, *skip_, x, end, delta1_, depthCutoff_)
+                      : cutoff_  ? opticalDepth(density_, x, end, delta1_, depthCutoff_)
+                                 : opticalDepth(density_, x, end, delta1_);
+    return std::exp(-sigmaT_ * tau);
+  }
+
   const std::vector<Light>& lights_;
   Phase phase_;
   float sigmaT_;
@@ -326,7 +361,40 @@ class LightFactor {
     return a;
   }
 
+  /// A over the view-march step of length dt centred at r.at(t), seen along −r.dir: per light
+  /// its term there, or where the midpoint lies within a point or spot light's glow (core/stages.h,
+  /// glowSubsteps) the mean of its term at r.at(t_m) for n substeps' midpoints t_m — the fast
+  /// march's factorGroup and the GPU's lightFactorStep alike.
+  Vec3 overStep(const Ray& r, float t, float dt) const {
+    const Vec3 x = r.at(t), toViewer = -r.dir;
+    Vec3 a(0.0f);
+    for (std::size_t i = 0; i < lights_.size(); ++i) {
+      const Light& l = lights_[i];
+      const int n = l.type == Light::Type::Directional
+                        ? 1
+                        : glowSubsteps(glowDistance(l.position, x, r.dir, dt),
+                                       kGlowRatio / glowAngle(l) * dt);
+      if (n == 1) {
+        a += term(i, x, toViewer);
+        continue;
+      }
+      Vec3 s(0.0f);
+      for (int m = 0; m < n; ++m)
+        s += term(i, r.at(t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt), toViewer);
+      a += s / float(n);
+    }
+    return a;
+  }
+
  private:
+  /// Light i's term of A at x (operator()'s).
+  Vec3 term(std::size_t i, const Vec3& x, const Vec3& toViewer) const {
+    Light::Incident inc;
+    if (!lights_[i].incident(x, inc)) return Vec3(0.0f);
+    const float m = lamp_.on() ? lamp_(i, inc.distance) : 1.0f;
+    return inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * m);
+  }
+
   const std::vector<Light>& lights_;
   Phase phase_;
   LampModel lamp_;

@@ -19,7 +19,8 @@ struct GpuLight {
   vec4 positionType;       // xyz position, w type
   vec4 directionCosInner;  // xyz direction (unit), w cos of the inner half-angle
   vec4 intensityCosOuter;  // rgb intensity / irradiance, w cos of the outer half-angle
-  vec4 lamp;  // x: k_l of the lamp model, y (lights[0]): min_l m_l (lamp_k.comp.glsl); zw unused
+  vec4 lamp;  // x: k_l of the lamp model, y (lights[0]): min_l m_l (lamp_k.comp.glsl);
+              // z: the glow's substep scale kGlowRatio / w (lightFactorStep); w unused
 };
 layout(std430, binding = BINDING_LIGHTS) readonly buffer Lights { GpuLight lights[]; };
 uniform int uLightCount;
@@ -319,6 +320,57 @@ vec3 lightFactor(vec3 x, vec3 toViewer) {
 #else
     if (lightTerm(li, x, toViewer, w, cone, segEnd)) a += w * cone;
 #endif
+  }
+  return a;
+}
+
+// One light's term of A at x (lightFactor's).
+vec3 lightFactorTerm(int li, vec3 x, vec3 toViewer) {
+  vec3 w, segEnd;
+  float cone;
+  if (!lightTerm(li, x, toViewer, w, cone, segEnd)) return vec3(0.0);
+#ifdef SL_LAMP_MODEL
+  return w * (cone * lampModel(li, x));
+#else
+  return w * cone;
+#endif
+}
+
+// The distance from a light at p to the step of length dt centred at x along dir (glowDistance
+// of core/stages.h).
+float glowDistance(vec3 p, vec3 x, vec3 dir, float dt) {
+  vec3 v = p - x;
+  float tc = clamp(dot(v, dir), -0.5 * dt, 0.5 * dt);
+  return length(v - tc * dir);
+}
+
+// The substeps of a light's glow at a step `dist` from it (glowSubsteps of core/stages.h,
+// kGlowRatio and kGlowMaxSubsteps).
+int glowSubsteps(float dist, float reach) {
+  if (!(dist < reach)) return 1;
+  if (!(dist > 0.0)) return int(SL_GLOW_MAX_SUBSTEPS);
+  return int(min(ceil(reach / dist), SL_GLOW_MAX_SUBSTEPS));
+}
+
+// A over the view march's step of length dt centred at origin + t·dir (toViewer = −dir): per
+// light its term there, or near a point or spot light (the glow) the mean of its term at the
+// midpoints of n substeps (the CPU's factorGroup and glowMean, LightFactor::overStep).
+vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
+  vec3 x = origin + dir * t;
+  vec3 a = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) {
+    int n = 1;
+    if (int(lights[li].positionType.w) != 2)
+      n = glowSubsteps(glowDistance(lights[li].positionType.xyz, x, dir, dt),
+                       lights[li].lamp.z * dt);
+    if (n == 1) {
+      a += lightFactorTerm(li, x, -dir);
+      continue;
+    }
+    vec3 s = vec3(0.0);
+    for (int m = 0; m < n; ++m)
+      s += lightFactorTerm(li, origin + dir * (t + ((float(m) + 0.5) / float(n) - 0.5) * dt), -dir);
+    a += s / float(n);
   }
   return a;
 }

@@ -44,20 +44,23 @@ void main() {
   int i = n - 1 - uLayer;
   if (i < 0) discard;
   float dt = (t1 - t0) / float(n);
-  vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+  float tMid = t0 + (float(i) + 0.5) * dt;
+  vec3 x = uEye + dir * tMid;
 #else
   float c = dot(dir, uForward);
   float a = max(t0, uDepthNear / c), b = min(t1, uDepthFar / c);
   if (!(b > a)) discard;
   float dt = b - a;
-  vec3 x = uEye + dir * (0.5 * (a + b));
+  float tMid = 0.5 * (a + b);
+  vec3 x = uEye + dir * tMid;
 #endif
   float D = densityAtIndex(x * uDensityScale + uDensityOffset);
   if (!(D > 0.0)) discard;
   float alpha = stepTransmittance(uSigmaT * D * dt);
   vec3 S = textureLod(uRadiance, (x * uRadScale + uRadOffset + 0.5) / vec3(uRadDims), 0.0).rgb;
 #ifdef SL_FACTOR_LIGHTS
-  if (S != vec3(0.0)) S *= lightFactor(x, -dir);  // the volume holds V = S / A; V = 0: S = 0
+  // The volume holds V = S / A (V = 0: S = 0); A over the step, the glow's substeps included.
+  if (S != vec3(0.0)) S *= lightFactorStep(uEye, dir, tMid, dt);
 #endif
   outColor = vec4(uAlbedo * (1.0 - alpha) * S, alpha);
 }

@@ -97,7 +97,7 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
 #ifdef SL_FACTOR_LIGHTS
           // The volume holds V = S / A; where V = 0 (outside every spot cone, or fully
           // shadowed) S is 0 without evaluating A, as on the CPU.
-          if (S != vec3(0.0)) S *= lightFactor(x, -dir);
+          if (S != vec3(0.0)) S *= lightFactorStep(uEye, dir, t0 + (float(i) + 0.5) * dt, dt);
 #endif
           float a = stepTransmittance(uSigmaT * D * dt);
           L += (T * uAlbedo * (1.0 - a)) * S;

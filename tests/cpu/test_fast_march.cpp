@@ -168,8 +168,7 @@ FusedMarchState plainSums(const RandomFused& g, const FusedRay& ray, int n,
     const float D = g.d.sampleIndex(u);
     if (D <= 0.0f) continue;
     Vec3 S = g.r.sampleIndex(u);
-    if (A && S != Vec3(0.0f))
-      S *= (*A)(world->at(ray.t0 + (float(i) + 0.5f) * ray.dt), -world->dir);
+    if (A && S != Vec3(0.0f)) S *= A->overStep(*world, ray.t0 + (float(i) + 0.5f) * ray.dt, ray.dt);
     const float a = std::exp(-c.sigmaT * D * ray.dt);
     for (int k = 0; k < 3; ++k) s.L[k] += s.T * c.ratio * (1.0f - a) * S[k];
     s.wt += s.T * (1.0f - a) * (ray.t0 + (float(i) + 0.5f) * ray.dt);
