@@ -62,6 +62,63 @@ TEST(LightFactorization, VTimesAIsTheSourceRadiance) {
   EXPECT_LT(worst, 3e-7);
 }
 
+TEST(LightFactorization, AStepThroughALampsGlowTakesTheMeanOfA) {
+  // LightFactor::overStep against the mean of A over 4096 points of the step (the integral the
+  // march wants), for steps of one voxel passing a point light, a narrow spot's apex and its
+  // edge at distances from 0.01 to 12 steps; and far from every light (or with the glow's reach
+  // 0) it is A at the midpoint, bit for bit.
+  Json doc = mixedLightsDoc();
+  doc["lights"][1]["inner_deg"] = 5;
+  doc["lights"][1]["outer_deg"] = 8;
+  const Scene scene = testing::sceneFromJson(doc);
+  const LightFactor A(scene);
+  const float dt = scene.medium.voxelSize();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> dir(-1.0f, 1.0f), off(0.0f, 1.0f), along(-0.5f, 0.5f);
+  double worstMean = 0.0, worstNear = 0.0, worstMid = 0.0;
+  int refined = 0;
+  for (const Light& l : scene.lights) {
+    if (l.type == Light::Type::Directional) continue;
+    for (int k = 0; k < 300; ++k) {
+      const Vec3 d = glm::normalize(Vec3(dir(rng), dir(rng), dir(rng)));
+      // A segment of length dt whose closest approach to the light is at distance `miss`.
+      Vec3 n = glm::normalize(glm::cross(d, Vec3(dir(rng), dir(rng), dir(rng))));
+      const float miss = dt * 0.01f * std::pow(1200.0f, off(rng));
+      const Vec3 closest = l.position + miss * n;
+      const Ray r{closest - 3.0f * d, d};
+      const float t = 3.0f + along(rng) * dt;  // the light's foot somewhere on the step
+      Vec3 mean(0.0f);
+      for (int m = 0; m < 4096; ++m) mean += A(r.at(t + ((m + 0.5f) / 4096.0f - 0.5f) * dt), -d);
+      mean /= 4096.0f;
+      const Vec3 got = A.overStep(r, t, dt), mid = A(r.at(t), -d);
+      const float scale = std::max({mean.x, mean.y, mean.z, 1e-30f});
+      const double eGot = glm::length(got - mean) / scale, eMid = glm::length(mid - mean) / scale;
+      bool inGlow = false;  // of any light (a narrow spot's reaches far)
+      for (const Light& o : scene.lights)
+        inGlow |= o.type != Light::Type::Directional &&
+                  glowSubsteps(glowDistance(o.position, r.at(t), d, dt),
+                               kGlowRatio / glowAngle(o) * dt) > 1;
+      if (inGlow) {
+        ++refined;
+        // Within ⅛ step of a light 32 substeps no longer resolve 1/r² (the cap): counted apart.
+        double& wm = miss >= dt / 8.0f ? worstMean : worstNear;
+        wm = std::max(wm, eGot);
+        worstMid = std::max(worstMid, eMid);
+      } else {
+        EXPECT_EQ(got, mid) << k;
+      }
+    }
+  }
+  std::printf(
+      "%d steps in a glow: mean of A within %.3g, within %.3g where they pass closer than 1/8 "
+      "step (the midpoint alone: %.3g)\n",
+      refined, worstMean, worstNear, worstMid);
+  EXPECT_GT(refined, 300);
+  // Measured 2026-11-30:
+  EXPECT_LT(worstMean, 1.0);
+  EXPECT_GT(worstMid, 10.0 * worstMean);
+}
+
 TEST(LightFactorization, VIsTheTransmittanceOfOneLightAndItsGradientIsAnalytic) {
   // One point light inside a homogeneous box: V = exp(−σt·ρ·d), ∇V = −σt·ρ·V·(x − s)/d.
   const float rho = 0.8f, sigmaT = 1.5f;
