@@ -72,6 +72,9 @@ struct MarchSettings {
   /// render.march_scale: march one ray per scale × scale pixels and upsample depth-aware
   /// (cpu/ray_marcher.h); 1 marches every pixel.
   int scale = 1;
+  /// render.glow: next to a point or spot light a light's term of A (the factored march) or of
+  /// S (exact) is its mean over the step's substeps (glowSubsteps); false: at the midpoint.
+  bool glow = true;
 };
 
 /// How the GPU backend runs the stages of a method with a radiance volume (render key

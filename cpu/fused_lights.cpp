@@ -6,7 +6,7 @@
 
 namespace scatterlab {
 
-FusedLights::FusedLights(const Scene& scene, const LampModel& lamp)
+FusedLights::FusedLights(const Scene& scene, const LampModel& lamp, bool glow)
     : hg(scene.medium.phase.type == Phase::Type::HenyeyGreenstein),
       g(scene.medium.phase.g),
       phase_(scene.medium.phase) {
@@ -31,7 +31,7 @@ FusedLights::FusedLights(const Scene& scene, const LampModel& lamp)
     e0.push_back(spot ? l.cosOuter : -2.0f);
     e1.push_back(spot ? l.cosInner : -1.0f);
     k.push_back(lamp.k(i));
-    glow.push_back(kGlowRatio / glowAngle(l));
+    this->glow.push_back(glow ? kGlowRatio / glowAngle(l) : 0.0f);
   }
 }
 

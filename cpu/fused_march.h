@@ -43,7 +43,8 @@ struct FusedMarchState {
 class FusedLights {
  public:
   /// `lamp`: LampModel's m_l (off: every m = 1), as LightFactor's.
-  FusedLights(const Scene& scene, const LampModel& lamp);
+  /// `glow`: render.glow (false: every glow's reach 0, no substeps).
+  FusedLights(const Scene& scene, const LampModel& lamp, bool glow = true);
   /// A of the directional lights towards `toViewer`.
   Vec3 directional(const Vec3& toViewer) const;
 

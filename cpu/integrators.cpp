@@ -111,10 +111,10 @@ class RayMarcher : public Integrator {
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LampModel lamp = lampModel_ ? LampModel(scene, *f.density) : LampModel();
-    const LightFactor A(scene, lamp);
+    const LightFactor A(scene, lamp, march_.glow);
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       fused_.build(*f.density, radiance, keys_.halfFloat);
-      const FusedLights lights(scene, lamp);
+      const FusedLights lights(scene, lamp, march_.glow);
       const FusedLookup lookup{fused_,
                                factored_ ? &A : nullptr,
                                factored_ ? &lights : nullptr,
@@ -154,8 +154,9 @@ class ExactIntegrator : public Integrator {
     // With the fast march the shadow rays are traced with SIMD over their steps
     // (cpu/shadow_rays.h); the plain march keeps the scalar opticalDepth.
     const SimdShadowRays shadows(density);
-    const SourceRadiance source(scene, density, delta1_, nullptr, march_.fast,
-                                march_.fast ? shadows.fn() : ShadowDepthFn{});
+    SourceRadiance source(scene, density, delta1_, nullptr, march_.fast,
+                          march_.fast ? shadows.fn() : ShadowDepthFn{});
+    source.setGlow(march_.glow);
     MarchCounts counts;
     // S over each step (SourceRadiance::overStep): a lamp's glow averaged over substeps.
     const ExactLookup lookup{density, source};

@@ -149,6 +149,7 @@ Image SliceMarcher::integrate(const Scene& scene, const Volume& density, const V
     if (!surfaces) glClearBufferfv(GL_COLOR, 0, clear);
     program.use();
     setSliceMarchInputs(program, scene, inputs, radiance);
+    glUniform1f(program.uniform("uGlow"), settings_.glow ? 1.0f : 0.0f);
     glBindVertexArray(vao.id());
     drawSliceLayers(program, layout, raySteps_, settings_.step, surfaces ? &surfacePass : nullptr);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);

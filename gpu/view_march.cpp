@@ -75,6 +75,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     setIVec3(march, "uRadDims", radiance.dims);
     glUniform1f(march.uniform("uStep"), settings_.step);
     glUniform1f(march.uniform("uMinT"), settings_.minTransmittance);
+    glUniform1f(march.uniform("uGlow"), settings_.glow ? 1.0f : 0.0f);
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);
     counters->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);

@@ -92,6 +92,11 @@ const std::vector<KeyDoc>& viewMarchKeys() {
        "steps at once (SIMD), stopped where no light gets through (same images within 1e-6); "
        "false: the plain march and scalar shadow rays (reference)",
        "false", nullptr, "cpu"},
+      {"glow", "bool", "true", "true, false",
+       "next to a point or spot light the march takes a light's term of A (factored lights) or "
+       "of S (exact) as its mean over up to 32 points of the step, resolving the light's glow "
+       "(docs/fidelity.md, \"Glows\"); false: at each step's midpoint only (before 2026-11-30)",
+       "false"},
       {"march_scale", "int", "1", "1, 2, 4 (2 and 4 need camera.spp = 1)",
        "CPU view march at 1/scale of the resolution per axis (one ray per scale × scale pixels), "
        "upsampled depth-aware to full resolution (box entry/exit depths; edges marched in full); "
@@ -106,6 +111,7 @@ void parseViewMarch(Params& p, const Scene& scene, PipelineSettings& s) {
                         stepRange(glm::length(scene.medium.bounds.extent())));
   s.march.minTransmittance = p.real("min_transmittance", 1e-6, Interval::closed(0, 1));
   s.march.fast = p.boolean("fast_march", true);
+  s.march.glow = p.boolean("glow", true);
   s.march.scale = int(p.integer("march_scale", 1, Interval::closed(1, 4)));
   if (s.march.scale == 3) p.fail("march_scale", "is 3; allowed: 1, 2, 4");
   if (s.march.scale > 1 && scene.camera.spp > 1)

@@ -183,7 +183,7 @@ class SourceRadiance {
     const Vec3 x = r.at(t), toViewer = -r.dir;
     Vec3 s(0.0f);
     for (const Light& l : lights_) {
-      const int n = l.type == Light::Type::Directional
+      const int n = !glow_ || l.type == Light::Type::Directional
                         ? 1
                         : glowSubsteps(glowDistance(l.position, x, r.dir, dt),
                                        kGlowRatio / glowAngle(l) * dt);
@@ -226,6 +226,11 @@ class SourceRadiance {
   ShadowDepthFn shadow_;         ///< the shadow rays' tracer, when given
   bool cutoff_;                  ///< shadow rays stop at depthCutoff_ (always with skip_)
   float depthCutoff_;            ///< τ at which a shadow ray stops
+  bool glow_ = true;             ///< overStep's substeps (render.glow)
+
+ public:
+  /// render.glow false: overStep takes S at the step's midpoint only.
+  void setGlow(bool glow) { glow_ = glow; }
 };
 
 /// The radiance leaving a Lambertian surface point towards any direction (DESIGN.md §2):
@@ -339,8 +344,9 @@ class LightFactor {
  public:
   /// References must outlive this object. `lamp` (on: PipelineSettings::lampModel): each
   /// light's term times its near-lamp model m_l.
-  explicit LightFactor(const Scene& scene, LampModel lamp = {})
-      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)) {}
+  /// `glow` (render.glow): overStep averages a light's term over the substeps of its glow.
+  explicit LightFactor(const Scene& scene, LampModel lamp = {}, bool glow = true)
+      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)), glow_(glow) {}
 
   /// A(x, toViewer): one analytic evaluation per light (no tracing).
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -370,7 +376,7 @@ class LightFactor {
     Vec3 a(0.0f);
     for (std::size_t i = 0; i < lights_.size(); ++i) {
       const Light& l = lights_[i];
-      const int n = l.type == Light::Type::Directional
+      const int n = !glow_ || l.type == Light::Type::Directional
                         ? 1
                         : glowSubsteps(glowDistance(l.position, x, r.dir, dt),
                                        kGlowRatio / glowAngle(l) * dt);
@@ -398,6 +404,7 @@ class LightFactor {
   const std::vector<Light>& lights_;
   Phase phase_;
   LampModel lamp_;
+  bool glow_;
 };
 
 /// Where A of LightFactor can be non-zero. A point or directional light lights every point;

@@ -355,6 +355,7 @@ int glowSubsteps(float dist, float reach) {
 // A over the view march's step of length dt centred at origin + t·dir (toViewer = −dir): per
 // light its term there, or near a point or spot light (the glow) the mean of its term at the
 // midpoints of n substeps (the CPU's factorGroup and glowMean, LightFactor::overStep).
+uniform float uGlow;  // render.glow: 1 (the glow's substeps), 0 (each step's midpoint only)
 vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
   vec3 x = origin + dir * t;
   vec3 a = vec3(0.0);
@@ -362,7 +363,7 @@ vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
     int n = 1;
     if (int(lights[li].positionType.w) != 2)
       n = glowSubsteps(glowDistance(lights[li].positionType.xyz, x, dir, dt),
-                       lights[li].lamp.z * dt);
+                       lights[li].lamp.z * dt * uGlow);
     if (n == 1) {
       a += lightFactorTerm(li, x, -dir);
       continue;

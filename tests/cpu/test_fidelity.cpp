@@ -71,7 +71,7 @@ TEST(LightFactorization, AStepThroughALampsGlowTakesTheMeanOfA) {
   doc["lights"][1]["inner_deg"] = 5;
   doc["lights"][1]["outer_deg"] = 8;
   const Scene scene = testing::sceneFromJson(doc);
-  const LightFactor A(scene);
+  const LightFactor A(scene), noGlow(scene, {}, false);  // render.glow true, false
   const float dt = scene.medium.voxelSize();
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> dir(-1.0f, 1.0f), off(0.0f, 1.0f), along(-0.5f, 0.5f);
@@ -91,6 +91,7 @@ TEST(LightFactorization, AStepThroughALampsGlowTakesTheMeanOfA) {
       for (int m = 0; m < 4096; ++m) mean += A(r.at(t + ((m + 0.5f) / 4096.0f - 0.5f) * dt), -d);
       mean /= 4096.0f;
       const Vec3 got = A.overStep(r, t, dt), mid = A(r.at(t), -d);
+      EXPECT_EQ(noGlow.overStep(r, t, dt), mid) << k;  // render.glow false: the midpoint
       const float scale = std::max({mean.x, mean.y, mean.z, 1e-30f});
       const double eGot = glm::length(got - mean) / scale, eMid = glm::length(mid - mean) / scale;
       bool inGlow = false;  // of any light (a narrow spot's reaches far)

@@ -30,6 +30,7 @@ struct MarchCase {
   bool factor = false;
   int spp = 1;
   float minT = 0.0f;
+  bool glow = true;  ///< render.glow
 };
 
 /// CPU marcher and the compute view march on the same volumes (the blob scene, an oblique
@@ -49,8 +50,9 @@ double viewMarchVsCpu(const MarchCase& c) {
   MarchSettings ms;
   ms.step = 0.5f / 24;
   ms.minTransmittance = c.minT;
+  ms.glow = c.glow;
   const Vec3 s = radiance.indexScale(), o = radiance.indexOffset();
-  const LightFactor A(scene);
+  const LightFactor A(scene, {}, c.glow);
   // The CPU's plain march: S = V · A over each step (LightFactor::overStep, the glow included).
   struct Lookup {
     const DensityGrid& density;
@@ -105,6 +107,12 @@ TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightInsideTheMedium) {
 TEST(GpuViewMarch, MatchesCpuMarcherWithFactoredLightsStrataAndEarlyExit) {
   SCATTERLAB_REQUIRE_GPU();
   EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 5e-6);
+}
+
+TEST(GpuViewMarch, MatchesCpuMarcherWithoutTheGlowsSubsteps) {
+  SCATTERLAB_REQUIRE_GPU();
+  // render.glow false: A at each step's midpoint only, on the GPU as on the CPU.
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .glow = false}), 5e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightOutside) {
