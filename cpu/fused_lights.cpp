@@ -2,6 +2,9 @@
 
 #include "cpu/fused_march.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/stages.h"
 
 namespace scatterlab {
@@ -33,6 +36,54 @@ FusedLights::FusedLights(const Scene& scene, const LampModel& lamp, bool glow)
     k.push_back(lamp.k(i));
     this->glow.push_back(glow ? kGlowRatio / glowAngle(l) : 0.0f);
   }
+}
+
+bool FusedLights::glowMean(int j, const FusedFactor& f, float t, float dt, float out[3]) const {
+  const Vec3 p(px[j], py[j], pz[j]), o(f.origin[0], f.origin[1], f.origin[2]),
+      d(f.dir[0], f.dir[1], f.dir[2]);
+  const int n = glowSubsteps(glowDistance(p, o + t * d, d, dt), glow[j] * dt);
+  if (n <= 1) return false;
+  const float gg = 1.0f + g * g, g2 = 2.0f * g, hgNum = kInvFourPi * (1.0f - g * g);
+  float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f;
+  for (int m = 0; m < n; ++m) {
+    const float tm = t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt;
+    const float dx = px[j] - (f.origin[0] + tm * f.dir[0]),
+                dy = py[j] - (f.origin[1] + tm * f.dir[1]),
+                dz = pz[j] - (f.origin[2] + tm * f.dir[2]);
+    const float d2 = dx * dx + dy * dy + dz * dz;
+    if (!(d2 > 0.0f)) continue;
+    const float dist = std::sqrt(d2);
+    const float tx = dx / dist, ty = dy / dist, tz = dz / dist;
+    float cone = 1.0f;
+    if (e0[j] > -2.0f) {  // a spot light
+      const float c = -tx * ax[j] + -ty * ay[j] + -tz * az[j];
+      if (e0[j] == e1[j]) {
+        cone = c < e0[j] ? 0.0f : 1.0f;
+      } else {
+        const float u = std::min(std::max((c - e0[j]) / (e1[j] - e0[j]), 0.0f), 1.0f);
+        cone = u * u * (3.0f - 2.0f * u);
+      }
+    }
+    if (!(cone > 0.0f)) continue;
+    float phase = kInvFourPi;
+    if (hg) {
+      const float cosT = -tx * f.toViewer[0] + -ty * f.toViewer[1] + -tz * f.toViewer[2];
+      const float denom = gg - g2 * cosT;
+      phase = hgNum / (denom * std::sqrt(denom));
+    }
+    if (k[j] > 0.0f) {
+      const float q = k[j] * dist;
+      phase = phase * std::exp(-kLampDepth * q / (q + kLampDepth));
+    }
+    const float s = cone / d2;
+    s0 += ir[j] * s * phase;
+    s1 += ig[j] * s * phase;
+    s2 += ib[j] * s * phase;
+  }
+  out[0] = s0 / float(n);
+  out[1] = s1 / float(n);
+  out[2] = s2 / float(n);
+  return true;
 }
 
 Vec3 FusedLights::directional(const Vec3& toViewer) const {

@@ -40,6 +40,8 @@ struct FusedMarchState {
 /// and spot lights SIMD over a group of steps (cpu/fused_march_impl.h, factorGroup) instead of
 /// light by light and step by step. Directional lights give the same A all along a view ray
 /// (ω is the ray's, the irradiance constant): directional() sums them once per ray.
+struct FusedFactor;
+
 class FusedLights {
  public:
   /// `lamp`: LampModel's m_l (off: every m = 1), as LightFactor's.
@@ -47,6 +49,14 @@ class FusedLights {
   FusedLights(const Scene& scene, const LampModel& lamp, bool glow = true);
   /// A of the directional lights towards `toViewer`.
   Vec3 directional(const Vec3& toViewer) const;
+  /// Point or spot light j at the step of length dt centred at ray parameter t of `f`: where the
+  /// step passes through its glow (core/stages.h, glowSubsteps > 1) its term of A averaged over
+  /// the substeps' midpoints into `out` (factorGroup's formula, LightFactor::overStep's rule),
+  /// and true; false elsewhere. Out of line, in a file built for the baseline instruction set:
+  /// the kernels are built for SSE2 and for AVX2, and an inline function both define (this one,
+  /// or glowSubsteps and the vector maths it calls) could be linked from the AVX2 build into
+  /// every caller.
+  bool glowMean(int j, const FusedFactor& f, float t, float dt, float out[3]) const;
 
   int count = 0;  ///< point and spot lights, in the scene's order
   /// Per point or spot light: position, intensity (RGB), spot axis and smoothstep edges

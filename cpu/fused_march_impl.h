@@ -30,55 +30,6 @@ inline void accumulateGroup(const float (&V)[G][4], const float (&D)[G], const f
 /// LightFactor's (shading/transport.h; Light::incident, Phase::evalCos, LampModel), then the
 /// directional lights' constant. Only steps with D > 0 and S ≠ 0 are scaled (the others add
 /// nothing), and none is computed where no step of the group needs it.
-/// Light j's term of A averaged over n points spread evenly over the step of length dt centred
-/// at ray parameter t (the midpoint rule on n substeps), as factorGroup computes it at one
-/// point; written to out0..2.
-inline void glowMean(const scatterlab::FusedLights& l, int j, const scatterlab::FusedFactor& f,
-                     float t, float dt, int n, float& out0, float& out1, float& out2) {
-  const float g = l.g, gg = 1.0f + g * g, g2 = 2.0f * g,
-              hgNum = scatterlab::kInvFourPi * (1.0f - g * g);
-  float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f;
-  for (int m = 0; m < n; ++m) {
-    const float tm = t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt;
-    const float dx = l.px[j] - (f.origin[0] + tm * f.dir[0]),
-                dy = l.py[j] - (f.origin[1] + tm * f.dir[1]),
-                dz = l.pz[j] - (f.origin[2] + tm * f.dir[2]);
-    const float d2 = dx * dx + dy * dy + dz * dz;
-    if (!(d2 > 0.0f)) continue;
-    const float dist = std::sqrt(d2);
-    const float tx = dx / dist, ty = dy / dist, tz = dz / dist;
-    float cone = 1.0f;
-    const float e0 = l.e0[j], e1 = l.e1[j];
-    if (e0 > -2.0f) {
-      const float c = -tx * l.ax[j] + -ty * l.ay[j] + -tz * l.az[j];
-      if (e0 == e1) {
-        cone = c < e0 ? 0.0f : 1.0f;
-      } else {
-        const float u = std::min(std::max((c - e0) / (e1 - e0), 0.0f), 1.0f);
-        cone = u * u * (3.0f - 2.0f * u);
-      }
-    }
-    if (!(cone > 0.0f)) continue;
-    float phase = scatterlab::kInvFourPi;
-    if (l.hg) {
-      const float cosT = -tx * f.toViewer[0] + -ty * f.toViewer[1] + -tz * f.toViewer[2];
-      const float denom = gg - g2 * cosT;
-      phase = hgNum / (denom * std::sqrt(denom));
-    }
-    if (l.k[j] > 0.0f) {
-      const float q = l.k[j] * dist;
-      phase = phase * std::exp(-scatterlab::kLampDepth * q / (q + scatterlab::kLampDepth));
-    }
-    const float s = cone / d2;
-    s0 += l.ir[j] * s * phase;
-    s1 += l.ig[j] * s * phase;
-    s2 += l.ib[j] * s * phase;
-  }
-  out0 = s0 / float(n);
-  out1 = s1 / float(n);
-  out2 = s2 / float(n);
-}
-
 template <int G>
 inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::FusedRay& r, int i,
                         int q1, float (&V)[G][4]) {
@@ -138,13 +89,14 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
       t0.store_aligned(T[0]);
       t1.store_aligned(T[1]);
       t2.store_aligned(T[2]);
-      const scatterlab::Vec3 p(l.px[j], l.py[j], l.pz[j]), o(f.origin[0], f.origin[1], f.origin[2]),
-          d(f.dir[0], f.dir[1], f.dir[2]);
       for (int q = 0; q < q1; ++q) {
         if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
-        const int n = scatterlab::glowSubsteps(scatterlab::glowDistance(p, o + tq[q] * d, d, r.dt),
-                                               l.glow[j] * r.dt);
-        if (n > 1) glowMean(l, j, f, tq[q], r.dt, n, T[0][q], T[1][q], T[2][q]);
+        float m[3];
+        if (l.glowMean(j, f, tq[q], r.dt, m)) {
+          T[0][q] = m[0];
+          T[1][q] = m[1];
+          T[2][q] = m[2];
+        }
       }
       t0 = B::load_aligned(T[0]);
       t1 = B::load_aligned(T[1]);

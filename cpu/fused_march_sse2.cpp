@@ -3,9 +3,6 @@
 
 #include <Imath/half.h>
 
-#include <algorithm>
-#include <cmath>
-
 #include "core/cpu_features.h"
 #include "core/error.h"
 #include "cpu/fused_march.h"
