@@ -260,6 +260,18 @@ inline float glowAngle(const Light& l) {
                   std::acos(std::clamp(l.cosInner, -1.0f, 1.0f));
   return std::clamp(w, kGlowMinAngle, 1.0f);
 }
+/// Light l's substeps at the view-march step of length dt centred at x along unit dir: 1 for a
+/// directional light, else glowSubsteps at the step's distance from it (what `exact`'s
+/// SourceRadiance and the factored march's LightFactor average over).
+inline int lightGlowSubsteps(const Light& l, const Vec3& x, const Vec3& dir, float dt) {
+  if (l.type == Light::Type::Directional) return 1;
+  return glowSubsteps(glowDistance(l.position, x, dir, dt), kGlowRatio / glowAngle(l) * dt);
+}
+/// The ray parameter of substep m of n of the step of length dt centred at t: the midpoints of
+/// n equal parts.
+inline float glowSubstepT(float t, float dt, int m, int n) {
+  return t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt;
+}
 
 /// Optical depth σt·τ at which a shadow ray stops (shadowDepthCutoff(), shading/transport.h; on
 /// the GPU the shadow rays that skip empty space, common.glsl opticalDepth): exp(−25) ≈ 1.4e-11

@@ -46,7 +46,7 @@ bool FusedLights::glowMean(int j, const FusedFactor& f, float t, float dt, float
   const float gg = 1.0f + g * g, g2 = 2.0f * g, hgNum = kInvFourPi * (1.0f - g * g);
   float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f;
   for (int m = 0; m < n; ++m) {
-    const float tm = t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt;
+    const float tm = glowSubstepT(t, dt, m, n);
     const float dx = px[j] - (f.origin[0] + tm * f.dir[0]),
                 dy = py[j] - (f.origin[1] + tm * f.dir[1]),
                 dz = pz[j] - (f.origin[2] + tm * f.dir[2]);

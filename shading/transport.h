@@ -166,11 +166,7 @@ class SourceRadiance {
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
     Vec3 s(0.0f);
-    for (const Light& l : lights_) {
-      Light::Incident inc;
-      if (!l.incident(x, inc)) continue;
-      s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, x));
-    }
+    for (const Light& l : lights_) s += term(l, x, toViewer);
     return s;
   }
 
@@ -183,28 +179,26 @@ class SourceRadiance {
     const Vec3 x = r.at(t), toViewer = -r.dir;
     Vec3 s(0.0f);
     for (const Light& l : lights_) {
-      const int n = !glow_ || l.type == Light::Type::Directional
-                        ? 1
-                        : glowSubsteps(glowDistance(l.position, x, r.dir, dt),
-                                       kGlowRatio / glowAngle(l) * dt);
-      Light::Incident inc;
+      const int n = glow_ ? lightGlowSubsteps(l, x, r.dir, dt) : 1;
       if (n == 1) {
-        if (l.incident(x, inc))
-          s += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, x));
+        s += term(l, x, toViewer);
         continue;
       }
       Vec3 a(0.0f);
-      for (int m = 0; m < n; ++m) {
-        const Vec3 xm = r.at(t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt);
-        if (l.incident(xm, inc))
-          a += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, xm));
-      }
+      for (int m = 0; m < n; ++m) a += term(l, r.at(glowSubstepT(t, dt, m, n)), toViewer);
       s += a / float(n);
     }
     return s;
   }
 
  private:
+  /// Light l's term of S at x (operator()'s): its irradiance, phase and V_l·T.
+  Vec3 term(const Light& l, const Vec3& x, const Vec3& toViewer) const {
+    Light::Incident inc;
+    if (!l.incident(x, inc)) return Vec3(0.0f);
+    return inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * transmittance(l, inc, x));
+  }
+
   /// V_l·T from x towards light l (inc: its direction and distance from x).
   float transmittance(const Light& l, const Light::Incident& inc, const Vec3& x) const {
     if (objects_ && objects_->occluded(x, inc.toLight, 0.0f, inc.distance)) return 0.0f;
@@ -351,19 +345,7 @@ class LightFactor {
   /// A(x, toViewer): one analytic evaluation per light (no tracing).
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
     Vec3 a(0.0f);
-    if (lamp_.on()) {
-      for (std::size_t i = 0; i < lights_.size(); ++i) {
-        Light::Incident inc;
-        if (!lights_[i].incident(x, inc)) continue;
-        a += inc.irradiance * (phase_.eval(-inc.toLight, toViewer) * lamp_(i, inc.distance));
-      }
-      return a;
-    }
-    for (const Light& l : lights_) {
-      Light::Incident inc;
-      if (!l.incident(x, inc)) continue;
-      a += inc.irradiance * phase_.eval(-inc.toLight, toViewer);
-    }
+    for (std::size_t i = 0; i < lights_.size(); ++i) a += term(i, x, toViewer);
     return a;
   }
 
@@ -375,18 +357,13 @@ class LightFactor {
     const Vec3 x = r.at(t), toViewer = -r.dir;
     Vec3 a(0.0f);
     for (std::size_t i = 0; i < lights_.size(); ++i) {
-      const Light& l = lights_[i];
-      const int n = !glow_ || l.type == Light::Type::Directional
-                        ? 1
-                        : glowSubsteps(glowDistance(l.position, x, r.dir, dt),
-                                       kGlowRatio / glowAngle(l) * dt);
+      const int n = glow_ ? lightGlowSubsteps(lights_[i], x, r.dir, dt) : 1;
       if (n == 1) {
         a += term(i, x, toViewer);
         continue;
       }
       Vec3 s(0.0f);
-      for (int m = 0; m < n; ++m)
-        s += term(i, r.at(t + ((float(m) + 0.5f) / float(n) - 0.5f) * dt), toViewer);
+      for (int m = 0; m < n; ++m) s += term(i, r.at(glowSubstepT(t, dt, m, n)), toViewer);
       a += s / float(n);
     }
     return a;
