@@ -229,11 +229,13 @@ inline constexpr float kSingularEps = 1e-9f;
 inline constexpr float kLampDepth = 2.0f;
 
 /// The factored march's quadrature of A near a lamp (docs/fidelity.md, "Glows"): at a step of
-/// length dt whose midpoint lies at distance r from a point or spot light, that light's term of A
-/// is the mean over n = min(kGlowMaxSubsteps, ⌈kGlowRatio · dt / (r · w)⌉) points spread evenly
-/// over the step (w: 1 for a point light, a spot's transition angle in radians, at least
-/// kGlowMinAngle), not its value at the midpoint alone: 1/r², the phase function and the cone's
-/// edge vary faster than a voxel there. n = 1 elsewhere.
+/// length dt whose segment passes at distance r from a point or spot light (glowDistance), that
+/// light's term of A is the mean over n = min(kGlowMaxSubsteps, ⌈kGlowRatio · dt / (r · w)⌉)
+/// points spread evenly over the step (w: 1 for a point light, a spot's transition angle in
+/// radians, at least kGlowMinAngle), not its value at the midpoint alone: 1/r², the phase function
+/// and the cone's edge vary faster than a voxel there. n = 1 elsewhere. Both constants re-checked
+/// on the 135 population scenes with a lamp (reach 2, 4, 8; 16, 32, 64 substeps) and kept
+/// (docs/fidelity.md, "The glow's constants chosen on the population").
 inline constexpr float kGlowRatio = 4.0f;
 inline constexpr int kGlowMaxSubsteps = 32;
 inline constexpr float kGlowMinAngle = 0.02f;
