@@ -75,6 +75,9 @@ struct MarchSettings {
   /// render.glow: next to a point or spot light a light's term of A (the factored march) or of
   /// S (exact) is its mean over the step's substeps (glowSubsteps); false: at the midpoint.
   bool glow = true;
+  /// render.far_field: R of A's far field in voxels (FarField, shading/transport.h): the
+  /// factored march looks the point lights beyond 2R up on a grid; 0 evaluates every light.
+  float farField = 0.0f;
 };
 
 /// How the GPU backend runs the stages of a method with a radiance volume (render key

@@ -1,5 +1,7 @@
 #include "cpu/integrators.h"
 
+#include <tbb/parallel_for.h>
+
 #include "core/stages.h"
 #include "cpu/froxel.h"
 #include "cpu/fused_march.h"
@@ -89,6 +91,29 @@ struct ExactLookup {
   }
 };
 
+/// A's far field over the medium's box (FarField, render.far_field): a vertex per voxel corner
+/// holding Σ_l w_l·A_l, the layers of vertices in parallel. The GPU's far_field.comp.glsl
+/// writes the same sums.
+FarField buildFarField(const LightFactor& A, const Medium& medium, float radiusVoxels) {
+  FarField f;
+  f.radius = radiusVoxels * medium.voxelSize();
+  f.dims = medium.resolution + IVec3(1);
+  f.lo = medium.bounds.min;
+  f.cell = medium.bounds.extent() / Vec3(medium.resolution);
+  f.a.assign(std::size_t(f.dims.x) * std::size_t(f.dims.y) * std::size_t(f.dims.z), Vec3(0.0f));
+  tbb::parallel_for(0, f.dims.z, [&](int k) {
+    for (int j = 0; j < f.dims.y; ++j)
+      for (int i = 0; i < f.dims.x; ++i) {
+        const Vec3 x = f.lo + Vec3(float(i), float(j), float(k)) * f.cell;
+        Vec3 a(0.0f);
+        for (std::size_t l = 0; l < A.lightCount(); ++l) a += A.farTerm(l, f, x);
+        f.a[(std::size_t(k) * std::size_t(f.dims.y) + std::size_t(j)) * std::size_t(f.dims.x) +
+            std::size_t(i)] = a;
+      }
+  });
+  return f;
+}
+
 class RayMarcher : public Integrator {
  public:
   explicit RayMarcher(const PipelineSettings& s)
@@ -111,8 +136,16 @@ class RayMarcher : public Integrator {
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LampModel lamp = lampModel_ ? LampModel(scene, *f.density) : LampModel();
-    const LightFactor A(scene, lamp, march_.glow);
-    if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
+    LightFactor A(scene, lamp, march_.glow);
+    // A's far field: built for this frame, marched by the plain march (the SIMD kernels
+    // evaluate every light).
+    const bool far = factored_ && march_.farField > 0.0f;
+    FarField farField;
+    if (far) {
+      farField = buildFarField(A, scene.medium, march_.farField);
+      A.setFarField(&farField);
+    }
+    if (!far && march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       fused_.build(*f.density, radiance, keys_.halfFloat);
       const FusedLights lights(scene, lamp, march_.glow);
       const FusedLookup lookup{fused_,

@@ -73,6 +73,14 @@ inline constexpr GLuint kBinItems = 3;
 inline constexpr GLuint kBinSphereCount = 4;
 inline constexpr GLuint kBinCounts = 5;
 inline constexpr GLuint kBinOverflow = 6;
+/// vec4 per vertex of A's far field (render.far_field): far_field.comp.glsl writes it, the
+/// compute view march reads it (common.glsl farLookup). Never in one program with kErrors,
+/// kFillEntries or kBinCounts.
+inline constexpr GLuint kFarField = 5;
+/// The same buffer as far_field.comp.glsl writes it (its own binding, so that a program built
+/// with both declarations, as the shader tests build every variant, has no two blocks at one
+/// binding; that pass binds nothing else at 2).
+inline constexpr GLuint kFarFieldOut = 2;
 /// GpuShadowLight[] per scene light (shadow.glsl, gpu/shadow_maps.h).
 inline constexpr GLuint kShadowLights = 12;
 /// mat4 world -> clip per shadow-map layer (shadow.glsl).
@@ -166,6 +174,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_COUNTERS", binding::kCounters},
     {"BINDING_RADIANCE", binding::kRadiance},
     {"BINDING_ERRORS", binding::kErrors},
+    {"BINDING_FAR_FIELD", binding::kFarField},
+    {"BINDING_FAR_FIELD_OUT", binding::kFarFieldOut},
     {"BINDING_LEVEL_COUNTS", binding::kLevelCounts},
     {"BINDING_THRESHOLD", binding::kThreshold},
     {"BINDING_LOOP_GUARD", binding::kLoopGuard},

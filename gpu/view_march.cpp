@@ -51,6 +51,38 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   }
   if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
   if (factor_ && lamp_) defines.push_back("SL_LAMP_MODEL");
+  // A's far field (render.far_field): one pass writes the grid of far terms Σ_l w_l·A_l, a vertex
+  // per voxel corner of the medium's box (buildFarField on the CPU), which the march reads.
+  const bool far = factor_ && settings_.farField > 0.0f;
+  const Medium& medium = scene.medium;
+  const IVec3 farDims = medium.resolution + IVec3(1);
+  const float farR = settings_.farField * medium.voxelSize();
+  const Vec3 farCell = medium.bounds.extent() / Vec3(medium.resolution);
+  const auto setFar = [&](const Program& p, const std::string& prefix) {
+    glUniform1f(p.uniform(prefix + "R"), farR);
+    setVec3(p, prefix + "Lo", medium.bounds.min);
+    setVec3(p, prefix + "Cell", farCell);
+    setIVec3(p, prefix + "Dims", farDims);
+  };
+  Buffer farGrid;
+  if (far) {
+    const std::size_t vertices =
+        std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
+    farGrid = Buffer(vertices * 4 * sizeof(float), nullptr, 0, "far field");
+    std::vector<std::string> farDefines;
+    if (lamp_) farDefines.push_back("SL_LAMP_MODEL");
+    const Program& fp =
+        pass.program("far field", {"common.glsl", "far_field.comp.glsl"}, farDefines);
+    ScopedGpuTimer t(timer, "far field");
+    fp.use();
+    pass.inputs().apply(fp);  // the lights and the medium's uniforms (no camera: A is isotropic)
+    setFar(fp, "uBuild");
+    farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
+    dispatch("far field", {groups(std::size_t(farDims.x), 4), groups(std::size_t(farDims.y), 4),
+                           groups(std::size_t(farDims.z), 4)});
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    defines.push_back("SL_FAR_FIELD");
+  }
   if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims))
     defines.push_back("SL_FUSED");
   const Program& march = pass.program("view march", files, defines);
@@ -76,6 +108,10 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glUniform1f(march.uniform("uStep"), settings_.step);
     glUniform1f(march.uniform("uMinT"), settings_.minTransmittance);
     glUniform1f(march.uniform("uGlow"), settings_.glow ? 1.0f : 0.0f);
+    if (far) {
+      setFar(march, "uFar");
+      farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarField);
+    }
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);
     counters->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);

@@ -138,12 +138,28 @@ const std::vector<KeyDoc>& sampleKeys() {
        "the light's own extinction, saturating at optical depth 2, so V = S / A has no cusp at "
        "lamps inside the medium; methods with samples",
        "false"},
+      {"far_field", "number", "0 (off)",
+       "0, or 2…1024 (needs factor_lights and an isotropic phase)",
+       "A's far field: the factored march evaluates a point light's term of A only within 2 × "
+       "this many voxels of it and takes the rest from a grid of the far terms built once per "
+       "frame (one vertex per voxel corner), so a step near no lamp costs one lookup instead of "
+       "a term per light; image within 0.005-0.05 % of every light exact at 16 (docs/gpu.md, "
+       "\"A's far field on a grid\"). CPU: the plain march; GPU: the compute pipeline",
+       "0"},
       {"sampler", "object", "see the table below", "",
        "where the samples are placed (render.sampler); methods with samples", "", samplerKeys},
       {"evaluator", "string", "volume-tracer", "a registered radiance evaluator",
        "how S and ∇S are computed at the samples; methods with samples", R"("volume-tracer")"},
   };
   return keys;
+}
+
+/// A number as a message shows it: six significant digits, no trailing zeros (0.2, not
+/// 0.200000003).
+std::string shortNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
 }
 
 /// paper, factor_lights, lamp_model (sampler and evaluator: planMethod; log_space, which
@@ -167,6 +183,20 @@ void parseSampleValues(Params& p, const Scene& scene, PipelineSettings& s, bool 
     p.fail("lamp_model", "is an extension; it cannot be true with render.paper = true");
   if (s.lampModel && !s.factorLights)
     p.fail("lamp_model", "is part of factor_lights' A; it needs factor_lights = true");
+  s.march.farField = float(p.real("far_field", 0.0, Interval::closed(0, 1024)));
+  if (s.march.farField > 0.0f) {
+    if (s.paper) p.fail("far_field", "is an extension; it cannot be set with render.paper = true");
+    if (!s.factorLights)
+      p.fail("far_field", "splits factor_lights' A; it needs factor_lights = true");
+    if (s.march.farField < 2.0f)
+      p.fail("far_field",
+             "is " + shortNumber(s.march.farField) + " voxels; allowed: 0 (off) or 2 to 1024");
+    const Phase& ph = scene.medium.phase;
+    if (ph.type != Phase::Type::Isotropic && ph.g != 0.0f)
+      p.fail("far_field",
+             "needs an isotropic phase function (medium.phase has g = " + shortNumber(ph.g) +
+                 "): with Henyey-Greenstein A's far part depends on the direction to the camera");
+  }
 }
 
 /// Methods whose row has a whole-scene fallback (MethodDesc::wholeSceneFallback).
@@ -389,6 +419,10 @@ MethodPlan planMethod(const MethodDesc& d, Params& p, const Scene& scene, Backen
   // The keys that mean something on one backend (or the GPU's raster pipeline) only: the
   // others accept them and report them unused.
   const bool raster = b == Backend::Gpu && plan.settings.gpuPipeline == GpuPipeline::Raster;
+  if (raster && plan.settings.march.farField > 0.0f)
+    throw ConfigError("'" + p.keyPath("far_field") +
+                      "': A's far field is built for the compute pipeline; it cannot be set "
+                      "with gpu_pipeline = \"raster\"");
   for (const std::vector<KeyDoc>* table : keyTables(d, plan.stages))
     for (const KeyDoc& row : *table) {
       if (row.only.empty() || !p.has(std::string(row.name))) continue;

@@ -327,6 +327,45 @@ inline TaylorBounds lampBounds(TaylorBounds b, const Scene& scene, const Density
   return lampBounds(b, LampModel(scene, density), density.bounds());
 }
 
+/// A's far field (render.far_field; docs/gpu.md, "A's far field on a grid"): each point light's
+/// term of A split by w_l(x) = smoothstep(R, 2R, |p_l − x|) into a near part (1 − w_l)·A_l, which
+/// the factored march evaluates at every step as before, and a far part w_l·A_l, summed over the
+/// lights at the vertices of a grid over the medium's box (one per voxel corner) and interpolated
+/// trilinearly between them: near no lamp a step looks the grid up instead of evaluating every
+/// light. Spot and directional lights stay exact (w = 0). Only for the isotropic phase function,
+/// where A does not depend on the direction to the camera (with Henyey–Greenstein it does, and a
+/// grid interpolates it badly where it turns fast). The GPU's farWeight and farLookup
+/// (gpu/shaders/common.glsl) are the same arithmetic.
+struct FarField {
+  float radius = 0.0f;        ///< R in world units; 0: off
+  IVec3 dims{0};              ///< vertices per axis (the voxels + 1)
+  Vec3 lo{0.0f}, cell{1.0f};  ///< vertex (i, j, k) at lo + (i, j, k) · cell
+  std::vector<Vec3> a;        ///< Σ_l w_l·A_l at each vertex, x fastest
+
+  bool on() const { return radius > 0.0f; }
+  /// w_l at x: 0 within R of a point light, 1 beyond 2R (smoothly between); 0 for other lights.
+  float weight(const Light& l, const Vec3& x) const {
+    if (l.type != Light::Type::Point) return 0.0f;
+    const float u = std::clamp((glm::length(l.position - x) - radius) / radius, 0.0f, 1.0f);
+    return u * u * (3.0f - 2.0f * u);
+  }
+  /// The far part at x, trilinear between the grid's vertices (x clamped into the box).
+  Vec3 lookup(const Vec3& x) const {
+    const Vec3 u = glm::clamp((x - lo) / cell, Vec3(0.0f), Vec3(dims - IVec3(1)));
+    const IVec3 b = glm::min(IVec3(glm::floor(u)), dims - IVec3(2));
+    const Vec3 t = u - Vec3(b);
+    const auto at = [&](int i, int j, int k) {
+      return a[(std::size_t(k) * std::size_t(dims.y) + std::size_t(j)) * std::size_t(dims.x) +
+               std::size_t(i)];
+    };
+    const Vec3 c00 = glm::mix(at(b.x, b.y, b.z), at(b.x + 1, b.y, b.z), t.x);
+    const Vec3 c10 = glm::mix(at(b.x, b.y + 1, b.z), at(b.x + 1, b.y + 1, b.z), t.x);
+    const Vec3 c01 = glm::mix(at(b.x, b.y, b.z + 1), at(b.x + 1, b.y, b.z + 1), t.x);
+    const Vec3 c11 = glm::mix(at(b.x, b.y + 1, b.z + 1), at(b.x + 1, b.y + 1, b.z + 1), t.x);
+    return glm::mix(glm::mix(c00, c10, t.y), glm::mix(c01, c11, t.y), t.z);
+  }
+};
+
 /// The singular-light factorization (docs/fidelity.md): S(x, ω) = A(x, ω) ⊙ V(x, ω), per RGB
 /// channel, with A = Σ_l f(ω_l → ω)·E⁰_l(x) the analytic, unshadowed source radiance (E⁰ =
 /// I·cone/d² for point and spot lights, the sun's irradiance for directional ones) and
@@ -353,21 +392,36 @@ class LightFactor {
   /// its term there, or where the midpoint lies within a point or spot light's glow (core/stages.h,
   /// glowSubsteps) the mean of its term at r.at(t_m) for n substeps' midpoints t_m — the fast
   /// march's factorGroup and the GPU's lightFactorStep alike.
+  /// With a far field (setFarField): its lookup plus each light's near part, (1 − w_l) times
+  /// the above; the lights beyond 2R are not evaluated.
   Vec3 overStep(const Ray& r, float t, float dt) const {
     const Vec3 x = r.at(t), toViewer = -r.dir;
-    Vec3 a(0.0f);
+    Vec3 a = far_ ? far_->lookup(x) : Vec3(0.0f);
     for (std::size_t i = 0; i < lights_.size(); ++i) {
+      const float keep = far_ ? 1.0f - far_->weight(lights_[i], x) : 1.0f;
+      if (!(keep > 0.0f)) continue;
       const int n = glow_ ? lightGlowSubsteps(lights_[i], x, r.dir, dt) : 1;
-      if (n == 1) {
-        a += term(i, x, toViewer);
-        continue;
-      }
       Vec3 s(0.0f);
-      for (int m = 0; m < n; ++m) s += term(i, r.at(glowSubstepT(t, dt, m, n)), toViewer);
-      a += s / float(n);
+      if (n == 1) {
+        s = term(i, x, toViewer);
+      } else {
+        for (int m = 0; m < n; ++m) s += term(i, r.at(glowSubstepT(t, dt, m, n)), toViewer);
+        s /= float(n);
+      }
+      a += far_ ? keep * s : s;
     }
     return a;
   }
+
+  /// overStep's far field (null: every light exact). The grid must outlive this object.
+  void setFarField(const FarField* far) { far_ = far && far->on() ? far : nullptr; }
+  /// Light i's far part w_i·A_i at x (the far field's vertices; the isotropic phase, so no
+  /// direction to the viewer).
+  Vec3 farTerm(std::size_t i, const FarField& far, const Vec3& x) const {
+    const float w = far.weight(lights_[i], x);
+    return w > 0.0f ? w * term(i, x, Vec3(0.0f, 0.0f, 1.0f)) : Vec3(0.0f);
+  }
+  std::size_t lightCount() const { return lights_.size(); }
 
  private:
   /// Light i's term of A at x (operator()'s).
@@ -382,6 +436,7 @@ class LightFactor {
   Phase phase_;
   LampModel lamp_;
   bool glow_;
+  const FarField* far_ = nullptr;
 };
 
 /// Where A of LightFactor can be non-zero. A point or directional light lights every point;

@@ -352,26 +352,71 @@ int glowSubsteps(float dist, float reach) {
   return int(min(ceil(reach / dist), SL_GLOW_MAX_SUBSTEPS));
 }
 
+// A's far field (FarField of shading/transport.h): w_l at x, smoothstep(R, 2R, |p_l − x|) for a
+// point light (type 0), 0 for the others.
+float farWeight(int li, vec3 x, float R) {
+  if (int(lights[li].positionType.w) != 0) return 0.0;
+  float u = clamp((length(lights[li].positionType.xyz - x) - R) / R, 0.0, 1.0);
+  return u * u * (3.0 - 2.0 * u);
+}
+
+#ifdef SL_FAR_FIELD
+// The grid of far terms Σ_l w_l·A_l (far_field.comp.glsl), x fastest; vertex (i, j, k) at
+// uFarLo + (i, j, k) · uFarCell.
+layout(std430, binding = BINDING_FAR_FIELD) readonly buffer FarFieldGrid { vec4 farA[]; };
+uniform float uFarR;
+uniform vec3 uFarLo;
+uniform vec3 uFarCell;
+uniform ivec3 uFarDims;
+vec3 farAt(int i, int j, int k) { return farA[(k * uFarDims.y + j) * uFarDims.x + i].rgb; }
+// FarField::lookup: trilinear between the grid's vertices, x clamped into the box.
+vec3 farLookup(vec3 x) {
+  vec3 u = clamp((x - uFarLo) / uFarCell, vec3(0.0), vec3(uFarDims - ivec3(1)));
+  ivec3 b = min(ivec3(floor(u)), uFarDims - ivec3(2));
+  vec3 t = u - vec3(b);
+  vec3 c00 = mix(farAt(b.x, b.y, b.z), farAt(b.x + 1, b.y, b.z), t.x);
+  vec3 c10 = mix(farAt(b.x, b.y + 1, b.z), farAt(b.x + 1, b.y + 1, b.z), t.x);
+  vec3 c01 = mix(farAt(b.x, b.y, b.z + 1), farAt(b.x + 1, b.y, b.z + 1), t.x);
+  vec3 c11 = mix(farAt(b.x, b.y + 1, b.z + 1), farAt(b.x + 1, b.y + 1, b.z + 1), t.x);
+  return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+}
+#endif
+
 // A over the view march's step of length dt centred at origin + t·dir (toViewer = −dir): per
 // light its term there, or near a point or spot light (the glow) the mean of its term at the
-// midpoints of n substeps (the CPU's factorGroup and glowMean, LightFactor::overStep).
+// midpoints of n substeps (the CPU's factorGroup and glowMean, LightFactor::overStep). With
+// SL_FAR_FIELD the far field's lookup plus each light's near part, (1 − w_l) times the above.
 uniform float uGlow;  // render.glow: 1 (the glow's substeps), 0 (each step's midpoint only)
 vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
   vec3 x = origin + dir * t;
+#ifdef SL_FAR_FIELD
+  vec3 a = farLookup(x);
+#else
   vec3 a = vec3(0.0);
+#endif
   for (int li = 0; li < uLightCount; ++li) {
+#ifdef SL_FAR_FIELD
+    float keep = 1.0 - farWeight(li, x, uFarR);
+    if (!(keep > 0.0)) continue;
+#endif
     int n = 1;
     if (int(lights[li].positionType.w) != 2)
       n = glowSubsteps(glowDistance(lights[li].positionType.xyz, x, dir, dt),
                        lights[li].lamp.z * dt * uGlow);
-    if (n == 1) {
-      a += lightFactorTerm(li, x, -dir);
-      continue;
-    }
     vec3 s = vec3(0.0);
-    for (int m = 0; m < n; ++m)
-      s += lightFactorTerm(li, origin + dir * (t + ((float(m) + 0.5) / float(n) - 0.5) * dt), -dir);
-    a += s / float(n);
+    if (n == 1) {
+      s = lightFactorTerm(li, x, -dir);
+    } else {
+      for (int m = 0; m < n; ++m)
+        s += lightFactorTerm(li, origin + dir * (t + ((float(m) + 0.5) / float(n) - 0.5) * dt),
+                             -dir);
+      s /= float(n);
+    }
+#ifdef SL_FAR_FIELD
+    a += keep * s;
+#else
+    a += s;
+#endif
   }
   return a;
 }
