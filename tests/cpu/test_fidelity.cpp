@@ -213,13 +213,7 @@ Json ringOfLampsDoc() {
       {"blobs",
        {{{"center", {0.45, 0.5, 0.5}}, {"radius", 0.3}, {"weight", 1.0}},
         {{"center", {0.7, 0.35, 0.6}}, {"radius", 0.15}, {"weight", 1.5}}}}};
-  for (int i = 0; i < 8; ++i) {
-    const double phi = 2.0 * 3.14159265358979 * i / 8;
-    doc["lights"].push_back(
-        {{"type", "point"},
-         {"position", {0.5 + 0.3 * std::cos(phi), 0.45, 0.5 + 0.3 * std::sin(phi)}},
-         {"intensity", {0.2, 0.15, 0.1}}});
-  }
+  testing::addRingOfLamps(doc, 8, 0.3, 0.45, {0.2, 0.15, 0.1});
   doc["lights"].push_back(
       {{"type", "point"}, {"position", {1.6, 0.9, 0.3}}, {"intensity", {2, 2, 2}}});
   doc["lights"].push_back({{"type", "spot"},

@@ -121,13 +121,7 @@ TEST(GpuViewMarch, AsFarFieldMatchesTheCpus) {
   SCATTERLAB_REQUIRE_GPU();
   Json doc = testing::blobSceneDoc(32, 40, 30);
   doc["medium"]["phase"] = {{"type", "isotropic"}};
-  for (int i = 0; i < 6; ++i) {
-    const double phi = 2.0 * 3.14159265358979 * i / 6;
-    doc["lights"].push_back(
-        {{"type", "point"},
-         {"position", {0.5 + 0.3 * std::cos(phi), 0.5, 0.5 + 0.3 * std::sin(phi)}},
-         {"intensity", {0.5, 0.4, 0.3}}});
-  }
+  testing::addRingOfLamps(doc, 6, 0.3, 0.5, {0.5, 0.4, 0.3});
   doc["render"] = {{"method", "gradient"}, {"voxel_switch", 0}, {"fast_march", false}};
   const Image exactGpu = testing::renderOn(doc, "gpu").image;
   doc["render"]["far_field"] = 4;

@@ -1,6 +1,8 @@
 #pragma once
 /// Scenes built in code for tests and benchmarks.
 
+#include <cmath>
+
 #include "api/scatterlab.h"
 #include "methods/register.h"
 
@@ -31,6 +33,18 @@ inline Json sampledPath(Json render) {
   for (const MethodDesc& d : builtinMethods())
     if (d.name == m && !d.wholeSceneFallback.empty()) render["voxel_switch"] = 0;
   return render;
+}
+
+/// Appends `n` point lights of intensity `I` (RGB) to doc["lights"], on a horizontal ring of
+/// radius `radius` about (0.5, y, 0.5): many lamps inside the unit box.
+inline void addRingOfLamps(Json& doc, int n, double radius, double y, const Json& I) {
+  for (int i = 0; i < n; ++i) {
+    const double phi = 2.0 * 3.14159265358979 * i / n;
+    doc["lights"].push_back(
+        {{"type", "point"},
+         {"position", {0.5 + radius * std::cos(phi), y, 0.5 + radius * std::sin(phi)}},
+         {"intensity", I}});
+  }
 }
 
 /// Homogeneous unit box [0,1]³ of density `density`, one isotropic point light of intensity
