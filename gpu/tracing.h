@@ -25,6 +25,12 @@ struct DeviceLights {
       packed;  ///< as uploaded (packLight: lampK 0, lampMin 1), the key with sigmaT
   float sigmaT = 0.0f;
   Buffer buffer;
+  /// A's far field of these lights in this density (render.far_field; gpu::ViewMarchGpu): its
+  /// grid, kept with them while R and the lamp model stay, so a frame whose lights did not move
+  /// (a camera move: the far field is isotropic) runs no far-field pass.
+  mutable Buffer farField;
+  mutable float farFieldRadius = 0.0f;  ///< R the grid was built with; 0: none
+  mutable bool farFieldLamp = false;    ///< whether its terms hold the lamp model
 };
 
 /// The lights of `scene` for `density`: the volume's kept ones where they are the same, else
@@ -51,6 +57,8 @@ class TracingInputs {
   void skipEmptySpace(StageTimer* timer);
   /// Binds the buffers and texture and sets the uniforms of `program` (which must be in use).
   void apply(const Program& program) const;
+  /// The lights apply() binds (deviceLights()).
+  const DeviceLights& lights() const { return *lights_; }
   const ShadowMaps* shadows() const { return shadows_; }
 
  private:

@@ -64,11 +64,16 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     setVec3(p, prefix + "Cell", farCell);
     setIVec3(p, prefix + "Dims", farDims);
   };
-  Buffer farGrid;
-  if (far) {
+  // Kept with the lights (DeviceLights::farField) while they, the density, R and the lamp
+  // model stay: a frame that moved only the camera runs no pass.
+  const DeviceLights& lights = pass.inputs().lights();
+  const Buffer& farGrid = lights.farField;
+  if (far && !(farGrid.id() && lights.farFieldRadius == farR && lights.farFieldLamp == lamp_)) {
     const std::size_t vertices =
         std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
-    farGrid = Buffer(vertices * 4 * sizeof(float), nullptr, 0, "far field");
+    lights.farField = Buffer(vertices * 4 * sizeof(float), nullptr, 0, "far field");
+    lights.farFieldRadius = farR;
+    lights.farFieldLamp = lamp_;
     std::vector<std::string> farDefines;
     if (lamp_) farDefines.push_back("SL_LAMP_MODEL");
     const Program& fp =
@@ -81,8 +86,8 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     dispatch("far field", {groups(std::size_t(farDims.x), 4), groups(std::size_t(farDims.y), 4),
                            groups(std::size_t(farDims.z), 4)});
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    defines.push_back("SL_FAR_FIELD");
   }
+  if (far) defines.push_back("SL_FAR_FIELD");
   if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims))
     defines.push_back("SL_FUSED");
   const Program& march = pass.program("view march", files, defines);

@@ -133,6 +133,17 @@ TEST(GpuViewMarch, AsFarFieldMatchesTheCpus) {
   // the far field: 5.95e-7 on fig3 with 64 lamps); unmeasured on hardware.
   EXPECT_LT(err, unmeasuredOnHardware(6.14e-7));
   EXPECT_GT(change, 10.0 * err);  // the grid is used
+  // The grid is kept with the lights: a frame that moved only the camera runs no far-field pass,
+  // one that moved a lamp runs it again.
+  Renderer r(doc, ".", "gradient", "gpu");
+  const auto farPasses = [](const RenderResult& res) {
+    return res.stats.extra.at("dispatches_by_pass").value("far field", 0);
+  };
+  EXPECT_EQ(farPasses(r.render()), 1);
+  r.set("camera.position=[0.6,0.5,-2]");
+  EXPECT_EQ(farPasses(r.render()), 0);
+  r.set("lights.2.position=[0.75,0.5,0.55]");
+  EXPECT_EQ(farPasses(r.render()), 1);
   doc["render"]["gpu_pipeline"] = "raster";
   EXPECT_THROW(
       {
