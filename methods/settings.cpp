@@ -484,12 +484,20 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodPlan& plan, bool
     const IVec3 r = s.radianceResolution;
     memory.add(p.keyPath("radiance_resolution"),
                "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
-    // The fast march fuses density and radiance (4 floats per voxel) when their grids agree.
+    // The fast march fuses density and radiance (4 floats per voxel) when their grids agree;
+    // with A's far field the plain march runs instead, and the far field's grid is held (a
+    // vertex per voxel corner: RGB on the CPU, a vec4 on the GPU).
+    const bool far = s.factorLights && s.march.farField > 0.0f;
     if (plan.integratorDecl->viewMarch && plan.integratorDecl->fusedVolumeOnCpu && cpu &&
-        s.march.fast && r == res)
+        s.march.fast && r == res && !far)
       memory.add(p.keyPath("fast_march"),
                  "the fused density + radiance volume of " + dims(r) + " voxels",
                  voxels(r) * 4 * sizeof(float));
+    if (far && plan.integratorDecl->viewMarch) {
+      const IVec3 v = res + IVec3(1);
+      memory.add(p.keyPath("far_field"), "A's far field of " + dims(v) + " vertices",
+                 voxels(v) * (cpu ? sizeof(Vec3) : 4 * sizeof(float)));
+    }
   }
   if (samples > 0)
     memory.add(p.keyPath("sampler.count"), std::to_string(samples) + " radiance samples",
