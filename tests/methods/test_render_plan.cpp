@@ -91,6 +91,15 @@ TEST(RenderPlan, DynamicSamplingBuffersCount) {
       << m;
 }
 
+TEST(RenderPlan, AsFarFieldGridCountsAndTheFusedVolumeItReplacesDoesNot) {
+  // gradient at 128^3 with render.far_field: a grid of 129^3 RGB vertices (24.6 MiB), marched by
+  // the plain march (no fused volume), beside the density (8 MiB) and radiance (24 MiB) volumes.
+  const MemoryLimit limit(40 * kMiB);  // above each, below the sum
+  const std::string m = limitOf("gradient", {"medium.resolution=128", "render.far_field=16"});
+  EXPECT_TRUE(has(m, "'render.far_field': A's far field of 129x129x129 vertices, 25 MiB")) << m;
+  EXPECT_FALSE(has(m, "fused density")) << m;
+}
+
 TEST(RenderPlan, SampleEvaluationWorkIsBoundedBeforeStarting) {
   // A unit box: delta1 = 2e-6 gives ceil(1.732 / 2e-6) = 866 026 steps per traced point and
   // light (glow has one light).
