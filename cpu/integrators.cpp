@@ -114,6 +114,23 @@ FarField buildFarField(const LightFactor& A, const Medium& medium, float radiusV
   return f;
 }
 
+/// What A's far field depends on (buildFarField): R, the box and its voxels, and per light its
+/// type, position, intensity and lamp-model k (the phase is isotropic, the spots' and suns'
+/// terms are not in it). Equal keys, equal grids.
+std::vector<float> farFieldKey(const Scene& scene, const LampModel& lamp, float radiusVoxels) {
+  const Medium& m = scene.medium;
+  std::vector<float> key = {radiusVoxels,         m.bounds.min.x,        m.bounds.min.y,
+                            m.bounds.min.z,       m.bounds.max.x,        m.bounds.max.y,
+                            m.bounds.max.z,       float(m.resolution.x), float(m.resolution.y),
+                            float(m.resolution.z)};
+  for (std::size_t i = 0; i < scene.lights.size(); ++i) {
+    const Light& l = scene.lights[i];
+    key.insert(key.end(), {float(int(l.type)), l.position.x, l.position.y, l.position.z,
+                           l.intensity.x, l.intensity.y, l.intensity.z, lamp.k(i)});
+  }
+  return key;
+}
+
 class RayMarcher : public Integrator {
  public:
   explicit RayMarcher(const PipelineSettings& s)
@@ -137,13 +154,17 @@ class RayMarcher : public Integrator {
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LampModel lamp = lampModel_ ? LampModel(scene, *f.density) : LampModel();
     LightFactor A(scene, lamp, march_.glow);
-    // A's far field: built for this frame, marched by the plain march (the SIMD kernels
-    // evaluate every light).
+    // A's far field: kept from render to render while what it depends on stays (a camera
+    // move: the far field is isotropic), marched by the plain march (the SIMD kernels evaluate
+    // every light).
     const bool far = factored_ && march_.farField > 0.0f;
-    FarField farField;
     if (far) {
-      farField = buildFarField(A, scene.medium, march_.farField);
-      A.setFarField(&farField);
+      std::vector<float> key = farFieldKey(scene, lamp, march_.farField);
+      if (!farField_.on() || key != farKey_) {
+        farField_ = buildFarField(A, scene.medium, march_.farField);
+        farKey_ = std::move(key);
+      }
+      A.setFarField(&farField_);
     }
     if (!far && march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       fused_.build(*f.density, radiance, keys_.halfFloat);
@@ -169,6 +190,9 @@ class RayMarcher : public Integrator {
   /// The fast march's volume, kept from render to render: its storage is written again, not
   /// allocated and faulted in anew (a Renderer's frames, the harness's repetitions).
   FusedVolume fused_;
+  /// A's far field (render.far_field) and what it was built from (farFieldKey), kept likewise.
+  FarField farField_;
+  std::vector<float> farKey_;
   bool factored_;
   bool lampModel_;  ///< A includes LampModel's m_l (PipelineSettings::lampModel)
   float delta1_;

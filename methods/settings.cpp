@@ -142,10 +142,10 @@ const std::vector<KeyDoc>& sampleKeys() {
        "0, or 2…1024 (needs factor_lights and an isotropic phase)",
        "A's far field: the factored march evaluates a point light's term of A only within 2 × "
        "this many voxels of it and takes the rest from a grid of the far terms (one vertex per "
-       "voxel corner; CPU: built each render, GPU: kept while the lights stay), so a step near "
-       "no lamp costs one lookup instead of a term per light; image within 0.005-0.05 % of "
-       "every light exact at 16 (docs/gpu.md, \"A's far field on a grid\"). CPU: the plain "
-       "march; GPU: the compute pipeline",
+       "voxel corner, kept while the lights stay), so a step near no lamp costs one lookup "
+       "instead of a term per light; image within 0.005-0.05 % of every light exact at 16 "
+       "(docs/gpu.md, \"A's far field on a grid\"). CPU: the plain march; GPU: the compute "
+       "pipeline",
        "0"},
       {"sampler", "object", "see the table below", "",
        "where the samples are placed (render.sampler); methods with samples", "", samplerKeys},

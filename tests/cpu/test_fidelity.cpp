@@ -251,6 +251,27 @@ TEST(LightFactorization, AsFarFieldKeepsTheImageOfEveryLightExact) {
   EXPECT_LT(r8, r2);
 }
 
+/// The CPU keeps the far field's grid from render to render while the lights, the box and R
+/// stay: a Renderer's frames equal fresh renders bit for bit after a camera move (the grid
+/// kept) and after a lamp move (built anew).
+TEST(LightFactorization, AsFarFieldKeptByARendererEqualsAFreshRender) {
+  Json doc = ringOfLampsDoc();
+  doc["render"] = {{"method", "gradient"}, {"voxel_switch", 0}, {"far_field", 4}};
+  const auto fresh = [](const Json& d) {
+    const Scene s = testing::sceneFromJson(d);
+    return createMethod(s, "", "cpu")->render(s, nullptr).image;
+  };
+  Renderer r(doc, ".", "gradient", "cpu");
+  EXPECT_EQ(compareImages(r.render().image, fresh(doc)).relL2, 0.0);
+  doc["camera"]["position"] = {0.6, 0.5, -2};
+  r.set("camera.position=[0.6,0.5,-2]");
+  EXPECT_EQ(compareImages(r.render().image, fresh(doc)).relL2, 0.0);
+  doc["lights"][1]["position"] = {0.75, 0.45, 0.55};
+  r.set("lights.1.position=[0.75,0.45,0.55]");
+  const Image moved = r.render().image;
+  EXPECT_EQ(compareImages(moved, fresh(doc)).relL2, 0.0);
+}
+
 TEST(LightFactorization, AsFarFieldIsRefusedWhereItWouldBeWrong) {
   const auto error = [](Json doc, const Json& r) {
     doc["render"] = r;
