@@ -265,12 +265,19 @@ inline float glowAngle(const Light& l) {
                   std::acos(std::clamp(l.cosInner, -1.0f, 1.0f));
   return std::clamp(w, kGlowMinAngle, 1.0f);
 }
-/// Light l's substeps at the view-march step of length dt centred at x along unit dir: 1 for a
-/// directional light, else glowSubsteps at the step's distance from it (what `exact`'s
-/// SourceRadiance and the factored march's LightFactor average over).
-inline int lightGlowSubsteps(const Light& l, const Vec3& x, const Vec3& dir, float dt) {
-  if (l.type == Light::Type::Directional) return 1;
-  return glowSubsteps(glowDistance(l.position, x, dir, dt), kGlowRatio / glowAngle(l) * dt);
+/// A light's glow reach per unit of step (reach = this · dt): kGlowRatio / glowAngle for a point
+/// or spot light, 0 for a directional one (no glow). Kept per light by LightFactor,
+/// SourceRadiance and FusedLights (FusedLights::glow), and in GpuLight::glow (lamp.z), so that
+/// no march step takes a spot's angles again.
+inline float glowScale(const Light& l) {
+  return l.type == Light::Type::Directional ? 0.0f : kGlowRatio / glowAngle(l);
+}
+/// The substeps of a light at `p` whose glowScale is `scale` at the view-march step of length dt
+/// centred at x along unit dir: 1 where scale is 0, else glowSubsteps at the step's distance
+/// from it (what `exact`'s SourceRadiance and the factored march's LightFactor average over).
+inline int lightGlowSubsteps(float scale, const Vec3& p, const Vec3& x, const Vec3& dir, float dt) {
+  if (!(scale > 0.0f)) return 1;
+  return glowSubsteps(glowDistance(p, x, dir, dt), scale * dt);
 }
 /// The ray parameter of substep m of n of the step of length dt centred at t: the midpoints of
 /// n equal parts.

@@ -34,7 +34,7 @@ FusedLights::FusedLights(const Scene& scene, const LampModel& lamp, bool glow)
     e0.push_back(spot ? l.cosOuter : -2.0f);
     e1.push_back(spot ? l.cosInner : -1.0f);
     k.push_back(lamp.k(i));
-    this->glow.push_back(glow ? kGlowRatio / glowAngle(l) : 0.0f);
+    this->glow.push_back(glow ? glowScale(l) : 0.0f);
   }
 }
 

@@ -36,7 +36,7 @@ struct GpuLight {
   /// lamp.y of lights[0]: min_l m_l at the box's diagonal (1 / LampModel::vBound), by the same
   /// pass; 1 (no lamp inside the box) until then. Unused in the other lights.
   float lampMin = 1.0f;
-  /// lamp.z: kGlowRatio / glowAngle, the glow's substep scale of the factored march
+  /// lamp.z: glowScale (kGlowRatio / glowAngle), the glow's substep scale of the factored march
   /// (core/stages.h); 0 for a directional light.
   float glow = 0.0f;
   float unused = 0.0f;
@@ -52,8 +52,8 @@ inline GpuLight packLight(const Light& l) {
   const float type = l.type == Light::Type::Point  ? 0.0f
                      : l.type == Light::Type::Spot ? 1.0f
                                                    : 2.0f;
-  const float glow = l.type == Light::Type::Directional ? 0.0f : kGlowRatio / glowAngle(l);
-  return {l.position, type, l.direction, l.cosInner, l.intensity, l.cosOuter, 0.0f, 1.0f, glow};
+  return {l.position, type, l.direction, l.cosInner,  l.intensity,
+          l.cosOuter, 0.0f, 1.0f,        glowScale(l)};
 }
 
 /// A sample's position and valid radius: `vec4` (xyz, w = radius) of samples[] at

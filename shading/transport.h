@@ -161,7 +161,9 @@ class SourceRadiance {
         skip_(skip),
         shadow_(shadow),
         cutoff_(cutoff || skip || shadow.fn),
-        depthCutoff_(shadowDepthCutoff(sigmaT_)) {}
+        depthCutoff_(shadowDepthCutoff(sigmaT_)) {
+    for (const Light& l : lights_) glowScale_.push_back(glowScale(l));
+  }
 
   /// S at x for light leaving towards the viewer along unit `toViewer`.
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -178,8 +180,9 @@ class SourceRadiance {
   Vec3 overStep(const Ray& r, float t, float dt) const {
     const Vec3 x = r.at(t), toViewer = -r.dir;
     Vec3 s(0.0f);
-    for (const Light& l : lights_) {
-      const int n = glow_ ? lightGlowSubsteps(l, x, r.dir, dt) : 1;
+    for (std::size_t i = 0; i < lights_.size(); ++i) {
+      const Light& l = lights_[i];
+      const int n = glow_ ? lightGlowSubsteps(glowScale_[i], l.position, x, r.dir, dt) : 1;
       if (n == 1) {
         s += term(l, x, toViewer);
         continue;
@@ -215,12 +218,13 @@ class SourceRadiance {
   float sigmaT_;
   const DensityGrid& density_;
   float delta1_;
-  const SceneObjects* objects_;  ///< V_l: null when the scene has no objects
-  const MaxDensityGrid* skip_;   ///< empty-space skipping of the shadow rays, or null
-  ShadowDepthFn shadow_;         ///< the shadow rays' tracer, when given
-  bool cutoff_;                  ///< shadow rays stop at depthCutoff_ (always with skip_)
-  float depthCutoff_;            ///< τ at which a shadow ray stops
-  bool glow_ = true;             ///< overStep's substeps (render.glow)
+  const SceneObjects* objects_;   ///< V_l: null when the scene has no objects
+  const MaxDensityGrid* skip_;    ///< empty-space skipping of the shadow rays, or null
+  ShadowDepthFn shadow_;          ///< the shadow rays' tracer, when given
+  bool cutoff_;                   ///< shadow rays stop at depthCutoff_ (always with skip_)
+  float depthCutoff_;             ///< τ at which a shadow ray stops
+  bool glow_ = true;              ///< overStep's substeps (render.glow)
+  std::vector<float> glowScale_;  ///< glowScale of each light
 
  public:
   /// render.glow false: overStep takes S at the step's midpoint only.
@@ -379,7 +383,9 @@ class LightFactor {
   /// light's term times its near-lamp model m_l.
   /// `glow` (render.glow): overStep averages a light's term over the substeps of its glow.
   explicit LightFactor(const Scene& scene, LampModel lamp = {}, bool glow = true)
-      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)), glow_(glow) {}
+      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)), glow_(glow) {
+    for (const Light& l : lights_) glowScale_.push_back(glowScale(l));
+  }
 
   /// A(x, toViewer): one analytic evaluation per light (no tracing).
   Vec3 operator()(const Vec3& x, const Vec3& toViewer) const {
@@ -400,7 +406,7 @@ class LightFactor {
     for (std::size_t i = 0; i < lights_.size(); ++i) {
       const float keep = far_ ? 1.0f - far_->weight(lights_[i], x) : 1.0f;
       if (!(keep > 0.0f)) continue;
-      const int n = glow_ ? lightGlowSubsteps(lights_[i], x, r.dir, dt) : 1;
+      const int n = glow_ ? lightGlowSubsteps(glowScale_[i], lights_[i].position, x, r.dir, dt) : 1;
       Vec3 s(0.0f);
       if (n == 1) {
         s = term(i, x, toViewer);
@@ -436,6 +442,7 @@ class LightFactor {
   Phase phase_;
   LampModel lamp_;
   bool glow_;
+  std::vector<float> glowScale_;  ///< glowScale of each light
   const FarField* far_ = nullptr;
 };
 

@@ -98,9 +98,7 @@ TEST(LightFactorization, AStepThroughALampsGlowTakesTheMeanOfA) {
       const double eGot = glm::length(got - mean) / scale, eMid = glm::length(mid - mean) / scale;
       bool inGlow = false;  // of any light (a narrow spot's reaches far)
       for (const Light& o : scene.lights)
-        inGlow |= o.type != Light::Type::Directional &&
-                  glowSubsteps(glowDistance(o.position, r.at(t), d, dt),
-                               kGlowRatio / glowAngle(o) * dt) > 1;
+        inGlow |= lightGlowSubsteps(glowScale(o), o.position, r.at(t), d, dt) > 1;
       if (inGlow) {
         ++refined;
         // Within ⅛ step of a light 32 substeps no longer resolve 1/r² (the cap): counted apart.
