@@ -32,6 +32,7 @@ void HostFrame::report(RenderStats& stats) {
     stats.extra["march_steps"] = (*marchSteps)[0];
     stats.extra["march_steps_skipped"] = (*marchSteps)[1];
   }
+  if (farFieldTerms) stats.extra["far_field_terms"] = *farFieldTerms;
 }
 
 std::array<BackendEntry, kBackendCount>& backends() {

@@ -86,6 +86,35 @@ bool FusedLights::glowMean(int j, const FusedFactor& f, float t, float dt, float
   return true;
 }
 
+void FusedLights::setFarField(const FarField* far) {
+  far_ = far && far->on() ? far : nullptr;
+  farRadius = far_ ? far_->radius : 0.0f;
+}
+
+void FusedLights::farLookup(float x, float y, float z, float out[3]) const {
+  const Vec3 a = far_->lookup(Vec3(x, y, z));
+  out[0] = a.x;
+  out[1] = a.y;
+  out[2] = a.z;
+}
+
+void FusedLights::nearSpan(const FusedFactor& f, float ta, float tb, std::vector<int>& out) const {
+  out.clear();
+  const Vec3 o(f.origin[0], f.origin[1], f.origin[2]), d(f.dir[0], f.dir[1], f.dir[2]);
+  // factorGroup skips a point light only where d² >= 4R² at every step; 2R(1 + 1e-4) keeps
+  // every light it could evaluate.
+  const float reach = 2.0f * farRadius * 1.0001f;
+  for (int j = 0; j < count; ++j) {
+    if (e0[j] > -2.0f) {  // a spot light: always evaluated
+      out.push_back(j);
+      continue;
+    }
+    const Vec3 p(px[j], py[j], pz[j]);
+    const float t = std::clamp(glm::dot(p - o, d), ta, tb);
+    if (glm::length(p - (o + t * d)) < reach) out.push_back(j);
+  }
+}
+
 Vec3 FusedLights::directional(const Vec3& toViewer) const {
   Vec3 a(0.0f);
   for (const Light& l : directional_) a += l.intensity * phase_.eval(l.direction, toViewer);

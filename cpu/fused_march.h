@@ -57,6 +57,18 @@ class FusedLights {
   /// or glowSubsteps and the vector maths it calls) could be linked from the AVX2 build into
   /// every caller.
   bool glowMean(int j, const FusedFactor& f, float t, float dt, float out[3]) const;
+  /// A's far field (render.far_field; FarField in shading/transport.h), as LightFactor's
+  /// setFarField: a point light beyond 2R of every step of a group is not evaluated, one within
+  /// is weighted by 1 − w (FarField::weight), and farLookup adds the grid's part. Null: every
+  /// light exact. The grid must outlive this object.
+  void setFarField(const FarField* far);
+  /// The far field's part at world point (x, y, z) into `out` (FarField::lookup). Out of line,
+  /// as glowMean.
+  void farLookup(float x, float y, float z, float out[3]) const;
+  /// The lights FusedFactor::near lists for the steps of `f`'s ray between ray parameters ta
+  /// and tb (with the far field on): the spot lights, and the point lights whose distance to
+  /// the segment is below 2R (plus a margin for rounding), into `out`.
+  void nearSpan(const FusedFactor& f, float ta, float tb, std::vector<int>& out) const;
 
   int count = 0;  ///< point and spot lights, in the scene's order
   /// Per point or spot light: position, intensity (RGB), spot axis and smoothstep edges
@@ -67,8 +79,10 @@ class FusedLights {
   std::vector<float> glow;
   bool hg = false;  ///< Henyey–Greenstein (else isotropic, kInvFourPi)
   float g = 0.0f;
+  float farRadius = 0.0f;  ///< the far field's R in world units (setFarField); 0: none
 
  private:
+  const FarField* far_ = nullptr;
   std::vector<Light> directional_;
   Phase phase_;
 };
@@ -81,6 +95,11 @@ struct FusedFactor {
   const FusedLights* lights;
   float origin[3], dir[3], toViewer[3];
   float constant[3];
+  /// With a far field (FusedLights::farRadius > 0): the point and spot lights that can be
+  /// within 2R of a step of this span (FusedLights::nearSpan), `nearCount` of them; the kernels
+  /// evaluate only these. nearCount −1: every light.
+  const int* near = nullptr;
+  int nearCount = -1;
 };
 
 /// Marches steps [i, end) of `ray`; `factor`: null, or the lights' factor to multiply S by.

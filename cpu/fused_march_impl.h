@@ -29,7 +29,9 @@ inline void accumulateGroup(const float (&V)[G][4], const float (&D)[G], const f
 /// (FusedFactor): the point and spot lights G steps at once, light by light, each term as
 /// LightFactor's (shading/transport.h; Light::incident, Phase::evalCos, LampModel), then the
 /// directional lights' constant. Only steps with D > 0 and S ≠ 0 are scaled (the others add
-/// nothing), and none is computed where no step of the group needs it.
+/// nothing), and none is computed where no step of the group needs it. With a far field
+/// (FusedLights::setFarField) a point light beyond 2R of all G steps is skipped, one within is
+/// weighted by 1 − w, and the grid's part is added per step: LightFactor::overStep's sum.
 template <int G>
 inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::FusedRay& r, int i,
                         int q1, float (&V)[G][4]) {
@@ -47,10 +49,17 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
   const scatterlab::FusedLights& l = *f.lights;
   const float g = l.g, gg = 1.0f + g * g, g2 = 2.0f * g,
               hgNum = scatterlab::kInvFourPi * (1.0f - g * g);
+  const float farR = l.farRadius, far2 = 4.0f * farR * farR;
   B a0(0.0f), a1(0.0f), a2(0.0f);
-  for (int j = 0; j < l.count; ++j) {
+  const bool all = f.nearCount < 0;
+  const int n = all ? l.count : f.nearCount;
+  for (int jn = 0; jn < n; ++jn) {
+    const int j = all ? jn : f.near[jn];
     const B dx = B(l.px[j]) - x, dy = B(l.py[j]) - y, dz = B(l.pz[j]) - z;
     const B d2 = dx * dx + dy * dy + dz * dz;
+    // A point light (edges −2, −1) beyond 2R of every step: wholly in the far field's grid.
+    const bool nearPart = farR > 0.0f && l.e0[j] == -2.0f;
+    if (nearPart && xsimd::all(d2 >= B(far2))) continue;
     const B dist = xsimd::sqrt(d2);
     const B tx = dx / dist, ty = dy / dist, tz = dz / dist;  // towards the light
     // Falloff: smoothstep of cos(from the light, axis) between the edges (1 for point lights).
@@ -102,6 +111,13 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
       t1 = B::load_aligned(T[1]);
       t2 = B::load_aligned(T[2]);
     }
+    if (nearPart) {  // its near part: 1 − smoothstep(R, 2R, distance) of the term
+      const B u = xsimd::min(xsimd::max((dist - B(farR)) / B(farR), B(0.0f)), B(1.0f));
+      const B keep = B(1.0f) - u * u * (B(3.0f) - B(2.0f) * u);
+      t0 *= keep;
+      t1 *= keep;
+      t2 *= keep;
+    }
     a0 += t0;
     a1 += t1;
     a2 += t2;
@@ -110,6 +126,20 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
   (a0 + B(f.constant[0])).store_aligned(A[0]);
   (a1 + B(f.constant[1])).store_aligned(A[1]);
   (a2 + B(f.constant[2])).store_aligned(A[2]);
+  if (farR > 0.0f) {  // the far field's part, looked up per step that needs it
+    alignas(32) float X[3][G];
+    x.store_aligned(X[0]);
+    y.store_aligned(X[1]);
+    z.store_aligned(X[2]);
+    for (int q = 0; q < q1; ++q) {
+      if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
+      float m[3];
+      l.farLookup(X[0][q], X[1][q], X[2][q], m);
+      A[0][q] += m[0];
+      A[1][q] += m[1];
+      A[2][q] += m[2];
+    }
+  }
   for (int q = 0; q < q1; ++q) {
     if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
     V[q][1] *= A[0][q];

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/stages.h"
+#include "cpu/far_field.h"
 #include "cpu/froxel.h"
 #include "cpu/fused_march.h"
 #include "cpu/fused_volume.h"
@@ -47,11 +48,17 @@ struct FusedLookup {
     FusedMarchState s{{L.x, L.y, L.z}, T, wt};
     if (lights) {
       const Vec3 toViewer = -r.dir, a = lights->directional(toViewer);
-      const FusedFactor f{lights,
-                          {r.origin.x, r.origin.y, r.origin.z},
-                          {r.dir.x, r.dir.y, r.dir.z},
-                          {toViewer.x, toViewer.y, toViewer.z},
-                          {a.x, a.y, a.z}};
+      FusedFactor f{lights,
+                    {r.origin.x, r.origin.y, r.origin.z},
+                    {r.dir.x, r.dir.y, r.dir.z},
+                    {toViewer.x, toViewer.y, toViewer.z},
+                    {a.x, a.y, a.z}};
+      if (lights->farRadius > 0.0f) {  // only the lights within 2R of the span's steps
+        thread_local std::vector<int> near;
+        lights->nearSpan(f, t0 + (float(i) + 0.5f) * dt, t0 + (float(end) - 0.5f) * dt, near);
+        f.near = near.data();
+        f.nearCount = int(near.size());
+      }
       span(volume.view(), c, fr, i, end, s, &f);
     } else {
       span(volume.view(), c, fr, i, end, s, nullptr);
@@ -91,46 +98,6 @@ struct ExactLookup {
   }
 };
 
-/// A's far field over the medium's box (FarField, render.far_field): a vertex per voxel corner
-/// holding Σ_l w_l·A_l, the layers of vertices in parallel. The GPU's far_field.comp.glsl
-/// writes the same sums.
-FarField buildFarField(const LightFactor& A, const Medium& medium, float radiusVoxels) {
-  FarField f;
-  f.radius = radiusVoxels * medium.voxelSize();
-  f.dims = medium.resolution + IVec3(1);
-  f.lo = medium.bounds.min;
-  f.cell = medium.bounds.extent() / Vec3(medium.resolution);
-  f.a.assign(std::size_t(f.dims.x) * std::size_t(f.dims.y) * std::size_t(f.dims.z), Vec3(0.0f));
-  tbb::parallel_for(0, f.dims.z, [&](int k) {
-    for (int j = 0; j < f.dims.y; ++j)
-      for (int i = 0; i < f.dims.x; ++i) {
-        const Vec3 x = f.lo + Vec3(float(i), float(j), float(k)) * f.cell;
-        Vec3 a(0.0f);
-        for (std::size_t l = 0; l < A.lightCount(); ++l) a += A.farTerm(l, f, x);
-        f.a[(std::size_t(k) * std::size_t(f.dims.y) + std::size_t(j)) * std::size_t(f.dims.x) +
-            std::size_t(i)] = a;
-      }
-  });
-  return f;
-}
-
-/// What A's far field depends on (buildFarField): R, the box and its voxels, and per light its
-/// type, position, intensity and lamp-model k (the phase is isotropic, the spots' and suns'
-/// terms are not in it). Equal keys, equal grids.
-std::vector<float> farFieldKey(const Scene& scene, const LampModel& lamp, float radiusVoxels) {
-  const Medium& m = scene.medium;
-  std::vector<float> key = {radiusVoxels,         m.bounds.min.x,        m.bounds.min.y,
-                            m.bounds.min.z,       m.bounds.max.x,        m.bounds.max.y,
-                            m.bounds.max.z,       float(m.resolution.x), float(m.resolution.y),
-                            float(m.resolution.z)};
-  for (std::size_t i = 0; i < scene.lights.size(); ++i) {
-    const Light& l = scene.lights[i];
-    key.insert(key.end(), {float(int(l.type)), l.position.x, l.position.y, l.position.z,
-                           l.intensity.x, l.intensity.y, l.intensity.z, lamp.k(i)});
-  }
-  return key;
-}
-
 class RayMarcher : public Integrator {
  public:
   explicit RayMarcher(const PipelineSettings& s)
@@ -148,27 +115,24 @@ class RayMarcher : public Integrator {
   }
 
  private:
-  Image march(const HostFrame& f, const Scene& scene, Progress* progress, MarchCounts& counts) {
+  Image march(HostFrame& f, const Scene& scene, Progress* progress, MarchCounts& counts) {
     const RadianceGrid& radiance = *f.radiance;
     if (progress) progress->restart("march", scene.camera.height);
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LampModel lamp = lampModel_ ? LampModel(scene, *f.density) : LampModel();
     LightFactor A(scene, lamp, march_.glow);
     // A's far field: kept from render to render while what it depends on stays (a camera
-    // move: the far field is isotropic), marched by the plain march (the SIMD kernels evaluate
-    // every light).
+    // move: the far field is isotropic); the plain march and the SIMD kernels both take it.
     const bool far = factored_ && march_.farField > 0.0f;
     if (far) {
-      std::vector<float> key = farFieldKey(scene, lamp, march_.farField);
-      if (!farField_.on() || key != farKey_) {
-        farField_ = buildFarField(A, scene.medium, march_.farField);
-        farKey_ = std::move(key);
-      }
-      A.setFarField(&farField_);
+      long long terms = 0;
+      A.setFarField(&farField_.update(scene, lamp, *f.density, march_.farField, &terms));
+      f.farFieldTerms = terms;
     }
-    if (!far && march_.fast && FusedVolume::compatible(*f.density, radiance)) {
+    if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
       fused_.build(*f.density, radiance, keys_.halfFloat);
-      const FusedLights lights(scene, lamp, march_.glow);
+      FusedLights lights(scene, lamp, march_.glow);
+      if (far) lights.setFarField(&farField_.grid());
       const FusedLookup lookup{fused_,
                                factored_ ? &A : nullptr,
                                factored_ ? &lights : nullptr,
@@ -190,9 +154,8 @@ class RayMarcher : public Integrator {
   /// The fast march's volume, kept from render to render: its storage is written again, not
   /// allocated and faulted in anew (a Renderer's frames, the harness's repetitions).
   FusedVolume fused_;
-  /// A's far field (render.far_field) and what it was built from (farFieldKey), kept likewise.
-  FarField farField_;
-  std::vector<float> farKey_;
+  /// A's far field (render.far_field), kept likewise and updated light by light.
+  FarFieldCache farField_;
   bool factored_;
   bool lampModel_;  ///< A includes LampModel's m_l (PipelineSettings::lampModel)
   float delta1_;

@@ -40,9 +40,18 @@ std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volum
       std::memcmp(kept->packed.data(), packed.data(), packed.size() * sizeof(GpuLight)) == 0)
     return kept;
   // Dropped first: where nothing else holds them, their buffer goes back to the recycler for the
-  // new lights (a light moved from frame to frame makes no GL object).
+  // new lights (a light moved from frame to frame makes no GL object). Where they had A's far
+  // field (render.far_field), the new lights hold them until the view march has updated that
+  // grid from them light by light.
+  std::shared_ptr<const DeviceLights> before;
+  if (const auto& kept = density.lights; kept && kept->farField.id() && kept->sigmaT == sigmaT &&
+                                         kept->packed.size() == packed.size()) {
+    kept->before.reset();
+    before = kept;
+  }
   density.lights.reset();
   auto lights = std::make_shared<DeviceLights>();
+  lights->before = std::move(before);
   lights->buffer = Buffer(packed.size() * sizeof(GpuLight), packed.data(), 0, "lights");
   // The lamp model's k_l (lamp.x) and min_l m_l (lights[0].lamp.y), where a point or spot light
   // is inside the box: one small pass here, where every program that evaluates the model read

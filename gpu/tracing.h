@@ -31,6 +31,12 @@ struct DeviceLights {
   mutable Buffer farField;
   mutable float farFieldRadius = 0.0f;  ///< R the grid was built with; 0: none
   mutable bool farFieldLamp = false;    ///< whether its terms hold the lamp model
+  mutable IVec3 farFieldDims{0};        ///< its vertices per axis
+  mutable int farFieldUpdates = 0;      ///< in-place updates since it was built whole
+  /// The lights these replaced where those had a far field (deviceLights): held until the view
+  /// march takes their grid over and updates it light by light (gpu::ViewMarchGpu), or drops
+  /// them; never a chain (their own `before` is dropped when they are replaced).
+  mutable std::shared_ptr<const DeviceLights> before;
 };
 
 /// The lights of `scene` for `density`: the volume's kept ones where they are the same, else

@@ -1,6 +1,7 @@
 #include "gpu/view_march.h"
 
 #include <cmath>
+#include <cstring>
 
 #include "gpu/bindings.h"
 #include "gpu/dispatch.h"
@@ -10,6 +11,16 @@
 #include "gpu/volume.h"
 
 namespace scatterlab::gpu {
+
+namespace {
+
+/// A's far field updated in place (ViewMarchGpu::integrate) for at most this many changed
+/// lights (far_field.comp.glsl's uChanged[]), and at most this many times in a row before it is
+/// built whole (each update adds a rounding of the sums, as FarFieldCache::kMaxUpdates).
+constexpr int kMaxFarChanged = 32;
+constexpr int kMaxFarUpdates = 16;
+
+}  // namespace
 
 Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
   GpuFrame& f = static_cast<GpuFrame&>(frame);
@@ -21,11 +32,17 @@ Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
     st.extra["march_steps"] = GpuMarchCounters::join(n.looked);
     st.extra["march_steps_skipped"] = GpuMarchCounters::join(n.skipped);
   });
-  if (!f.imageOnDevice)
-    return integrate(scene, f.density, f.radiance, &f.timer, nullptr, counters.get());
-  f.imageWidth = scene.camera.width;
-  f.imageHeight = scene.camera.height;
-  return integrate(scene, f.density, f.radiance, &f.timer, &f.image, counters.get());
+  Image img;
+  if (!f.imageOnDevice) {
+    img = integrate(scene, f.density, f.radiance, &f.timer, nullptr, counters.get());
+  } else {
+    f.imageWidth = scene.camera.width;
+    f.imageHeight = scene.camera.height;
+    img = integrate(scene, f.density, f.radiance, &f.timer, &f.image, counters.get());
+  }
+  if (farTerms_ >= 0)
+    f.deferStats([terms = farTerms_](RenderStats& st) { st.extra["far_field_terms"] = terms; });
+  return img;
 }
 
 void ViewMarchGpu::describe(RenderStats& stats) const {
@@ -65,28 +82,67 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     setIVec3(p, prefix + "Dims", farDims);
   };
   // Kept with the lights (DeviceLights::farField) while they, the density, R and the lamp
-  // model stay: a frame that moved only the camera runs no pass.
+  // model stay: a frame that moved only the camera runs no pass. Where some lamps moved (at most
+  // half of them, kMaxFarChanged), the grid of the lights before is taken over and updated in
+  // place: their old terms taken out (a pass over the old lights), their new ones put in; whole
+  // again after kMaxFarUpdates updates (FarFieldCache on the CPU, cpu/far_field.h, alike).
   const DeviceLights& lights = pass.inputs().lights();
   const Buffer& farGrid = lights.farField;
+  farTerms_ = far ? 0 : -1;
   if (far && !(farGrid.id() && lights.farFieldRadius == farR && lights.farFieldLamp == lamp_)) {
-    const std::size_t vertices =
-        std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
-    lights.farField = Buffer(vertices * 4 * sizeof(float), nullptr, 0, "far field");
-    lights.farFieldRadius = farR;
-    lights.farFieldLamp = lamp_;
+    std::vector<int> changed;
+    const DeviceLights* before = lights.before.get();
+    bool update = before && before->farField.id() && before->farFieldRadius == farR &&
+                  before->farFieldLamp == lamp_ && before->farFieldDims == farDims &&
+                  before->farFieldUpdates < kMaxFarUpdates;
+    for (std::size_t l = 0; update && l < lights.packed.size(); ++l) {
+      const GpuLight &a = lights.packed[l], &b = before->packed[l];
+      if (std::memcmp(&a, &b, sizeof a) == 0) continue;
+      changed.push_back(int(l));
+      update = a.type == b.type && int(changed.size()) <= kMaxFarChanged &&
+               2 * changed.size() <= lights.packed.size();
+    }
     std::vector<std::string> farDefines;
     if (lamp_) farDefines.push_back("SL_LAMP_MODEL");
-    const Program& fp =
-        pass.program("far field", {"common.glsl", "far_field.comp.glsl"}, farDefines);
-    ScopedGpuTimer t(timer, "far field");
+    if (update) farDefines.push_back("SL_FAR_UPDATE");
+    const Program& fp = pass.program(update ? "far field update" : "far field",
+                                     {"common.glsl", "far_field.comp.glsl"}, farDefines);
+    ScopedGpuTimer t(timer, update ? "far field update" : "far field");
     fp.use();
     pass.inputs().apply(fp);  // the lights and the medium's uniforms (no camera: A is isotropic)
     setFar(fp, "uBuild");
-    farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
-    dispatch("far field", {groups(std::size_t(farDims.x), 4), groups(std::size_t(farDims.y), 4),
-                           groups(std::size_t(farDims.z), 4)});
+    const UVec3 farGroups(groups(std::size_t(farDims.x), 4), groups(std::size_t(farDims.y), 4),
+                          groups(std::size_t(farDims.z), 4));
+    if (update) {
+      lights.farField = std::move(before->farField);
+      lights.farFieldUpdates = before->farFieldUpdates + 1;
+      farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
+      glUniform1i(fp.uniform("uChangedCount"), GLint(changed.size()));
+      glUniform1iv(fp.uniform("uChanged"), GLsizei(changed.size()), changed.data());
+      // The old terms out with the old lights (and their lamp model's k), the new ones in.
+      before->buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
+      glUniform1f(fp.uniform("uSign"), -1.0f);
+      dispatch("far field update", farGroups);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      lights.buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
+      glUniform1f(fp.uniform("uSign"), 1.0f);
+      dispatch("far field update", farGroups);
+      farTerms_ = 2 * (long long)(farDims.x) * farDims.y * farDims.z * (long long)(changed.size());
+    } else {
+      const std::size_t vertices =
+          std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
+      lights.farField = Buffer(vertices * 4 * sizeof(float), nullptr, 0, "far field");
+      lights.farFieldUpdates = 0;
+      farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
+      dispatch("far field", farGroups);
+      farTerms_ = (long long)(vertices) * (long long)(lights.packed.size());
+    }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    lights.farFieldRadius = farR;
+    lights.farFieldLamp = lamp_;
+    lights.farFieldDims = farDims;
   }
+  lights.before.reset();
   if (far) defines.push_back("SL_FAR_FIELD");
   if (radiance.densityInAlpha && sameGrid(density, radiance.bounds, radiance.dims))
     defines.push_back("SL_FUSED");

@@ -144,7 +144,7 @@ const std::vector<KeyDoc>& sampleKeys() {
        "this many voxels of it and takes the rest from a grid of the far terms (one vertex per "
        "voxel corner, kept while the lights stay), so a step near no lamp costs one lookup "
        "instead of a term per light; image within 0.005-0.05 % of every light exact at 16 "
-       "(docs/gpu.md, \"A's far field on a grid\"). CPU: the plain march; GPU: the compute "
+       "(docs/gpu.md, \"A's far field on a grid\"). CPU: both marches; GPU: the compute "
        "pipeline",
        "0"},
       {"sampler", "object", "see the table below", "",
@@ -486,11 +486,11 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodPlan& plan, bool
     memory.add(p.keyPath("radiance_resolution"),
                "the source-radiance volume of " + dims(r) + " voxels", voxels(r) * sizeof(Vec3));
     // The fast march fuses density and radiance (4 floats per voxel) when their grids agree;
-    // with A's far field the plain march runs instead, and the far field's grid is held (a
-    // vertex per voxel corner: RGB on the CPU, a vec4 on the GPU).
+    // with A's far field its grid is held as well (a vertex per voxel corner: RGB on the CPU,
+    // a vec4 on the GPU).
     const bool far = s.factorLights && s.march.farField > 0.0f;
     if (plan.integratorDecl->viewMarch && plan.integratorDecl->fusedVolumeOnCpu && cpu &&
-        s.march.fast && r == res && !far)
+        s.march.fast && r == res)
       memory.add(p.keyPath("fast_march"),
                  "the fused density + radiance volume of " + dims(r) + " voxels",
                  voxels(r) * 4 * sizeof(float));

@@ -383,7 +383,11 @@ class LightFactor {
   /// light's term times its near-lamp model m_l.
   /// `glow` (render.glow): overStep averages a light's term over the substeps of its glow.
   explicit LightFactor(const Scene& scene, LampModel lamp = {}, bool glow = true)
-      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)), glow_(glow) {
+      : LightFactor(scene.lights, scene.medium.phase, std::move(lamp), glow) {}
+  /// Over `lights` (which must outlive this object) in a medium of `phase`.
+  LightFactor(const std::vector<Light>& lights, const Phase& phase, LampModel lamp = {},
+              bool glow = true)
+      : lights_(lights), phase_(phase), lamp_(std::move(lamp)), glow_(glow) {
     for (const Light& l : lights_) glowScale_.push_back(glowScale(l));
   }
 

@@ -133,17 +133,43 @@ TEST(GpuViewMarch, AsFarFieldMatchesTheCpus) {
   // the far field: 5.95e-7 on fig3 with 64 lamps); unmeasured on hardware.
   EXPECT_LT(err, unmeasuredOnHardware(6.14e-7));
   EXPECT_GT(change, 10.0 * err);  // the grid is used
-  // The grid is kept with the lights: a frame that moved only the camera runs no far-field pass,
-  // one that moved a lamp runs it again.
+  // The grid is kept with the lights: a frame that moved only the camera runs no far-field pass;
+  // (the point light, a spot and the six lamps 2…7) one that moved a lamp updates the grid in place
+  // (two passes over that lamp's terms: its old one out, its new one in), 16 times in a row, then
+  // builds it whole; one that moved more than half the lamps builds it whole. The images follow the
+  // CPU's, which updates likewise.
   Renderer r(doc, ".", "gradient", "gpu");
-  const auto farPasses = [](const RenderResult& res) {
-    return res.stats.extra.at("dispatches_by_pass").value("far field", 0);
+  const auto passes = [](const RenderResult& res, const char* name) {
+    return res.stats.extra.at("dispatches_by_pass").value(name, 0);
   };
-  EXPECT_EQ(farPasses(r.render()), 1);
+  EXPECT_EQ(passes(r.render(), "far field"), 1);
   r.set("camera.position=[0.6,0.5,-2]");
-  EXPECT_EQ(farPasses(r.render()), 0);
-  r.set("lights.2.position=[0.75,0.5,0.55]");
-  EXPECT_EQ(farPasses(r.render()), 1);
+  doc["camera"]["position"] = {0.6, 0.5, -2};
+  const RenderResult camera = r.render();
+  EXPECT_EQ(passes(camera, "far field") + passes(camera, "far field update"), 0);
+  EXPECT_EQ(camera.stats.extra.at("far_field_terms"), 0);
+  Renderer onCpu(doc, ".", "gradient", "cpu");
+  double worst = 0.0;
+  for (int m = 1; m <= 17; ++m) {
+    const std::string set = "lights." + std::to_string(2 + m % 6) + ".position=[" +
+                            std::to_string(0.5 + 0.3 * std::cos(m)) + ",0.5," +
+                            std::to_string(0.5 + 0.3 * std::sin(m)) + "]";
+    r.set(set);
+    onCpu.set(set);
+    const RenderResult moved = r.render();
+    EXPECT_EQ(passes(moved, "far field"), m <= 16 ? 0 : 1) << m;
+    EXPECT_EQ(passes(moved, "far field update"), m <= 16 ? 2 : 0) << m;
+    // 33³ vertices: 2 terms each for the lamp moved, or one per light when built whole.
+    EXPECT_EQ(moved.stats.extra.at("far_field_terms"), m <= 16 ? 2 * 35937 : 8 * 35937) << m;
+    worst = std::max(worst, relL2(moved.image, onCpu.render().image));
+  }
+  for (int l = 2; l <= 6; ++l) r.set("lights." + std::to_string(l) + ".intensity=[0.4,0.4,0.3]");
+  const RenderResult many = r.render();
+  EXPECT_EQ(passes(many, "far field"), 1) << many.stats.extra.at("dispatches_by_pass").dump();
+  std::printf("far field updated in place, GPU vs CPU: worst %.3g\n", worst);
+  // Measured on llvmpipe 2026-12-07: 8.62e-7 at worst over the 17 frames (16 updated in place,
+  // on the GPU in two passes, on the CPU in one); unmeasured on hardware.
+  EXPECT_LT(worst, unmeasuredOnHardware(8.62e-7));
   doc["render"]["gpu_pipeline"] = "raster";
   EXPECT_THROW(
       {

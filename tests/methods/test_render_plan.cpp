@@ -91,13 +91,18 @@ TEST(RenderPlan, DynamicSamplingBuffersCount) {
       << m;
 }
 
-TEST(RenderPlan, AsFarFieldGridCountsAndTheFusedVolumeItReplacesDoesNot) {
-  // gradient at 128^3 with render.far_field: a grid of 129^3 RGB vertices (24.6 MiB), marched by
-  // the plain march (no fused volume), beside the density (8 MiB) and radiance (24 MiB) volumes.
+TEST(RenderPlan, AsFarFieldGridCountsBesideTheFusedVolume) {
+  // gradient at 128^3 with render.far_field: a grid of 129^3 RGB vertices (24.6 MiB) beside the
+  // density (8 MiB), radiance (24 MiB) and fused (32 MiB) volumes: the fast march takes it too;
+  // with fast_march false the fused volume is not held.
   const MemoryLimit limit(40 * kMiB);  // above each, below the sum
   const std::string m = limitOf("gradient", {"medium.resolution=128", "render.far_field=16"});
   EXPECT_TRUE(has(m, "'render.far_field': A's far field of 129x129x129 vertices, 25 MiB")) << m;
-  EXPECT_FALSE(has(m, "fused density")) << m;
+  EXPECT_TRUE(has(m, "fused density")) << m;
+  const std::string plain = limitOf(
+      "gradient", {"medium.resolution=128", "render.far_field=16", "render.fast_march=false"});
+  EXPECT_TRUE(has(plain, "'render.far_field': A's far field")) << plain;
+  EXPECT_FALSE(has(plain, "fused density")) << plain;
 }
 
 TEST(RenderPlan, SampleEvaluationWorkIsBoundedBeforeStarting) {

@@ -1,0 +1,153 @@
+/// FarFieldCache (cpu/far_field.h): A's far field on the CPU, built, updated or kept.
+
+#include "cpu/far_field.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+
+namespace scatterlab {
+
+namespace {
+
+constexpr int kBrick = 8;  ///< cells per brick edge
+
+/// Whether light a and light b (with lamp-model k ka, kb) give the same far terms: a point
+/// light's by its position, intensity and k; any other light's are 0.
+bool sameFarPart(const Light& a, float ka, const Light& b, float kb) {
+  if (a.type != b.type) return false;
+  if (a.type != Light::Type::Point) return true;
+  return a.position == b.position && a.intensity == b.intensity && ka == kb;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> FarFieldCache::liveBricks(const DensityGrid& density,
+                                                    const IVec3& bricks) {
+  const IVec3 n = density.dims();
+  std::vector<std::uint8_t> live(std::size_t(bricks.x) * std::size_t(bricks.y) *
+                                 std::size_t(bricks.z));
+  // A point in cell c reads the voxels c − 1 … c + 1 (voxel centres at the cells' centres).
+  tbb::parallel_for(0, bricks.z, [&](int bz) {
+    for (int by = 0; by < bricks.y; ++by)
+      for (int bx = 0; bx < bricks.x; ++bx) {
+        const IVec3 b(bx, by, bz);
+        const IVec3 lo = glm::max(b * kBrick - 1, IVec3(0));
+        const IVec3 hi = glm::min(b * kBrick + kBrick, n - 1);
+        bool any = false;
+        for (int z = lo.z; z <= hi.z && !any; ++z)
+          for (int y = lo.y; y <= hi.y && !any; ++y)
+            for (int x = lo.x; x <= hi.x && !any; ++x) any = density.at(x, y, z) > 0.0f;
+        live[(std::size_t(bz) * std::size_t(bricks.y) + std::size_t(by)) * std::size_t(bricks.x) +
+             std::size_t(bx)] = any;
+      }
+  });
+  return live;
+}
+
+template <class F>
+long long FarFieldCache::forLiveVertices(const F& f) const {
+  const IVec3 dims = grid_.dims, last = bricks_ - 1;
+  // Vertex i is a corner of cells i − 1 and i, in bricks (i − 1) / 8 and i / 8.
+  const auto brickPair = [](int i, int lastBrick) {
+    return std::array<int, 2>{std::clamp((i - 1) / kBrick, 0, lastBrick),
+                              std::clamp(i / kBrick, 0, lastBrick)};
+  };
+  const auto liveAt = [&](int x, int y, int z) {
+    return live_[(std::size_t(z) * std::size_t(bricks_.y) + std::size_t(y)) *
+                     std::size_t(bricks_.x) +
+                 std::size_t(x)] != 0;
+  };
+  std::atomic<long long> count{0};
+  tbb::parallel_for(0, dims.z, [&](int k) {
+    const auto bz = brickPair(k, last.z);
+    long long layer = 0;
+    for (int j = 0; j < dims.y; ++j) {
+      const auto by = brickPair(j, last.y);
+      for (int i = 0; i < dims.x; ++i) {
+        const auto bx = brickPair(i, last.x);
+        bool needed = false;
+        for (int c = 0; c < 8 && !needed; ++c)
+          needed = liveAt(bx[c & 1], by[(c >> 1) & 1], bz[c >> 2]);
+        if (!needed) continue;
+        f(i, j, k,
+          (std::size_t(k) * std::size_t(dims.y) + std::size_t(j)) * std::size_t(dims.x) +
+              std::size_t(i));
+        ++layer;
+      }
+    }
+    count.fetch_add(layer, std::memory_order_relaxed);
+  });
+  return count.load();
+}
+
+const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
+                                      const DensityGrid& density, float radiusVoxels,
+                                      long long* terms) {
+  const Medium& m = scene.medium;
+  const IVec3 bricks = (m.resolution + IVec3(kBrick - 1)) / kBrick;
+  // A density of other dimensions than the medium's cells: every brick read.
+  std::vector<std::uint8_t> live =
+      density.dims() == m.resolution
+          ? liveBricks(density, bricks)
+          : std::vector<std::uint8_t>(std::size_t(bricks.x) * bricks.y * bricks.z, 1);
+  const std::vector<Light>& lights = scene.lights;
+  const bool sameGrid = grid_.on() && radiusVoxels == radiusVoxels_ && m.bounds.min == box_.min &&
+                        m.bounds.max == box_.max && m.resolution == resolution_ && live == live_ &&
+                        lights.size() == lights_.size() && lamp.on() == lamp_.on();
+  // The lights whose far terms changed; a light that changed its type: build anew.
+  std::vector<std::size_t> changed;
+  bool typeChanged = false;
+  if (sameGrid)
+    for (std::size_t l = 0; l < lights.size(); ++l)
+      if (!sameFarPart(lights[l], lamp.k(l), lights_[l], lamp_.k(l))) {
+        changed.push_back(l);
+        typeChanged |= lights[l].type != lights_[l].type;
+      }
+  const LightFactor A(lights, m.phase, lamp);
+  long long evaluated = 0;
+  if (sameGrid && changed.empty()) {
+    // kept
+  } else if (sameGrid && !typeChanged && 2 * changed.size() <= lights.size() &&
+             updates_ < kMaxUpdates) {
+    const LightFactor before(lights_, m.phase, lamp_);
+    const long long vertices = forLiveVertices([&](int i, int j, int k, std::size_t v) {
+      const Vec3 x = grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell;
+      Vec3 a = grid_.a[v];
+      for (const std::size_t l : changed) a += A.farTerm(l, grid_, x) - before.farTerm(l, grid_, x);
+      grid_.a[v] = a;
+    });
+    evaluated = 2 * vertices * static_cast<long long>(changed.size());
+    ++updates_;
+  } else {
+    grid_ = FarField();
+    grid_.radius = radiusVoxels * m.voxelSize();
+    grid_.dims = m.resolution + IVec3(1);
+    grid_.lo = m.bounds.min;
+    grid_.cell = m.bounds.extent() / Vec3(m.resolution);
+    grid_.a.assign(
+        std::size_t(grid_.dims.x) * std::size_t(grid_.dims.y) * std::size_t(grid_.dims.z),
+        Vec3(0.0f));
+    radiusVoxels_ = radiusVoxels;
+    box_ = m.bounds;
+    resolution_ = m.resolution;
+    bricks_ = bricks;
+    live_ = std::move(live);
+    const long long vertices = forLiveVertices([&](int i, int j, int k, std::size_t v) {
+      const Vec3 x = grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell;
+      Vec3 a(0.0f);
+      for (std::size_t l = 0; l < A.lightCount(); ++l) a += A.farTerm(l, grid_, x);
+      grid_.a[v] = a;
+    });
+    evaluated = vertices * static_cast<long long>(lights.size());
+    updates_ = 0;
+  }
+  lights_ = lights;
+  lamp_ = lamp;
+  if (terms) *terms += evaluated;
+  return grid_;
+}
+
+}  // namespace scatterlab
