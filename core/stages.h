@@ -421,7 +421,7 @@ class HostFrame : public Frame {
   /// The view march's steps looked up and jumped over (stats march_steps,
   /// march_steps_skipped), set by a marching integrator.
   std::optional<std::array<long long, 2>> marchSteps;
-  /// Light terms evaluated for A's far field this frame (stats far_field_terms; 0 when the
+  /// Point-light terms evaluated for A's far field this frame (stats far_field_terms; 0 when the
   /// grid was kept), set by the factored march with render.far_field.
   std::optional<long long> farFieldTerms;
 };

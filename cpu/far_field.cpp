@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <xsimd/xsimd.hpp>
+
+#include "core/stages.h"
 
 namespace scatterlab {
 
@@ -20,6 +23,58 @@ bool sameFarPart(const Light& a, float ka, const Light& b, float kb) {
   if (a.type != b.type) return false;
   if (a.type != Light::Type::Point) return true;
   return a.position == b.position && a.intensity == b.intensity && ka == kb;
+}
+
+using Batch = xsimd::batch<float>;  // the build's baseline width (4 lanes with SSE2)
+
+/// Point lights laid out for farSum: structure of arrays, padded to whole batches with lights
+/// of intensity 0.
+struct FarLights {
+  std::vector<float> px, py, pz, ir, ig, ib, k;
+  bool lamp = false;  ///< some k > 0: the lamp model's m_l evaluated
+  /// Point light l with its lamp-model k, its intensity times `sign` (−1: its terms taken out).
+  void add(const Light& l, float kl, float sign) {
+    if (l.type != Light::Type::Point) return;  // w = 0: not in the far field
+    px.push_back(l.position.x);
+    py.push_back(l.position.y);
+    pz.push_back(l.position.z);
+    ir.push_back(sign * l.intensity.x);
+    ig.push_back(sign * l.intensity.y);
+    ib.push_back(sign * l.intensity.z);
+    k.push_back(kl);
+    lamp |= kl > 0.0f;
+  }
+  /// Padding: 1e15 from every vertex (w = 1; d² 1e30, finite; k·distance 0), intensity 0.
+  void pad() {
+    while (px.size() % Batch::size) {
+      for (auto* v : {&ir, &ig, &ib, &k}) v->push_back(0.0f);
+      for (auto* v : {&px, &py, &pz}) v->push_back(1e15f);
+    }
+  }
+};
+
+/// Σ_l w_l·A_l at x over `L` (LightFactor::farTerm's terms for the isotropic phase: w·I·m/(4π d²),
+/// w = FarField::weight, m the lamp model), Batch::size lights at a time.
+Vec3 farSum(const FarLights& L, const Vec3& x, float R) {
+  const Batch X(x.x), Y(x.y), Z(x.z), r(R), zero(0.0f), one(1.0f);
+  Batch s0(0.0f), s1(0.0f), s2(0.0f);
+  for (std::size_t j = 0; j < L.px.size(); j += Batch::size) {
+    const Batch dx = Batch::load_unaligned(&L.px[j]) - X, dy = Batch::load_unaligned(&L.py[j]) - Y,
+                dz = Batch::load_unaligned(&L.pz[j]) - Z;
+    const Batch d2 = dx * dx + dy * dy + dz * dz;
+    const Batch dist = xsimd::sqrt(d2);
+    const Batch u = xsimd::min(xsimd::max((dist - r) / r, zero), one);
+    Batch f = u * u * (Batch(3.0f) - Batch(2.0f) * u) * Batch(kInvFourPi) / d2;
+    if (L.lamp) {
+      const Batch q = Batch::load_unaligned(&L.k[j]) * dist;
+      f *= xsimd::exp(Batch(-kLampDepth) * q / (q + Batch(kLampDepth)));
+    }
+    f = xsimd::select(d2 > zero, f, zero);  // Light::incident: nothing at the light itself
+    s0 += Batch::load_unaligned(&L.ir[j]) * f;
+    s1 += Batch::load_unaligned(&L.ig[j]) * f;
+    s2 += Batch::load_unaligned(&L.ib[j]) * f;
+  }
+  return Vec3(xsimd::hadd(s0), xsimd::hadd(s1), xsimd::hadd(s2));
 }
 
 }  // namespace
@@ -106,20 +161,22 @@ const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
         changed.push_back(l);
         typeChanged |= lights[l].type != lights_[l].type;
       }
-  const LightFactor A(lights, m.phase, lamp);
   long long evaluated = 0;
   if (sameGrid && changed.empty()) {
     // kept
   } else if (sameGrid && !typeChanged && 2 * changed.size() <= lights.size() &&
              updates_ < kMaxUpdates) {
-    const LightFactor before(lights_, m.phase, lamp_);
+    // The changed lights' new terms in, their old ones out (intensity × −1).
+    FarLights L;
+    for (const std::size_t l : changed) L.add(lights[l], lamp.k(l), 1.0f);
+    for (const std::size_t l : changed) L.add(lights_[l], lamp_.k(l), -1.0f);
+    const std::size_t terms = L.px.size();
+    L.pad();
     const long long vertices = forLiveVertices([&](int i, int j, int k, std::size_t v) {
-      const Vec3 x = grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell;
-      Vec3 a = grid_.a[v];
-      for (const std::size_t l : changed) a += A.farTerm(l, grid_, x) - before.farTerm(l, grid_, x);
-      grid_.a[v] = a;
+      grid_.a[v] +=
+          farSum(L, grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell, grid_.radius);
     });
-    evaluated = 2 * vertices * static_cast<long long>(changed.size());
+    evaluated = vertices * static_cast<long long>(terms);
     ++updates_;
   } else {
     grid_ = FarField();
@@ -135,13 +192,15 @@ const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
     resolution_ = m.resolution;
     bricks_ = bricks;
     live_ = std::move(live);
+    FarLights L;
+    for (std::size_t l = 0; l < lights.size(); ++l) L.add(lights[l], lamp.k(l), 1.0f);
+    const std::size_t terms = L.px.size();
+    L.pad();
     const long long vertices = forLiveVertices([&](int i, int j, int k, std::size_t v) {
-      const Vec3 x = grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell;
-      Vec3 a(0.0f);
-      for (std::size_t l = 0; l < A.lightCount(); ++l) a += A.farTerm(l, grid_, x);
-      grid_.a[v] = a;
+      grid_.a[v] =
+          farSum(L, grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell, grid_.radius);
     });
-    evaluated = vertices * static_cast<long long>(lights.size());
+    evaluated = vertices * static_cast<long long>(terms);
     updates_ = 0;
   }
   lights_ = lights;

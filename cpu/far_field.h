@@ -28,7 +28,8 @@ class FarFieldCache {
   static constexpr int kMaxUpdates = 16;
 
   /// The grid for `scene`'s lights with `lamp` (A's near-lamp model) over `density`, R =
-  /// radiusVoxels voxels of the medium. `terms` (may be null): light terms evaluated, added to it.
+  /// radiusVoxels voxels of the medium. `terms` (may be null): point-light terms evaluated,
+  /// added to it.
   const FarField& update(const Scene& scene, const LampModel& lamp, const DensityGrid& density,
                          float radiusVoxels, long long* terms = nullptr);
   const FarField& grid() const { return grid_; }

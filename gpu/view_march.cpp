@@ -1,5 +1,6 @@
 #include "gpu/view_march.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -127,7 +128,9 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
       lights.buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
       glUniform1f(fp.uniform("uSign"), 1.0f);
       dispatch("far field update", farGroups);
-      farTerms_ = 2 * (long long)(farDims.x) * farDims.y * farDims.z * (long long)(changed.size());
+      farTerms_ = 2 * (long long)(farDims.x) * farDims.y * farDims.z *
+                  std::count_if(changed.begin(), changed.end(),
+                                [&](int l) { return lights.packed[l].type == 0.0f; });
     } else {
       const std::size_t vertices =
           std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
@@ -135,7 +138,9 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
       lights.farFieldUpdates = 0;
       farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
       dispatch("far field", farGroups);
-      farTerms_ = (long long)(vertices) * (long long)(lights.packed.size());
+      farTerms_ =
+          (long long)(vertices)*std::count_if(lights.packed.begin(), lights.packed.end(),
+                                              [](const GpuLight& l) { return l.type == 0.0f; });
     }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     lights.farFieldRadius = farR;

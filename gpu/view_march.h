@@ -48,9 +48,9 @@ class ViewMarchGpu : public Integrator {
   float delta1_;
   ShadowMapSettings shadowMap_;
   bool skipEmpty_ = true;
-  /// Light terms the last integrate evaluated for A's far field (stats far_field_terms: every
-  /// vertex × light when built, 2 × vertices × changed lights when updated, 0 when kept); −1
-  /// without one.
+  /// Point-light terms the last integrate evaluated for A's far field (stats far_field_terms:
+  /// every vertex × point light when built, 2 × vertices × changed point lights when updated, 0
+  /// when kept); −1 without one.
   long long farTerms_ = -1;
 };
 
