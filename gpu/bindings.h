@@ -29,7 +29,8 @@ inline constexpr GLuint kSplatSamples = 1;
 inline constexpr GLuint kAncestors = 2;
 /// float τ to the viewer of every level-0 sample (dynamic sampling).
 inline constexpr GLuint kRootTau = 3;
-/// uint counters a pass reports (GpuPerVoxelCounters; uncovered voxels of the normalisation).
+/// uint counters a pass reports (GpuPerVoxelCounters; uncovered voxels of the normalisation;
+/// the vertices A's far field computed).
 inline constexpr GLuint kCounters = 3;
 /// GpuRadianceRecord[]: S and ∇S per sample (volume tracer, dynamic sampling).
 inline constexpr GLuint kRadiance = 4;

@@ -41,8 +41,12 @@ Image ViewMarchGpu::integrate(Frame& frame, const Scene& scene, Progress*) {
     f.imageHeight = scene.camera.height;
     img = integrate(scene, f.density, f.radiance, &f.timer, &f.image, counters.get());
   }
-  if (farTerms_ >= 0)
-    f.deferStats([terms = farTerms_](RenderStats& st) { st.extra["far_field_terms"] = terms; });
+  if (farTermsPerVertex_ >= 0)
+    f.deferStats([counter = farCounter_, perVertex = farTermsPerVertex_](RenderStats& st) {
+      std::uint32_t vertices = 0;
+      if (counter) counter->read(&vertices, sizeof vertices);
+      st.extra["far_field_terms"] = (long long)(vertices)*perVertex;
+    });
   return img;
 }
 
@@ -89,7 +93,11 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   // again after kMaxFarUpdates updates (FarFieldCache on the CPU, cpu/far_field.h, alike).
   const DeviceLights& lights = pass.inputs().lights();
   const Buffer& farGrid = lights.farField;
-  farTerms_ = far ? 0 : -1;
+  farTermsPerVertex_ = far ? 0 : -1;
+  farCounter_.reset();
+  // The far field's passes compute only the vertices a step can read (SL_FAR_SKIP), from the
+  // empty-space grid the march walks; built by the density's first march, bound by apply.
+  if (skipEmpty_) pass.skipEmptySpace(timer);
   if (far && !(farGrid.id() && lights.farFieldRadius == farR && lights.farFieldLamp == lamp_)) {
     std::vector<int> changed;
     const DeviceLights* before = lights.before.get();
@@ -106,14 +114,20 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     std::vector<std::string> farDefines;
     if (lamp_) farDefines.push_back("SL_LAMP_MODEL");
     if (update) farDefines.push_back("SL_FAR_UPDATE");
-    const Program& fp = pass.program(update ? "far field update" : "far field",
-                                     {"common.glsl", "far_field.comp.glsl"}, farDefines);
+    if (skipEmpty_) farDefines.push_back("SL_FAR_SKIP");
+    std::vector<std::string> farFiles = {"common.glsl", "far_field.comp.glsl"};
+    if (skipEmpty_) farFiles.insert(farFiles.end() - 1, "block_walk.glsl");
+    const Program& fp =
+        pass.program(update ? "far field update" : "far field", farFiles, farDefines);
     ScopedGpuTimer t(timer, update ? "far field update" : "far field");
     fp.use();
     pass.inputs().apply(fp);  // the lights and the medium's uniforms (no camera: A is isotropic)
     setFar(fp, "uBuild");
     const UVec3 farGroups(groups(std::size_t(farDims.x), 4), groups(std::size_t(farDims.y), 4),
                           groups(std::size_t(farDims.z), 4));
+    const std::uint32_t zero = 0;
+    farCounter_ = std::make_shared<Buffer>(sizeof zero, &zero, 0, "far field count");
+    farCounter_->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     if (update) {
       lights.farField = std::move(before->farField);
       lights.farFieldUpdates = before->farFieldUpdates + 1;
@@ -128,9 +142,8 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
       lights.buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
       glUniform1f(fp.uniform("uSign"), 1.0f);
       dispatch("far field update", farGroups);
-      farTerms_ = 2 * (long long)(farDims.x) * farDims.y * farDims.z *
-                  std::count_if(changed.begin(), changed.end(),
-                                [&](int l) { return lights.packed[l].type == 0.0f; });
+      farTermsPerVertex_ = std::count_if(changed.begin(), changed.end(),
+                                         [&](int l) { return lights.packed[l].type == 0.0f; });
     } else {
       const std::size_t vertices =
           std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
@@ -138,9 +151,8 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
       lights.farFieldUpdates = 0;
       farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
       dispatch("far field", farGroups);
-      farTerms_ =
-          (long long)(vertices)*std::count_if(lights.packed.begin(), lights.packed.end(),
-                                              [](const GpuLight& l) { return l.type == 0.0f; });
+      farTermsPerVertex_ = std::count_if(lights.packed.begin(), lights.packed.end(),
+                                         [](const GpuLight& l) { return l.type == 0.0f; });
     }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     lights.farFieldRadius = farR;
@@ -161,8 +173,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "view march image",
                                 Texture::Contents::Overwritten);  // one store per pixel
   const int strata = std::max(1, int(std::lround(std::sqrt(double(cam.spp)))));
-  // Built by the density's first march (its own pass, timed apart); bound by pass.bind.
-  if (skipEmpty_) pass.skipEmptySpace(timer);
+  // Built by the density's first march (its own pass, timed apart; above); bound by pass.bind.
   {
     ScopedGpuTimer t(timer, "view march");
     march.use();

@@ -9,6 +9,8 @@
 /// their distance and adds T·L_p. Steps inside blocks of zero density are jumped over
 /// (gpu/empty_space.h; they add exactly 0). Needs the GL context for integrate().
 
+#include <memory>
+
 #include "core/stages.h"
 #include "gpu/tracing.h"
 
@@ -48,10 +50,12 @@ class ViewMarchGpu : public Integrator {
   float delta1_;
   ShadowMapSettings shadowMap_;
   bool skipEmpty_ = true;
-  /// Point-light terms the last integrate evaluated for A's far field (stats far_field_terms:
-  /// every vertex × point light when built, 2 × vertices × changed point lights when updated, 0
-  /// when kept); −1 without one.
-  long long farTerms_ = -1;
+  /// A's far field in the last integrate (stats far_field_terms, read after the frame): the
+  /// vertices its passes computed, counted on the GPU (null: the grid was kept), and the
+  /// point-light terms per counted vertex (every point light when built, the changed ones when
+  /// updated: each of the two passes counts its vertices); −1 without a far field.
+  std::shared_ptr<Buffer> farCounter_;
+  long long farTermsPerVertex_ = -1;
 };
 
 }  // namespace scatterlab::gpu

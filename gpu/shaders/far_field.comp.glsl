@@ -20,25 +20,64 @@ uniform float uBuildR;
 uniform vec3 uBuildLo;
 uniform vec3 uBuildCell;
 uniform ivec3 uBuildDims;
+// The vertices computed (stats far_field_terms, read after the frame), summed per workgroup.
+layout(std430, binding = BINDING_COUNTERS) buffer FarFieldCount { uint farVertices; };
+shared uint groupVertices;
+
+#ifdef SL_FAR_SKIP
+// Only the vertices a march step can read (FarFieldCache on the CPU likewise, over its own
+// bricks): the march looks the grid up at steps with density only, and a step in one of the 8
+// cells around vertex x has its density lookup within one voxel of x, so where every block of
+// the empty-space grid (gpu/empty_space.h; uBlockMax and uBlocks of block_walk.glsl, which the
+// program then includes) those lookups fall in has maximum 0, no step reads x.
+bool farVertexRead(vec3 x) {
+  vec3 lo = (x - uBuildCell) * uDensityScale + uDensityOffset;
+  vec3 hi = (x + uBuildCell) * uDensityScale + uDensityOffset;
+  ivec3 b0 = clamp(ivec3(floor(max(lo, vec3(0.0)) / SL_BLOCK)), ivec3(0), uBlocks - 1);
+  ivec3 b1 = clamp(ivec3(floor(max(hi, vec3(0.0)) / SL_BLOCK)), ivec3(0), uBlocks - 1);
+  for (int z = b0.z; z <= b1.z; ++z)
+    for (int y = b0.y; y <= b1.y; ++y)
+      for (int x = b0.x; x <= b1.x; ++x)
+        if (texelFetch(uBlockMax, ivec3(x, y, z), 0).r > 0.0) return true;
+  return false;
+}
+#endif
 
 void main() {
+  if (gl_LocalInvocationIndex == 0u) groupVertices = 0u;
+  barrier();
   ivec3 id = ivec3(gl_GlobalInvocationID);
-  if (any(greaterThanEqual(id, uBuildDims))) return;
   vec3 x = uBuildLo + vec3(id) * uBuildCell;
   int v = (id.z * uBuildDims.y + id.y) * uBuildDims.x + id.x;
-#ifdef SL_FAR_UPDATE
-  vec3 a = farOut[v].xyz;
-  for (int c = 0; c < uChangedCount; ++c) {
-    int li = uChanged[c];
-    float w = farWeight(li, x, uBuildR);
-    if (w > 0.0) a += uSign * (w * lightFactorTerm(li, x, vec3(0.0, 0.0, 1.0)));
-  }
+  bool inside = all(lessThan(id, uBuildDims));
+#ifdef SL_FAR_SKIP
+  bool read = inside && farVertexRead(x);
 #else
-  vec3 a = vec3(0.0);
-  for (int li = 0; li < uLightCount; ++li) {
-    float w = farWeight(li, x, uBuildR);
-    if (w > 0.0) a += w * lightFactorTerm(li, x, vec3(0.0, 0.0, 1.0));
+  bool read = inside;
+#endif
+  if (read) {
+    atomicAdd(groupVertices, 1u);
+#ifdef SL_FAR_UPDATE
+    vec3 a = farOut[v].xyz;
+    for (int c = 0; c < uChangedCount; ++c) {
+      int li = uChanged[c];
+      float w = farWeight(li, x, uBuildR);
+      if (w > 0.0) a += uSign * (w * lightFactorTerm(li, x, vec3(0.0, 0.0, 1.0)));
+    }
+#else
+    vec3 a = vec3(0.0);
+    for (int li = 0; li < uLightCount; ++li) {
+      float w = farWeight(li, x, uBuildR);
+      if (w > 0.0) a += w * lightFactorTerm(li, x, vec3(0.0, 0.0, 1.0));
+    }
+#endif
+    farOut[v] = vec4(a, 0.0);
+  }
+#ifndef SL_FAR_UPDATE
+  else if (inside) {
+    farOut[v] = vec4(0.0);  // never read, but defined
   }
 #endif
-  farOut[v] = vec4(a, 0.0);
+  barrier();
+  if (gl_LocalInvocationIndex == 0u && groupVertices > 0u) atomicAdd(farVertices, groupVertices);
 }
