@@ -11,6 +11,7 @@
 #include <random>
 
 #include "api/scatterlab.h"
+#include "bench/bench_scenes.h"
 #include "gpu/context.h"
 #include "gpu/dynamic_sampling.h"
 #include "gpu/reconstructions.h"
@@ -203,8 +204,7 @@ constexpr FrameCase kFrameCases[] = {
     {"fig3", "gradient", false, 16},  // the defaults with A's far field (docs/gpu.md)
 };
 
-/// The case's scene at `res`³, 800×600, with `lights` point lights: the scene's own, then
-/// copies of it (intensity shared out) on a ring around the box's centre.
+/// The case's scene at `res`³, 800×600, with `lights` point lights (bench::addLampRing).
 Json frameScene(const FrameCase& c, int res, int lights, bool raster) {
   Json doc = readJsonFile(std::string(SCATTERLAB_SOURCE_DIR "/data/scenes/") + c.scene + ".json");
   doc["medium"]["resolution"] = res;
@@ -214,22 +214,7 @@ Json frameScene(const FrameCase& c, int res, int lights, bool raster) {
   doc["render"]["paper"] = c.paper;
   doc["render"]["gpu_pipeline"] = raster ? "raster" : "compute";
   if (c.farField > 0) doc["render"]["far_field"] = c.farField;
-  const Json first = doc["lights"][0];
-  const Json& b = doc["medium"]["bounds"];
-  const Vec3 lo(b["min"][0].get<float>(), b["min"][1].get<float>(), b["min"][2].get<float>());
-  const Vec3 hi(b["max"][0].get<float>(), b["max"][1].get<float>(), b["max"][2].get<float>());
-  const Vec3 centre = 0.5f * (lo + hi), ext = hi - lo;
-  for (int l = 1; l < lights; ++l) {
-    Json light = first;
-    const float a = 6.2831853f * float(l) / float(lights);
-    light["position"] = {centre.x + 0.45f * ext.x * std::cos(a), centre.y + 0.3f * ext.y,
-                         centre.z + 0.45f * ext.z * std::sin(a)};
-    doc["lights"].push_back(light);
-  }
-  if (lights > 1)
-    for (Json& light : doc["lights"])
-      if (light.contains("intensity"))
-        for (Json& v : light["intensity"]) v = v.get<double>() / lights;
+  bench::addLampRing(doc, lights);
   return doc;
 }
 
@@ -260,7 +245,7 @@ void BM_GpuSteadyFrame(benchmark::State& state) {
   r.render();  // cold: the density, the samples and the programs
   const Json p0 = doc["lights"][0]["position"];
   std::vector<double> gpuMs;
-  double waits = 0, dispatches = 0, tracer = 0, steps = 0, skipped = 0;
+  double waits = 0, dispatches = 0, tracer = 0, steps = 0, skipped = 0, farTerms = 0;
   int frame = 0;
   for (auto _ : state) {
     ++frame;
@@ -274,9 +259,11 @@ void BM_GpuSteadyFrame(benchmark::State& state) {
     tracer = res.stats.extra.value("tracer_invocations", 0.0);
     steps = res.stats.extra.value("march_steps", 0.0);
     skipped = res.stats.extra.value("march_steps_skipped", 0.0);
+    farTerms = res.stats.extra.value("far_field_terms", 0.0);
     state.ResumeTiming();
   }
   state.counters["gpu_ms"] = median(gpuMs);
+  state.counters["far_terms"] = farTerms;  // A's far field: point-light terms of the last frame
   state.counters["host_waits"] = waits;
   state.counters["dispatches"] = dispatches;
   // The work of a frame (issue 34): the tracer's invocations, the march's steps looked up and

@@ -16,14 +16,22 @@
 /// Exact/smoke1 marches smoke1 at its native 111×222×112 voxels with primary step 1 voxel and
 /// shadow step 3 voxels (render.delta1), the settings of the vdb_render comparison in
 /// docs/benchmarks.md. Run with --benchmark_enable_random_interleaving=true and repetitions.
+///   ManyLamps/<far_field>/<moved>: a Renderer's frames of fig3 with 64 lamps on a ring
+///     (bench::addLampRing), `gradient` at its defaults, 800×600, with render.far_field 0 or 16;
+///     moved 0 = the camera (the far field kept), 1 = one lamp (the far field updated for it),
+///     2 = a new Renderer per frame (cold: the density, samples and far field built anew).
+///     Counters march_ms (the march stage of the last frame) and far_terms (its
+///     far_field_terms).
 /// The CPU column is the process's CPU time (all threads): on a shared, oversubscribed machine
 /// it measures the work better than the wall time does.
 
 #include <benchmark/benchmark.h>
 
 #include <map>
+#include <memory>
 
 #include "api/scatterlab.h"
+#include "bench/bench_scenes.h"
 #include "core/method.h"
 #include "core/stages.h"
 #include "cpu/fused_march.h"
@@ -123,6 +131,52 @@ void BM_Exact(benchmark::State& state, const std::string& name) {
   }
 }
 
+void BM_ManyLamps(benchmark::State& state) {
+  initialize();
+  const int far = int(state.range(0)), moved = int(state.range(1));
+  Json doc = readJsonFile(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
+  doc["camera"]["width"] = 800;
+  doc["camera"]["height"] = 600;
+  doc["render"]["method"] = "gradient";
+  doc["render"]["far_field"] = far;
+  bench::addLampRing(doc, 64);
+  const auto make = [&] {
+    return std::make_unique<Renderer>(doc, SCATTERLAB_SOURCE_DIR "/data/scenes", "gradient", "cpu");
+  };
+  std::unique_ptr<Renderer> r = make();
+  r->render();
+  const Json p0 = doc["lights"][0]["position"], c0 = doc["camera"]["position"];
+  double march = 0, terms = 0;
+  int frame = 0;
+  for (auto _ : state) {
+    ++frame;
+    if (moved == 2) {
+      state.PauseTiming();
+      r.reset();
+      state.ResumeTiming();
+      r = make();
+    } else if (moved == 1) {
+      r->set("lights.0.position=[" + std::to_string(p0[0].get<double>() + 0.002 * (frame % 5)) +
+             "," + p0[1].dump() + "," + p0[2].dump() + "]");
+    } else {
+      r->set("camera.position=[" + std::to_string(c0[0].get<double>() + 0.01 * (frame % 5)) + "," +
+             c0[1].dump() + "," + c0[2].dump() + "]");
+    }
+    const RenderResult res = r->render();
+    for (const auto& [stage, ms] : res.stats.timingsMs)
+      if (stage == "march") march = ms;
+    terms = res.stats.extra.value("far_field_terms", 0.0);
+  }
+  state.counters["march_ms"] = march;
+  state.counters["far_terms"] = terms;
+}
+
+BENCHMARK(BM_ManyLamps)
+    ->ArgsProduct({{0, 16}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime()
+    ->Iterations(3);
 BENCHMARK_CAPTURE(BM_March, fig3, std::string("fig3"))
     ->DenseRange(0, 7)
     ->Unit(benchmark::kMillisecond)
