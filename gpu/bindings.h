@@ -82,6 +82,11 @@ inline constexpr GLuint kFarField = 5;
 /// with both declarations, as the shader tests build every variant, has no two blocks at one
 /// binding; that pass binds nothing else at 2).
 inline constexpr GLuint kFarFieldOut = 2;
+/// uint bit masks of the lights a step in each brick of A's far field evaluates (far_mask.comp.glsl
+/// writes them at kFarMaskOut, the compute view march reads them under SL_FAR_FIELD). Never in
+/// one program with kVertexAncestors.
+inline constexpr GLuint kFarMask = 8;
+inline constexpr GLuint kFarMaskOut = 2;
 /// GpuShadowLight[] per scene light (shadow.glsl, gpu/shadow_maps.h).
 inline constexpr GLuint kShadowLights = 12;
 /// mat4 world -> clip per shadow-map layer (shadow.glsl).
@@ -177,6 +182,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_ERRORS", binding::kErrors},
     {"BINDING_FAR_FIELD", binding::kFarField},
     {"BINDING_FAR_FIELD_OUT", binding::kFarFieldOut},
+    {"BINDING_FAR_MASK", binding::kFarMask},
+    {"BINDING_FAR_MASK_OUT", binding::kFarMaskOut},
     {"BINDING_LEVEL_COUNTS", binding::kLevelCounts},
     {"BINDING_THRESHOLD", binding::kThreshold},
     {"BINDING_LOOP_GUARD", binding::kLoopGuard},

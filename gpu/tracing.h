@@ -33,6 +33,8 @@ struct DeviceLights {
   mutable bool farFieldLamp = false;    ///< whether its terms hold the lamp model
   mutable IVec3 farFieldDims{0};        ///< its vertices per axis
   mutable int farFieldUpdates = 0;      ///< in-place updates since it was built whole
+  /// The lights a step of each brick evaluates (far_mask.comp.glsl), made with the grid.
+  mutable Buffer farMask;
   /// The lights these replaced where those had a far field (deviceLights): held until the view
   /// march takes their grid over and updates it light by light (gpu::ViewMarchGpu), or drops
   /// them; never a chain (their own `before` is dropped when they are replaced).

@@ -20,6 +20,8 @@ namespace {
 /// built whole (each update adds a rounding of the sums, as FarFieldCache::kMaxUpdates).
 constexpr int kMaxFarChanged = 32;
 constexpr int kMaxFarUpdates = 16;
+/// Cells per edge of a brick of the far field's light masks (kFarBrick of common.glsl).
+constexpr int kFarBrick = 8;
 
 }  // namespace
 
@@ -86,6 +88,9 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     setVec3(p, prefix + "Cell", farCell);
     setIVec3(p, prefix + "Dims", farDims);
   };
+  // The bricks of the lights' masks (far_mask.comp.glsl): kFarBrick³ cells, words of 32 lights.
+  const IVec3 farBricks = (medium.resolution + IVec3(kFarBrick - 1)) / kFarBrick;
+  const int farWords = int((scene.lights.size() + 31) / 32);
   // Kept with the lights (DeviceLights::farField) while they, the density, R and the lamp
   // model stay: a frame that moved only the camera runs no pass. Where some lamps moved (at most
   // half of them, kMaxFarChanged), the grid of the lights before is taken over and updated in
@@ -155,6 +160,26 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
                                          [](const GpuLight& l) { return l.type == 0.0f; });
     }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    // The lights' masks per brick, for these lights: every spot and directional light, and the
+    // point lights within 2R of the brick (timed with the grid's pass).
+    {
+      const Program& mp = pass.program("far field masks", {"common.glsl", "far_mask.comp.glsl"});
+      mp.use();
+      pass.inputs().apply(mp);
+      lights.farMask = Buffer(std::size_t(farBricks.x) * std::size_t(farBricks.y) *
+                                  std::size_t(farBricks.z) * std::size_t(farWords) * 4,
+                              nullptr, 0, "far field masks");
+      lights.farMask.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarMaskOut);
+      glUniform1f(mp.uniform("uMaskR"), farR);
+      setVec3(mp, "uMaskLo", medium.bounds.min);
+      setVec3(mp, "uMaskCell", farCell);
+      setIVec3(mp, "uMaskBricks", farBricks);
+      glUniform1i(mp.uniform("uMaskWords"), farWords);
+      dispatch("far field masks",
+               UVec3(groups(std::size_t(farBricks.x), 4), groups(std::size_t(farBricks.y), 4),
+                     groups(std::size_t(farBricks.z), 4)));
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
     lights.farFieldRadius = farR;
     lights.farFieldLamp = lamp_;
     lights.farFieldDims = farDims;
@@ -188,6 +213,9 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     if (far) {
       setFar(march, "uFar");
       farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarField);
+      lights.farMask.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarMask);
+      setIVec3(march, "uFarBricks", farBricks);
+      glUniform1i(march.uniform("uFarWords"), farWords);
     }
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);

@@ -368,6 +368,17 @@ uniform float uFarR;
 uniform vec3 uFarLo;
 uniform vec3 uFarCell;
 uniform ivec3 uFarDims;
+// The lights a step in each brick of kFarBrick³ cells evaluates (far_mask.comp.glsl): uFarWords
+// words of bits per brick, bricks x fastest.
+layout(std430, binding = BINDING_FAR_MASK) readonly buffer FarMaskGrid { uint farMask[]; };
+uniform ivec3 uFarBricks;
+uniform int uFarWords;
+const int kFarBrick = 8;
+int farBrick(vec3 x) {
+  ivec3 c = ivec3(floor((x - uFarLo) / uFarCell)) / kFarBrick;
+  c = clamp(c, ivec3(0), uFarBricks - 1);
+  return (c.z * uFarBricks.y + c.y) * uFarBricks.x + c.x;
+}
 vec3 farAt(int i, int j, int k) { return farA[(k * uFarDims.y + j) * uFarDims.x + i].rgb; }
 // FarField::lookup: trilinear between the grid's vertices, x clamped into the box.
 vec3 farLookup(vec3 x) {
@@ -382,42 +393,44 @@ vec3 farLookup(vec3 x) {
 }
 #endif
 
-// A over the view march's step of length dt centred at origin + t·dir (toViewer = −dir): per
-// light its term there, or near a point or spot light (the glow) the mean of its term at the
-// midpoints of n substeps (the CPU's factorGroup and glowMean, LightFactor::overStep). With
-// SL_FAR_FIELD the far field's lookup plus each light's near part, (1 − w_l) times the above.
+// Light li's term of A over the view march's step of length dt centred at x = origin + t·dir
+// (toViewer = −dir): its term at x, or near a point or spot light (the glow) the mean of its term
+// at the midpoints of n substeps (the CPU's factorGroup and glowMean, LightFactor::overStep).
 uniform float uGlow;  // render.glow: 1 (the glow's substeps), 0 (each step's midpoint only)
+vec3 lightStepTerm(int li, vec3 origin, vec3 dir, vec3 x, float t, float dt) {
+  int n = 1;
+  if (int(lights[li].positionType.w) != 2)
+    n = glowSubsteps(glowDistance(lights[li].positionType.xyz, x, dir, dt),
+                     lights[li].lamp.z * dt * uGlow);
+  if (n == 1) return lightFactorTerm(li, x, -dir);
+  vec3 s = vec3(0.0);
+  for (int m = 0; m < n; ++m)
+    s += lightFactorTerm(li, origin + dir * (t + ((float(m) + 0.5) / float(n) - 0.5) * dt), -dir);
+  return s / float(n);
+}
+
+// A over the view march's step: every light's lightStepTerm. With SL_FAR_FIELD the far field's
+// lookup plus each light's near part, (1 − w_l) times its term, for the lights the step's brick
+// lists (far_mask.comp.glsl: every spot and directional light, the point lights within 2R of the
+// brick), in ascending order as the CPU's sum.
 vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
   vec3 x = origin + dir * t;
 #ifdef SL_FAR_FIELD
   vec3 a = farLookup(x);
+  int base = farBrick(x) * uFarWords;
+  for (int w = 0; w < uFarWords; ++w) {
+    uint bits = farMask[base + w];
+    while (bits != 0u) {
+      int li = w * 32 + findLSB(bits);
+      bits &= bits - 1u;
+      float keep = 1.0 - farWeight(li, x, uFarR);
+      if (keep > 0.0) a += keep * lightStepTerm(li, origin, dir, x, t, dt);
+    }
+  }
 #else
   vec3 a = vec3(0.0);
+  for (int li = 0; li < uLightCount; ++li) a += lightStepTerm(li, origin, dir, x, t, dt);
 #endif
-  for (int li = 0; li < uLightCount; ++li) {
-#ifdef SL_FAR_FIELD
-    float keep = 1.0 - farWeight(li, x, uFarR);
-    if (!(keep > 0.0)) continue;
-#endif
-    int n = 1;
-    if (int(lights[li].positionType.w) != 2)
-      n = glowSubsteps(glowDistance(lights[li].positionType.xyz, x, dir, dt),
-                       lights[li].lamp.z * dt * uGlow);
-    vec3 s = vec3(0.0);
-    if (n == 1) {
-      s = lightFactorTerm(li, x, -dir);
-    } else {
-      for (int m = 0; m < n; ++m)
-        s += lightFactorTerm(li, origin + dir * (t + ((float(m) + 0.5) / float(n) - 0.5) * dt),
-                             -dir);
-      s /= float(n);
-    }
-#ifdef SL_FAR_FIELD
-    a += keep * s;
-#else
-    a += s;
-#endif
-  }
   return a;
 }
 
