@@ -273,6 +273,45 @@ TEST(GpuViewMarch, SkippingEmptyBlocksChangesNoBit) {
   }
 }
 
+/// A's far field on the GPU computes only the vertices a step can read (far_field.comp.glsl,
+/// SL_FAR_SKIP, from the empty-space grid): on the plume at 64³ (most blocks empty) with 6 lamps,
+/// the march's image with it equals, bit for bit, the image over a grid with every vertex
+/// computed (skipping off), with one fused lookup per step or two.
+TEST(GpuViewMarch, AsFarFieldOnlyWhereAStepCanReadItChangesNoBit) {
+  SCATTERLAB_REQUIRE_GPU();
+  initialize();
+  Scene scene = loadScene(std::string(SCATTERLAB_SOURCE_DIR) + "/data/scenes/fig3.json",
+                          {"medium.resolution=64", "camera.width=96", "camera.height=96"});
+  const Box& box = scene.medium.bounds;
+  for (int i = 0; i < 6; ++i) {  // a ring of lamps around the box's centre, inside it
+    Light light;
+    const float phi = 1.0471976f * float(i);
+    light.position = box.center() + 0.35f * box.extent() * Vec3(std::cos(phi), 0.2f, std::sin(phi));
+    light.intensity = Vec3(0.5f, 0.4f, 0.3f);
+    scene.lights.push_back(light);
+  }
+  const DensityGrid density = buildDensityVolume(scene);
+  const float voxel = scene.medium.voxelSize();
+  MarchSettings ms;
+  ms.step = voxel;
+  ms.farField = 4.0f;
+  for (const bool fused : {true, false}) {
+    // Each march its own density volume: the grid is kept with the volume's lights.
+    Image images[2];
+    for (const bool skip : {true, false}) {
+      const gpu::Volume d = gpu::uploadDensity(density);
+      gpu::Volume r = gpu::PerVoxelGpu(voxel).build(scene, d, scene.medium.bounds,
+                                                    scene.medium.resolution, nullptr, nullptr);
+      r.densityInAlpha = fused;
+      gpu::ViewMarchGpu march(ms, true, voxel, ShadowMapSettings{});
+      march.skipEmptySpace(skip);
+      images[skip ? 0 : 1] = march.integrate(scene, d, r, nullptr);
+    }
+    EXPECT_TRUE(images[0].pixels() == images[1].pixels()) << "fused " << fused;
+    EXPECT_GT(compareImages(images[0], Image(96, 96)).relL2, 0.5);  // not black
+  }
+}
+
 /// The target: rendered by the gradient method at its own resolution (128³; 96 × 96
 /// pixels), the plume's GPU march reports at least half of its steps skipped (measured on
 /// llvmpipe: 56 % at 256 × 256), and the tracer at least one invocation per sample and light;
