@@ -121,8 +121,9 @@ class RayMarcher : public Integrator {
     // The volume holds V = S / A; A is analytic (one evaluation per light and step).
     const LampModel lamp = lampModel_ ? LampModel(scene, *f.density) : LampModel();
     LightFactor A(scene, lamp, march_.glow);
-    // A's far field: kept from render to render while what it depends on stays (a camera
-    // move: the far field is isotropic); the plain march and the SIMD kernels both take it.
+    // A's far field (FarFieldCache): kept from render to render while what it depends on stays
+    // (a camera move: the far field is isotropic), updated for the lamps that changed; the
+    // plain march and the SIMD kernels both take it.
     const bool far = factored_ && march_.farField > 0.0f;
     if (far) {
       long long terms = 0;

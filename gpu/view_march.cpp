@@ -76,7 +76,8 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   if (factor_) defines.push_back("SL_FACTOR_LIGHTS");
   if (factor_ && lamp_) defines.push_back("SL_LAMP_MODEL");
   // A's far field (render.far_field): one pass writes the grid of far terms Σ_l w_l·A_l, a vertex
-  // per voxel corner of the medium's box (buildFarField on the CPU), which the march reads.
+  // per voxel corner of the medium's box (FarFieldCache on the CPU, cpu/far_field.h), which the
+  // march reads.
   const bool far = factor_ && settings_.farField > 0.0f;
   const Medium& medium = scene.medium;
   const IVec3 farDims = medium.resolution + IVec3(1);
