@@ -89,6 +89,14 @@ bool FusedLights::glowMean(int j, const FusedFactor& f, float t, float dt, float
 void FusedLights::setFarField(const FarField* far) {
   far_ = far && far->on() ? far : nullptr;
   farRadius = far_ ? far_->radius : 0.0f;
+  farA = nullptr;
+  if (!far_) return;
+  for (int a = 0; a < 3; ++a) {
+    farDims[a] = far_->dims[a];
+    farLo[a] = far_->lo[a];
+    farCell[a] = far_->cell[a];
+  }
+  if (3 * far_->a.size() < std::size_t(1) << 31) farA = &far_->a[0].x;
 }
 
 void FusedLights::farLookup(float x, float y, float z, float out[3]) const {

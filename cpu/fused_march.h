@@ -80,6 +80,12 @@ class FusedLights {
   bool hg = false;  ///< Henyey–Greenstein (else isotropic, kInvFourPi)
   float g = 0.0f;
   float farRadius = 0.0f;  ///< the far field's R in world units (setFarField); 0: none
+  /// The far field's grid as the kernels read it (setFarField; FarField's members): RGB floats
+  /// per vertex, x fastest, and null where the grid's float offsets do not fit 32 bits (the
+  /// kernels then call farLookup per step).
+  const float* farA = nullptr;
+  int farDims[3] = {0, 0, 0};
+  float farLo[3] = {0.0f, 0.0f, 0.0f}, farCell[3] = {1.0f, 1.0f, 1.0f};
 
  private:
   const FarField* far_ = nullptr;

@@ -126,7 +126,38 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
   (a0 + B(f.constant[0])).store_aligned(A[0]);
   (a1 + B(f.constant[1])).store_aligned(A[1]);
   (a2 + B(f.constant[2])).store_aligned(A[2]);
-  if (farR > 0.0f) {  // the far field's part, looked up per step that needs it
+  if (farR > 0.0f && l.farA) {
+    // The far field's part, FarField::lookup for the G steps at once: the same clamp, base
+    // corner, fractions and lerps (glm::mix's a·(1 − t) + b·t), the corners gathered.
+    using I = xsimd::batch<int32_t, typename B::arch_type>;
+    static_assert(I::size == G, "one index per step");
+    const B pos[3] = {x, y, z};
+    B t[3];
+    I base[3];
+    for (int a = 0; a < 3; ++a) {
+      const B u = xsimd::min(xsimd::max((pos[a] - B(l.farLo[a])) / B(l.farCell[a]), B(0.0f)),
+                             B(float(l.farDims[a] - 1)));
+      const B b = xsimd::min(xsimd::floor(u), B(float(l.farDims[a] - 2)));
+      t[a] = u - b;
+      base[a] = xsimd::batch_cast<int32_t>(b);
+    }
+    const int dx = 3, dy = 3 * l.farDims[0], dz = dy * l.farDims[1];
+    const I o = base[2] * I(dz) + base[1] * I(dy) + base[0] * I(dx);
+    const auto mix = [](const B& a, const B& b, const B& w) { return a * (B(1.0f) - w) + b * w; };
+    alignas(32) float F[3][G];
+    for (int c = 0; c < 3; ++c) {
+      const float* p = l.farA + c;
+      const auto at = [&](int off) { return B::gather(p, o + I(off)); };
+      const B c00 = mix(at(0), at(dx), t[0]), c10 = mix(at(dy), at(dy + dx), t[0]),
+              c01 = mix(at(dz), at(dz + dx), t[0]), c11 = mix(at(dz + dy), at(dz + dy + dx), t[0]);
+      mix(mix(c00, c10, t[1]), mix(c01, c11, t[1]), t[2]).store_aligned(F[c]);
+    }
+    for (int q = 0; q < q1; ++q) {
+      A[0][q] += F[0][q];
+      A[1][q] += F[1][q];
+      A[2][q] += F[2][q];
+    }
+  } else if (farR > 0.0f) {  // a grid too large for 32-bit offsets: per step, out of line
     alignas(32) float X[3][G];
     x.store_aligned(X[0]);
     y.store_aligned(X[1]);
