@@ -302,6 +302,11 @@ inline constexpr int kErrorBins = 4096;
 inline constexpr float kLitMargin = 1e-3f;
 inline constexpr float kLitGrow = 1.001f;
 
+/// Cells per edge of the bricks of A's far field (render.far_field): the CPU computes the grid
+/// only next to bricks with density (cpu/far_field.h), the GPU keeps a mask of the lights near
+/// each brick (far_mask.comp.glsl).
+inline constexpr int kFarBrick = 8;
+
 /// The physics constants the shaders share with the CPU, by the #define the GPU programs see
 /// them under (gpu/shaders.h injects each one, so that no shader copies a number by hand).
 struct SharedConstant {
@@ -319,6 +324,7 @@ inline constexpr SharedConstant kSharedConstants[] = {
     {"SL_LIT_MARGIN", kLitMargin},
     {"SL_LIT_GROW", kLitGrow},
     {"SL_GLOW_MAX_SUBSTEPS", float(kGlowMaxSubsteps)},
+    {"SL_FAR_BRICK", float(kFarBrick)},
 };
 
 /// The range a sample's Taylor estimate is clamped to, per channel, before it is weighted

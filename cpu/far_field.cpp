@@ -15,8 +15,6 @@ namespace scatterlab {
 
 namespace {
 
-constexpr int kBrick = 8;  ///< cells per brick edge
-
 /// Whether light a and light b (with lamp-model k ka, kb) give the same far terms: a point
 /// light's by its position, intensity and k; any other light's are 0.
 bool sameFarPart(const Light& a, float ka, const Light& b, float kb) {
@@ -53,7 +51,7 @@ struct FarLights {
   }
 };
 
-/// Σ_l w_l·A_l at x over `L` (LightFactor::farTerm's terms for the isotropic phase: w·I·m/(4π d²),
+/// Σ_l w_l·A_l at x over `L` (LightFactor's terms for the isotropic phase: w·I·m/(4π d²),
 /// w = FarField::weight, m the lamp model), Batch::size lights at a time.
 Vec3 farSum(const FarLights& L, const Vec3& x, float R) {
   const Batch X(x.x), Y(x.y), Z(x.z), r(R), zero(0.0f), one(1.0f);
@@ -89,8 +87,8 @@ std::vector<std::uint8_t> FarFieldCache::liveBricks(const DensityGrid& density,
     for (int by = 0; by < bricks.y; ++by)
       for (int bx = 0; bx < bricks.x; ++bx) {
         const IVec3 b(bx, by, bz);
-        const IVec3 lo = glm::max(b * kBrick - 1, IVec3(0));
-        const IVec3 hi = glm::min(b * kBrick + kBrick, n - 1);
+        const IVec3 lo = glm::max(b * kFarBrick - 1, IVec3(0));
+        const IVec3 hi = glm::min(b * kFarBrick + kFarBrick, n - 1);
         bool any = false;
         for (int z = lo.z; z <= hi.z && !any; ++z)
           for (int y = lo.y; y <= hi.y && !any; ++y)
@@ -107,8 +105,8 @@ long long FarFieldCache::forLiveVertices(const F& f) const {
   const IVec3 dims = grid_.dims, last = bricks_ - 1;
   // Vertex i is a corner of cells i − 1 and i, in bricks (i − 1) / 8 and i / 8.
   const auto brickPair = [](int i, int lastBrick) {
-    return std::array<int, 2>{std::clamp((i - 1) / kBrick, 0, lastBrick),
-                              std::clamp(i / kBrick, 0, lastBrick)};
+    return std::array<int, 2>{std::clamp((i - 1) / kFarBrick, 0, lastBrick),
+                              std::clamp(i / kFarBrick, 0, lastBrick)};
   };
   const auto liveAt = [&](int x, int y, int z) {
     return live_[(std::size_t(z) * std::size_t(bricks_.y) + std::size_t(y)) *
@@ -142,7 +140,7 @@ const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
                                       const DensityGrid& density, float radiusVoxels,
                                       long long* terms) {
   const Medium& m = scene.medium;
-  const IVec3 bricks = (m.resolution + IVec3(kBrick - 1)) / kBrick;
+  const IVec3 bricks = (m.resolution + IVec3(kFarBrick - 1)) / kFarBrick;
   // A density of other dimensions than the medium's cells: every brick read.
   std::vector<std::uint8_t> live =
       density.dims() == m.resolution
@@ -161,6 +159,16 @@ const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
         changed.push_back(l);
         typeChanged |= lights[l].type != lights_[l].type;
       }
+  // The terms of L added to every live vertex's sum (a whole build's start at 0); the terms
+  // evaluated.
+  const auto addToGrid = [&](FarLights L) {
+    const long long n = static_cast<long long>(L.px.size());
+    L.pad();
+    return n * forLiveVertices([&](int i, int j, int k, std::size_t v) {
+             grid_.a[v] += farSum(L, grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell,
+                                  grid_.radius);
+           });
+  };
   long long evaluated = 0;
   if (sameGrid && changed.empty()) {
     // kept
@@ -170,13 +178,7 @@ const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
     FarLights L;
     for (const std::size_t l : changed) L.add(lights[l], lamp.k(l), 1.0f);
     for (const std::size_t l : changed) L.add(lights_[l], lamp_.k(l), -1.0f);
-    const std::size_t terms = L.px.size();
-    L.pad();
-    const long long vertices = forLiveVertices([&](int i, int j, int k, std::size_t v) {
-      grid_.a[v] +=
-          farSum(L, grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell, grid_.radius);
-    });
-    evaluated = vertices * static_cast<long long>(terms);
+    evaluated = addToGrid(std::move(L));
     ++updates_;
   } else {
     grid_ = FarField();
@@ -194,13 +196,7 @@ const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
     live_ = std::move(live);
     FarLights L;
     for (std::size_t l = 0; l < lights.size(); ++l) L.add(lights[l], lamp.k(l), 1.0f);
-    const std::size_t terms = L.px.size();
-    L.pad();
-    const long long vertices = forLiveVertices([&](int i, int j, int k, std::size_t v) {
-      grid_.a[v] =
-          farSum(L, grid_.lo + Vec3(float(i), float(j), float(k)) * grid_.cell, grid_.radius);
-    });
-    evaluated = vertices * static_cast<long long>(terms);
+    evaluated = addToGrid(std::move(L));
     updates_ = 0;
   }
   lights_ = lights;

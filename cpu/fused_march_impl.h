@@ -162,8 +162,7 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
     x.store_aligned(X[0]);
     y.store_aligned(X[1]);
     z.store_aligned(X[2]);
-    for (int q = 0; q < q1; ++q) {
-      if (!(V[q][0] > 0.0f) || (V[q][1] == 0.0f && V[q][2] == 0.0f && V[q][3] == 0.0f)) continue;
+    for (int q = 0; q < q1; ++q) {  // every step, as above (the unscaled ones use none)
       float m[3];
       l.farLookup(X[0][q], X[1][q], X[2][q], m);
       A[0][q] += m[0];

@@ -20,8 +20,6 @@ namespace {
 /// built whole (each update adds a rounding of the sums, as FarFieldCache::kMaxUpdates).
 constexpr int kMaxFarChanged = 32;
 constexpr int kMaxFarUpdates = 16;
-/// Cells per edge of a brick of the far field's light masks (kFarBrick of common.glsl).
-constexpr int kFarBrick = 8;
 
 }  // namespace
 

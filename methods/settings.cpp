@@ -495,9 +495,9 @@ void checkRenderPlan(Params& p, const Scene& scene, const MethodPlan& plan, bool
                  "the fused density + radiance volume of " + dims(r) + " voxels",
                  voxels(r) * 4 * sizeof(float));
     if (far && plan.integratorDecl->viewMarch) {
-      // On the GPU with the lights' masks per brick of 8³ cells (far_mask.comp.glsl): a bit
+      // On the GPU with the lights' masks per brick of kFarBrick³ cells (far_mask.comp.glsl): a bit
       // per light and brick.
-      const IVec3 v = res + IVec3(1), bricks = (res + IVec3(7)) / 8;
+      const IVec3 v = res + IVec3(1), bricks = (res + IVec3(kFarBrick - 1)) / kFarBrick;
       const double masks =
           cpu ? 0.0 : voxels(bricks) * 4.0 * double((scene.lights.size() + 31) / 32);
       memory.add(p.keyPath("far_field"), "A's far field of " + dims(v) + " vertices",

@@ -383,11 +383,7 @@ class LightFactor {
   /// light's term times its near-lamp model m_l.
   /// `glow` (render.glow): overStep averages a light's term over the substeps of its glow.
   explicit LightFactor(const Scene& scene, LampModel lamp = {}, bool glow = true)
-      : LightFactor(scene.lights, scene.medium.phase, std::move(lamp), glow) {}
-  /// Over `lights` (which must outlive this object) in a medium of `phase`.
-  LightFactor(const std::vector<Light>& lights, const Phase& phase, LampModel lamp = {},
-              bool glow = true)
-      : lights_(lights), phase_(phase), lamp_(std::move(lamp)), glow_(glow) {
+      : lights_(scene.lights), phase_(scene.medium.phase), lamp_(std::move(lamp)), glow_(glow) {
     for (const Light& l : lights_) glowScale_.push_back(glowScale(l));
   }
 
@@ -425,13 +421,6 @@ class LightFactor {
 
   /// overStep's far field (null: every light exact). The grid must outlive this object.
   void setFarField(const FarField* far) { far_ = far && far->on() ? far : nullptr; }
-  /// Light i's far part w_i·A_i at x (the far field's vertices; the isotropic phase, so no
-  /// direction to the viewer).
-  Vec3 farTerm(std::size_t i, const FarField& far, const Vec3& x) const {
-    const float w = far.weight(lights_[i], x);
-    return w > 0.0f ? w * term(i, x, Vec3(0.0f, 0.0f, 1.0f)) : Vec3(0.0f);
-  }
-  std::size_t lightCount() const { return lights_.size(); }
 
  private:
   /// Light i's term of A at x (operator()'s).

@@ -368,14 +368,13 @@ uniform float uFarR;
 uniform vec3 uFarLo;
 uniform vec3 uFarCell;
 uniform ivec3 uFarDims;
-// The lights a step in each brick of kFarBrick³ cells evaluates (far_mask.comp.glsl): uFarWords
-// words of bits per brick, bricks x fastest.
+// The lights a step in each brick of SL_FAR_BRICK³ cells evaluates (far_mask.comp.glsl):
+// uFarWords words of bits per brick, bricks x fastest.
 layout(std430, binding = BINDING_FAR_MASK) readonly buffer FarMaskGrid { uint farMask[]; };
 uniform ivec3 uFarBricks;
 uniform int uFarWords;
-const int kFarBrick = 8;
 int farBrick(vec3 x) {
-  ivec3 c = ivec3(floor((x - uFarLo) / uFarCell)) / kFarBrick;
+  ivec3 c = ivec3(floor((x - uFarLo) / uFarCell)) / int(SL_FAR_BRICK);
   c = clamp(c, ivec3(0), uFarBricks - 1);
   return (c.z * uFarBricks.y + c.y) * uFarBricks.x + c.x;
 }

@@ -1,4 +1,4 @@
-// The lights a step of A's far field must evaluate, per brick of kFarBrick³ cells of the grid
+// The lights a step of A's far field must evaluate, per brick of SL_FAR_BRICK³ cells of the grid
 // (common.glsl lightFactorStep under SL_FAR_FIELD): bit l % 32 of word l / 32 of brick b set for
 // every spot and directional light (never in the far field) and for each point light within 2R of
 // the brick's cells widened by a cell (a step's midpoint lies in its brick's cells, the widening
@@ -15,7 +15,7 @@ uniform int uMaskWords;
 void main() {
   ivec3 b = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(b, uMaskBricks))) return;
-  const int kBrick = 8;  // kFarBrick of common.glsl
+  const int kBrick = int(SL_FAR_BRICK);
   vec3 lo = uMaskLo + vec3(b * kBrick - 1) * uMaskCell;
   vec3 hi = uMaskLo + vec3(b * kBrick + kBrick + 1) * uMaskCell;
   int base = ((b.z * uMaskBricks.y + b.y) * uMaskBricks.x + b.x) * uMaskWords;
