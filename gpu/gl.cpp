@@ -5,10 +5,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <regex>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "core/error.h"
 #include "gpu/context.h"
@@ -457,6 +460,36 @@ Framebuffer::Framebuffer(std::string_view name) {
   label(GL_FRAMEBUFFER, id_, name);
 }
 
+namespace {
+
+/// SCATTERLAB_GPU_SHADER_DUMP=DIR: every shader that compiles is written to DIR as
+/// <hash of its text>.<comp|vert|frag> (each text once; written under a temporary name and
+/// renamed, so tests running side by side never leave half a file), for a compiler other than
+/// the driver's to check (scripts/check-shaders.sh: the Khronos reference front end).
+void dumpShader(GLenum stage, std::string_view source) {
+  static const std::string dir = [] {
+    const char* v = std::getenv("SCATTERLAB_GPU_SHADER_DUMP");
+    return std::string(v ? v : "");
+  }();
+  if (dir.empty()) return;
+  const char* ext = stage == GL_COMPUTE_SHADER  ? "comp"
+                    : stage == GL_VERTEX_SHADER ? "vert"
+                                                : "frag";
+  char hash[17];
+  std::snprintf(hash, sizeof hash, "%016zx", std::hash<std::string_view>()(source));
+  const std::string path = dir + "/" + hash + "." + ext;
+  const std::string tmp = path + ".tmp" + std::to_string(getpid());
+  FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw GpuError("SCATTERLAB_GPU_SHADER_DUMP: cannot write " + tmp);
+  const bool written = std::fwrite(source.data(), 1, source.size(), f) == source.size();
+  if (std::fclose(f) != 0 || !written || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw GpuError("SCATTERLAB_GPU_SHADER_DUMP: cannot write " + path);
+  }
+}
+
+}  // namespace
+
 Shader::Shader(GLenum stage, std::string_view source, std::string_view file) : stage_(stage) {
   id_ = glCreateShader(stage);
   detail::countCreated();
@@ -474,6 +507,7 @@ Shader::Shader(GLenum stage, std::string_view source, std::string_view file) : s
     log.resize(std::strlen(log.c_str()));
     throw GpuError("shader " + std::string(file) + " failed to compile:\n" + log);
   }
+  dumpShader(stage, source);
   label(GL_SHADER, id_, file);
   declared_ = gpu::declaredUniforms(source);
 }

@@ -1,24 +1,27 @@
 #!/usr/bin/env bash
-# Sets everything up (scripts/setup.sh), installs what the browser test of report.html needs
-# when it is missing (Debian's chromium, chromium-driver, python3-selenium: the test
-# ReportHtml.* skips without them, a plain build does not need them), then runs the whole test
-# suite with ctest.
+# Sets everything up (scripts/setup.sh), installs what only the tests need when it is missing
+# (Debian's chromium, chromium-driver, python3-selenium for the browser test of report.html:
+# ReportHtml.* skips without them; glslang-tools for the shader check; a plain build needs
+# none), runs the whole test suite with ctest, then checks every shader text the suite compiled
+# with the Khronos reference compiler (scripts/check-shaders.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh build
 
-BROWSER_PACKAGES=(chromium chromium-driver python3-selenium)
+TEST_PACKAGES=(chromium chromium-driver python3-selenium glslang-tools)
 missing=()
-for p in "${BROWSER_PACKAGES[@]}"; do
+for p in "${TEST_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if ((${#missing[@]})); then
-  echo "scatterlab test: installing ${missing[*]} (the browser test of report.html)"
+  echo "scatterlab test: installing ${missing[*]} (what only the tests use)"
   SUDO=""
   [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-cd build
-ctest --output-on-failure -j "${SCATTERLAB_JOBS:-2}" --timeout 900
+rm -rf build/shader-texts && mkdir -p build/shader-texts
+(cd build && SCATTERLAB_GPU_SHADER_DUMP="$PWD/shader-texts" \
+  ctest --output-on-failure -j "${SCATTERLAB_JOBS:-2}" --timeout 900)
+scripts/check-shaders.sh build/shader-texts
