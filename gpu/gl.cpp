@@ -233,6 +233,7 @@ std::size_t Buffer::grownFor(std::size_t bytes) {
 
 Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::string_view name)
     : size_(bytes), storage_(storageFor(bytes)), flags_(flags | GL_DYNAMIC_STORAGE_BIT) {
+  const std::size_t poison = validating() ? kPoisonBytes : 0;
   id_ = detail::takeRecycled(key());
   if (id_) {
     // A recycled buffer is cleared where no data is given (its bytes past size() as well).
@@ -243,14 +244,29 @@ Buffer::Buffer(std::size_t bytes, const void* data, GLbitfield flags, std::strin
   } else {
     glCreateBuffers(1, &id_);
     detail::countCreated();
-    const bool whole = bytes && data && storage_ == bytes;
-    glNamedBufferStorage(id_, GLsizeiptr(storage_), whole ? data : nullptr, flags_);
+    const std::size_t gl = storage_ + poison;
+    const bool whole = bytes && data && gl == bytes;
+    glNamedBufferStorage(id_, GLsizeiptr(gl), whole ? data : nullptr, flags_);
     if (bytes && data && !whole) glNamedBufferSubData(id_, 0, GLsizeiptr(bytes), data);
     // New storage is undefined in GL (zeros on llvmpipe, not on every GPU): cleared as a
     // recycled buffer is.
     if (!data) glClearNamedBufferData(id_, GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
   }
+  if (poison) {
+    const GLubyte ff = 0xff;
+    glClearNamedBufferSubData(id_, GL_R8UI, GLintptr(bytes), GLsizeiptr(storage_ + poison - bytes),
+                              GL_RED_INTEGER, GL_UNSIGNED_BYTE, &ff);
+  }
   label(GL_BUFFER, id_, name);
+}
+
+bool Buffer::extendTo(std::size_t bytes) {
+  if (!id_ || bytes > storage_) return false;
+  if (bytes > size_ && validating())  // poisoned past size(): given back as 0 (kPoisonBytes)
+    glClearNamedBufferSubData(id_, GL_R8UI, GLintptr(size_), GLsizeiptr(bytes - size_),
+                              GL_RED_INTEGER, GL_UNSIGNED_BYTE, nullptr);
+  size_ = std::max(size_, bytes);
+  return true;
 }
 
 void Buffer::bindBase(GLenum target, GLuint index) const {

@@ -180,13 +180,15 @@ class Buffer : public GlObject<BufferDeleter> {
   std::size_t size() const { return size_; }
   /// Makes size() at least `bytes` where the storage holds them (the size class's room) and
   /// returns true; returns false and changes nothing where it does not.
-  bool extendTo(std::size_t bytes) {
-    if (!id_ || bytes > storage_) return false;
-    size_ = std::max(size_, bytes);
-    return true;
-  }
+  bool extendTo(std::size_t bytes);
   /// Copies bytes [offset, offset + n) back to host memory.
   void read(void* dst, std::size_t n, std::size_t offset = 0) const;
+  /// Under validation (gpu/validate.h) every buffer's storage has this many bytes more, and its
+  /// bytes past size() are 0xff (a float NaN, a uint 0xffffffff, an int −1): a shader that
+  /// reads past what was asked for reads them, an image the tests see differ, where llvmpipe's
+  /// bounds checks read 0 and a GPU reads whatever lies there. extendTo clears what it takes
+  /// back to 0, as a buffer made without data starts.
+  static constexpr std::size_t kPoisonBytes = 256;
   /// Binds the buffer to `index` of `target`. A shader storage binding above the device's
   /// GL_MAX_SHADER_STORAGE_BLOCK_SIZE (GL's minimum is 16 MiB; 128 MiB on some GPUs, 2 GiB on
   /// others) is a GpuError naming the buffer and the limit: a shader would read and write past

@@ -425,11 +425,22 @@ void recordWrite(State& s, Kind kind, GLuint id, std::int64_t begin, std::int64_
     s.writes[key(kind, id)].push_back({begin, end, GL_ALL_BARRIER_BITS, writer});
 }
 
-/// A transfer or clear that overwrites [begin, end): the shader writes it covers are gone.
+/// A transfer or clear that overwrites [begin, end): the shader writes' bytes in it are gone (a
+/// write it overlaps keeps its bytes on either side, so that two transfers side by side, an
+/// upload and a clear of the rest, forget a write over both).
 void forgetCovered(State& s, Kind kind, GLuint id, std::int64_t begin, std::int64_t end) {
   const auto it = s.writes.find(key(kind, id));
   if (it == s.writes.end()) return;
-  std::erase_if(it->second, [&](const Write& w) { return begin <= w.begin && w.end <= end; });
+  std::vector<Write> kept;
+  for (Write& w : it->second) {
+    if (w.end <= begin || end <= w.begin) {
+      kept.push_back(std::move(w));
+      continue;
+    }
+    if (w.begin < begin) kept.push_back({w.begin, begin, w.pending, w.writer});
+    if (end < w.end) kept.push_back({end, w.end, w.pending, w.writer});
+  }
+  it->second = std::move(kept);
   if (it->second.empty()) s.writes.erase(it);
 }
 

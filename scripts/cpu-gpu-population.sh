@@ -42,7 +42,9 @@ for gpu in "$OUT"/images/*-gpu.exr; do
   gs=$(field "$gr" '  ' samples) cs=$(field "$cr" '  ' samples)
   gv=$(field "$gr" '    ' voxels_instead) cv=$(field "$cr" '    ' voxels_instead)
   note=""
-  if grep -q '"shadow_map": {' "$gr"; then  # objects: shadow maps, not held to the bound
+  # Objects: the sampled methods' records carry the shadow_map settings, every GPU record the
+  # stage "shadow maps"; not held to the bound.
+  if grep -q -e '"shadow_map": {' -e '"shadow maps": ' "$gr"; then
     note=" (objects: GPU shadow maps${gs:+; GPU samples $gs})"
     objects=$((objects + 1)) worstObjects=$(max "$rel" "$worstObjects")
   else

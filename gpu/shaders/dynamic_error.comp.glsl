@@ -126,8 +126,10 @@ void main() {
       }
       sTau[slot * kLanes + lane] = t;
     }
+    memoryBarrierShared();
     barrier();
     if (j < count && lane == 0u) finish(j, count, slot);
+    memoryBarrierShared();
     barrier();  // sTau is rewritten by the next round
   }
 }

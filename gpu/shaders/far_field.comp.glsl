@@ -45,6 +45,7 @@ bool farVertexRead(vec3 x) {
 
 void main() {
   if (gl_LocalInvocationIndex == 0u) groupVertices = 0u;
+  memoryBarrierShared();
   barrier();
   ivec3 id = ivec3(gl_GlobalInvocationID);
   vec3 x = uBuildLo + vec3(id) * uBuildCell;
@@ -78,6 +79,7 @@ void main() {
     farOut[v] = vec4(0.0);  // never read, but defined
   }
 #endif
+  memoryBarrierShared();
   barrier();
   if (gl_LocalInvocationIndex == 0u && groupVertices > 0u) atomicAdd(farVertices, groupVertices);
 }

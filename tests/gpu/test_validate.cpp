@@ -3,6 +3,7 @@
 /// `readonly` where a shader only reads, is none.
 
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "gpu/context.h"
@@ -110,6 +111,75 @@ TEST_F(GpuValidate, ReadOnlyBindingsReadTwiceAreNoHazardAndDisjointRangesAreApar
   gpu::dispatch("test read", {1, 1, 1});
   glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, a.id(), 0, 512);
   expectHazard([&] { gpu::dispatch("test read", {1, 1, 1}); }, {"bytes 256–512"});
+}
+
+TEST_F(GpuValidate, AShaderReadingPastABuffersSizeReadsPoisonNotZero) {
+  // 75 uints asked for (300 bytes; storage 384, the size class): a shader that copies 76 reads
+  // the 76th from the poison, 0xffffffff, where llvmpipe's bounds checks alone would give 0 and
+  // a GPU whatever lies in memory there.
+  std::vector<GLuint> in(75);
+  for (std::size_t i = 0; i < in.size(); ++i) in[i] = GLuint(i + 1);
+  gpu::Buffer a(in.size() * sizeof(GLuint), in.data(), 0, "test 75 uints");
+  const gpu::Buffer b(76 * sizeof(GLuint), nullptr, 0, "test copy");
+  const gpu::Program copy = program(
+      "layout(std430, binding = 0) readonly buffer A { uint a[]; };\n"
+      "layout(std430, binding = 1) writeonly buffer B { uint b[]; };\n"
+      "void main() { for (int i = 0; i < 76; ++i) b[i] = a[i]; }\n",
+      "test copy one past");
+  const auto run = [&] {
+    a.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+    b.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+    copy.use();
+    gpu::dispatch("test copy one past", {1, 1, 1});
+    std::vector<GLuint> out(76);
+    b.read(out.data(), out.size() * sizeof(GLuint));
+    return out;
+  };
+  std::vector<GLuint> out = run();
+  EXPECT_EQ(out[0], 1u);
+  EXPECT_EQ(out[74], 75u);
+  EXPECT_EQ(out[75], 0xffffffffu);
+  // A buffer made without data reads 0 up to its size, the poison past it; extendTo gives what
+  // it takes back as 0, as such a buffer starts.
+  ASSERT_TRUE(a.extendTo(76 * sizeof(GLuint)));
+  out = run();
+  EXPECT_EQ(out[74], 75u);
+  EXPECT_EQ(out[75], 0u);
+}
+
+TEST_F(GpuValidate, TwoTransfersSideBySideOverwriteAShaderWriteOverBoth) {
+  // A shader writes all of a (the whole binding); an upload of its first 16 bytes and a clear
+  // of the rest leave nothing of that write for a later read to wait for. The upload alone
+  // leaves the rest pending.
+  const gpu::Program write = program(
+      "layout(std430, binding = 0) writeonly buffer A { uint a[]; };\n"
+      "void main() { for (int i = 0; i < 8; ++i) a[i] = 7u; }\n",
+      "test write all");
+  const gpu::Program read = program(kRead, "test read");
+  const gpu::Buffer a(32, nullptr, 0, "test a"), b(16, nullptr, 0, "test b");
+  const GLuint zeros[4] = {};
+  GLint64 size = 0;  // 32 bytes and, under validation, the poison past them
+  glGetNamedBufferParameteri64v(a.id(), GL_BUFFER_SIZE, &size);
+  for (const bool both : {false, true}) {
+    a.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+    b.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+    write.use();
+    gpu::dispatch("test write all", {1, 1, 1});
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // what the transfers need
+    glNamedBufferSubData(a.id(), 0, sizeof zeros, zeros);
+    if (both)
+      glClearNamedBufferSubData(a.id(), GL_R8UI, 16, GLsizeiptr(size - 16), GL_RED_INTEGER,
+                                GL_UNSIGNED_BYTE, nullptr);
+    read.use();
+    if (both)
+      gpu::dispatch("test read", {1, 1, 1});
+    else
+      expectHazard(
+          [&] {
+            gpu::dispatch("test read", {1, 1, 1});
+          },
+          {"'test write all'", "bytes 16–"});
+  }
 }
 
 TEST_F(GpuValidate, AnIndirectSizeAndATextureFetchNeedTheirOwnBits) {
