@@ -256,6 +256,10 @@ void GpuFrame::report(RenderStats& st) {
                    "' ends every loop of a shader invocation there), so "
                    "its image would be wrong. What makes it long: " +
                    loopKeys(cut) + "; fewer of them, or --backend cpu, renders it");
+  if (const std::string pass = fetchOutside(); !pass.empty())
+    throw GpuError("the GPU pass '" + pass +
+                   "' fetched a texel outside its texture (SCATTERLAB_GPU_VALIDATE): GL leaves "
+                   "the value undefined, llvmpipe returns 0 and a GPU may not");
   // The frame's waits, before report() itself waits for the queries and the deferred stats.
   const HostWaitCounts waits = hostWaitCounts();
   const PassCounts passes = passCounts();

@@ -50,6 +50,33 @@ void main() {
 )";
 constexpr GLuint kLoopProbeTrips = 1u << 20;
 
+// Put before the files of every compute and fragment stage when the driver caps loops: the
+// guard's buffer (uint trips = 2, uint cut, uint fetched) and, under validation
+// (gpu/validate.h), texelFetch checked: a texel outside the texture's level records the
+// program's serial in `fetched`. GL leaves such a fetch undefined; llvmpipe returns 0, which a
+// shader may come to rely on without anyone seeing it.
+std::string loopGuardPrologue(std::size_t serial, bool checkFetches) {
+  std::string s =
+      "layout(std430, binding = BINDING_LOOP_GUARD) buffer SlLoopGuard {\n"
+      "  uint slLoopTrips;\n"
+      "  uint slLoopCut;\n"
+      "  uint slFetchOutside;\n"
+      "};\n";
+  if (!checkFetches) return s;
+  const std::string record = "atomicMax(slFetchOutside, " + std::to_string(serial) + "u);";
+  const auto checked = [&](const char* sampler, const char* coords) {
+    return std::string("vec4 slCheckedFetch(") + sampler + " s, " + coords +
+           " p, int lod) {\n"
+           "  if (any(lessThan(p, " +
+           coords + "(0))) || any(greaterThanEqual(p, textureSize(s, lod)))) " + record +
+           "\n"
+           "  return texelFetch(s, p, lod);\n"
+           "}\n";
+  };
+  return s + checked("sampler2D", "ivec2") + checked("sampler3D", "ivec3") +
+         checked("sampler2DArray", "ivec3") + "#define texelFetch slCheckedFetch\n";
+}
+
 // Appended to every compute and fragment stage when the driver caps loops: the stage's main()
 // runs as slGuardedMain(), then a loop of `trips` (2, read from the buffer so that no compiler
 // unrolls it) ends after one trip only if the cap was reached, and the program's serial is
@@ -57,10 +84,6 @@ constexpr GLuint kLoopProbeTrips = 1u << 20;
 // LP_MAX_TGSI_LOOP_ITERATIONS), so this detects a cut anywhere in the invocation.
 std::string loopGuardEpilogue(std::size_t serial) {
   return "#undef main\n"
-         "layout(std430, binding = BINDING_LOOP_GUARD) buffer SlLoopGuard {\n"
-         "  uint slLoopTrips;\n"
-         "  uint slLoopCut;\n"
-         "};\n"
          "void main() {\n"
          "  slGuardedMain();\n"
          "  uint k = 0u;\n"
@@ -92,7 +115,7 @@ int loopIterationLimit() {
   checkGl("loop-iteration probe");
   g.limit = done > 0 && done < kLoopProbeTrips ? int(done) : 0;
   if (g.limit > 0) {
-    const GLuint init[2] = {2u, 0u};
+    const GLuint init[3] = {2u, 0u, 0u};
     glCreateBuffers(1, &g.buffer);
     glNamedBufferStorage(g.buffer, sizeof init, init, GL_DYNAMIC_STORAGE_BIT);
     glObjectLabel(GL_BUFFER, g.buffer, -1, "loop guard");
@@ -106,8 +129,8 @@ int loopIterationLimit() {
 void resetLoopGuard() {
   LoopGuard& g = loopGuard();
   if (g.limit <= 0) return;
-  const GLuint zero = 0;
-  glNamedBufferSubData(g.buffer, sizeof(GLuint), sizeof zero, &zero);
+  const GLuint zero[2] = {0u, 0u};
+  glNamedBufferSubData(g.buffer, sizeof(GLuint), sizeof zero, zero);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding::kLoopGuard, g.buffer);
 }
 
@@ -121,6 +144,15 @@ std::string loopGuardCut() {
   return cut > 0 && cut < g.programs.size() ? g.programs[cut] : "";
 }
 
+std::string fetchOutside() {
+  LoopGuard& g = loopGuard();
+  if (g.limit <= 0 || !validating()) return "";
+  GLuint serial = 0;
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(g.buffer, 2 * sizeof(GLuint), sizeof serial, &serial);
+  return serial > 0 && serial < g.programs.size() ? g.programs[serial] : "";
+}
+
 Shader compileShader(GLenum stage, const std::vector<std::string>& files,
                      const std::vector<std::string>& defines, std::string_view label) {
   const bool guarded =
@@ -130,20 +162,23 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
     src += "#define " + std::string(b.name) + " " + std::to_string(b.value) + "\n";
   for (const std::string& c : sharedConstantDefines()) src += "#define " + c + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
-  if (guarded) src += "#define main slGuardedMain\n";
   std::string names;
+  for (size_t i = 0; i < files.size(); ++i) names += (i ? " + " : "") + files[i];
+  std::size_t serial = 0;
+  if (guarded) {
+    LoopGuard& g = loopGuard();
+    g.programs.push_back(label.empty() ? names : std::string(label));
+    serial = g.programs.size() - 1;
+    src += loopGuardPrologue(serial, validating());
+    src += "#define main slGuardedMain\n";
+  }
   for (size_t i = 0; i < files.size(); ++i) {
     src += "#line 1 " + std::to_string(i + 1) + "\n";
     src += shaderSource(files[i]);
     src += "\n";
-    names += (i ? " + " : "") + files[i];
   }
-  if (guarded) {
-    LoopGuard& g = loopGuard();
-    g.programs.push_back(label.empty() ? names : std::string(label));
-    src += "#line 1 " + std::to_string(files.size() + 1) + "\n" +
-           loopGuardEpilogue(g.programs.size() - 1);
-  }
+  if (guarded)
+    src += "#line 1 " + std::to_string(files.size() + 1) + "\n" + loopGuardEpilogue(serial);
   if (files.size() > 1) {
     names += " (log lines are 'file-index:line' with ";
     for (size_t i = 0; i < files.size(); ++i)

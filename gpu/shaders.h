@@ -45,6 +45,10 @@ void resetLoopGuard();
 /// The label of a program an invocation of which reached the loop cap since the last reset
 /// ("" when none did, or there is no cap). Reads 4 bytes back where there is a cap.
 std::string loopGuardCut();
+/// Under validation (gpu/validate.h) where the driver caps loops (llvmpipe: the guard's buffer
+/// is there), the label of a program that fetched a texel outside its texture's level since the
+/// last reset (texelFetch is checked in every guarded stage); "" when none did.
+std::string fetchOutside();
 
 /// A compute program from embedded files. Needs a current context.
 Program computeProgram(const std::vector<std::string>& files,

@@ -6,9 +6,11 @@
 #include <vector>
 
 #include "core/error.h"
+#include "gpu/bindings.h"
 #include "gpu/context.h"
 #include "gpu/dispatch.h"
 #include "gpu/gl.h"
+#include "gpu/shaders.h"
 #include "gpu/validate.h"
 #include "gpu_support.h"
 
@@ -145,6 +147,28 @@ TEST_F(GpuValidate, AShaderReadingPastABuffersSizeReadsPoisonNotZero) {
   out = run();
   EXPECT_EQ(out[74], 75u);
   EXPECT_EQ(out[75], 0u);
+}
+
+TEST_F(GpuValidate, ATexelFetchOutsideItsTextureNamesThePass) {
+  // The empty-space grid's pass over a 4³ density told it is 8³: it fetches texels 4–7, which
+  // GL leaves undefined (llvmpipe: 0). Told the truth, it fetches none.
+  if (gpu::loopIterationLimit() <= 0) GTEST_SKIP() << "checked only where the loop guard is";
+  const gpu::Texture density = gpu::Texture::make3D(GL_R32F, 4, 4, 4, "test density");
+  const gpu::Texture grid = gpu::Texture::make3D(GL_R32F, 1, 1, 1, "test grid");
+  const gpu::Program& p =
+      gpu::program({.compute = {"common.glsl", "block_max.comp.glsl"}}, "test empty-space grid");
+  for (const int told : {8, 4}) {
+    gpu::resetLoopGuard();
+    p.use();
+    glBindTextureUnit(gpu::binding::kDensityTexture, density.id());
+    gpu::setIVec3(p, "uDensityDims", IVec3(told));
+    gpu::setIVec3(p, "uBlockCount", IVec3(1));
+    glBindImageTexture(gpu::binding::kBlockMaxImage, grid.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                       GL_R32F);
+    gpu::dispatch("test empty-space grid", {1, 1, 1});
+    glMemoryBarrier(GL_ALL_BARRIER_BITS);
+    EXPECT_EQ(gpu::fetchOutside(), told == 8 ? "test empty-space grid" : "") << told;
+  }
 }
 
 TEST_F(GpuValidate, TwoTransfersSideBySideOverwriteAShaderWriteOverBoth) {
