@@ -51,10 +51,10 @@ void main() {
 constexpr GLuint kLoopProbeTrips = 1u << 20;
 
 // Put before the files of every compute and fragment stage when the driver caps loops: the
-// guard's buffer (uint trips = 2, uint cut, uint fetched) and, under validation
-// (gpu/validate.h), texelFetch checked: a texel outside the texture's level records the
-// program's serial in `fetched`. GL leaves such a fetch undefined; llvmpipe returns 0, which a
-// shader may come to rely on without anyone seeing it.
+// guard's buffer (uint trips = 2, cut, fetch outside) and, under validation (gpu/validate.h),
+// texelFetch checked: a texel outside the texture's level records the program's serial in
+// slFetchOutside. GL leaves such a fetch undefined; llvmpipe returns 0, which a shader may come
+// to rely on without anyone seeing it.
 std::string loopGuardPrologue(std::size_t serial, bool checkFetches) {
   std::string s =
       "layout(std430, binding = BINDING_LOOP_GUARD) buffer SlLoopGuard {\n"
