@@ -137,15 +137,17 @@ long long FarFieldCache::forLiveVertices(const F& f) const {
 }
 
 const FarField& FarFieldCache::update(const Scene& scene, const LampModel& lamp,
-                                      const DensityGrid& density, float radiusVoxels,
-                                      long long* terms) {
+                                      const std::shared_ptr<const DensityGrid>& density,
+                                      float radiusVoxels, long long* terms) {
   const Medium& m = scene.medium;
   const IVec3 bricks = (m.resolution + IVec3(kFarBrick - 1)) / kFarBrick;
   // A density of other dimensions than the medium's cells: every brick read.
   std::vector<std::uint8_t> live =
-      density.dims() == m.resolution
-          ? liveBricks(density, bricks)
+      density_.lock() == density && m.resolution == resolution_ && !live_.empty() ? live_
+      : density->dims() == m.resolution
+          ? liveBricks(*density, bricks)
           : std::vector<std::uint8_t>(std::size_t(bricks.x) * bricks.y * bricks.z, 1);
+  density_ = density;
   const std::vector<Light>& lights = scene.lights;
   const bool sameGrid = grid_.on() && radiusVoxels == radiusVoxels_ && m.bounds.min == box_.min &&
                         m.bounds.max == box_.max && m.resolution == resolution_ && live == live_ &&

@@ -4,6 +4,7 @@
 /// from render to render and brought up to date with as little work as the change allows.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/grid.h"
@@ -29,9 +30,12 @@ class FarFieldCache {
 
   /// The grid for `scene`'s lights with `lamp` (A's near-lamp model) over `density`, R =
   /// radiusVoxels voxels of the medium. `terms` (may be null): point-light terms evaluated,
-  /// added to it.
-  const FarField& update(const Scene& scene, const LampModel& lamp, const DensityGrid& density,
-                         float radiusVoxels, long long* terms = nullptr);
+  /// added to it. The same density object as last time (a frame that kept its density: a
+  /// host frame's density is a new object whenever it is built) keeps the live bricks found in
+  /// it instead of scanning it again.
+  const FarField& update(const Scene& scene, const LampModel& lamp,
+                         const std::shared_ptr<const DensityGrid>& density, float radiusVoxels,
+                         long long* terms = nullptr);
   const FarField& grid() const { return grid_; }
 
  private:
@@ -48,9 +52,10 @@ class FarFieldCache {
   IVec3 resolution_{0};
   IVec3 bricks_{0};
   std::vector<std::uint8_t> live_;
-  std::vector<Light> lights_;  ///< the lights the sums hold
-  LampModel lamp_;             ///< and their lamp model
-  int updates_ = 0;            ///< in-place updates since the last whole build
+  std::weak_ptr<const DensityGrid> density_;  ///< the density live_ was found in
+  std::vector<Light> lights_;                 ///< the lights the sums hold
+  LampModel lamp_;                            ///< and their lamp model
+  int updates_ = 0;                           ///< in-place updates since the last whole build
 };
 
 }  // namespace scatterlab

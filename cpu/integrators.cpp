@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <memory>
+
 #include "core/stages.h"
 #include "cpu/far_field.h"
 #include "cpu/froxel.h"
@@ -127,11 +129,18 @@ class RayMarcher : public Integrator {
     const bool far = factored_ && march_.farField > 0.0f;
     if (far) {
       long long terms = 0;
-      A.setFarField(&farField_.update(scene, lamp, *f.density, march_.farField, &terms));
+      A.setFarField(&farField_.update(scene, lamp, f.density, march_.farField, &terms));
       f.farFieldTerms = terms;
     }
     if (march_.fast && FusedVolume::compatible(*f.density, radiance)) {
-      fused_.build(*f.density, radiance, keys_.halfFloat);
+      // A frame over the density and radiance it was built from (a camera move: both kept, the
+      // same objects; HostFrame makes new ones whenever it builds them) keeps it as it is.
+      if (fusedDensity_.lock() != f.density || fusedRadiance_.lock() != f.radiance ||
+          fused_.half() != keys_.halfFloat) {
+        fused_.build(*f.density, radiance, keys_.halfFloat);
+        fusedDensity_ = f.density;
+        fusedRadiance_ = f.radiance;
+      }
       FusedLights lights(scene, lamp, march_.glow);
       if (far) lights.setFarField(&farField_.grid());
       const FusedLookup lookup{fused_,
@@ -155,6 +164,8 @@ class RayMarcher : public Integrator {
   /// The fast march's volume, kept from render to render: its storage is written again, not
   /// allocated and faulted in anew (a Renderer's frames, the harness's repetitions).
   FusedVolume fused_;
+  std::weak_ptr<const DensityGrid> fusedDensity_;    ///< what fused_ was built from
+  std::weak_ptr<const RadianceGrid> fusedRadiance_;  ///< likewise
   /// A's far field (render.far_field), kept likewise and updated light by light.
   FarFieldCache farField_;
   bool factored_;

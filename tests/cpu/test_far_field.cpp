@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -40,9 +41,11 @@ TEST(FarFieldCache, ComputesEveryVertexAStepWithDensityReads) {
   const LampModel lamp(scene, density);
   FarFieldCache sparse, full;
   long long sparseTerms = 0, fullTerms = 0;
-  const FarField& s = sparse.update(scene, lamp, density, 4.0f, &sparseTerms);
+  const auto shared = std::make_shared<const DensityGrid>(density);
+  const FarField& s = sparse.update(scene, lamp, shared, 4.0f, &sparseTerms);
   // A density of other dimensions than the medium's cells: every brick counts as read.
-  const DensityGrid other(scene.medium.bounds, scene.medium.resolution + IVec3(1));
+  const auto other =
+      std::make_shared<const DensityGrid>(scene.medium.bounds, scene.medium.resolution + IVec3(1));
   const FarField& f = full.update(scene, lamp, other, 4.0f, &fullTerms);
   std::printf("far field terms: %lld over the bricks with density, %lld over all\n", sparseTerms,
               fullTerms);
@@ -64,4 +67,33 @@ TEST(FarFieldCache, ComputesEveryVertexAStepWithDensityReads) {
     ASSERT_EQ(s.lookup(x), f.lookup(x)) << x.x << " " << x.y << " " << x.z;
   }
   EXPECT_GT(withDensity, 10000);
+}
+
+/// The live bricks are kept with the density object they were found in: the same object again
+/// (a frame that kept its density) keeps the grid; a new object — even one made where the first
+/// was freed — is scanned anew, its new bricks computed as a fresh cache computes them.
+TEST(FarFieldCache, KeepsTheBricksOfTheSameDensityObjectOnly) {
+  const Scene scene = lampBoxScene();
+  DensityGrid first(scene.medium.bounds, scene.medium.resolution);
+  first.at(4, 4, 4) = 1.0f;
+  const LampModel lamp(scene, first);
+  FarFieldCache cache;
+  auto a = std::make_shared<const DensityGrid>(first);
+  long long built = 0, kept = 0, rebuilt = 0, fresh = 0;
+  cache.update(scene, lamp, a, 4.0f, &built);
+  cache.update(scene, lamp, a, 4.0f, &kept);
+  EXPECT_GT(built, 0);
+  EXPECT_EQ(kept, 0);
+  a.reset();
+  DensityGrid second = first;
+  second.at(27, 27, 27) = 1.0f;  // a brick the first has no density in
+  const auto b = std::make_shared<const DensityGrid>(second);
+  const FarField& g = cache.update(scene, lamp, b, 4.0f, &rebuilt);
+  FarFieldCache other;
+  const FarField& h = other.update(scene, lamp, b, 4.0f, &fresh);
+  EXPECT_GT(rebuilt, built);
+  EXPECT_EQ(rebuilt, fresh);
+  const Vec3 x = (Vec3(27.0f) + 0.5f) / Vec3(scene.medium.resolution);
+  EXPECT_NE(h.lookup(x), Vec3(0.0f));
+  EXPECT_EQ(g.lookup(x), h.lookup(x));
 }
