@@ -53,7 +53,7 @@ Image radialBlurPrePass(const Scene& scene, const DensityGrid& density, int ligh
           t1 = std::min(t1, hit.t);
           if (!(t1 > t0)) continue;
         }
-        const int n = std::max(1, int(std::ceil((t1 - t0) / ms.step)));
+        const int n = stepCount(t1 - t0, ms.step);
         const float dt = (t1 - t0) / float(n);
         const Vec3 sc = density.indexScale();
         const Vec3 u0 = r.at(t0 + 0.5f * dt) * sc + density.indexOffset();

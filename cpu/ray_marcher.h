@@ -222,7 +222,7 @@ Image marchWith(const Scene& scene, const DensityGrid& density, const Lookup& lo
     if (sigmaT > 0.0f && m.bounds.intersect(r, t0, t1) && t1 > t0) {
       if (hasHit) t1 = std::min(t1, hit.t);
       if (t1 > t0) {
-        const int n = std::max(1, int(std::ceil((t1 - t0) / ms.step)));
+        const int n = stepCount(t1 - t0, ms.step);
         const float dt = (t1 - t0) / float(n);
         const Vec3 s = density.indexScale();
         const Vec3 u0 = r.at(t0 + 0.5f * dt) * s + density.indexOffset();

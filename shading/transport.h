@@ -26,7 +26,7 @@ float opticalDepth(const Field& field, const Box& box, const Vec3& a, const Vec3
   const Ray r{a, d / len};
   float t0, t1;
   if (!box.intersect(r, t0, t1, 0.0f, len) || t1 <= t0) return 0.0f;
-  const int n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  const int n = stepCount(t1 - t0, step);
   const float dt = (t1 - t0) / float(n);
   float sum = 0.0f;
   for (int i = 0; i < n; ++i) sum += field(r.at(t0 + (float(i) + 0.5f) * dt));
@@ -56,7 +56,7 @@ inline IndexSteps indexSteps(const DensityGrid& g, const Vec3& a, const Vec3& b,
   if ((clipInside || !(box.contains(a) && box.contains(b))) &&
       (!box.intersect(r, t0, t1, 0.0f, len) || t1 <= t0))
     return out;
-  out.n = std::max(1, int(std::ceil((t1 - t0) / step)));
+  out.n = stepCount(t1 - t0, step);
   out.dt = (t1 - t0) / float(out.n);
   const Vec3 s = g.indexScale();
   out.u0 = r.at(t0 + 0.5f * out.dt) * s + g.indexOffset();

@@ -86,6 +86,12 @@ bool intersectBox(vec3 o, vec3 d, float tmin, float tmax, out float t0, out floa
   return true;
 }
 
+// stepCount (core/stages.h): the equal midpoint steps of at most `stepLen` (up to SL_STEP_SLACK
+// longer) over a segment of `len`, so that an integer ratio does not round apart from the CPU's.
+int stepCount(float len, float stepLen) {
+  return max(1, int(ceil(len / stepLen - SL_STEP_SLACK)));
+}
+
 // VoxelOccupancy (cpu/per_voxel.h): whether a density voxel with D > 0 has a trilinear support
 // overlapping that of the radiance voxel centred at c with edge `cell` (the range shrunk by 1e-4
 // voxel against rounding). The per-voxel pass skips the others; the normalisation counts the
@@ -148,7 +154,7 @@ float opticalDepth(vec3 a, vec3 b, float stepLen, float maxDepth) {
   vec3 dir = d / len;
   float t0, t1;
   if (!intersectBox(a, dir, 0.0, len, t0, t1) || t1 <= t0) return 0.0;
-  int n = max(1, int(ceil((t1 - t0) / stepLen)));
+  int n = stepCount(t1 - t0, stepLen);
   float dt = (t1 - t0) / float(n);
   vec3 u0 = (a + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
   vec3 du = dir * dt * uDensityScale;

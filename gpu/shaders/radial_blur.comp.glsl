@@ -68,7 +68,7 @@ void main() {
 #endif
   if (inBox && min(t1, hitT) > t0) {
     t1 = min(t1, hitT);
-    int n = max(1, int(ceil((t1 - t0) / uStep)));
+    int n = stepCount(t1 - t0, uStep);
     float dt = (t1 - t0) / float(n);
     vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
     vec3 du = dir * dt * uDensityScale;

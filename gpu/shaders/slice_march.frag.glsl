@@ -40,7 +40,7 @@ void main() {
 #ifdef SL_RAY_STEPS
   // Variant: layer k is step n-1-k of this pixel's ray, exactly the CPU marcher's steps
   // (same sample points), still composited far to near with the same blending.
-  int n = max(1, int(ceil((t1 - t0) / uStep)));
+  int n = stepCount(t1 - t0, uStep);
   int i = n - 1 - uLayer;
   if (i < 0) discard;
   float dt = (t1 - t0) / float(n);

@@ -1,6 +1,6 @@
 // The compute view march (render.gpu_pipeline = compute; gpu/view_march.h): one invocation per
 // pixel, front to back with early exit, the CPU marcher's steps exactly (cpu/ray_marcher.h
-// marchWith): n = ceil((t1 − t0)/step) equal steps between the box entry and the box exit (or
+// marchWith): n = stepCount(t1 − t0, step) equal steps between the box entry and the box exit (or
 // the first surface), lookups at the steps' middles in index space u0 + i·du,
 //   L += T·Ω·(1 − a)·S,  T *= a,  a = exp(−σt·D·Δt),
 // until T <= uMinT; then L + T·L_p (the surface's, from the surface pass) or L + T·background.
@@ -61,7 +61,7 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
   if (uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
     if (hit) t1 = min(t1, tSurface);
     if (t1 > t0) {
-      int n = max(1, int(ceil((t1 - t0) / uStep)));
+      int n = stepCount(t1 - t0, uStep);
       float dt = (t1 - t0) / float(n);
       vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
       vec3 du = dir * dt * uDensityScale;
