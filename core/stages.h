@@ -228,11 +228,11 @@ inline constexpr float kSingularEps = 1e-9f;
 
 /// The equal midpoint steps over a segment of `length` with steps of at most `step`: ⌈length /
 /// step − kStepSlack⌉, at least 1 (a step may be kStepSlack × `step` longer). The view march,
-/// the shadow rays and radial-blur count their steps with it, the GPU's stepCount
-/// (gpu/shaders/common.glsl) likewise. Without the slack a ratio that is an integer in exact
-/// arithmetic — a camera looking along an axis of a box whose depth is a whole number of steps
-/// (its central rays), a shadow ray from a voxel centre straight along an axis — rounds to n on
-/// one backend and n + 1 on the other (the CPU and a GPU round the box's entry and exit apart):
+/// the shadow rays, the occlusion weights and radial-blur count their steps with it, the GPU's
+/// stepCount (gpu/shaders/common.glsl) likewise. Without the slack a ratio that is an integer in
+/// exact arithmetic — a camera looking along an axis of a box whose depth is a whole number of
+/// steps (its central rays), a shadow ray from a voxel centre straight along an axis — rounds to n
+/// on one backend and n + 1 on the other (the CPU and a GPU round the box's entry and exit apart):
 /// a camera zoomed to 0.5° at the glow scene's centre put 2.6 % between two pixels of the CPU's
 /// and llvmpipe's images, 5.9e-4 relative L2 (docs/gpu.md, "CPU ≡ GPU on scenes nobody picked").
 inline constexpr float kStepSlack = 1e-3f;

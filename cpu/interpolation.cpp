@@ -259,7 +259,7 @@ void occlusionWeights(const Gather& g, const Vec3& p, float y, float z, int i0, 
   for (int i = i0; i <= i1; ++i) {
     const Vec3 seg = Vec3(g.lo.x + (float(i) + 0.5f) * g.h.x, y, z) - p;
     const float len = glm::length(seg);
-    const int steps = std::max(1, int(std::ceil(len / g.densityVoxel)));
+    const int steps = stepCount(len, g.densityVoxel);
     float sum = 0.0f;
     for (int m = 0; m < steps; ++m)
       sum += g.density.sample(p + seg * ((float(m) + 0.5f) / float(steps)));

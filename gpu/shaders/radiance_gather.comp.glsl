@@ -79,7 +79,7 @@ void main() {
     float W = R / max(dist, SL_SINGULAR_EPS * R);
 #ifdef SL_OCCLUSION
     vec3 p = positionRadius.xyz;
-    int steps = max(1, int(ceil(dist / uDensityVoxel)));
+    int steps = stepCount(dist, uDensityVoxel);
     float tau = 0.0;
     for (int m = 0; m < steps; ++m)
       tau += densityAtIndex((p + d * ((float(m) + 0.5) / float(steps))) * uDensityScale +

@@ -29,7 +29,7 @@ void main() {
   // Occlusion-aware weight (interpolateSamples' twin): exp(−σt·τ) of the segment from the
   // sample to the voxel, τ by the midpoint rule with steps of at most one density voxel.
   vec3 p = vPosR.xyz;
-  int steps = max(1, int(ceil(dist / uDensityVoxel)));
+  int steps = stepCount(dist, uDensityVoxel);
   float sum = 0.0;
   for (int m = 0; m < steps; ++m)
     sum += densityAtIndex((p + d * ((float(m) + 0.5) / float(steps))) * uDensityScale +
