@@ -244,6 +244,13 @@ inline int stepCount(float length, float step) {
 /// falls from 1 at the lamp towards e^(−κ), so V = S / A lies in [0, e^κ] with it. Chosen by
 /// measurement among 0.25, 0.5, 1, 2, 4, 8 (docs/fidelity.md §8).
 inline constexpr float kLampDepth = 2.0f;
+/// LampModel's m_l at q = k_l·distance, exp(−κ·q / (q + κ)): for a float (LampModel, the fused
+/// lights' glow) or an xsimd batch (the SIMD march, the far field's build) alike.
+template <class T>
+T lampTransmittance(const T& q) {
+  using std::exp;
+  return exp(T(-kLampDepth) * q / (q + T(kLampDepth)));
+}
 
 /// The factored march's quadrature of A near a lamp (docs/fidelity.md, "Glows"): at a step of
 /// length dt whose segment passes at distance r from a point or spot light (glowDistance), that

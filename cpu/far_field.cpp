@@ -65,7 +65,7 @@ Vec3 farSum(const FarLights& L, const Vec3& x, float R) {
     Batch f = u * u * (Batch(3.0f) - Batch(2.0f) * u) * Batch(kInvFourPi) / d2;
     if (L.lamp) {
       const Batch q = Batch::load_unaligned(&L.k[j]) * dist;
-      f *= xsimd::exp(Batch(-kLampDepth) * q / (q + Batch(kLampDepth)));
+      f *= lampTransmittance(q);
     }
     f = xsimd::select(d2 > zero, f, zero);  // Light::incident: nothing at the light itself
     s0 += Batch::load_unaligned(&L.ir[j]) * f;

@@ -73,7 +73,7 @@ bool FusedLights::glowMean(int j, const FusedFactor& f, float t, float dt, float
     }
     if (k[j] > 0.0f) {
       const float q = k[j] * dist;
-      phase = phase * std::exp(-kLampDepth * q / (q + kLampDepth));
+      phase = phase * lampTransmittance(q);
     }
     const float s = cone / d2;
     s0 += ir[j] * s * phase;

@@ -82,7 +82,7 @@ inline void factorGroup(const scatterlab::FusedFactor& f, const scatterlab::Fuse
     }
     if (l.k[j] > 0.0f) {
       const B q = B(l.k[j]) * dist;
-      phase = phase * xsimd::exp(B(-scatterlab::kLampDepth) * q / (q + B(scatterlab::kLampDepth)));
+      phase = phase * scatterlab::lampTransmittance(q);
     }
     const B s = cone / d2;
     // Light::incident's cut: nothing at the light's own position or outside the cone.

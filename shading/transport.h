@@ -301,7 +301,7 @@ class LampModel {
     const float k = k_[i];
     if (!(k > 0.0f)) return 1.0f;
     const float q = k * distance;
-    return std::exp(-kLampDepth * q / (q + kLampDepth));
+    return lampTransmittance(q);
   }
   /// An upper bound of V = S / A with the model: 1 / min m_l over the box of diagonal `diag`
   /// (V = Σ w·T / Σ w·m <= max_l T_l / m_l <= max_l 1 / m_l(diag)); 1 without lamps inside.
