@@ -70,18 +70,25 @@ FroxelVolume froxelAccumulate(const Scene& scene, const DensityGrid& density,
   const auto rays = scene.camera.rayGenerator();
   const Medium& m = scene.medium;
   const SourceRadiance traced(scene, density, delta1);
+  const Vec3 sc = density.indexScale(), so = density.indexOffset();
   tbb::parallel_for(0, v.dims.y, [&](int j) {
     for (int i = 0; i < v.dims.x; ++i) {
       const Ray ray = columnRay(rays, v.dims, i, j);
       const float c = glm::dot(ray.dir, rays.forward);
+      // The column's piece inside the medium box: each slice is clipped to it, so that a slice
+      // across a face counts only its part inside, and no froxel's centre sits on a face,
+      // where which side it falls on is a matter of rounding (CPU ≠ GPU).
+      float t0 = 0.0f, t1 = -1.0f;
+      if (m.sigmaT > 0.0f && !m.bounds.intersect(ray, t0, t1)) t1 = -1.0f;
       Vec3 L(0.0f);
       float T = 1.0f;
       for (int k = 0; k < v.dims.z; ++k) {
         const float za = v.slicing.depth(float(k)), zb = v.slicing.depth(float(k + 1));
-        const Vec3 x = ray.at(0.5f * (za + zb) / c);
-        const float D = m.sigmaT > 0.0f ? density.sample(x) : 0.0f;
+        const float ta = std::max(za / c, t0), tb = std::min(zb / c, t1);
+        const Vec3 x = ray.at(0.5f * (ta + tb));
+        const float D = tb > ta ? density.sampleIndex(x * sc + so) : 0.0f;
         if (D > 0.0f) {
-          const float a = std::exp(-m.sigmaT * D * (zb - za) / c);
+          const float a = std::exp(-m.sigmaT * D * (tb - ta));
           const Vec3 S = maps ? maps->source(x, -ray.dir) : traced(x, -ray.dir);
           L += (T * m.albedo * (1.0f - a)) * S;
           T *= a;

@@ -59,14 +59,18 @@ void main() {
   if (any(greaterThanEqual(ij, uGrid.xy))) return;
   vec3 dir = cameraRay((vec2(ij) + 0.5) * uSize / vec2(uGrid.xy));
   float c = dot(dir, uForward);
+  // Each slice clipped to the column's piece inside the box (cpu/froxel.cpp).
+  float t0 = 0.0, t1 = -1.0;
+  if (uSigmaT > 0.0 && !intersectBox(uEye, dir, 0.0, kInf, t0, t1)) t1 = -1.0;
   vec3 L = vec3(0.0);
   float T = 1.0;
   for (int k = 0; k < uGrid.z; ++k) {
     float za = sliceDepth(float(k)), zb = sliceDepth(float(k + 1));
-    vec3 x = uEye + dir * (0.5 * (za + zb) / c);
-    float D = uSigmaT > 0.0 ? densityAt(x) : 0.0;
+    float ta = max(za / c, t0), tb = min(zb / c, t1);
+    vec3 x = uEye + dir * (0.5 * (ta + tb));
+    float D = tb > ta ? densityAtIndex(x * uDensityScale + uDensityOffset) : 0.0;
     if (D > 0.0) {
-      float a = stepTransmittance(uSigmaT * D * (zb - za) / c);
+      float a = stepTransmittance(uSigmaT * D * (tb - ta));
 #ifdef SL_TRANSMITTANCE_MAP
       vec3 S = mapSource(x, -dir);
 #else

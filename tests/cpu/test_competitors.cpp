@@ -86,11 +86,11 @@ TEST(Froxel, ConvergesToExactAsTheGridRefines) {
                                    {"backend", "cpu"},
                                    {"froxel_grid", {12 * f, 9 * f, 16 * f}}}),
                         ref));
-  // Measured (48x36 image, CPU): 0.174, 0.0579, 0.000266 (at 48x36 columns every pixel has its
-  // own column); the finest limit is 1.5x its measurement.
+  // Measured (48x36 image, CPU, slices clipped to the box): 0.174, 0.0578, 0.000234 (at 48x36
+  // columns every pixel has its own column); the finest limit is 1.5x its measurement.
   EXPECT_LT(err[1], err[0]);
   EXPECT_LT(err[2], err[1]);
-  EXPECT_LT(err[2], 0.0004);
+  EXPECT_LT(err[2], 0.00035);
 }
 
 TEST(JitteredMarch, JitterChangesNothingWhereTheIntegrandIsConstant) {
@@ -226,9 +226,10 @@ TEST(Competitors, RenderObjectsOnTheCpuLikeExact) {
   const double jm = relL2(render(s, {{"method", "jittered-march"}, {"steps", 64}}), ref);
   const double fx = relL2(render(s, {{"method", "froxel"}, {"froxel_grid", {40, 30, 64}}}), ref);
   // Measured relative L2 to exact (40x30): jittered-march (64 steps) 0.00907, froxel
-  // (40x30x64) 0.0156, far below what the objects change (0.586: shadow and floor).
+  // (40x30x64) 0.0115 (0.0156 before its slices were clipped to the medium box), far below what
+  // the objects change (0.586: shadow and floor).
   EXPECT_LT(jm, 0.0136);
-  EXPECT_LT(fx, 0.0234);
+  EXPECT_LT(fx, 0.0173);
   EXPECT_GT(objectsShare, 0.39);
 }
 

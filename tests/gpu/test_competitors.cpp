@@ -43,8 +43,9 @@ TEST(GpuJitteredMarch, MatchesCpuForEveryJitterAndDownsample) {
 TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
   SCATTERLAB_REQUIRE_GPU();
   const std::string m = "froxel";
-  // Measured on llvmpipe: 9.8e-7, 3.2e-7, 9.5e-7 (float rounding of pow, log and exp); on an
-  // NVIDIA H200 (driver 580), 2026-11, issue 23: up to 2.8e-6. Limit 1.5x the largest.
+  // Measured on llvmpipe (slices clipped to the box, 2026-12-07): 4.7e-7, 3.2e-6, 3.3e-7 (float
+  // rounding of pow, log and exp); with SCATTERLAB_GPU_IMPRECISE=4 1.5e-6, 2.7e-6, 3.8e-7; on an
+  // NVIDIA H200 (driver 580, unclipped), 2026-11, issue 23: up to 2.8e-6. Limit 1.5x the largest.
   for (const Json& r :
        {Json{{"method", m}, {"froxel_grid", {20, 15, 32}}},
         Json{{"method", m}, {"froxel_grid", {40, 30, 16}}, {"depth_distribution", "linear"}},
@@ -52,7 +53,7 @@ TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
              {"froxel_grid", {13, 11, 24}},
              {"light_transmittance", "map"},
              {"transmittance_map_resolution", 16}}})
-    EXPECT_LT(blobGpuVsCpu(r), 4.2e-6) << r.dump();
+    EXPECT_LT(blobGpuVsCpu(r), 4.8e-6) << r.dump();
 }
 
 }  // namespace
