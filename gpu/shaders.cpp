@@ -1,6 +1,7 @@
 #include "gpu/shaders.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 
@@ -92,7 +93,50 @@ std::string loopGuardEpilogue(std::size_t serial) {
          std::to_string(serial) + "u);\n}\n";
 }
 
+// The built-ins whose results SCATTERLAB_GPU_IMPRECISE moves (see impreciseUlps()).
+constexpr const char* kImpreciseBuiltins[] = {"exp",  "exp2", "log",  "log2",   "sqrt",
+                                              "inversesqrt", "sin", "cos", "normalize", "length"};
+
+// Put before the files of every stage under SCATTERLAB_GPU_IMPRECISE: slImprecise moves a value
+// by ±`ulps` units in the last place, the sign from a hash of its bits (so that errors do not
+// all lean one way, and the same value always moves the same way); 0, ±1, infinities and NaN
+// stay, as hardware gives them exactly. Each listed built-in (and pow, of two arguments) is then
+// a macro around itself: a preprocessor does not expand a macro inside its own expansion.
+std::string imprecisePrologue(int ulps) {
+  std::string s =
+      "float slImprecise(float v) {\n"
+      "  if (v == 0.0 || abs(v) == 1.0 || isinf(v) || isnan(v)) return v;\n"
+      "  uint b = floatBitsToUint(v);\n"
+      "  uint h = (b ^ (b >> 16)) * 0x45d9f3bu;\n"
+      "  h ^= h >> 16;\n"
+      "  return uintBitsToFloat((h & 1u) != 0u ? b + " +
+      std::to_string(ulps) + "u : b - " + std::to_string(ulps) +
+      "u);\n"
+      "}\n"
+      "vec2 slImprecise(vec2 v) { return vec2(slImprecise(v.x), slImprecise(v.y)); }\n"
+      "vec3 slImprecise(vec3 v) { return vec3(slImprecise(v.xy), slImprecise(v.z)); }\n"
+      "vec4 slImprecise(vec4 v) { return vec4(slImprecise(v.xyz), slImprecise(v.w)); }\n"
+      "#define pow(x, y) slImprecise(pow(x, y))\n";
+  for (const char* f : kImpreciseBuiltins)
+    s += "#define " + std::string(f) + "(x) slImprecise(" + f + "(x))\n";
+  return s;
+}
+
 }  // namespace
+
+int impreciseUlps() {
+  static const int ulps = [] {
+    const char* v = std::getenv("SCATTERLAB_GPU_IMPRECISE");
+    if (!v || !*v) return 0;
+    char* end = nullptr;
+    const long n = std::strtol(v, &end, 10);
+    if (*end || n < 0 || n > 1024)
+      throw GpuError("SCATTERLAB_GPU_IMPRECISE: '" + std::string(v) +
+                     "' is not a number of ulps from 0 to 1024");
+    return int(n);
+  }();
+  return ulps;
+}
 
 int loopIterationLimit() {
   LoopGuard& g = loopGuard();
@@ -162,6 +206,7 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
     src += "#define " + std::string(b.name) + " " + std::to_string(b.value) + "\n";
   for (const std::string& c : sharedConstantDefines()) src += "#define " + c + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
+  if (const int ulps = impreciseUlps()) src += imprecisePrologue(ulps);
   std::string names;
   for (size_t i = 0; i < files.size(); ++i) names += (i ? " + " : "") + files[i];
   std::size_t serial = 0;

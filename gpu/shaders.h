@@ -50,6 +50,16 @@ std::string loopGuardCut();
 /// last reset (texelFetch is checked in every guarded stage); "" when none did.
 std::string fetchOutside();
 
+/// SCATTERLAB_GPU_IMPRECISE=N (0 … 1024; unset or 0: off): every stage is compiled with the
+/// results of exp, exp2, log, log2, pow, sqrt, inversesqrt, sin, cos, normalize and length moved
+/// by ±N units in the last place — what a GPU's approximate built-ins do (NVIDIA's are a few
+/// ulps off, more for pow and for exp of a large argument) where llvmpipe's are correctly rounded
+/// or nearly so. A test whose CPU ≡ GPU tolerance holds with N = 4 does not depend on llvmpipe's
+/// precision; one that fails shows a tolerance borrowed from llvmpipe or a result that jumps at a
+/// rounding (scripts/test-imprecise.sh). Throws GpuError naming the variable when it is not a
+/// number in range. No context.
+int impreciseUlps();
+
 /// A compute program from embedded files. Needs a current context.
 Program computeProgram(const std::vector<std::string>& files,
                        const std::vector<std::string>& defines, std::string_view label);

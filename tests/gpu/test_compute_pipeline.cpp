@@ -31,7 +31,7 @@ struct MarchCase {
   int spp = 1;
   float minT = 0.0f;
   bool glow = true;  ///< render.glow
-  /// The camera zoomed to 0.5° down the box's z axis from (0.5, 0.5, −2) instead of oblique.
+  /// The camera zoomed to 0.1° down the box's z axis from (0.5, 0.5, −2) instead of oblique.
   bool alongAxis = false;
 };
 
@@ -42,7 +42,7 @@ double viewMarchVsCpu(const MarchCase& c) {
   Json doc = blobSceneDoc(24, 32, 24);
   if (!c.lightInside) doc["lights"][0]["position"] = {1.25, 0.8, 0.3};
   doc["camera"]["spp"] = c.spp;
-  if (c.alongAxis) doc["camera"]["fov_y_deg"] = 0.5;
+  if (c.alongAxis) doc["camera"]["fov_y_deg"] = 0.1;
   Scene scene = sceneFromJson(doc);
   scene.background = Vec3(0.05f, 0.1f, 0.2f);
   if (!c.alongAxis) scene.camera.position = Vec3(1.6f, 1.1f, -1.5f);
@@ -97,35 +97,41 @@ double viewMarchVsCpu(const MarchCase& c) {
   return err;
 }
 
-// Tolerances: 1.5x the larger of what llvmpipe (Mesa 22.3.6, 2026-11-26) measured and what an
-// NVIDIA H200 measured for the same arithmetic (issue 23; the compute pipeline itself has not
-// run on hardware yet). The view march on uploaded volumes: llvmpipe 1.93e-6 / 1.99e-6 /
-// 1.02e-6; on the H200 a per-pixel march with the same per-step exp (jittered-march) differed
-// from the CPU by up to 3.3e-6. Limit 5e-6.
+// Tolerances: 1.5x the largest of what llvmpipe (Mesa 22.3.6, 2026-11-26) measured, what it
+// measured with a GPU's approximate built-ins (SCATTERLAB_GPU_IMPRECISE=2 / 4, 2026-12-07) and
+// what an NVIDIA H200 measured for the same arithmetic (issue 23; the compute pipeline itself
+// has not run on hardware yet). The view march on uploaded volumes: llvmpipe 1.93e-6 / 1.99e-6 /
+// 1.02e-6 (2026-12-07: 1.3e-7 / 2.1e-8 / 3.0e-8); imprecise 3.6e-6 / 2.3e-6 / 1.4e-6 (2 ulps),
+// 6.5e-6 / 3.5e-6 / 4.6e-6 (4 ulps); on the H200 a per-pixel march with the same per-step exp
+// (jittered-march) differed from the CPU by up to 3.3e-6. Limit 9.8e-6.
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightInsideTheMedium) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({}), 5e-6);
+  EXPECT_LT(viewMarchVsCpu({}), 9.8e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithFactoredLightsStrataAndEarlyExit) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 5e-6);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 9.8e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithoutTheGlowsSubsteps) {
   SCATTERLAB_REQUIRE_GPU();
   // render.glow false: A at each step's midpoint only, on the GPU as on the CPU.
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .glow = false}), 5e-6);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .glow = false}), 9.8e-6);
 }
 
 // Looking down an axis of the box, zoomed: the central rays cross the unit box's depth, 48
 // half-voxel steps, in exact arithmetic, so a step count by ceil alone rounded 48 on one backend
-// and 49 on the other (stepCount's slack, core/stages.h). Measured 2026-12-07 on llvmpipe:
-// 2.12e-7; with the GPU counting by ceil alone (the CPU with the slack) 5.66e-3. The limit is
-// the view march's above (from the H200's 3.3e-6).
+// and 49 on the other (stepCount's slack, core/stages.h). The slack moves the edge between 48
+// and 49 steps to a ratio of 48.001, which no ray of this view comes near: at 0.1° the corner
+// rays' ratio is 48.00005 (at 0.5° it was 48.0007 to 48.001, and a GPU's normalize 4 ulps off,
+// SCATTERLAB_GPU_IMPRECISE=4, gave four corner pixels 49 steps: 5.3e-4). Any step count has such
+// an edge somewhere; a generic view crosses it between pixels. Measured 2026-12-07 on llvmpipe
+// (0.1°): see the log; with the GPU counting by ceil alone (the CPU with the slack) it fails.
+// The limit is the view march's above.
 TEST(GpuViewMarch, MatchesCpuMarcherLookingDownAnAxis) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .alongAxis = true}), 5e-6);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .alongAxis = true}), 9.8e-6);
 }
 
 // A's far field (render.far_field): the GPU's grid of far terms (far_field.comp.glsl) and its
@@ -447,11 +453,12 @@ TEST(GpuDensityGather, EqualsTheCpuBuildAndTheRasterSplat) {
   std::printf("density gather: max abs vs CPU %.3g, vs raster %.3g (max density %.3g)\n",
               double(errCpu), double(errRaster), double(maxD));
   EXPECT_GT(maxD, 0.5f);
-  // vs CPU: llvmpipe 1.79e-7 at max D 1.13 (the exp); the H200's raster splat of a .sog's
-  // Gaussians 2.98e-7 at max D 0.96: 1.5x of the larger, 4.5e-7. vs raster: 0 on llvmpipe (the
-  // same sums in the same order); the bound is the same.
-  EXPECT_LT(errCpu, 4.5e-7f);
-  EXPECT_LT(errRaster, 4.5e-7f);
+  // vs CPU: llvmpipe 1.79e-7 at max D 1.13 (the exp), 4.8e-7 / 6.0e-7 with
+  // SCATTERLAB_GPU_IMPRECISE=2 / 4; the H200's raster splat of a .sog's Gaussians 2.98e-7 at
+  // max D 0.96: 1.5x of the largest, 9e-7. vs raster: 0 on llvmpipe (the same sums in the same
+  // order); the bound is the same.
+  EXPECT_LT(errCpu, 9e-7f);
+  EXPECT_LT(errRaster, 9e-7f);
 }
 
 TEST(GpuSphereBins, ListsEverySphereThatReachesABinInAscendingOrder) {
@@ -599,7 +606,10 @@ TEST(GpuComputePipeline, PerVoxelEndToEndMatchesCpu) {
 
 TEST(GpuComputePipeline, AdaptiveEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  endToEnd("adaptive", 2.9e-6, 2.1e-4);
+  // With SCATTERLAB_GPU_IMPRECISE=2 or 4 (2026-12-07) both pipelines 1.75e-5: the same samples
+  // per level, but one split taken by another sample of an error group (a flipped decision at
+  // a smaller scale than kFlippedSplitBound's). 1.5x that for the compute pipeline.
+  endToEnd("adaptive", 2.7e-5, 2.1e-4);
 }
 
 // Where no spot cone reaches (LitReach, shading/transport.h): the tracer leaves samples no cone
@@ -625,12 +635,12 @@ TEST(GpuComputePipeline, WhereNoConeReachesTheGpuSkipsAsTheCpu) {
     const double e = relL2(gpu.image, cpu.image);
     std::printf("%s vs CPU: %.3g (relative L2)\n", r.dump().c_str(), e);
     // Measured on llvmpipe 2026-11-28: 2.53e-6 / 2.51e-6 / 2.49e-6 (the spot's cone edge: its
-    // smoothstep rounds differently on the two). Not yet measured on hardware: the hardware
-    // factor (unmeasuredOnHardware), and for adaptive the flipped-decision bound where its
-    // samples per level differ from the CPU's.
+    // smoothstep rounds differently on the two); 2026-12-07 8.0e-7 / 8.1e-7 / 7.8e-7, with
+    // SCATTERLAB_GPU_IMPRECISE=2 6.4e-6 each, =4 1.19e-5 each. Not yet measured on hardware:
+    // 1.5x the largest, and for adaptive the flipped-decision bound where its samples per
+    // level differ from the CPU's.
     EXPECT_LT(e, decisionBound(gpu.stats.extra.value("samples_per_level", Json()),
-                               cpu.stats.extra.value("samples_per_level", Json()),
-                               unmeasuredOnHardware(2.53e-6)))
+                               cpu.stats.extra.value("samples_per_level", Json()), 1.8e-5))
         << r.dump();
     if (r["voxel_switch"] == 1000) {
       // The voxels traced: those the cone reaches; the cone test's trigonometry may differ by

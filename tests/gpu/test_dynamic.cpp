@@ -613,8 +613,11 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
   // Measured on llvmpipe 2026-11-26 (compute pipeline): extensions 1.45e-6, paper 1.33e-6; on
   // an NVIDIA H200 (driver 580), 2026-11, issue 23 (raster pipeline): extensions 3.3e-5,
   // paper 1.0e-3 (the paper's tiny epsilon splits where hardware and CPU arithmetic differ by a
-  // rounding: the same sample counts, other splits' order). ×1.5 of the larger, per variant.
-  EXPECT_LT(err, GetParam() ? 1.5e-3 : 5.0e-5);
+  // rounding: the same sample counts, other splits' order). With a GPU's approximate built-ins
+  // simulated (SCATTERLAB_GPU_IMPRECISE=2 / 4, 2026-12-07): extensions 1.0e-4 / 1.04e-4, paper
+  // 7.2e-3 / 7.9e-3, the same counts again — the paper's decisions at epsilon 2e-4 move its
+  // image by most of a percent at a rounding. ×1.5 of the largest, per variant.
+  EXPECT_LT(err, GetParam() ? 1.2e-2 : 1.6e-4);
 }
 INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuAdaptiveMethod, ::testing::Bool());
 
@@ -683,9 +686,10 @@ TEST(GpuAdaptiveMethod, VisibleTauTracesTheSampleAndItsProbesInParallel) {
       "%.3g\n",
       evaluate(visible), evaluate(sample), initial, err);
   // Measured on llvmpipe 2026-11-28: 5.6e-7 (4 096 invocations for 494 initial samples; 512
-  // with tau "sample"), the CPU's samples per level; the bound of the test above.
+  // with tau "sample"), the CPU's samples per level; 2026-12-07 8.3e-7, with
+  // SCATTERLAB_GPU_IMPRECISE=2 / 4 4.8e-5 / 5.2e-5 (the same counts, other splits). 1.5x that.
   EXPECT_LT(err, decisionBound(visible.stats.extra.value("samples_per_level", Json()),
-                               cpu.stats.extra.value("samples_per_level", Json()), 5.0e-5));
+                               cpu.stats.extra.value("samples_per_level", Json()), 7.8e-5));
 }
 
 /// The glow scene (a point light inside the medium) at 32³, 80×60: the compute march and the

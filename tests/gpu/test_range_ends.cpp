@@ -70,9 +70,11 @@ TEST_P(GpuRangeEnds, MatchTheCpuOrRefuseTheWork) {
   const RenderResult cpu = createMethod(scene, "", "cpu")->render(scene, nullptr);
   const double e = relL2(gpu.image, cpu.image);
   std::printf("%s: gpu vs cpu relative L2 %.3g\n", c.name, e);
-  // llvmpipe is the driver with the loop cap (gpu::loopIterationLimit() > 0).
-  EXPECT_LT(e, gpu::loopIterationLimit() > 0 && c.llvmpipe > 0 ? 1.5 * c.llvmpipe : c.bound)
-      << c.name;
+  // llvmpipe is the driver with the loop cap (gpu::loopIterationLimit() > 0); with a GPU's
+  // approximate built-ins simulated (SCATTERLAB_GPU_IMPRECISE) it is held to a GPU's bound
+  // (per_voxel_short_step: 3.9e-7 / 9.0e-7 at 2 / 4 ulps, 2026-12-07).
+  const bool llvmpipeArithmetic = gpu::loopIterationLimit() > 0 && gpu::impreciseUlps() == 0;
+  EXPECT_LT(e, llvmpipeArithmetic && c.llvmpipe > 0 ? 1.5 * c.llvmpipe : c.bound) << c.name;
 }
 
 /// The bounds. Measured on llvmpipe (the cases under its cap): per-voxel at march_step 2e-5

@@ -587,9 +587,10 @@ TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
       if (f == 0) {
         const double toCpu = compareImages(fresh, cpu.image).relL2;
         std::printf("switched %s, gpu vs cpu: relative L2 %.3g\n", method.c_str(), toCpu);
-        // Measured on llvmpipe: 1.94e-7 (2026-11-28), 2.05e-7 for both (2026-11-29); 1e-6
-        // leaves a GPU's float rounding room.
-        EXPECT_LT(toCpu, 1e-6);
+        // Measured on llvmpipe: 1.94e-7 (2026-11-28), 2.05e-7 for both (2026-11-29); with
+        // SCATTERLAB_GPU_IMPRECISE=2 / 4 (a GPU's approximate built-ins, 2026-12-07) 1.08e-6 /
+        // 9.4e-7. 1.5x the largest.
+        EXPECT_LT(toCpu, 1.6e-6);
       }
       // The same passes as a fresh render.
       EXPECT_EQ(compareImages(deviceImage(res), fresh).maxAbs, 0.0) << "frame " << f;

@@ -1,6 +1,7 @@
 /// Every GPU stage against its CPU twin on the same input (issue 6 tolerances), on llvmpipe in
 /// CI. Scenes are tiny so that each test takes a few seconds at most on a software rasteriser.
 
+#include <cstdio>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -176,10 +177,12 @@ TEST(GpuVolumeTracer, FortyLightsSplitBetweenLanesMatchTheCpu) {
   // Largest |gpu − cpu| / (|cpu| + 1e-3·max), value and gradient, measured on llvmpipe (Mesa
   // 22.3.6; GCC 12 build): S 3.7e-7, 7.4e-5; V 3.8e-7, 6.5e-4; ln V 1.7e-4, 6.5e-4. A clang 14
   // build: ∇V 1.02e-3. NVIDIA H200 (driver 580.159.04, 2026-11-27): ln V 2.63e-4 (the rest
-  // within the llvmpipe limits). Tolerances 1.5x the largest.
+  // within the llvmpipe limits). With SCATTERLAB_GPU_IMPRECISE=2 / 4 (2026-12-07): S 8.9e-7 /
+  // 9.95e-7, 1.33e-4 / 1.77e-4; V 5.3e-7 / 7.3e-7, 6.9e-4 / 8.6e-4; ln V 1.2e-4 / 2.5e-4,
+  // 4.6e-4 / 1.03e-3. Tolerances 1.5x the largest.
   for (const Space sp :
-       {Space{"S", false, false, 5.5e-7f, 1.1e-4f}, Space{"V", true, false, 5.8e-7f, 1.5e-3f},
-        Space{"ln V", true, true, 4e-4f, 1.5e-3f}}) {
+       {Space{"S", false, false, 1.5e-6f, 2.7e-4f}, Space{"V", true, false, 1.1e-6f, 1.6e-3f},
+        Space{"ln V", true, true, 4e-4f, 1.6e-3f}}) {
     PipelineSettings ps;
     ps.delta1 = 1.0f / 16;
     ps.delta2 = 1.0f / 32;
@@ -211,6 +214,8 @@ TEST(GpuVolumeTracer, FortyLightsSplitBetweenLanesMatchTheCpu) {
           gErr = std::max(gErr, std::abs(g[i].dS[a][ch] - c[i].dS[a][ch]) /
                                     (std::abs(c[i].dS[a][ch]) + 1e-3f * gMax));
       }
+    std::printf("forty lights, %s: value %.3g, gradient %.3g\n", sp.name, double(sErr),
+                double(gErr));
     EXPECT_LE(sErr, sp.tolS) << sp.name;
     EXPECT_LE(gErr, sp.tolGrad) << sp.name;
   }
