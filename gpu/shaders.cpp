@@ -93,15 +93,19 @@ std::string loopGuardEpilogue(std::size_t serial) {
          std::to_string(serial) + "u);\n}\n";
 }
 
-// The built-ins whose results SCATTERLAB_GPU_IMPRECISE moves (see impreciseUlps()).
-constexpr const char* kImpreciseBuiltins[] = {"exp",  "exp2", "log",  "log2",   "sqrt",
-                                              "inversesqrt", "sin", "cos", "normalize", "length"};
+}  // namespace
 
-// Put before the files of every stage under SCATTERLAB_GPU_IMPRECISE: slImprecise moves a value
-// by ±`ulps` units in the last place, the sign from a hash of its bits (so that errors do not
-// all lean one way, and the same value always moves the same way); 0, ±1, infinities and NaN
-// stay, as hardware gives them exactly. Each listed built-in (and pow, of two arguments) is then
-// a macro around itself: a preprocessor does not expand a macro inside its own expansion.
+namespace {
+// The built-ins whose results SCATTERLAB_GPU_IMPRECISE moves (see impreciseUlps()).
+constexpr const char* kImpreciseBuiltins[] = {"exp",         "exp2", "log", "log2",      "sqrt",
+                                              "inversesqrt", "sin",  "cos", "normalize", "length"};
+}  // namespace
+
+// slImprecise moves a value by ±`ulps` units in the last place, the sign from a hash of its bits
+// (so that errors do not all lean one way, and the same value always moves the same way); 0,
+// ±1, infinities and NaN stay, as hardware gives them exactly. Each listed built-in (and pow, of
+// two arguments) is then a macro around itself: a preprocessor does not expand a macro inside
+// its own expansion.
 std::string imprecisePrologue(int ulps) {
   std::string s =
       "float slImprecise(float v) {\n"
@@ -121,8 +125,6 @@ std::string imprecisePrologue(int ulps) {
     s += "#define " + std::string(f) + "(x) slImprecise(" + f + "(x))\n";
   return s;
 }
-
-}  // namespace
 
 int impreciseUlps() {
   static const int ulps = [] {

@@ -59,6 +59,9 @@ std::string fetchOutside();
 /// rounding (scripts/test-imprecise.sh). Throws GpuError naming the variable when it is not a
 /// number in range. No context.
 int impreciseUlps();
+/// The GLSL that does it for `ulps` (> 0), put after the #defines of every stage: slImprecise()
+/// and the built-ins as macros around themselves. No context.
+std::string imprecisePrologue(int ulps);
 
 /// A compute program from embedded files. Needs a current context.
 Program computeProgram(const std::vector<std::string>& files,

@@ -1,6 +1,8 @@
 /// GL foundations: context, RAII wrappers, embedded shaders and their failure paths.
 
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -247,6 +249,56 @@ TEST(GpuPassLayer, SharedConstantsReachTheShadersBitForBit) {
     EXPECT_EQ(text.find("1e-6 * R"), std::string::npos) << s.name;
     EXPECT_EQ(text.find("kLampDepth = 2"), std::string::npos) << s.name;
   }
+}
+
+/// What a shader's built-ins give for fixed arguments, with `prologue` before main.
+std::vector<float> builtInResults(const std::string& prologue) {
+  const std::string src = "#version 450 core\n" + prologue +
+                          "layout(local_size_x = 1) in;\n"
+                          "layout(std430, binding = 0) buffer Out { float v[]; };\n"
+                          "void main() {\n"
+                          "  v[0] = exp(0.7);\n"
+                          "  v[1] = sqrt(2.0);\n"
+                          "  vec3 n = normalize(vec3(1.0, 2.0, 3.0));\n"
+                          "  v[2] = n.x; v[3] = n.y; v[4] = n.z;\n"
+                          "  v[5] = pow(1.3, 2.5);\n"
+                          "  v[6] = log(3.0);\n"
+                          "  v[7] = exp(0.0);\n"
+                          "  v[8] = sqrt(0.0);\n"
+                          "}\n";
+  const gpu::Shader cs(GL_COMPUTE_SHADER, src, "built-ins test");
+  const gpu::Program p({&cs}, "built-ins test");
+  const gpu::Buffer out(9 * sizeof(float), nullptr, 0, "built-ins");
+  p.use();
+  out.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  gpu::dispatch("built-ins test", {1, 1, 1});
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<float> got(9);
+  out.read(got.data(), got.size() * sizeof(float));
+  return got;
+}
+
+TEST(GpuShaders, ImpreciseBuiltInsAreTheUlpsAskedAwayAndExactValuesStay) {
+  SCATTERLAB_REQUIRE_GPU();
+  // SCATTERLAB_GPU_IMPRECISE's prologue (the CI's second GPU run sets 4): each result of the
+  // built-ins N ulps from the driver's own, either way; exp(0) = 1 and sqrt(0) = 0 untouched.
+  const std::vector<float> exact = builtInResults(""),
+                           off = builtInResults(gpu::imprecisePrologue(4));
+  int up = 0;
+  for (std::size_t i = 0; i < 7; ++i) {
+    std::int32_t a, b;
+    std::memcpy(&a, &exact[i], sizeof a);
+    std::memcpy(&b, &off[i], sizeof b);
+    EXPECT_EQ(std::abs(b - a), 4) << "result " << i << ": " << exact[i] << " vs " << off[i];
+    up += b > a;
+  }
+  EXPECT_GT(up, 0);  // not all one way
+  EXPECT_LT(up, 7);
+  EXPECT_EQ(off[7], 1.0f);
+  EXPECT_EQ(off[8], 0.0f);
+  // The variable as the process read it (the whole suite runs with it unset and with 4).
+  const char* v = std::getenv("SCATTERLAB_GPU_IMPRECISE");
+  EXPECT_EQ(gpu::impreciseUlps(), v && *v ? std::atoi(v) : 0);
 }
 
 TEST(GpuPassLayer, ADispatchBeyondTheDeviceLimitIsAnErrorBeforeAnyWork) {
