@@ -1,8 +1,8 @@
 /// Every GPU stage against its CPU twin on the same input (issue 6 tolerances), on llvmpipe in
 /// CI. Scenes are tiny so that each test takes a few seconds at most on a software rasteriser.
 
-#include <cstdio>
 #include <unistd.h>
+#include <cstdio>
 
 #include <cstdlib>
 #include <filesystem>
