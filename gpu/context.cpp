@@ -197,6 +197,10 @@ Context::Context() {
   if (const char* off = std::getenv("SCATTERLAB_NO_GPU"); off && *off && std::strcmp(off, "0"))
     throw GpuError("no OpenGL context: the GPU backend is disabled by SCATTERLAB_NO_GPU=" +
                    std::string(off) + "; use --backend cpu");
+  // Validation checks every shader's compile log for warnings (gpu/gl.cpp, Shader): Mesa's
+  // shader cache skips the compile of a text it has seen, log and all, so validation turns the
+  // cache off unless the caller set it.
+  if (validationRequested()) setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
   std::optional<Egl> egl;
   if (gShareContext != EGL_NO_CONTEXT) {
     Egl shared;

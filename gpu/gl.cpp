@@ -515,14 +515,18 @@ Shader::Shader(GLenum stage, std::string_view source, std::string_view file) : s
   glCompileShader(id_);
   GLint ok = 0;
   glGetShaderiv(id_, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint n = 0;
-    glGetShaderiv(id_, GL_INFO_LOG_LENGTH, &n);
-    std::string log(size_t(std::max(n, 1)), '\0');
-    glGetShaderInfoLog(id_, n, nullptr, log.data());
-    log.resize(std::strlen(log.c_str()));
-    throw GpuError("shader " + std::string(file) + " failed to compile:\n" + log);
-  }
+  GLint n = 0;
+  glGetShaderiv(id_, GL_INFO_LOG_LENGTH, &n);
+  std::string log(size_t(std::max(n, 1)), '\0');
+  if (n > 1) glGetShaderInfoLog(id_, n, nullptr, log.data());
+  log.resize(std::strlen(log.c_str()));
+  if (!ok) throw GpuError("shader " + std::string(file) + " failed to compile:\n" + log);
+  // Under validation a warning is an error: Mesa's front end warns of a variable read before
+  // anything is written to it ("used uninitialized"), which llvmpipe reads as 0 and a GPU as
+  // whatever its register held.
+  if (validating() && log.find("warning") != std::string::npos)
+    throw GpuError("shader " + std::string(file) +
+                   " compiled with a warning (SCATTERLAB_GPU_VALIDATE):\n" + log);
   dumpShader(stage, source);
   label(GL_SHADER, id_, file);
   declared_ = gpu::declaredUniforms(source);

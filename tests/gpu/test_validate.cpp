@@ -171,6 +171,29 @@ TEST_F(GpuValidate, ATexelFetchOutsideItsTextureNamesThePass) {
   }
 }
 
+TEST_F(GpuValidate, AVariableReadBeforeItIsWrittenIsAnErrorNamingTheShader) {
+  // Mesa warns of it; llvmpipe reads 0 there, a GPU whatever its register held.
+  const char* body =
+      "layout(std430, binding = 0) writeonly buffer A { float a[]; };\n"
+      "void main() { float x; a[0] = x + 1.0; }\n";
+  try {
+    const gpu::Program p = program(body, "test uninitialised");
+    // A driver whose front end does not warn (not Mesa) compiles it: nothing to check there.
+    if (std::string(reinterpret_cast<const char*>(glGetString(GL_VENDOR))).find("Mesa") !=
+        std::string::npos)
+      ADD_FAILURE() << "compiled without an error";
+  } catch (const GpuError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("test uninitialised compiled with a warning"), std::string::npos) << m;
+    EXPECT_NE(m.find("used uninitialized"), std::string::npos) << m;
+  }
+  // Written first, the same shader compiles.
+  EXPECT_NO_THROW(
+      program("layout(std430, binding = 0) writeonly buffer A { float a[]; };\n"
+              "void main() { float x = 2.0; a[0] = x + 1.0; }\n",
+              "test initialised"));
+}
+
 TEST_F(GpuValidate, TwoTransfersSideBySideOverwriteAShaderWriteOverBoth) {
   // A shader writes all of a (the whole binding); an upload of its first 16 bytes and a clear
   // of the rest leave nothing of that write for a later read to wait for. The upload alone
