@@ -105,7 +105,8 @@ constexpr const char* kImpreciseBuiltins[] = {"exp",         "exp2", "log", "log
 // (so that errors do not all lean one way, and the same value always moves the same way); 0,
 // ±1, infinities and NaN stay, as hardware gives them exactly. Each listed built-in (and pow, of
 // two arguments) is then a macro around itself: a preprocessor does not expand a macro inside
-// its own expansion.
+// its own expansion. (An array's `.length()` would meet the `length` macro and fail to compile
+// under it: no shader calls it, and the imprecise CI run would show one that did.)
 std::string imprecisePrologue(int ulps) {
   std::string s =
       "float slImprecise(float v) {\n"
