@@ -93,17 +93,16 @@ std::string loopGuardEpilogue(std::size_t serial) {
          std::to_string(serial) + "u);\n}\n";
 }
 
-}  // namespace
-
-namespace {
 // The built-ins whose results SCATTERLAB_GPU_IMPRECISE moves (see impreciseUlps()).
 constexpr const char* kImpreciseBuiltins[] = {"exp",         "exp2", "log", "log2",      "sqrt",
                                               "inversesqrt", "sin",  "cos", "normalize", "length"};
+
 }  // namespace
 
 // slImprecise moves a value by ±`ulps` units in the last place, the sign from a hash of its bits
 // (so that errors do not all lean one way, and the same value always moves the same way); 0,
-// ±1, infinities and NaN stay, as hardware gives them exactly. Each listed built-in (and pow, of
+// ±1, infinities and NaN stay, as hardware gives them exactly (and values within `ulps` of 0 or
+// of infinity, which the move would carry across). Each listed built-in (and pow, of
 // two arguments) is then a macro around itself: a preprocessor does not expand a macro inside
 // its own expansion. (An array's `.length()` would meet the `length` macro and fail to compile
 // under it: no shader calls it, and the imprecise CI run would show one that did.)
@@ -111,7 +110,10 @@ std::string imprecisePrologue(int ulps) {
   std::string s =
       "float slImprecise(float v) {\n"
       "  if (v == 0.0 || abs(v) == 1.0 || isinf(v) || isnan(v)) return v;\n"
-      "  uint b = floatBitsToUint(v);\n"
+      "  uint b = floatBitsToUint(v), m = b & 0x7fffffffu;\n"
+      "  if (m <= " +
+      std::to_string(ulps) + "u || m >= 0x7f800000u - " + std::to_string(ulps) +
+      "u) return v;\n"
       "  uint h = (b ^ (b >> 16)) * 0x45d9f3bu;\n"
       "  h ^= h >> 16;\n"
       "  return uintBitsToFloat((h & 1u) != 0u ? b + " +
