@@ -215,29 +215,39 @@ TEST(GpuPassLayer, AProgramIsItsFilesAndDefines) {
   EXPECT_NE(a.key(), b.key());
 }
 
+/// What one invocation of a compute shader writes to `count` floats v[] at binding 0: the text
+/// is "#version 450 core", `head` (#defines, functions), the block, then main() around `body`.
+std::vector<float> oneInvocationFloats(const std::string& head, const std::string& body,
+                                       std::size_t count, const std::string& label) {
+  const std::string src = "#version 450 core\n" + head +
+                          "layout(local_size_x = 1) in;\n"
+                          "layout(std430, binding = 0) buffer Out { float v[]; };\n"
+                          "void main() {\n" +
+                          body + "}\n";
+  const gpu::Shader cs(GL_COMPUTE_SHADER, src, label);
+  const gpu::Program p({&cs}, label);
+  const gpu::Buffer out(count * sizeof(float), nullptr, 0, label);
+  p.use();
+  out.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  gpu::dispatch(label, {1, 1, 1});
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<float> got(count);
+  out.read(got.data(), got.size() * sizeof(float));
+  return got;
+}
+
 TEST(GpuPassLayer, SharedConstantsReachTheShadersBitForBit) {
   SCATTERLAB_REQUIRE_GPU();
   // Each constant of kSharedConstants written by a shader that sees only the injected #define
   // reads back as the C++ float exactly (the Eq. 4 clamp once drifted: 1e-9 on the CPU, 1e-6
   // in the splat shaders).
-  std::string src =
-      "layout(local_size_x = 1) in;\n"
-      "layout(std430, binding = 0) buffer Out { float v[]; };\nvoid main() {\n";
+  std::string head, body;
+  for (const std::string& d : gpu::sharedConstantDefines()) head += "#define " + d + "\n";
   int i = 0;
   for (const SharedConstant& c : kSharedConstants)
-    src += "  v[" + std::to_string(i++) + "] = " + c.define + ";\n";
-  src += "}\n";
-  std::string text = "#version 450 core\n";
-  for (const std::string& d : gpu::sharedConstantDefines()) text += "#define " + d + "\n";
-  const gpu::Shader cs(GL_COMPUTE_SHADER, text + src, "constants test");
-  const gpu::Program p({&cs}, "constants test");
-  const gpu::Buffer out(std::size(kSharedConstants) * sizeof(float), nullptr, 0, "constants");
-  p.use();
-  out.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
-  gpu::dispatch("constants test", {1, 1, 1});
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  std::vector<float> got(std::size(kSharedConstants));
-  out.read(got.data(), got.size() * sizeof(float));
+    body += "  v[" + std::to_string(i++) + "] = " + c.define + ";\n";
+  const std::vector<float> got =
+      oneInvocationFloats(head, body, std::size(kSharedConstants), "constants test");
   i = 0;
   for (const SharedConstant& c : kSharedConstants)
     EXPECT_EQ(got[std::size_t(i++)], c.value) << c.define;
@@ -253,29 +263,16 @@ TEST(GpuPassLayer, SharedConstantsReachTheShadersBitForBit) {
 
 /// What a shader's built-ins give for fixed arguments, with `prologue` before main.
 std::vector<float> builtInResults(const std::string& prologue) {
-  const std::string src = "#version 450 core\n" + prologue +
-                          "layout(local_size_x = 1) in;\n"
-                          "layout(std430, binding = 0) buffer Out { float v[]; };\n"
-                          "void main() {\n"
-                          "  v[0] = exp(0.7);\n"
-                          "  v[1] = sqrt(2.0);\n"
-                          "  vec3 n = normalize(vec3(1.0, 2.0, 3.0));\n"
-                          "  v[2] = n.x; v[3] = n.y; v[4] = n.z;\n"
-                          "  v[5] = pow(1.3, 2.5);\n"
-                          "  v[6] = log(3.0);\n"
-                          "  v[7] = exp(0.0);\n"
-                          "  v[8] = sqrt(0.0);\n"
-                          "}\n";
-  const gpu::Shader cs(GL_COMPUTE_SHADER, src, "built-ins test");
-  const gpu::Program p({&cs}, "built-ins test");
-  const gpu::Buffer out(9 * sizeof(float), nullptr, 0, "built-ins");
-  p.use();
-  out.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
-  gpu::dispatch("built-ins test", {1, 1, 1});
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  std::vector<float> got(9);
-  out.read(got.data(), got.size() * sizeof(float));
-  return got;
+  return oneInvocationFloats(prologue,
+                             "  v[0] = exp(0.7);\n"
+                             "  v[1] = sqrt(2.0);\n"
+                             "  vec3 n = normalize(vec3(1.0, 2.0, 3.0));\n"
+                             "  v[2] = n.x; v[3] = n.y; v[4] = n.z;\n"
+                             "  v[5] = pow(1.3, 2.5);\n"
+                             "  v[6] = log(3.0);\n"
+                             "  v[7] = exp(0.0);\n"
+                             "  v[8] = sqrt(0.0);\n",
+                             9, "built-ins test");
 }
 
 TEST(GpuShaders, ImpreciseBuiltInsAreTheUlpsAskedAwayAndExactValuesStay) {
