@@ -32,22 +32,22 @@ status=0
 
 # A top-level key of a run record ("  \"key\": value,") or one of its stats ("    ...").
 field() { sed -n "s/^$2\"$3\": \([^,]*\),\{0,1\}$/\1/p" "$1" | head -n 1; }
-# The scene file of scene NAME in CONFIG and the config's --set overrides, as compare's options
-# (for the relative L2 with the pixels next to each light masked, docs/metrics.md).
-sceneOptions() {
-  python3 - "$CONFIG" "$1" <<'PY'
+# compare's options per scene name, read from CONFIG once: the scene file and the config's --set
+# overrides (for the relative L2 with the pixels next to each light masked, docs/metrics.md).
+declare -A sceneOptions=()
+while IFS=$'\t' read -r name options; do
+  sceneOptions[$name]=$options
+done < <(python3 - "$CONFIG" <<'PY'
 import json, os, sys
-config, name = sys.argv[1], sys.argv[2]
+config = sys.argv[1]
 doc = json.load(open(config))
+sets = "".join(" --set " + kv for kv in doc.get("set", []))
 for s in doc.get("scenes", []):
     f = s["file"] if isinstance(s, dict) else s
-    if os.path.splitext(os.path.basename(f))[0] == name:
-        print("--scene", os.path.join(os.path.dirname(config), f))
-        for kv in doc.get("set", []):
-            print("--set", kv)
-        break
+    name = os.path.splitext(os.path.basename(f))[0]
+    print(name + "\t--scene " + os.path.join(os.path.dirname(config), f) + sets)
 PY
-}
+)
 max() { awk -v r="$1" -v w="$2" 'BEGIN { print (r > w ? r : w) }'; }
 pairs=0 over=0 differ=0 worst=0 worstMasked=0 objects=0 worstObjects=0 table=$OUT/cpu_gpu.txt.tmp
 : >"$table"
@@ -56,8 +56,8 @@ for gpu in "$OUT"/images/*-gpu.exr; do
   [[ -e $gpu ]] || continue
   id=$(basename "$gpu" -gpu.exr) cpu=${gpu%-gpu.exr}-cpu.exr
   [[ -e $cpu ]] || continue
-  # shellcheck disable=SC2046  # one option or value per line, none with spaces
-  cmp=$("$CLI" compare --json "$gpu" "$cpu" $(sceneOptions "${id%%__*}"))
+  # shellcheck disable=SC2086  # options and values without spaces, split on purpose
+  cmp=$("$CLI" compare --json "$gpu" "$cpu" ${sceneOptions[${id%%__*}]:-})
   rel=$(sed -n 's/^ *"rel_l2": \([^,]*\),$/\1/p' <<<"$cmp")
   masked=$(sed -n 's/^ *"masked_rel_l2": \([^,]*\),$/\1/p' <<<"$cmp")
   [[ -n $masked ]] && masked=$(printf '%.3e' "$masked")
