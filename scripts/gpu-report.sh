@@ -10,6 +10,16 @@
 #   test_gpu runs first, after the device: whether the GPU draws right matters more than how fast,
 #   and a device call is cut at 10 minutes (each step has its own timeout; together 540 s).
 # Usage: scripts/gpu-report.sh [OUT_DIR]   (default gpu-report/; after scripts/setup.sh).
+#        scripts/gpu-report.sh --table2 [OUT_DIR]   the harness's GPU Table 2 instead
+#   (data/experiments/table2_gpu.json: every method cold and steady at 800×600 over the plume's
+#   resolutions and lights and the shaft's spot lights, errors against the CPU's per-voxel and
+#   exact; ~68 runs, meant as a second device call of its own). Its images stay in
+#   out/table2_gpu (a rerun on the same machine resumes there); OUT_DIR/table2_gpu/ gets
+#   results.json, results.csv and report.md. Then, here: python3 scripts/results_md.py
+#   --table2-gpu OUT_DIR/table2_gpu writes docs/RESULTS.md's "GPU Table 2". TABLE2_CONFIG names
+#   another config (a smaller one, to check the plumbing on llvmpipe).
+# Both end with scripts/gpu-targets.py (issues 33 and 34's targets, met or missed) where the
+# machine has python3; run it here on OUT_DIR otherwise.
 # On a machine without packages: ../shared/tools/gpu-bundle.sh here, then on that machine
 #   bash .gpu-bundle/run.sh bash scripts/gpu-report.sh
 #   (where the bundle's run.sh sets B= to a relative path, make it absolute first: the links it
@@ -22,6 +32,8 @@
 # SCATTERLAB_GPU_BENCH_ITERS=1: its times are CPU times, only the counts mean something.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+TABLE2=0
+[[ ${1:-} == --table2 ]] && { TABLE2=1; shift; }
 OUT=${1:-gpu-report}
 mkdir -p "$OUT"
 bin() {  # a tool from build/bin, else from PATH (the GPU bundle's wrappers)
@@ -31,6 +43,33 @@ CLI=$(bin scatterlab) BENCH=$(bin scatterlab_bench) TESTS=$(bin test_gpu)
 [[ -n $CLI && -n $BENCH && -n $TESTS ]] || { echo "gpu-report: build first (scripts/setup.sh)" >&2; exit 2; }
 export SCATTERLAB_GPU_BENCH_ITERS=${SCATTERLAB_GPU_BENCH_ITERS:-30}
 status=0
+
+targets() {  # issues 33 and 34's targets from what OUT holds
+  if command -v python3 >/dev/null; then
+    echo "== targets (scripts/gpu-targets.py $*)"
+    python3 scripts/gpu-targets.py "$@" | tee "$OUT/targets.txt"
+  else
+    echo "== no python3 here: run python3 scripts/gpu-targets.py $* on the copy of $OUT"
+  fi
+}
+
+if [[ $TABLE2 == 1 ]]; then
+  echo "== device"
+  "$CLI" info --gpu | tee "$OUT/device.txt" || status=1
+  echo "load average: $(cat /proc/loadavg)" | tee -a "$OUT/device.txt"
+  echo "== GPU Table 2 (the harness, data/experiments/table2_gpu.json)"
+  WORK=out/table2_gpu
+  timeout 540 "$CLI" experiment "${TABLE2_CONFIG:-data/experiments/table2_gpu.json}" -o "$WORK" -q --no-plots \
+    --no-progress || status=1
+  mkdir -p "$OUT/table2_gpu"
+  for f in results.json results.csv report.md log.txt; do
+    [[ -f $WORK/$f ]] && cp "$WORK/$f" "$OUT/table2_gpu/"
+  done
+  [[ -f $OUT/table2_gpu/results.json ]] && targets --table2 "$OUT/table2_gpu" \
+    $([[ -f $OUT/frames.json ]] && echo --report "$OUT")
+  echo "== written to $OUT/ (status $status)"
+  exit $status
+fi
 
 echo "== device"
 "$CLI" info --gpu | tee "$OUT/device.txt" || status=1
@@ -49,5 +88,6 @@ echo "== GPU stage benchmarks"
 timeout 120 "$BENCH" --benchmark_filter='BM_Gpu(DensitySplat|VolumeTracer512|GradientSplat512|PerVoxel|ViewMarch800x600|SliceMarch800x600|GradientPipeline512|AdaptivePipeline)' \
   --benchmark_out="$OUT/stages.json" --benchmark_out_format=json | tee "$OUT/stages.txt" || status=1
 
+targets --report "$OUT"
 echo "== written to $OUT/ (status $status)"
 exit $status

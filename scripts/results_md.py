@@ -2,7 +2,7 @@
 """Writes docs/RESULTS.md from the harness's output directories (docs/harness.md):
 
     python3 scripts/results_md.py [--fig3 out/fig3] [--fig45 out/fig45] [--table2 out/table2]
-                                  [-o docs/RESULTS.md]
+                                  [--table2-gpu out/table2_gpu] [-o docs/RESULTS.md]
 
 Each directory is one `scatterlab experiment` run (its results.json). Our numbers are put beside
 the paper's, each section with the machine(s), load and commit its results record (results.json's
@@ -29,7 +29,7 @@ def load(d):
 
 
 # The sections this script writes, by the start of their heading.
-MINE = ("## Fig. 3", "## Fig. 4/5", "## Table 2")
+MINE = ("## Fig. 3", "## Fig. 4/5", "## Table 2", "## GPU Table 2")
 
 
 def previous_sections(path):
@@ -97,11 +97,80 @@ def err(run, ref):
     return e["rel_l2"] if e else None
 
 
+def samples_md(r):
+    """The run's samples, or the voxels per-voxel traced where the whole-scene fallback switched
+    (report.md's wording)."""
+    st = r.get("stats") or {}
+    if st.get("voxels_instead"):
+        return f"per-voxel: {st.get('traced_voxels', '?')} voxels"
+    return r.get("samples", "—")
+
+
+def ms_fps(ms):
+    return "—" if not ms else f"{ms:.3f} ({1000 / ms:.0f})"
+
+
+def gpu_table2(w, old, t2, d):
+    """GPU Table 2 (data/experiments/table2_gpu.json): cold and steady frames side by side, on
+    the device the results name."""
+    w("## GPU Table 2: steady and cold frames on a GPU\n")
+    if not t2:
+        keep(w, old, "## GPU Table 2", d)
+        return
+    w(machines_md(t2))
+    gpus = [g for m in t2.get("machines", [t2.get("machine", {})]) for g in
+            m.get("gpu_renderers", [])]
+    if not gpus or any("llvmpipe" in g.lower() for g in gpus):
+        w("**Not a GPU: llvmpipe runs the GL on the CPU; its times are CPU times. Only the host "
+          "waits, sample counts and errors below mean something.**\n")
+    refs = [x if isinstance(x, str) else x["name"] for x in t2["references"]]
+    sweeps = []
+    for r in t2["runs"]:
+        if r["sweep"] not in sweeps:
+            sweeps.append(r["sweep"])
+    baseline = "per-voxel-gpu"
+    for sw in sweeps:
+        runs = [r for r in t2["runs"] if r["sweep"] == sw]
+        axis = next(iter(runs[0]["axes"]), None)
+        base = {r["point"]: r for r in runs if r["method"] == baseline and r["status"] == "ok"}
+        w(f"### {sw}\n")
+        w(f"| {axis} | method | samples | cold ms (fps) | steady wall ms (fps) | steady GPU ms "
+          f"(fps) | steady host waits | paper fps | speed-up, steady GPU | " +
+          " | ".join(f"rel L2 vs {x}" for x in refs) + " |")
+        w("|---|---|---|---|---|---|---|---|---|" + "---|" * len(refs))
+        for r in runs:
+            x = r["axes"].get(axis)
+            if r["status"] != "ok":
+                w(f"| {x} | {r['method']} | {r['status']}: {r.get('error', '')} |" +
+                  " |" * (7 + len(refs)))
+                continue
+            st = r.get("steady") or {}
+            b = (base.get(r["point"]) or {}).get("steady") or {}
+            su = (b["gpu_ms"] / st["gpu_ms"] if b.get("gpu_ms") and st.get("gpu_ms") and
+                  r["method"] != baseline else None)
+            pf = r.get("paper", {}).get("fps")
+            waits = f"{st['host_waits']:.0f}" if "host_waits" in st else "—"
+            w(f"| {x} | {r['method']} | {samples_md(r)} | "
+              f"{ms_fps(r['median_ms']['total'])} | {ms_fps(st.get('wall_ms'))} | "
+              f"{ms_fps(st.get('gpu_ms'))} | "
+              f"{waits} | "
+              f"{pf if pf else '—'} | {f'{su:.2f}×' if su else '—'} | " +
+              " | ".join(pct(err(r, x)) for x in refs) + " |")
+        w("")
+    w("Cold = a new method per render, the image read back (what `scatterlab render` and the "
+      "harness's repetitions draw); steady = one method kept between renders, light 0 moved, the "
+      "image left on the device (a `Renderer`, what an engine draws); GPU = the frame's timer "
+      "queries. Speed-up = per-voxel-gpu's steady GPU time / the method's at the same point. "
+      "The paper's fps are an NVIDIA 8800 GTX's. Issue 33 and 34's targets from these rows: "
+      "`python3 scripts/gpu-targets.py --table2 DIR` (docs/gpu.md).\n")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--fig3", default="out/fig3")
     ap.add_argument("--fig45", default="out/fig45")
     ap.add_argument("--table2", default="out/table2")
+    ap.add_argument("--table2-gpu", default="out/table2_gpu")
     ap.add_argument("-o", "--output", default="docs/RESULTS.md")
     a = ap.parse_args()
 
@@ -202,6 +271,7 @@ def main():
           "The targets are the paper's speed-ups: ≥ 5.4× at 128³, ≥ 12.9× at 256³ and ≥ 44× "
           "with 64 point lights at ≤ 5% relative L2; where ours falls short, the dominant stage "
           "column says what the frame time is spent on (see the discussion in docs/harness.md).\n")
+    gpu_table2(w, old, load(a.table2_gpu), a.table2_gpu)
     d = os.path.dirname(a.output)
     if d:
         os.makedirs(d, exist_ok=True)

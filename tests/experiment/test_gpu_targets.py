@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""ctest GpuTargets.*: scripts/gpu-targets.py judges issues 33 and 34's targets from a report.
+
+A fake frames.json (google benchmark's JSON, the report's counters) with frames chosen on both
+sides of each bound, a test_gpu.txt and a fake GPU Table 2 (the harness's results.json): on a
+GPU's name every target gets met or MISSED as its figure says; on llvmpipe's the times are "CPU
+time" and only the counts and waits are judged; a missing input is exit 2.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPT = os.path.join(ROOT, "scripts", "gpu-targets.py")
+
+
+def frame(kind, case, res, lights, wall, gpu, waits=0, **counters):
+    names = ["fig3 gradient paper", "fig3 gradient defaults", "fig3 per-voxel defaults",
+             "shaft adaptive paper", "shaft adaptive defaults"]
+    return dict({"name": f"BM_Gpu{kind}Frame/{case}/{res}/{lights}/0/iterations:30/real_time",
+                 "real_time": wall, "time_unit": "ms", "gpu_ms": gpu, "host_waits": waits,
+                 "label": f"{kind.lower()}: {names[case]}, {lights} lights, compute, DEVICE"},
+                **counters)
+
+
+def benchmarks(device):
+    rows = [
+        # gradient paper: 128³ 0.5 ms GPU / 0.8 wall (met), 256³ 2.5 ms GPU (400 fps: missed)
+        frame("Steady", 0, 128, 1, 0.8, 0.5, skipped_pct=56.0, samples=512, tracer_inv=3584),
+        frame("Steady", 0, 256, 1, 2.8, 2.5),
+        frame("Steady", 0, 128, 64, 1.2, 1.0, samples=512, tracer_inv=30000),  # < 512·64
+        frame("Steady", 0, 256, 64, 2.4, 2.0),
+        frame("Steady", 1, 128, 1, 1.7, 1.5),  # 2.1× the paper's wall: missed
+        frame("Steady", 2, 128, 1, 1.2, 1.0),  # per-voxel 1000 fps: met
+        frame("Steady", 2, 256, 1, 11.0, 10.0),
+        frame("Steady", 2, 128, 64, 46.0, 45.0),  # 45× the gradient: met
+        frame("Steady", 2, 256, 64, 80.0, 79.0),  # 39.5×: missed
+        frame("Steady", 3, 128, 1, 2.2, 1.9, waits=2),  # 526 fps GPU: met; 2 waits
+        frame("Steady", 4, 128, 1, 1.3, 1.1),
+    ]
+    for r in rows:
+        r["label"] = r["label"].replace("DEVICE", device)
+    return {"context": {}, "benchmarks": rows}
+
+
+def table2(device):
+    def run(sweep, method, x, wall, gpu, exact):
+        return {"id": f"{sweep}__{method}__{x}", "status": "ok", "sweep": sweep, "method": method,
+                "registered_method": method.split("-gpu")[0], "axes": {"a": x},
+                "steady": {"frames": 10, "wall_ms": wall, "gpu_ms": gpu, "host_waits": 0.0},
+                "errors": {"per-voxel": {"rel_l2": 0.01}, "exact": {"rel_l2": exact}}}
+    runs = [run("resolution", "per-voxel-gpu", 128, 1.3, 1.0, 0.004),     # 1.08×: met
+            run("resolution", "gradient-gpu", 128, 1.3, 0.4, 0.03),       # 1.63×: missed
+            run("resolution", "gradient-gpu-defaults", 128, 1.1, 0.9, 0.005),  # on the front
+            run("resolution", "jittered-march-gpu", 128, 0.5, 0.3, 0.02),  # beats gradient-gpu
+            run("resolution", "froxel-gpu", 128, 0.5, 0.35, 0.05),
+            run("spot_lights", "adaptive-gpu", 1, 2.0, 1.8, 0.2)]
+    m = {"gpu_renderers": [device]}
+    return {"references": ["per-voxel", "exact"], "runs": runs, "machine": m, "machines": [m]}
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="scatterlab-gputargets-")
+    failures = []
+
+    def check(cond, what):
+        print(("ok   " if cond else "FAIL ") + what)
+        if not cond:
+            failures.append(what)
+
+    try:
+        for device, hardware in (("NVIDIA H200/PCIe/SSE2", True),
+                                 ("llvmpipe (LLVM 15.0.6, 256 bits)", False)):
+            rep, t2 = os.path.join(tmp, "report"), os.path.join(tmp, "report", "table2_gpu")
+            os.makedirs(t2, exist_ok=True)
+            with open(os.path.join(rep, "frames.json"), "w") as f:
+                json.dump(benchmarks(device), f)
+            with open(os.path.join(rep, "test_gpu.txt"), "w") as f:
+                f.write("[==========] 137 tests ran.\n[  PASSED  ] 136 tests.\n"
+                        "[  FAILED  ] 1 test, listed below:\n")
+            with open(os.path.join(t2, "results.json"), "w") as f:
+                json.dump(table2(device), f)
+            p = subprocess.run([sys.executable, SCRIPT, "--report", rep, "--table2", t2],
+                               capture_output=True, text=True)
+            check(p.returncode == 0, f"{device}: exit 0")
+            lines = p.stdout.splitlines()
+
+            def verdict(start):
+                hit = [x for x in lines if x.startswith(start)]
+                return hit[0].rsplit("  ", 1)[1].strip() if len(hit) == 1 else f"{len(hit)} lines"
+            timed = (lambda v: v) if hardware else (lambda v: "CPU time")
+            expect = {
+                "#33  gradient paper 128³ ≥ 1000 fps GPU": timed("met"),
+                "#33  gradient paper 128³ ≥ 500 fps wall": timed("met"),
+                "#34  gradient paper 256³ ≥ 500 fps GPU": timed("MISSED"),
+                "#33  gradient defaults within 2× of paper": timed("MISSED"),
+                "#33  adaptive paper (shaft) 128³ ≥ 500 fps GPU": timed("met"),
+                "#34  per-voxel 128³ ≥ 500 fps GPU": timed("met"),
+                "#34  gradient paper / per-voxel 128³ 64 lights ≥ 44×": timed("met"),
+                "#34  gradient paper / per-voxel 256³ 64 lights ≥ 44×": timed("MISSED"),
+                "#34  gradient paper / per-voxel 128³ 1 lights ≥ 1×": timed("met"),
+                # judged on any device: waits, counts, tests
+                "#33  steady frames wait for nothing": "MISSED",
+                "#34  plume: march steps skipped ≥ 50 %": "met",
+                "#34  tracer invocations ≥ samples × lights": "MISSED",
+                "#33  test_gpu: 0 failures": "MISSED",
+                "#33  harness steady per-voxel-gpu within": timed("met"),
+                "#33  harness steady gradient-gpu within": timed("MISSED"),
+                "#34  gradient-gpu 128³ on the Pareto front (vs exact)": timed("MISSED"),
+                "#34  gradient-gpu-defaults 128³ on the Pareto front": timed("met"),
+            }
+            for start, v in expect.items():
+                got = verdict(start)
+                check(got == v, f"{device}: {start.strip()} -> {v} (got {got})")
+            check("beaten by jittered-march-gpu" in p.stdout, f"{device}: names who beats it")
+            check("adaptive-gpu spot_lights" not in p.stdout,
+                  f"{device}: no front where nothing else was run")
+            check(lines[0].startswith(f"device: {device}"), f"{device}: names the device")
+        p = subprocess.run([sys.executable, SCRIPT, "--report", os.path.join(tmp, "none")],
+                           capture_output=True, text=True)
+        check(p.returncode == 2 and "frames.json" in p.stderr, "a missing report: exit 2")
+    finally:
+        if not failures:
+            shutil.rmtree(tmp, ignore_errors=True)
+    print("FAILED" if failures else "PASSED", len(failures), "failure(s)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
