@@ -284,7 +284,8 @@ void BM_GpuSteadyFrame(benchmark::State& state) {
   // The work of a frame (issue 34): the tracer's invocations, the march's steps looked up and
   // the share it jumped over in empty blocks.
   state.counters["tracer_inv"] = tracer;
-  state.counters["samples"] = samples;  // the frame's samples (0 where none, or switched to per-voxel)
+  state.counters["samples"] =
+      samples;  // the frame's samples (0 where none, or switched to per-voxel)
   state.counters["march_steps"] = steps;
   state.counters["skipped_pct"] = steps + skipped > 0 ? 100.0 * skipped / (steps + skipped) : 0.0;
   state.SetLabel("steady: " + frameLabel(c, state));
