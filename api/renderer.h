@@ -68,6 +68,11 @@ class Renderer {
   /// Applies a `--set` assignment ("lights.0.position=[0.5,1,0.5]") to the scene. On error
   /// (bad path or value) throws ConfigError and the renderer keeps its previous scene.
   void set(const std::string& assignment);
+  /// Several assignments, applied in order, then the scene parsed once: what an engine that
+  /// moves many lights a frame calls (64 light positions on fig3: one set's cost, not 64; bench
+  /// BM_RendererSet). All or nothing: on the first error it throws ConfigError and the renderer
+  /// keeps its previous scene.
+  void setAll(const std::vector<std::string>& assignments);
   /// Typed setters for an engine that moves lights and the camera per frame: the same as
   /// set("lights.<index>=…") and set("camera=…") with the scene format's keys (lightJson,
   /// cameraJson), checked as a scene file is. The light replaces lights[index] whole (a `path`

@@ -7,13 +7,21 @@
 ///     start-up).
 /// One iteration = 48 frames; the counter ms_per_frame is the wall time per frame. The ratio of
 /// the two is in docs/benchmarks.md ("Animation"). GPU variants are skipped without an EGL context.
+///   BM_RendererSet/<case>: what an engine's per-frame update costs the host (issue 33:
+///     microseconds, not a copy of the scene): Renderer::set of light 0's position (as a string,
+///     0; typed, setLight, 1), of the camera's position (2), and of every light's position in one
+///     setAll (3), on fig3 (800 Gaussian blobs) with one light or 64 (arg 1); no render in the
+///     loop. CPU backend: set() does no GL work unless a key of the render block or the medium
+///     changes.
 
 #include <benchmark/benchmark.h>
 
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include "api/scatterlab.h"
+#include "bench_scenes.h"
 #include "gpu/context.h"
 
 namespace scatterlab {
@@ -68,6 +76,49 @@ void animationSeparate(benchmark::State& state, std::string method, std::string 
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   state.counters["ms_per_frame"] = ms / (double(state.iterations()) * kFrames);
 }
+
+void BM_RendererSet(benchmark::State& state) {
+  initialize();
+  Json doc = readJsonFile(SCATTERLAB_SOURCE_DIR "/data/scenes/fig3.json");
+  bench::addLampRing(doc, int(state.range(1)));
+  Renderer r(doc, SCATTERLAB_SOURCE_DIR "/data/scenes", "gradient", "cpu");
+  const Json p0 = doc["lights"][0]["position"], c0 = doc["camera"]["position"];
+  Light light = r.scene().lights[0];
+  Camera camera = r.scene().camera;
+  std::vector<std::string> all(r.scene().lights.size());
+  int frame = 0;
+  for (auto _ : state) {
+    const double dx = 0.002 * (++frame % 5);
+    switch (state.range(0)) {
+      case 0:
+        r.set("lights.0.position=[" + std::to_string(p0[0].get<double>() + dx) + "," +
+              p0[1].dump() + "," + p0[2].dump() + "]");
+        break;
+      case 1:
+        light.position.x = float(p0[0].get<double>() + dx);
+        r.setLight(0, light);
+        break;
+      case 2:
+        camera.position.x = float(c0[0].get<double>() + dx);
+        r.setCamera(camera);
+        break;
+      default:
+        for (std::size_t l = 0; l < all.size(); ++l) {
+          const Json& p = doc["lights"][l]["position"];
+          all[l] = "lights." + std::to_string(l) + ".position=[" +
+                   std::to_string(p[0].get<double>() + dx) + "," + p[1].dump() + "," + p[2].dump() +
+                   "]";
+        }
+        r.setAll(all);
+    }
+  }
+  const char* const what[] = {"set(\"lights.0.position=...\")", "setLight", "setCamera",
+                              "setAll of every light's position"};
+  state.SetLabel(std::string(what[state.range(0)]) + ", fig3, " + std::to_string(state.range(1)) +
+                 " light(s)");
+}
+
+BENCHMARK(BM_RendererSet)->ArgsProduct({{0, 1, 2, 3}, {1, 64}})->Unit(benchmark::kMicrosecond);
 
 void registerAll() {
   for (const char* method : {"gradient", "per-voxel"})

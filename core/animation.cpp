@@ -67,6 +67,19 @@ bool densityMovesWithTime(const Json& d) {
   return true;  // dusty-room (wind), and types registered elsewhere
 }
 
+bool documentMovesWithTime(const Json& doc) {
+  if (!doc.is_object()) return false;
+  if (doc.contains("lights") && doc["lights"].is_array())
+    for (const Json& l : doc["lights"])
+      if (l.is_object() && l.contains("path")) return true;
+  if (doc.contains("medium") && doc["medium"].is_object()) {
+    const Json& medium = doc["medium"];
+    return medium.contains("density") && densityMovesWithTime(medium["density"]) &&
+           medium["density"].is_object();
+  }
+  return false;
+}
+
 Json sceneAtTime(const Json& doc, double t) {
   Json work = doc;
   if (work.is_object() && work.contains("lights") && work["lights"].is_array()) {

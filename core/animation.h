@@ -30,6 +30,10 @@ Vec3 pathPosition(const std::vector<PathKey>& path, double t);
 /// media, .sog frame sequences, and any type this function does not know.
 bool densityMovesWithTime(const Json& density);
 
+/// Whether sceneAtTime would change `doc` at some time: a light with a `path`, or a density
+/// that moves with time. A document without either is its own scene at every time.
+bool documentMovesWithTime(const Json& doc);
+
 /// A scene document prepared at time t: light paths evaluated into `position` and removed,
 /// and medium.density.time = t where the density moves with time. Throws ConfigError for a
 /// malformed path.

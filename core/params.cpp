@@ -384,6 +384,11 @@ void checkOverrideSyntax(const std::string& assignment) {
     throw ConfigError("--set '" + assignment + "': empty key in path");
 }
 
+bool isOverrideIndex(const std::string& part) {
+  return !part.empty() && part.size() <= 9 &&
+         part.find_first_not_of("0123456789") == std::string::npos;
+}
+
 void applyOverride(Json& doc, const std::string& assignment) {
   checkOverrideSyntax(assignment);
   const auto eq = assignment.find('=');
@@ -405,9 +410,7 @@ void applyOverride(Json& doc, const std::string& assignment) {
     if (node->is_array()) {
       // lights.0.position: a decimal index into an existing element (arrays never grow here,
       // so a typo cannot create a light with every other key missing).
-      const bool digits =
-          part.size() <= 9 && part.find_first_not_of("0123456789") == std::string::npos;
-      if (!digits)
+      if (!isOverrideIndex(part))
         throw ConfigError("--set '" + assignment + "': '" + walked + "' is an array of " +
                           std::to_string(node->size()) + "; '" + part +
                           "' is not an element index (0, 1, ...)");

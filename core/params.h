@@ -161,6 +161,10 @@ Json parseJson(std::string_view text, const std::string& origin);
 /// ConfigError naming the path.
 void applyOverride(Json& doc, const std::string& assignment);
 
+/// Whether an override path's `part` is an element index in applyOverride's sense: decimal
+/// digits, at most 9 of them (whether the element exists is the caller's check).
+bool isOverrideIndex(const std::string& part);
+
 /// The part of applyOverride's checks that needs no document: KEY=VALUE with a key path of
 /// non-empty parts, at most kMaxJsonDepth deep. Throws ConfigError naming the assignment; callers
 /// check every override before any work (issue 37: `--set '='` and sweep axes "." or "render."

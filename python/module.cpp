@@ -453,6 +453,17 @@ PYBIND11_MODULE(_core, m) {
             r.renderer.set(assignment);
           },
           py::arg("assignment"), "Sets a scene key from 'key=VALUE', as --set and C++ set()")
+      .def(
+          "set",
+          [](PyRenderer& r, const py::object& changes) {
+            const std::vector<std::string> all = assignments(changes);
+            GilReleased unlocked;
+            const std::lock_guard<std::mutex> hold(r.lock);
+            r.renderer.setAll(all);
+          },
+          py::arg("changes"),
+          "Sets several keys at once, a dict {key: value} or a list of 'key=VALUE', parsing the "
+          "scene once (C++ setAll: what moving many lights a frame wants); all or nothing")
       .def_property(
           "time",
           [](PyRenderer& r) {

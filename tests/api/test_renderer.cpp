@@ -283,6 +283,38 @@ TEST(Renderer, SetOutsideTheMediumKeepsTheMediumAndItsDocument) {
   EXPECT_EQ(r.scene().medium.sigmaT, 3.0f);
 }
 
+// setAll: the assignments in order, the scene parsed once — the document and scene of one set()
+// a key; all or nothing where any of them fails, in the override (an index past the lights) or
+// in the parse after them (an unknown render key), also when two change the same light.
+TEST(Renderer, SetAllIsTheSetsInOrderAndAllOrNothing) {
+  initialize();
+  Renderer one(blobDoc(), ".", "per-voxel", "cpu"), all(blobDoc(), ".", "per-voxel", "cpu");
+  one.render();
+  all.render();
+  const std::vector<std::string> changes = {"lights.0.position=[0.4,0.6,0.5]",
+                                            "lights.0.intensity=[1,2,3]", "camera.fov_y_deg=35",
+                                            "lights.0.position=[0.45,0.6,0.5]"};
+  for (const std::string& c : changes) one.set(c);
+  all.setAll(changes);
+  EXPECT_EQ(all.document(), one.document());
+  EXPECT_EQ(all.scene().lights[0].position, Vec3(0.45f, 0.6f, 0.5f));
+  EXPECT_EQ(all.scene().camera.fovYDeg, 35.0f);
+  EXPECT_TRUE(all.render().stats.extra.at("density_reused").get<bool>());
+  const Json before = all.document();
+  const Vec3 light = all.scene().lights[0].position;
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"lights.0.position=[0.1,0.1,0.1]", "lights.3.position=[0,0,0]"},
+        std::vector<std::string>{"lights.0.position=[0.1,0.1,0.1]", "lights.0.intensity=[2,2,2]",
+                                 "render.nonsense=1"},
+        std::vector<std::string>{"camera.width=64", "lights=[]", "lights.0=5"}}) {
+    EXPECT_THROW(all.setAll(bad), ConfigError) << bad.back();
+    EXPECT_EQ(all.document(), before) << bad.back();
+    EXPECT_EQ(all.scene().lights[0].position, light);
+    EXPECT_EQ(all.scene().camera.width, 32);
+  }
+  EXPECT_TRUE(all.render().stats.extra.at("density_reused").get<bool>());
+}
+
 // The typed setters (issue 36: what an engine calls per frame) are the string setters with the
 // scene format's keys: the same scene, the same image as a fresh render, the same errors.
 TEST(Renderer, TypedSettersAreTheStringSetters) {

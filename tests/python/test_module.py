@@ -265,6 +265,23 @@ class Usability(unittest.TestCase):
         with self.assertRaisesRegex(sl.ConfigError, "expected set\\(key, value\\) or set\\('key=VALUE'\\)"):
             r.set("camera.width")
 
+    def test_set_several_at_once_all_or_nothing(self):
+        # set({key: value}) / set(["key=VALUE"]) is C++ setAll: the same scene as one set() a key,
+        # the scene parsed once; a bad key anywhere leaves the renderer as it was.
+        one = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        one.set("lights.0.position", [0.2, 1.1, 0.4])
+        one.set("camera.fov_y_deg", 35)
+        many = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        many.set({"lights.0.position": np.array([0.2, 1.1, 0.4]), "camera.fov_y_deg": 35})
+        self.assertEqual(np.abs(one.render()[0] - many.render()[0]).max(), 0.0)
+        listed = sl.Renderer(sl.load_scene(box_scene()), method="exact", backend="cpu")
+        listed.set(["lights.0.position=[0.2,1.1,0.4]", "camera.fov_y_deg=35"])
+        self.assertEqual(np.abs(one.render()[0] - listed.render()[0]).max(), 0.0)
+        before = many.render()[0]
+        with self.assertRaisesRegex(sl.ConfigError, "camera.width"):
+            many.set({"lights.0.position": [0.9, 1.1, 0.4], "camera.width": 0})
+        self.assertEqual(np.abs(many.render()[0] - before).max(), 0.0)
+
     def test_list_methods(self):
         m = sl.list_methods()
         for name in ("exact", "per-voxel", "gradient", "adaptive"):
