@@ -59,8 +59,10 @@ std::string levelLabel(const char* what, std::size_t level) {
 /// list's end, where its top-up children begin and where the fallback's children begin, the
 /// budget's running kept count, count after a cut and top-up cut, the final list's overflow, the
 /// cut of each split level, the samples each level keeps and the top-up children of each split
-/// level; last three uints per level: its evaluate pass's dispatch with tau "visible" (8 samples
-/// per workgroup, dynamic_error.comp.glsl).
+/// level; three uints per level: its evaluate pass's dispatch with tau "visible" (8 samples
+/// per workgroup, dynamic_error.comp.glsl); last, three per level for its tracer pass and three
+/// for its probe pass (the tracer's samples per workgroup; the probes' y: their groups); then
+/// three for the tracer pass of the final list's children with ∇S, three for the voxels'.
 struct CountSlots {
   std::size_t L;
   std::size_t overflow() const { return L + 1; }
@@ -77,7 +79,12 @@ struct CountSlots {
   std::size_t childrenOf(std::size_t k) const { return end() + 8 + 2 * L + k; }
   std::size_t evaluate(std::size_t k) const { return end() + 8 + 3 * L + 3 * k; }
   std::size_t keptSamples() const { return end() + 8 + 3 * L + 3 * (L + 1); }
-  std::size_t words() const { return keptSamples() + 1; }
+  std::size_t trace(std::size_t k) const { return keptSamples() + 1 + 3 * k; }
+  std::size_t probes(std::size_t k) const { return keptSamples() + 1 + 3 * (L + 1) + 3 * k; }
+  std::size_t childTrace(std::size_t batch) const {
+    return keptSamples() + 1 + 6 * (L + 1) + 3 * batch;
+  }
+  std::size_t words() const { return childTrace(2); }
 };
 
 /// The most workgroups of the evaluate pass with tau "visible" (GL's least
@@ -295,8 +302,12 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
   ScopedGpuTimer t(timer, "ds evaluate+error");
   // pass 0: S and ∇S, parallel over (sample, point, light) (∇S = 0 for the per-voxel fallback's
   // voxels, as the CPU's gradients = false)
+  // After level 0 the count pass sized the tracer's and the probes' dispatches for the level's
+  // own count (a level's capacity is its grid's vertices: up to 4096 workgroups that would
+  // mostly return at once).
   traceLevel(inputs, lights, valueSpace(steps, mode != LevelEvaluation::FinalVoxels), steps.delta2,
-             l.samples, l.radiance, w.counts, k, l.capacity);
+             l.samples, l.radiance, w.counts, k, l.capacity, kFromZero,
+             k > 0 ? std::optional<std::size_t>(CountSlots{L}.trace(k)) : std::nullopt);
   if (mode != LevelEvaluation::Split) {  // a final level has S and ∇S, and no E
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return;
@@ -345,11 +356,18 @@ void evaluateLevel(DynamicSamplingWorkspace& w, const TracingInputs& inputs, con
     l.radiance.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kRadiance);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     w.probeSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kProbeSums);
-    // The count is known only on the GPU: workgroups for the level's capacity, at most 4096
-    // along x; they stride over the samples (as traceLevel).
-    const TracerShape shape = probeShape(lights);
-    dispatch("ds probes", {std::min<GLuint>(groups(l.capacity, GLuint(shape.slots)), 4096u),
-                           GLuint(groupsPerSample), 1});
+    // Level 0: workgroups for its count, known on the host; after it the count pass's size for
+    // the level's own count (at most kMaxTraceGroups along x; they stride over the samples).
+    if (k == 0) {
+      const TracerShape shape = probeShape(lights);
+      dispatch("ds probes",
+               {std::min<GLuint>(groups(l.capacity, GLuint(shape.slots)), kMaxTraceGroups),
+                GLuint(groupsPerSample), 1});
+    } else {
+      glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
+      dispatchIndirect("ds probes", GLintptr(CountSlots{L}.probes(k) * sizeof(GLuint)));
+      glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
   {  // pass 3: E_j from the groups' sums
@@ -506,10 +524,16 @@ void splitLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-/// Compact G_{k+1} into level k + 1: scan, count (and the next dispatch size), scatter. GPU
-/// times: "ds scan" (scan and count), "ds compact".
+/// The next level's tracer and probe passes as the count pass sizes them: samples per workgroup
+/// (the tracer's slots, the same for both) and the probes' groups (0: the level is not probed).
+struct IndirectShape {
+  GLuint samplesPerGroup = 1, probeGroups = 0;
+};
+
+/// Compact G_{k+1} into level k + 1: scan, count (and the next level's dispatch sizes), scatter.
+/// GPU times: "ds scan" (scan and count), "ds compact".
 void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::size_t next,
-                  std::size_t L, StageTimer* timer) {
+                  std::size_t L, const IndirectShape& shape, StageTimer* timer) {
   const Program& count =
       gpu::program({.compute = {"dynamic_level.comp.glsl"}}, "dynamic sampling count");
   const Program& program = gpu::program({.compute = {"grid_vertex.glsl", "compact.comp.glsl"}},
@@ -527,6 +551,11 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
     glUniform1ui(count.uniform("uDispatchSlot"), GLuint(CountSlots{L}.dispatch(0)));
     glUniform1ui(count.uniform("uEvaluateSlot"), GLuint(CountSlots{L}.evaluate(0)));
     glUniform1ui(count.uniform("uMaxEvaluateGroups"), kMaxEvaluateGroups);
+    glUniform1ui(count.uniform("uTraceSlot"), GLuint(CountSlots{L}.trace(0)));
+    glUniform1ui(count.uniform("uProbesSlot"), GLuint(CountSlots{L}.probes(0)));
+    glUniform1ui(count.uniform("uSamplesPerGroup"), shape.samplesPerGroup);
+    glUniform1ui(count.uniform("uProbeGroups"), shape.probeGroups);
+    glUniform1ui(count.uniform("uMaxTraceGroups"), kMaxTraceGroups);
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
@@ -663,24 +692,32 @@ void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std
     glUniform1ui(ends.uniform("uGradEndSlot"), GLuint(slots.gradEnd()));
     glUniform1ui(ends.uniform("uEndSlot"), GLuint(slots.end()));
     glUniform1ui(ends.uniform("uOverflowSlot"), GLuint(slots.finalOverflow()));
+    glUniform1ui(ends.uniform("uChildTraceSlot"), GLuint(slots.childTrace(0)));
+    glUniform1ui(ends.uniform("uSamplesPerGroup"), GLuint(tracerShape(lights, true).slots));
+    glUniform1ui(ends.uniform("uMaxTraceGroups"), kMaxTraceGroups);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.parts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kAssembleParts);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     dispatch("ds assemble end", {1, 1, 1});
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
+                    GL_COMMAND_BARRIER_BIT);
   }
   if (children[0] == 0 && children[1] == 0) return;
   // The children's S (final samples: no probes), in place: ∇S for those of the split grids,
   // none for the fallback's voxels (as the voxel level itself).
   ScopedGpuTimer t(timer, "ds evaluate+error");
+  // Their dispatches sized on the GPU for the children there are (the capacities count every
+  // vertex a top-up could take).
   if (children[0] > 0)
     traceLevel(inputs, lights, valueSpace(steps, true), steps.delta2, out.points, out.radiance,
-               w.counts, slots.gradEnd(), std::min(children[0], out.capacity), slots.keptEnd());
+               w.counts, slots.gradEnd(), std::min(children[0], out.capacity), slots.keptEnd(),
+               slots.childTrace(0));
   if (children[1] > 0)
     traceLevel(inputs, lights, valueSpace(steps, false), steps.delta2, out.points, out.radiance,
-               w.counts, slots.end(), std::min(children[1], out.capacity), slots.gradEnd());
+               w.counts, slots.end(), std::min(children[1], out.capacity), slots.gradEnd(),
+               slots.childTrace(1));
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
@@ -712,7 +749,13 @@ class GpuSplitPass final : public SplitPassSteps {
     const GridGeometry grid(in_.scene.medium.bounds, plan.grids[k]);
     if (plan.budget > 0) budgetLevel(w_, grid, k, L, plan.limits, plan.fallback(), in_.timer);
     splitLevel(w_, grid, k, L, plan.budget > 0, in_.timer);
-    compactLevel(w_, grid, k + 1, L, in_.timer);
+    // The next level's passes: probed unless it is the last (levelProbes: fewer before the
+    // per-voxel fallback).
+    const IndirectShape next{
+        .samplesPerGroup = GLuint(probeShape(in_.scene.lights.size()).slots),
+        .probeGroups =
+            k + 1 < L ? GLuint(probeGroups(levelProbes(in_.settings, plan.grids[k + 1]))) : 0u};
+    compactLevel(w_, grid, k + 1, L, next, in_.timer);
   }
   void endLevel(std::size_t k) override { checkGl("dynamic sampling: level " + std::to_string(k)); }
   void topUp() override {

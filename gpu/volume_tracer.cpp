@@ -68,7 +68,8 @@ ProgramVariant tracerProgramVariant(const TracerShape& shape, const TracerVarian
 
 void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
                 float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,
-                std::size_t level, std::size_t capacity, std::size_t firstSlot) {
+                std::size_t level, std::size_t capacity, std::size_t firstSlot,
+                std::optional<std::size_t> indirectSlot) {
   if (capacity == 0) return;
   const TracerShape shape = tracerShape(lights, variant.gradients);
   const Program& program = tracerProgram(shape, variant, inputs.shadows(), true);
@@ -77,10 +78,14 @@ void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVar
   glUniform1ui(program.uniform("uFirstSlot"),
                firstSlot == kFromZero ? 0xffffffffu : GLuint(firstSlot));
   counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
-  // The count is known only on the GPU: enough workgroups for the level's capacity, at most
-  // 4096 (up to 1.8 M invocations with gradients, several waves of a large GPU); they stride over
-  // the samples and those past the count return at once.
-  dispatch("ds trace", {std::min<GLuint>(groups(capacity, GLuint(shape.slots)), 4096u), 1, 1});
+  if (indirectSlot) {  // the level's own count, sized on the GPU
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, counts.id());
+    dispatchIndirect("ds trace", GLintptr(*indirectSlot * sizeof(GLuint)));
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+  } else {  // enough workgroups for the capacity; those past the count return at once
+    dispatch("ds trace",
+             {std::min<GLuint>(groups(capacity, GLuint(shape.slots)), kMaxTraceGroups), 1, 1});
+  }
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 

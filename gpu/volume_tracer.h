@@ -2,6 +2,7 @@
 /// The GPU radiance evaluator "volume-tracer" (DESIGN.md §3), registered in gpu/register.cpp.
 /// The interface override works in a GpuFrame (gpu/frame.h); the Volume overload is the pass.
 
+#include <optional>
 #include <span>
 
 #include "core/stages.h"
@@ -68,10 +69,17 @@ inline constexpr std::size_t kFromZero = std::size_t(-1);
 /// unless kFromZero), the counts read on the GPU from `counts` (binding::kLevelCounts: no
 /// read-back), at most `capacity` samples; parallel over (sample, point, light) as the
 /// evaluator's pass. `inputs` applied (TracingInputs), pass name "ds trace", timed by the
-/// caller's scope.
+/// caller's scope. Workgroups: for the capacity (at most kMaxTraceGroups; they stride over the
+/// count), or, with `indirectSlot`, the (x, 1, 1) that the GPU's count pass left at
+/// counts[indirectSlot] for the level's own count (dynamic_level.comp.glsl).
 void traceLevel(const TracingInputs& inputs, std::size_t lights, const TracerVariant& variant,
                 float delta2, const Buffer& points, const Buffer& results, const Buffer& counts,
-                std::size_t level, std::size_t capacity, std::size_t firstSlot = kFromZero);
+                std::size_t level, std::size_t capacity, std::size_t firstSlot = kFromZero,
+                std::optional<std::size_t> indirectSlot = std::nullopt);
+
+/// The most workgroups of a level's tracer and probe passes (up to 1.8 M invocations with
+/// gradients, several waves of a large GPU); they stride over the rest.
+inline constexpr unsigned kMaxTraceGroups = 4096;
 
 /// How the tracer's workgroups are laid out (volume_tracer.comp.glsl): `lanes` invocations split
 /// the lights of each of a sample's `rows` points (7 with gradients: x and x ± δ2·e_a), `slots`

@@ -15,7 +15,7 @@
 // children (the vertex, the grid's radius; S by the tracer afterwards) into the list.
 // SL_PART_ENDS (one invocation): each part's total, and the list's ends after the kept samples,
 // after the children with ∇S and after all; an end past the list's capacity is recorded as an
-// overflow (the samples past it are dropped).
+// overflow (the samples past it are dropped); the children's tracer dispatches.
 #ifdef SL_PART_ENDS
 layout(local_size_x = 1) in;
 #else
@@ -115,6 +115,10 @@ uniform uint uKeptEndSlot;   // counts[slot]: the end of the kept samples
 uniform uint uGradEndSlot;   // counts[slot]: the end of the children with ∇S
 uniform uint uEndSlot;       // counts[slot]: the list's end
 uniform uint uOverflowSlot;  // counts[slot]: the end asked beyond the capacity
+uniform uint uChildTraceSlot;   // counts[slot + 3·batch ...]: the tracer's (x, 1, 1) for the
+                                // children with ∇S (batch 0) and the voxels' (batch 1)
+uniform uint uSamplesPerGroup;  // samples a tracer workgroup holds
+uniform uint uMaxTraceGroups;
 void main() {
   uint end = 0u;
   uint group = 0u;
@@ -129,5 +133,14 @@ void main() {
   for (; group < 2u; ++group) counts[group == 0u ? uKeptEndSlot : uGradEndSlot] = min(end, uCapacity);
   counts[uEndSlot] = min(end, uCapacity);
   counts[uOverflowSlot] = end > uCapacity ? end : 0u;
+  // The children's tracer passes, for their own counts (the batches end where the next begins).
+  uint from[2] = uint[2](counts[uKeptEndSlot], counts[uGradEndSlot]);
+  uint to[2] = uint[2](counts[uGradEndSlot], counts[uEndSlot]);
+  for (uint b = 0u; b < 2u; ++b) {
+    uint n = to[b] - from[b];
+    counts[uChildTraceSlot + 3u * b] = min((n + uSamplesPerGroup - 1u) / uSamplesPerGroup, uMaxTraceGroups);
+    counts[uChildTraceSlot + 3u * b + 1u] = 1u;
+    counts[uChildTraceSlot + 3u * b + 2u] = 1u;
+  }
 }
 #endif

@@ -5,7 +5,8 @@
 // Without it (after the scan of G_{k+1}'s membership): |Q^{k+1}| = last offset + last flag,
 // clamped to the level's capacity (an overflow records the largest asked count and its level,
 // reported by the host once the frame is done), and the level's indirect dispatch sizes (64
-// samples per workgroup, and 8 for the evaluate pass with tau "visible").
+// samples per workgroup, 8 for the evaluate pass with tau "visible", and the tracer's and the
+// probe pass's: uSamplesPerGroup a workgroup, at most uMaxTraceGroups, the probes' groups in y).
 layout(local_size_x = 1) in;
 
 layout(std430, binding = BINDING_LEVEL_COUNTS) buffer LevelCounts { uint counts[]; };
@@ -38,6 +39,11 @@ uniform uint uOverflowSlot; // counts[slot]: largest asked count, counts[slot + 
 uniform uint uDispatchSlot; // counts[slot + 3·level ...]: the level's (x, 1, 1) dispatch
 uniform uint uEvaluateSlot; // likewise, its evaluate pass's with tau "visible" (8 per workgroup)
 uniform uint uMaxEvaluateGroups;  // at most this many workgroups (they stride over the rest)
+uniform uint uTraceSlot;    // counts[slot + 3·level ...]: the level's tracer pass (x, 1, 1)
+uniform uint uProbesSlot;   // likewise its probe pass (x, probe groups, 1); 0 groups: not probed
+uniform uint uSamplesPerGroup;  // samples a workgroup of either pass holds (the tracer's slots)
+uniform uint uProbeGroups;
+uniform uint uMaxTraceGroups;
 
 void main() {
   uint n = uVertexCount;
@@ -56,5 +62,14 @@ void main() {
   counts[e] = min((kept + 7u) / 8u, uMaxEvaluateGroups);
   counts[e + 1u] = 1u;
   counts[e + 2u] = 1u;
+  uint groups = min((kept + uSamplesPerGroup - 1u) / uSamplesPerGroup, uMaxTraceGroups);
+  uint t = uTraceSlot + 3u * uLevel;
+  counts[t] = groups;
+  counts[t + 1u] = 1u;
+  counts[t + 2u] = 1u;
+  uint p = uProbesSlot + 3u * uLevel;
+  counts[p] = uProbeGroups == 0u ? 0u : groups;
+  counts[p + 1u] = max(uProbeGroups, 1u);
+  counts[p + 2u] = 1u;
 }
 #endif
