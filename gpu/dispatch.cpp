@@ -1,5 +1,6 @@
 #include "gpu/dispatch.h"
 
+#include <algorithm>
 #include <array>
 #include <string>
 
@@ -10,6 +11,7 @@ namespace scatterlab::gpu {
 namespace {
 
 PassCounts counts;
+GLuint fold = kLeastWorkGroupCount;
 
 /// GL_MAX_COMPUTE_WORK_GROUP_COUNT per axis of the current context (read once per process:
 /// the context lives until exit).
@@ -34,6 +36,19 @@ void countPass(std::map<std::string, long long, std::less<>>& m, std::string_vie
 
 PassCounts passCounts() {
   return counts;
+}
+
+UVec3 linearDispatch(GLuint groupCount) {
+  if (groupCount <= fold) return UVec3(groupCount, 1, 1);
+  return UVec3(fold, (groupCount + fold - 1) / fold, 1);
+}
+
+GLuint linearFold() {
+  return fold;
+}
+
+void setLinearFoldForTesting(GLuint f) {
+  fold = f == 0 ? kLeastWorkGroupCount : std::min(f, kLeastWorkGroupCount);
 }
 
 void dispatch(std::string_view pass, UVec3 count, StageTimer* timer) {

@@ -29,6 +29,22 @@ inline GLuint groups(std::size_t n, GLuint size) {
   return GLuint((n + size - 1) / size);
 }
 
+/// The least GL_MAX_COMPUTE_WORK_GROUP_COUNT of any axis GL 4.5 allows (llvmpipe's and Intel's
+/// x; NVIDIA's x is 2³¹ − 1, its y and z this).
+inline constexpr GLuint kLeastWorkGroupCount = 65535;
+
+/// A one-dimensional pass of `groupCount` workgroups laid out so that no axis exceeds
+/// kLeastWorkGroupCount: (n, 1, 1) up to it, else rows of linearFold() = 65535 workgroups,
+/// (65535, ⌈n / 65535⌉, 1), the last row partly past the end. Its shaders index with
+/// SL_LINEAR_GROUP / SL_LINEAR_INVOCATION (every compute shader's prologue, gpu/shaders.cpp) and
+/// return past their count (a whole workgroup at once where they use barriers); a pass whose
+/// size the GPU writes (dynamic_level.comp.glsl) folds at the same linearFold().
+UVec3 linearDispatch(GLuint groupCount);
+/// The row length of linearDispatch: kLeastWorkGroupCount, or what setLinearFoldForTesting set
+/// (a short row makes every 1D pass of a small test scene span two axes, as a 256³ one does).
+GLuint linearFold();
+void setLinearFoldForTesting(GLuint fold);  ///< 0: back to kLeastWorkGroupCount
+
 /// What has been sent to the GPU through the pass layer since the process started (no
 /// context): the stats count them per frame as differences.
 struct PassCounts {

@@ -277,7 +277,7 @@ std::size_t prepareWorkspace(DynamicSamplingWorkspace& w,
 void dispatchOverLevel(const char* pass, const DynamicSamplingWorkspace& w, std::size_t k,
                        std::size_t L) {
   if (k == 0) {
-    dispatch(pass, {groups(w.levels[0].capacity, 64), 1, 1});
+    dispatch(pass, linearDispatch(groups(w.levels[0].capacity, 64)));
     return;
   }
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, w.counts.id());
@@ -477,7 +477,7 @@ void budgetLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::siz
     glUniform1ui(vertices.uniform("uHistogramBase"), histBase);
     l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
     w.histograms.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kGroupHistograms);
-    dispatch("ds budget vertices", {groups(nv, 256), 1, 1});
+    dispatch("ds budget vertices", linearDispatch(groups(nv, 256)));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
   dispatchCut(w, k, L, budget, fallback, false);
@@ -556,6 +556,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
     glUniform1ui(count.uniform("uSamplesPerGroup"), shape.samplesPerGroup);
     glUniform1ui(count.uniform("uProbeGroups"), shape.probeGroups);
     glUniform1ui(count.uniform("uMaxTraceGroups"), kMaxTraceGroups);
+    glUniform1ui(count.uniform("uLinearFold"), linearFold());
     w.inSet.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kInSet);
     w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
     w.counts.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLevelCounts);
@@ -573,7 +574,7 @@ void compactLevel(DynamicSamplingWorkspace& w, const GridGeometry& grid, std::si
   w.offsets.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kOffsets);
   l.samples.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
   l.ancestors.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextAncestors);
-  dispatch("ds compact", {groups(nv, 256), 1, 1});
+  dispatch("ds compact", linearDispatch(groups(nv, 256)));
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
@@ -650,7 +651,7 @@ void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std
         glUniform1ui(childFlags.uniform("uTopCutSlot"), GLuint(slots.topCut()));
         l.vertexKeys.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kVertexKeys);
       }
-      dispatch("ds assemble", {groups(part.n, 256), 1, 1});
+      dispatch("ds assemble", linearDispatch(groups(part.n, 256)));
     }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     if (total > 0) scanBuffer(w.inSet, w.offsets, GLuint(total), true, w.scanSums);
@@ -671,7 +672,7 @@ void assembleFinal(DynamicSamplingWorkspace& w, const TracingInputs& inputs, std
         glUniform1f(childScatter.uniform("uRadius"), grid.radius());
       }
       out.points.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kNextSamples);
-      dispatch("ds assemble", {groups(part.n, 256), 1, 1});
+      dispatch("ds assemble", linearDispatch(groups(part.n, 256)));
     }
     // The parts' totals and the list's ends.
     std::vector<GLuint> table;

@@ -43,7 +43,7 @@ void scanAt(const Buffer& in, const Buffer& out, GLuint n, bool flags, ScanScrat
   in.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanIn);
   out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
   blockSums.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanBlockSums);
-  dispatch("scan (block)", {blocks, 1, 1});
+  dispatch("scan (block)", linearDispatch(blocks));
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   if (blocks > 1) {
     ensure(sums[2 * depth + 1], blocks * sizeof(GLuint), "scanned block sums");
@@ -53,7 +53,7 @@ void scanAt(const Buffer& in, const Buffer& out, GLuint n, bool flags, ScanScrat
     glUniform1ui(add.uniform("uCount"), n);
     out.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanOut);
     sums[2 * depth + 1].bindBase(GL_SHADER_STORAGE_BUFFER, binding::kScanScannedSums);
-    dispatch("scan (add block sums)", {blocks, 1, 1});
+    dispatch("scan (add block sums)", linearDispatch(blocks));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
 }

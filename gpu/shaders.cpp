@@ -212,6 +212,11 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
   for (const std::string& c : sharedConstantDefines()) src += "#define " + c + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
   if (const int ulps = impreciseUlps()) src += imprecisePrologue(ulps);
+  if (stage == GL_COMPUTE_SHADER)  // a 1D pass's index when it spans two axes (linearDispatch)
+    src +=
+        "#define SL_LINEAR_GROUP (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x)\n"
+        "#define SL_LINEAR_INVOCATION (SL_LINEAR_GROUP * gl_WorkGroupSize.x + "
+        "gl_LocalInvocationID.x)\n";
   std::string names;
   for (size_t i = 0; i < files.size(); ++i) names += (i ? " + " : "") + files[i];
   std::size_t serial = 0;

@@ -231,7 +231,7 @@ const Texture& residualLattice(const std::shared_ptr<const SogDensity>& sog, Sta
     list.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kResidualEntries);
     glBindImageTexture(binding::kResidualImage, cache.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
                        GL_R32F);
-    dispatch("residual upload", {groups(entries.size(), 64), 1, 1});
+    dispatch("residual upload", linearDispatch(groups(entries.size(), 64)));
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   }
   checkGl("sog residual upload");

@@ -16,7 +16,7 @@ uniform float uRadius;
 uniform uint uCapacity;
 
 void main() {
-  uint v = gl_GlobalInvocationID.x;
+  uint v = SL_LINEAR_INVOCATION;
   if (v >= uVertexCount || inSet[v] == 0u) return;
   uint o = offsets[v];
   if (o >= uCapacity) return;

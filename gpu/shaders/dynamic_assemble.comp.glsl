@@ -56,7 +56,7 @@ uniform uint uCutSlot;    // counts[slot]: the level's cut
 uniform uint uTopCutSlot; // counts[slot]: the top-up's cut
 uniform int uKeepAll;     // 1: every sample of the level stays
 void main() {
-  uint j = gl_GlobalInvocationID.x;
+  uint j = SL_LINEAR_INVOCATION;
   if (j >= uCount) return;
   uint stays = 0u;
   if (j < counts[uLevel]) {
@@ -76,7 +76,7 @@ layout(std430, binding = BINDING_VERTEX_KEYS) readonly buffer VertexKeys { uint 
 uniform uint uCutSlot;    // counts[slot]: the level's cut
 uniform uint uTopCutSlot; // counts[slot]: the top-up's cut
 void main() {
-  uint v = gl_GlobalInvocationID.x;
+  uint v = SL_LINEAR_INVOCATION;
   if (v >= uCount) return;
   uint key = vertexKeys[v];
   flags[uBase + v] =
@@ -88,7 +88,7 @@ layout(std430, binding = BINDING_RADIANCE) readonly buffer Radiance { Record rad
 layout(std430, binding = BINDING_NEXT_SAMPLES) writeonly buffer Final { vec4 finalSamples[]; };
 layout(std430, binding = BINDING_NEXT_RADIANCE) writeonly buffer FinalRadiance { Record finalRadiance[]; };
 void main() {
-  uint j = gl_GlobalInvocationID.x;
+  uint j = SL_LINEAR_INVOCATION;
   if (j >= uCount || flags[uBase + j] == 0u) return;
   uint dst = offsets[uBase + j];
   if (dst >= uCapacity) return;
@@ -100,7 +100,7 @@ void main() {
 layout(std430, binding = BINDING_NEXT_SAMPLES) writeonly buffer Final { vec4 finalSamples[]; };
 uniform float uRadius;
 void main() {
-  uint v = gl_GlobalInvocationID.x;
+  uint v = SL_LINEAR_INVOCATION;
   if (v >= uCount || flags[uBase + v] == 0u) return;
   uint dst = offsets[uBase + v];
   if (dst >= uCapacity) return;

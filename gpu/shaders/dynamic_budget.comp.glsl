@@ -24,7 +24,7 @@ uniform uint uVertexCount;
 uniform uint uHistogramBase;  // the level's candidates' histogram; the vertices' follows it
 
 void main() {
-  uint v = gl_GlobalInvocationID.x;
+  uint v = SL_LINEAR_INVOCATION;
   if (v >= uVertexCount) return;
   uint key = vertexKeys[v];
   if (key > 0u) atomicAdd(histograms[uHistogramBase + uint(kBins) + key - 1u], 1u);

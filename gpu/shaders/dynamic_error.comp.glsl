@@ -53,7 +53,7 @@ uniform float uBiasWeight;      // bias_weight k: the groups' sums come in pairs
 #endif
 
 void main() {
-  uint j = gl_GlobalInvocationID.x;
+  uint j = SL_LINEAR_INVOCATION;
   if (j >= counts[uLevel]) return;
   float R = samples[j].w;
   precise float sum = 0.0;
@@ -113,7 +113,10 @@ void finish(uint j, uint count, uint slot) {
 void main() {
   uint count = counts[uLevel];
   uint lane = gl_LocalInvocationID.x, slot = gl_LocalInvocationID.y;
-  for (uint base = gl_WorkGroupID.x * kSlots; base < count; base += gl_NumWorkGroups.x * kSlots) {
+  // Workgroups stride over the samples; after level 0 without tau "visible" the count pass's
+  // dispatch may span two axes (linearDispatch).
+  const uint groupCount = gl_NumWorkGroups.x * gl_NumWorkGroups.y;
+  for (uint base = SL_LINEAR_GROUP * kSlots; base < count; base += groupCount * kSlots) {
     uint j = base + slot;
     if (j < count && lane <= 6u) {
       vec4 pr = samples[j];

@@ -44,6 +44,7 @@ uniform uint uProbesSlot;   // likewise its probe pass (x, probe groups, 1); 0 g
 uniform uint uSamplesPerGroup;  // samples a workgroup of either pass holds (the tracer's slots)
 uniform uint uProbeGroups;
 uniform uint uMaxTraceGroups;
+uniform uint uLinearFold;   // gpu/dispatch.h linearFold()
 
 void main() {
   uint n = uVertexCount;
@@ -55,8 +56,9 @@ void main() {
     atomicMax(counts[uOverflowSlot + 1u], uLevel);
   }
   uint d = uDispatchSlot + 3u * uLevel;
-  counts[d] = (kept + 63u) / 64u;
-  counts[d + 1u] = 1u;
+  uint g = (kept + 63u) / 64u;  // laid out as gpu/dispatch.h linearDispatch: rows of uLinearFold
+  counts[d] = min(g, uLinearFold);
+  counts[d + 1u] = max((g + uLinearFold - 1u) / uLinearFold, 1u);
   counts[d + 2u] = 1u;
   uint e = uEvaluateSlot + 3u * uLevel;
   counts[e] = min((kept + 7u) / 8u, uMaxEvaluateGroups);

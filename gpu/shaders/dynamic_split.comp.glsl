@@ -39,7 +39,7 @@ uniform int uCell;  // 1: mark the cell, not the sphere (split "cell", and the p
 uniform int uVoxels;  // 1: G_{k+1} is the per-voxel fallback's grid
 
 void main() {
-  uint s = gl_GlobalInvocationID.x;
+  uint s = SL_LINEAR_INVOCATION;
   if (s >= counts[uLevel] || !(double(errors[s]) > threshold)) return;
 #if defined(SL_BUDGET_KEYS) || defined(SL_BUDGET)
   int group = errorGroup(errors[s], threshold);

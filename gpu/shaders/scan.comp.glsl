@@ -3,7 +3,7 @@
 // shared memory (up-sweep, clear the root, down-sweep) and writes the block's total to
 // blockSums. The host scans blockSums the same way (recursively) and SL_SCAN_ADD adds the
 // scanned block sums to every element of the block. With uFlags = 1 the input counts non-zero
-// as one (flags -> slots).
+// as one (flags -> slots). Blocks past 65 535 span two axes (gpu/dispatch.h linearDispatch).
 #define SCAN_BLOCK 512u
 layout(local_size_x = 256) in;
 
@@ -14,8 +14,9 @@ layout(std430, binding = BINDING_SCAN_OUT) buffer Out { uint outData[]; };
 layout(std430, binding = BINDING_SCAN_SCANNED_SUMS) readonly buffer ScannedSums { uint scannedSums[]; };
 void main() {
   uint t = gl_LocalInvocationID.x;
-  uint base = gl_WorkGroupID.x * SCAN_BLOCK;
-  uint add = scannedSums[gl_WorkGroupID.x];
+  uint base = SL_LINEAR_GROUP * SCAN_BLOCK;
+  if (base >= uCount) return;  // past the last block (linearDispatch's last row)
+  uint add = scannedSums[SL_LINEAR_GROUP];
   uint a = base + 2u * t, b = a + 1u;
   if (a < uCount) outData[a] += add;
   if (b < uCount) outData[b] += add;
@@ -29,7 +30,8 @@ shared uint temp[SCAN_BLOCK];
 
 void main() {
   uint t = gl_LocalInvocationID.x;
-  uint base = gl_WorkGroupID.x * SCAN_BLOCK;
+  uint base = SL_LINEAR_GROUP * SCAN_BLOCK;
+  if (base >= uCount) return;  // the whole workgroup: past the last block (linearDispatch)
   uint a = base + 2u * t, b = a + 1u;
   uint va = a < uCount ? inData[a] : 0u;
   uint vb = b < uCount ? inData[b] : 0u;
@@ -53,7 +55,7 @@ void main() {
   memoryBarrierShared();
   barrier();
   if (t == 0u) {
-    blockSums[gl_WorkGroupID.x] = temp[SCAN_BLOCK - 1u];
+    blockSums[SL_LINEAR_GROUP] = temp[SCAN_BLOCK - 1u];
     temp[SCAN_BLOCK - 1u] = 0u;
   }
   for (uint d = 1u; d < SCAN_BLOCK; d <<= 1) {  // down-sweep

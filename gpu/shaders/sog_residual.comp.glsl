@@ -15,7 +15,7 @@ uniform ivec3 uLatticeDims;
 uniform float uStep;
 
 void main() {
-  uint e = gl_GlobalInvocationID.x;
+  uint e = SL_LINEAR_INVOCATION;
   if (e >= uCount) return;
   uint key = uint(entries[e].x);
   uint nx = uint(uLatticeDims.x), ny = uint(uLatticeDims.y);

@@ -7,6 +7,7 @@
 
 #include "core/stages.h"
 #include "cpu/radiance_evaluator.h"
+#include "gpu/dispatch.h"
 #include "gpu/dynamic_sampling.h"
 #include "gpu/reconstructions.h"
 #include "gpu/slice_marcher.h"
@@ -620,6 +621,50 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
   EXPECT_LT(err, GetParam() ? 1.2e-2 : 1.6e-4);
 }
 INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuAdaptiveMethod, ::testing::Bool());
+
+/// A one-dimensional pass past GL's least workgroup count per axis (65 535) spans two axes
+/// (gpu/dispatch.h linearDispatch): dynamic sampling's passes over a 256³ level grid's
+/// vertices did not, and `adaptive` at 256³ with its defaults was a GpuError on llvmpipe (and
+/// on any device whose x-limit is 65 535). Here rows of 3 workgroups make every 1D pass of a
+/// small scene fold as a 256³ one does — the scan, the budget's vertex pass, the compaction, the
+/// final list's assembly, and the count pass's indirect sizes — and every image, sample count and
+/// scan is the unfolded one bit for bit.
+TEST(GpuDispatch, OneDimensionalPassesPastTheAxisLimitFoldAndChangeNoBit) {
+  SCATTERLAB_REQUIRE_GPU();
+  struct Fold {
+    Fold(GLuint f) { gpu::setLinearFoldForTesting(f); }
+    ~Fold() { gpu::setLinearFoldForTesting(0); }
+  };
+  EXPECT_EQ(gpu::linearDispatch(65535), UVec3(65535, 1, 1));
+  EXPECT_EQ(gpu::linearDispatch(65536), UVec3(65535, 2, 1));
+  EXPECT_EQ(gpu::linearDispatch(66306), UVec3(65535, 2, 1));  // 257³ vertices / 256
+  std::mt19937 rng(5);
+  std::vector<std::uint8_t> flags(100000);
+  for (auto& f : flags) f = std::uint8_t(rng() % 3 == 0);
+  std::vector<std::uint32_t> cpu(flags.size()), gpu(flags.size());
+  const std::uint32_t total = exclusiveScan(flags, cpu);
+  const Scene scene = spotScene(24, 18);
+  const std::vector<Json> renders = {
+      Json{{"method", "adaptive"}, {"voxel_switch", 0}},  // budget, top-up, per-voxel fallback
+      Json{{"method", "adaptive"}, {"paper", true}},
+      Json{
+          {"method", "adaptive"}, {"voxel_switch", 0}, {"tau", "sample"}}};  // level-sized evaluate
+  std::vector<RenderResult> plain;
+  for (const Json& r : renders) plain.push_back(renderWith(scene, r, "gpu"));
+  {
+    const Fold fold(3);
+    EXPECT_EQ(gpu::linearDispatch(7), UVec3(3, 3, 1));
+    EXPECT_EQ(gpu::exclusiveScanGpu(flags, gpu), total);  // 196 blocks: 66 rows of 3
+    EXPECT_TRUE(cpu == gpu);
+    for (std::size_t i = 0; i < renders.size(); ++i) {
+      const RenderResult folded = renderWith(scene, renders[i], "gpu");
+      expectNoGlError();
+      EXPECT_EQ(folded.stats.samples, plain[i].stats.samples) << renders[i].dump();
+      EXPECT_TRUE(folded.image.pixels() == plain[i].image.pixels()) << renders[i].dump();
+    }
+  }
+  EXPECT_EQ(gpu::linearDispatch(7), UVec3(7, 1, 1));
+}
 
 /// The default levels (issue 35, forInitialSamples()): one decision for both backends. At 56³
 /// the finest allowed, 28, is added after 16; at 64³ with 6000 initial samples (18 per axis)
