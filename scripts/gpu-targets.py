@@ -21,7 +21,8 @@ import sys
 # BM_GpuSteadyFrame / BM_GpuColdFrame's cases (bench/bench_gpu.cpp kFrameCases).
 GRADIENT_PAPER, GRADIENT_DEFAULTS, PER_VOXEL, ADAPTIVE_PAPER, ADAPTIVE_DEFAULTS = range(5)
 CASE_NAMES = ["gradient paper (plume)", "gradient defaults (plume)", "per-voxel (plume)",
-              "adaptive paper (shaft)", "adaptive defaults (shaft)"]
+              "adaptive paper (shaft)", "adaptive defaults (shaft)",
+              "gradient defaults + far field (plume)"]
 
 # The harness's steady rows and the Renderer frames that are the same work (one light; the
 # harness's `lights` ring and the bench's lamp ring differ above one light): (sweep, method,
@@ -95,7 +96,7 @@ def frame_targets(fr, v):
     steady = lambda case, res, lights=1: fr.get("steady", case, res, lights)
     # Issue 33: host waits of steady frames, every method, compute pipeline.
     waits, seen = [], 0
-    for case in range(5):
+    for case in range(len(CASE_NAMES)):
         for res in (128, 256):
             for lights in (1, 64):
                 r = steady(case, res, lights)
@@ -262,7 +263,12 @@ def main():
     if res:
         harness_targets(res, fr, v)
     v.print()
-    print(f"{v.missed} missed")
+    failed = sorted((k, r["error"]) for k, r in (fr.rows.items() if fr else []) if "error" in r)
+    for (kind, case, res, lights, raster), why in failed:
+        name = CASE_NAMES[case] if case < len(CASE_NAMES) else f"case {case}"  # a newer bench
+        print(f"frame failed: {kind} {name} {res}³ {lights} lights"
+              f"{' raster' if raster else ''}: {why}")
+    print(f"{v.missed} missed" + (f", {len(failed)} frames failed" if failed else ""))
     return 0
 
 
