@@ -45,14 +45,9 @@ if not have_distributed():
 
 import experiment_dask  # noqa: E402
 from distributed import Client, LocalCluster  # noqa: E402
+from script_checks import Checks  # noqa: E402
 
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
+check = Checks()
 
 
 def alive(pid):
@@ -182,12 +177,11 @@ def main():
             client.close()
             cluster.close()
     finally:
-        if not failures:
+        if not check.failures:
             shutil.rmtree(tmp, ignore_errors=True)
         else:
             print("kept", tmp)
-    print("FAILED" if failures else "PASSED", len(failures), "failure(s)")
-    return 1 if failures else 0
+    return check.summary()
 
 
 if __name__ == "__main__":

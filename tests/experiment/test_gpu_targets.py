@@ -13,6 +13,8 @@ import subprocess
 import sys
 import tempfile
 
+from script_checks import Checks
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCRIPT = os.path.join(ROOT, "scripts", "gpu-targets.py")
 
@@ -67,12 +69,7 @@ def table2(device):
 
 def main():
     tmp = tempfile.mkdtemp(prefix="scatterlab-gputargets-")
-    failures = []
-
-    def check(cond, what):
-        print(("ok   " if cond else "FAIL ") + what)
-        if not cond:
-            failures.append(what)
+    check = Checks()
 
     try:
         for device, hardware in (("NVIDIA H200/PCIe/SSE2", True),
@@ -129,10 +126,9 @@ def main():
                            capture_output=True, text=True)
         check(p.returncode == 2 and "frames.json" in p.stderr, "a missing report: exit 2")
     finally:
-        if not failures:
+        if not check.failures:
             shutil.rmtree(tmp, ignore_errors=True)
-    print("FAILED" if failures else "PASSED", len(failures), "failure(s)")
-    return 1 if failures else 0
+    return check.summary()
 
 
 if __name__ == "__main__":

@@ -16,6 +16,8 @@ import subprocess
 import sys
 import tempfile
 
+from script_checks import Checks
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 OLD = """# Results beside the paper's
 
@@ -42,12 +44,7 @@ MACHINE = {"cpu_model": "Test CPU 9000", "cores_used": 3, "logical_cpus": 8,
 
 def main():
     tmp = tempfile.mkdtemp(prefix="scatterlab-resultsmd-")
-    failures = []
-
-    def check(cond, what):
-        print(("ok   " if cond else "FAIL ") + what)
-        if not cond:
-            failures.append(what)
+    check = Checks()
 
     try:
         fig3 = os.path.join(tmp, "fig3")
@@ -131,10 +128,9 @@ def main():
             check(("its times are CPU times" in g) == warned,
                   "GPU Table 2: the llvmpipe warning " + ("given" if warned else "absent"))
     finally:
-        if not failures:
+        if not check.failures:
             shutil.rmtree(tmp, ignore_errors=True)
-    print("FAILED" if failures else "PASSED", len(failures), "failure(s)")
-    return 1 if failures else 0
+    return check.summary()
 
 
 if __name__ == "__main__":
