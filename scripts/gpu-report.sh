@@ -53,10 +53,11 @@ targets() {  # issues 33 and 34's targets from what OUT holds
   fi
 }
 
+echo "== device"
+"$CLI" info --gpu | tee "$OUT/device.txt" || status=1
+echo "load average: $(cat /proc/loadavg)" | tee -a "$OUT/device.txt"
+
 if [[ $TABLE2 == 1 ]]; then
-  echo "== device"
-  "$CLI" info --gpu | tee "$OUT/device.txt" || status=1
-  echo "load average: $(cat /proc/loadavg)" | tee -a "$OUT/device.txt"
   echo "== GPU Table 2 (the harness, data/experiments/table2_gpu.json)"
   WORK=out/table2_gpu
   timeout 540 "$CLI" experiment "${TABLE2_CONFIG:-data/experiments/table2_gpu.json}" -o "$WORK" -q --no-plots \
@@ -67,27 +68,21 @@ if [[ $TABLE2 == 1 ]]; then
   done
   [[ -f $OUT/table2_gpu/results.json ]] && targets --table2 "$OUT/table2_gpu" \
     $([[ -f $OUT/frames.json ]] && echo --report "$OUT")
-  echo "== written to $OUT/ (status $status)"
-  exit $status
+else
+  echo "== test_gpu (compute and raster pipelines)"
+  timeout 150 "$TESTS" --gtest_brief=1 2>&1 | tee "$OUT/test_gpu.txt"
+  [[ ${PIPESTATUS[0]} -eq 0 ]] || status=1
+
+  echo "== frames (steady and cold; ms per frame, gpu_ms, host_waits)"
+  timeout 270 "$BENCH" --benchmark_filter='BM_Gpu(Steady|Cold)Frame' \
+    --benchmark_out="$OUT/frames.json" --benchmark_out_format=json \
+    --benchmark_counters_tabular=true | tee "$OUT/frames.txt" || status=1
+
+  echo "== GPU stage benchmarks"
+  timeout 120 "$BENCH" --benchmark_filter='BM_Gpu(DensitySplat|VolumeTracer512|GradientSplat512|PerVoxel|ViewMarch800x600|SliceMarch800x600|GradientPipeline512|AdaptivePipeline)' \
+    --benchmark_out="$OUT/stages.json" --benchmark_out_format=json | tee "$OUT/stages.txt" || status=1
+
+  targets --report "$OUT"
 fi
-
-echo "== device"
-"$CLI" info --gpu | tee "$OUT/device.txt" || status=1
-echo "load average: $(cat /proc/loadavg)" | tee -a "$OUT/device.txt"
-
-echo "== test_gpu (compute and raster pipelines)"
-timeout 150 "$TESTS" --gtest_brief=1 2>&1 | tee "$OUT/test_gpu.txt"
-[[ ${PIPESTATUS[0]} -eq 0 ]] || status=1
-
-echo "== frames (steady and cold; ms per frame, gpu_ms, host_waits)"
-timeout 270 "$BENCH" --benchmark_filter='BM_Gpu(Steady|Cold)Frame' \
-  --benchmark_out="$OUT/frames.json" --benchmark_out_format=json \
-  --benchmark_counters_tabular=true | tee "$OUT/frames.txt" || status=1
-
-echo "== GPU stage benchmarks"
-timeout 120 "$BENCH" --benchmark_filter='BM_Gpu(DensitySplat|VolumeTracer512|GradientSplat512|PerVoxel|ViewMarch800x600|SliceMarch800x600|GradientPipeline512|AdaptivePipeline)' \
-  --benchmark_out="$OUT/stages.json" --benchmark_out_format=json | tee "$OUT/stages.txt" || status=1
-
-targets --report "$OUT"
 echo "== written to $OUT/ (status $status)"
 exit $status
