@@ -249,8 +249,8 @@ double median(std::vector<double> v) {
 /// left on the device (Renderer::keepImageOnDevice). Real time per frame is the wall time an
 /// engine waits for a frame it does not read back; counters: gpu_ms (the median of the stats'
 /// gpu_ms_total: GPU time from timer queries), host_waits (the largest over the frames).
-/// Runs a frame benchmark's body; a scatterlab error (a device limit a case exceeds: the far
-/// field's storage block at 256³ on a device that addresses 128 MiB in one, ...) is the
+/// Runs a frame benchmark's body; a scatterlab error (a device limit a case exceeds: a storage
+/// buffer above what the device addresses in one block, ...) is the
 /// benchmark's error row, not the end of the run: the GPU report's other frames still come.
 template <class Body>
 void reportingErrors(benchmark::State& state, Body&& body) {

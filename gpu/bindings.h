@@ -74,14 +74,6 @@ inline constexpr GLuint kBinItems = 3;
 inline constexpr GLuint kBinSphereCount = 4;
 inline constexpr GLuint kBinCounts = 5;
 inline constexpr GLuint kBinOverflow = 6;
-/// vec4 per vertex of A's far field (render.far_field): far_field.comp.glsl writes it, the
-/// compute view march reads it (common.glsl farLookup). Never in one program with kErrors,
-/// kFillEntries or kBinCounts.
-inline constexpr GLuint kFarField = 5;
-/// The same buffer as far_field.comp.glsl writes it (its own binding, so that a program built
-/// with both declarations, as the shader tests build every variant, has no two blocks at one
-/// binding; that pass binds nothing else at 2).
-inline constexpr GLuint kFarFieldOut = 2;
 /// uint bit masks of the lights a step in each brick of A's far field evaluates (far_mask.comp.glsl
 /// writes them at kFarMaskOut, the compute view march reads them under SL_FAR_FIELD). Never in
 /// one program with kVertexAncestors.
@@ -129,6 +121,11 @@ inline constexpr GLuint kResidualTexture = 5;
 /// The R32F empty-space grid: per block of voxels the largest density a lookup can read
 /// (sampler3D uBlockMax, block_walk.glsl; gpu/empty_space.h).
 inline constexpr GLuint kBlockMaxTexture = 6;
+/// The RGBA32F grid of A's far field (render.far_field), a texel per vertex, read by texelFetch
+/// in the compute view march (sampler3D uFarField, common.glsl farLookup). A 3D texture, not a
+/// storage buffer: a 256³ medium's grid is 272 MB, above the 128 MiB that llvmpipe and Mesa's
+/// Intel drivers address in one storage block (GL's minimum is 16 MiB).
+inline constexpr GLuint kFarFieldTexture = 7;
 
 // ---- image units
 
@@ -160,6 +157,9 @@ inline constexpr GLuint kTransmittanceMapImage = 6;
 /// is added to.
 inline constexpr GLuint kResidualImage = 0;
 inline constexpr GLuint kDensityImage = 1;
+/// The RGBA32F grid of A's far field as far_field.comp.glsl writes it (and, updating it in
+/// place, reads it). That program binds no other image.
+inline constexpr GLuint kFarFieldImage = 0;
 
 }  // namespace binding
 
@@ -180,8 +180,6 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_COUNTERS", binding::kCounters},
     {"BINDING_RADIANCE", binding::kRadiance},
     {"BINDING_ERRORS", binding::kErrors},
-    {"BINDING_FAR_FIELD", binding::kFarField},
-    {"BINDING_FAR_FIELD_OUT", binding::kFarFieldOut},
     {"BINDING_FAR_MASK", binding::kFarMask},
     {"BINDING_FAR_MASK_OUT", binding::kFarMaskOut},
     {"BINDING_LEVEL_COUNTS", binding::kLevelCounts},
@@ -211,6 +209,8 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_RADIANCE_TEXTURE", binding::kRadianceTexture},
     {"BINDING_BLOCK_MAX_TEXTURE", binding::kBlockMaxTexture},
     {"BINDING_BLOCK_MAX_IMAGE", binding::kBlockMaxImage},
+    {"BINDING_FAR_FIELD_TEXTURE", binding::kFarFieldTexture},
+    {"BINDING_FAR_FIELD_IMAGE", binding::kFarFieldImage},
     {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
     {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
     {"BINDING_SURFACE_RADIANCE_TEXTURE", binding::kSurfaceRadianceTexture},

@@ -27,8 +27,9 @@ struct DeviceLights {
   Buffer buffer;
   /// A's far field of these lights in this density (render.far_field; gpu::ViewMarchGpu): its
   /// grid, kept with them while R and the lamp model stay, so a frame whose lights did not move
-  /// (a camera move: the far field is isotropic) runs no far-field pass.
-  mutable Buffer farField;
+  /// (a camera move: the far field is isotropic) runs no far-field pass. RGBA32F, a texel per
+  /// vertex (gpu/bindings.h kFarFieldTexture).
+  mutable Texture farField;
   mutable float farFieldRadius = 0.0f;  ///< R the grid was built with; 0: none
   mutable bool farFieldLamp = false;    ///< whether its terms hold the lamp model
   mutable IVec3 farFieldDims{0};        ///< its vertices per axis

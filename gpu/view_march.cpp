@@ -96,7 +96,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
   // place: their old terms taken out (a pass over the old lights), their new ones put in; whole
   // again after kMaxFarUpdates updates (FarFieldCache on the CPU, cpu/far_field.h, alike).
   const DeviceLights& lights = pass.inputs().lights();
-  const Buffer& farGrid = lights.farField;
+  const Texture& farGrid = lights.farField;
   farTermsPerVertex_ = far ? 0 : -1;
   farCounter_.reset();
   // The far field's passes compute only the vertices a step can read (SL_FAR_SKIP), from the
@@ -135,30 +135,34 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     if (update) {
       lights.farField = std::move(before->farField);
       lights.farFieldUpdates = before->farFieldUpdates + 1;
-      farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
+      glBindImageTexture(binding::kFarFieldImage, farGrid.id(), 0, GL_TRUE, 0, GL_READ_WRITE,
+                         GL_RGBA32F);
       glUniform1i(fp.uniform("uChangedCount"), GLint(changed.size()));
       glUniform1iv(fp.uniform("uChanged"), GLsizei(changed.size()), changed.data());
       // The old terms out with the old lights (and their lamp model's k), the new ones in.
       before->buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
       glUniform1f(fp.uniform("uSign"), -1.0f);
       dispatch("far field update", farGroups);
-      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
       lights.buffer.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kLights);
       glUniform1f(fp.uniform("uSign"), 1.0f);
       dispatch("far field update", farGroups);
       farTermsPerVertex_ = std::count_if(changed.begin(), changed.end(),
                                          [&](int l) { return lights.packed[l].type == 0.0f; });
     } else {
-      const std::size_t vertices =
-          std::size_t(farDims.x) * std::size_t(farDims.y) * std::size_t(farDims.z);
-      lights.farField = Buffer(vertices * 4 * sizeof(float), nullptr, 0, "far field");
+      // Every texel stored by the pass (0 where no step reads it).
+      lights.farField = Texture::make3D(GL_RGBA32F, farDims.x, farDims.y, farDims.z, "far field",
+                                        Texture::Contents::Overwritten);
       lights.farFieldUpdates = 0;
-      farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarFieldOut);
+      glBindImageTexture(binding::kFarFieldImage, farGrid.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
+                         GL_RGBA32F);
       dispatch("far field", farGroups);
       farTermsPerVertex_ = std::count_if(lights.packed.begin(), lights.packed.end(),
                                          [](const GpuLight& l) { return l.type == 0.0f; });
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    // The march's texelFetch, and the counter's read after the frame, see the writes.
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                    GL_SHADER_STORAGE_BARRIER_BIT);
     // The lights' masks per brick, for these lights: every spot and directional light, and the
     // point lights within 2R of the brick (timed with the grid's pass).
     {
@@ -211,7 +215,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glUniform1f(march.uniform("uGlow"), settings_.glow ? 1.0f : 0.0f);
     if (far) {
       setFar(march, "uFar");
-      farGrid.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarField);
+      glBindTextureUnit(binding::kFarFieldTexture, farGrid.id());
       lights.farMask.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFarMask);
       setIVec3(march, "uFarBricks", farBricks);
       glUniform1i(march.uniform("uFarWords"), farWords);

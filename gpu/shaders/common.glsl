@@ -367,9 +367,9 @@ float farWeight(int li, vec3 x, float R) {
 }
 
 #ifdef SL_FAR_FIELD
-// The grid of far terms Σ_l w_l·A_l (far_field.comp.glsl), x fastest; vertex (i, j, k) at
-// uFarLo + (i, j, k) · uFarCell.
-layout(std430, binding = BINDING_FAR_FIELD) readonly buffer FarFieldGrid { vec4 farA[]; };
+// The grid of far terms Σ_l w_l·A_l (far_field.comp.glsl): texel (i, j, k) of an RGBA32F 3D
+// texture is the vertex at uFarLo + (i, j, k) · uFarCell (gpu/bindings.h kFarFieldTexture).
+layout(binding = BINDING_FAR_FIELD_TEXTURE) uniform sampler3D uFarField;
 uniform float uFarR;
 uniform vec3 uFarLo;
 uniform vec3 uFarCell;
@@ -384,7 +384,7 @@ int farBrick(vec3 x) {
   c = clamp(c, ivec3(0), uFarBricks - 1);
   return (c.z * uFarBricks.y + c.y) * uFarBricks.x + c.x;
 }
-vec3 farAt(int i, int j, int k) { return farA[(k * uFarDims.y + j) * uFarDims.x + i].rgb; }
+vec3 farAt(int i, int j, int k) { return texelFetch(uFarField, ivec3(i, j, k), 0).rgb; }
 // FarField::lookup: trilinear between the grid's vertices, x clamped into the box.
 vec3 farLookup(vec3 x) {
   vec3 u = clamp((x - uFarLo) / uFarCell, vec3(0.0), vec3(uFarDims - ivec3(1)));

@@ -5,16 +5,17 @@
 // the key otherwise), so A's terms do not depend on the direction to the viewer.
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 // Names of its own (the march's are common.glsl's uFar*, under SL_FAR_FIELD).
+// The grid, a texel per vertex (RGBA32F; gpu/bindings.h kFarFieldImage).
 #ifdef SL_FAR_UPDATE
 // In place (gpu::ViewMarchGpu): the terms of the uChangedCount lights uChanged[] of the lights
 // bound now, times uSign, added to each vertex's sum: once with the lights before (−1), once
 // with the lights now (+1).
-layout(std430, binding = BINDING_FAR_FIELD_OUT) buffer FarFieldOut { vec4 farOut[]; };
+layout(rgba32f, binding = BINDING_FAR_FIELD_IMAGE) uniform image3D farOut;
 uniform int uChangedCount;
 uniform int uChanged[32];
 uniform float uSign;
 #else
-layout(std430, binding = BINDING_FAR_FIELD_OUT) writeonly buffer FarFieldOut { vec4 farOut[]; };
+layout(rgba32f, binding = BINDING_FAR_FIELD_IMAGE) writeonly uniform image3D farOut;
 #endif
 uniform float uBuildR;
 uniform vec3 uBuildLo;
@@ -49,7 +50,6 @@ void main() {
   barrier();
   ivec3 id = ivec3(gl_GlobalInvocationID);
   vec3 x = uBuildLo + vec3(id) * uBuildCell;
-  int v = (id.z * uBuildDims.y + id.y) * uBuildDims.x + id.x;
   bool inside = all(lessThan(id, uBuildDims));
 #ifdef SL_FAR_SKIP
   bool read = inside && farVertexRead(x);
@@ -59,7 +59,7 @@ void main() {
   if (read) {
     atomicAdd(groupVertices, 1u);
 #ifdef SL_FAR_UPDATE
-    vec3 a = farOut[v].xyz;
+    vec3 a = imageLoad(farOut, id).xyz;
     for (int c = 0; c < uChangedCount; ++c) {
       int li = uChanged[c];
       float w = farWeight(li, x, uBuildR);
@@ -72,11 +72,11 @@ void main() {
       if (w > 0.0) a += w * lightFactorTerm(li, x, vec3(0.0, 0.0, 1.0));
     }
 #endif
-    farOut[v] = vec4(a, 0.0);
+    imageStore(farOut, id, vec4(a, 0.0));
   }
 #ifndef SL_FAR_UPDATE
   else if (inside) {
-    farOut[v] = vec4(0.0);  // never read, but defined
+    imageStore(farOut, id, vec4(0.0));  // never read, but defined
   }
 #endif
   memoryBarrierShared();
