@@ -44,7 +44,9 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     march.use();
     pass.bind(march);
     tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
-    bindScreenImage(binding::kLowResImage, low, GL_WRITE_ONLY);
+    // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one).
+    const int parts = lightDispatches(scene, s_.steps, shadowRayIterations(scene, delta1_));
+    bindScreenImage(binding::kLowResImage, low, parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_R32F);
     glUniform2i(march.uniform("uLowSize"), lw, lh);
@@ -53,8 +55,12 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     glUniform1i(march.uniform("uJitter"), int(s_.jitter));
     glUniform1i(march.uniform("uTableSize"), kBlueNoiseSize);
     glUniform1f(march.uniform("uMinTransmittance"), minT_);
-    dispatch("jittered march", {groups(lw, 8), groups(lh, 8), 1});
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glUniform1i(march.uniform("uLightStride"), parts);
+    for (int part = 0; part < parts; ++part) {
+      glUniform1i(march.uniform("uLightFirst"), part);
+      dispatch("jittered march", {groups(lw, 8), groups(lh, 8), 1});
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
   }
   checkGl("jittered march");
   {
@@ -131,15 +137,23 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     scatter.use();
     pass.bind(scatter);
     slicingUniforms(scatter);
-    glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
-                       GL_RGBA32F);
+    // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one):
+    // a slice evaluates each light's shadow ray, or with the maps its 8 texels.
+    const int parts =
+        lightDispatches(scene, g.z, useMap ? 10.0 : shadowRayIterations(scene, delta1_));
+    glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0,
+                       parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY, GL_RGBA32F);
     if (useMap) {
       glBindImageTexture(binding::kTransmittanceMapImage, map.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
                          GL_R32F);
       glUniform1i(scatter.uniform("uMapRes"), R);
     }
-    dispatch("froxel accumulate", {groups(g.x, 8), groups(g.y, 8), 1});
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glUniform1i(scatter.uniform("uLightStride"), parts);
+    for (int part = 0; part < parts; ++part) {
+      glUniform1i(scatter.uniform("uLightFirst"), part);
+      dispatch("froxel accumulate", {groups(g.x, 8), groups(g.y, 8), 1});
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
   }
   checkGl("froxel accumulate");
   {

@@ -1,8 +1,11 @@
 // froxel, pass 1 (cpu/froxel.cpp, froxelAccumulate): one invocation per froxel column, front
 // to back over the depth slices; at each froxel's centre the in-scattering of its slice is
-// composited, and (L, T) after the froxel is stored.
+// composited, and (L, T) after the froxel is stored. On a driver that caps loop iterations the
+// lights may be split over dispatches (gpu::lightDispatches): this one takes lights uLightFirst,
+// uLightFirst + uLightStride, … and, unless it is the first (uLightFirst 0), adds the L the ones
+// before it stored at each froxel.
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = BINDING_FROXEL_IMAGE) uniform writeonly image3D uFroxels;
+layout(rgba32f, binding = BINDING_FROXEL_IMAGE) uniform image3D uFroxels;
 #ifdef SL_TRANSMITTANCE_MAP
 layout(r32f, binding = BINDING_TRANSMITTANCE_MAP_IMAGE) uniform readonly image3D uMap;
 uniform int uMapRes;
@@ -11,6 +14,8 @@ uniform ivec3 uGrid;
 uniform float uNear;
 uniform float uFar;
 uniform int uExponential;
+uniform int uLightFirst;
+uniform int uLightStride;
 
 // FroxelSlicing::depth (shading/screen_march.h).
 float sliceDepth(float k) {
@@ -41,7 +46,7 @@ float mapAt(int li, vec3 x) {
 // TransmittanceMaps::source: Σ_l E_l(x)·f(ω_l → ω)·map_l(x).
 vec3 mapSource(vec3 x, vec3 toViewer) {
   vec3 s = vec3(0.0);
-  for (int li = 0; li < uLightCount; ++li) {
+  for (int li = uLightFirst; li < uLightCount; li += uLightStride) {
     GpuLight l = lights[li];
     vec3 toLight;
     float dist, dist2, f;
@@ -74,11 +79,12 @@ void main() {
 #ifdef SL_TRANSMITTANCE_MAP
       vec3 S = mapSource(x, -dir);
 #else
-      vec3 S = sourceRadiance(x, -dir);
+      vec3 S = sourceRadiancePart(x, -dir, uLightFirst, uLightStride);
 #endif
       L += (T * uAlbedo * (1.0 - a)) * S;
       T *= a;
     }
-    imageStore(uFroxels, ivec3(ij, k), vec4(L, T));
+    vec3 before = uLightFirst > 0 ? imageLoad(uFroxels, ivec3(ij, k)).rgb : vec3(0.0);
+    imageStore(uFroxels, ivec3(ij, k), vec4(L + before, T));
   }
 }

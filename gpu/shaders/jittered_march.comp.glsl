@@ -1,9 +1,12 @@
 // jittered-march, pass 1 (cpu/jittered_march.cpp, jitteredMarchLowRes): one invocation per
 // low-resolution pixel, uSteps steps over the ray's piece inside the box at offsets
 // (k + o)·Δt, S traced to every light at each sample. SL_OBJECTS: the ray ends at the surface
-// pass's first surface, and S's visibility comes from the shadow maps (common.glsl).
+// pass's first surface, and S's visibility comes from the shadow maps (common.glsl). On a driver
+// that caps loop iterations the lights may be split over dispatches (gpu::lightDispatches): this
+// one traces lights uLightFirst, uLightFirst + uLightStride, … and, unless it is the first
+// (uLightFirst 0), adds the L the ones before it stored.
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = BINDING_LOW_RES_IMAGE) uniform writeonly image2D uLow;
+layout(rgba32f, binding = BINDING_LOW_RES_IMAGE) uniform image2D uLow;
 layout(r32f, binding = BINDING_LOW_RES_DEPTH_IMAGE) uniform writeonly image2D uLowDepth;
 layout(std430, binding = BINDING_JITTER_TABLE) readonly buffer JitterTable { float jitterTable[]; };
 uniform ivec2 uLowSize;
@@ -12,6 +15,8 @@ uniform int uSteps;
 uniform int uJitter;  // 0 none, 1 ign, 2 blue noise (Jitter order)
 uniform int uTableSize;
 uniform float uMinTransmittance;
+uniform int uLightFirst;
+uniform int uLightStride;
 
 float jitterOffset(ivec2 p) {
   if (uJitter == 0) return 0.5;
@@ -41,10 +46,12 @@ void main() {
       float D = densityAtIndex(u0 + float(k) * du);
       if (!(D > 0.0)) continue;
       float a = stepTransmittance(uSigmaT * D * dt);
-      L += (T * uAlbedo * (1.0 - a)) * sourceRadiance(uEye + dir * (t0 + (float(k) + o) * dt), -dir);
+      vec3 x = uEye + dir * (t0 + (float(k) + o) * dt);
+      L += (T * uAlbedo * (1.0 - a)) * sourceRadiancePart(x, -dir, uLightFirst, uLightStride);
       T *= a;
     }
   }
+  if (uLightFirst > 0) L += imageLoad(uLow, p).rgb;
   imageStore(uLow, p, vec4(L, T));
   imageStore(uLowDepth, p, vec4(depth));
 }
