@@ -11,7 +11,7 @@
 #include <random>
 
 #include "api/scatterlab.h"
-#include "bench/bench_scenes.h"
+#include "experiment/experiment.h"
 #include "gpu/context.h"
 #include "gpu/dynamic_sampling.h"
 #include "gpu/reconstructions.h"
@@ -216,7 +216,10 @@ constexpr FrameCase kFrameCases[] = {
     {"fig3", "gradient", false, 16},  // the defaults with A's far field (docs/gpu.md)
 };
 
-/// The case's scene at `res`³, 800×600, with `lights` point lights (bench::addLampRing).
+/// The case's scene at `res`³, 800×600, with `lights` lights: its first light on the harness's
+/// ring (ringOfLights, experiment/experiment.h; before 2026-12-07 bench::addLampRing, another
+/// ring), so that a frame here and the harness's steady row of data/experiments/table2_gpu.json
+/// at the same light count are the same scene (scripts/gpu-targets.py compares them).
 Json frameScene(const FrameCase& c, int res, int lights, bool raster) {
   Json doc = readJsonFile(std::string(SCATTERLAB_SOURCE_DIR "/data/scenes/") + c.scene + ".json");
   doc["medium"]["resolution"] = res;
@@ -228,7 +231,11 @@ Json frameScene(const FrameCase& c, int res, int lights, bool raster) {
   doc["render"]["gpu_pipeline"] = raster ? "raster" : "compute";
   if (c.farField > 0) doc["render"]["far_field"] = c.farField;
   if (*c.render) doc["render"].update(Json::parse(c.render));
-  bench::addLampRing(doc, lights);
+  const Json& b = doc["medium"]["bounds"];
+  const Vec3 centre =
+      0.5f * (Vec3(b["min"][0].get<float>(), b["min"][1].get<float>(), b["min"][2].get<float>()) +
+              Vec3(b["max"][0].get<float>(), b["max"][1].get<float>(), b["max"][2].get<float>()));
+  doc["lights"] = ringOfLights(doc["lights"][0], centre, lights);
   return doc;
 }
 

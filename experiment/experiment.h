@@ -113,8 +113,16 @@ struct ExperimentPlan {
 ExperimentPlan parseExperiment(const std::string& configPath,
                                const std::vector<std::string>& overrides = {});
 
+/// The `lights` sweep axis's lights (docs/harness.md): `first` (a scene's first light, as JSON)
+/// replicated on a ring of `n` lights around the box centre `centre`, rotated about +Y (its
+/// position about the centre, a direction with it), each with 1/n of its power (intensity or
+/// irradiance), so the total stays the same; n = 1 is `first` itself. The GPU report's frames
+/// (bench/bench_gpu.cpp) use the same ring, so that their frames and the harness's are the same
+/// scenes at every light count.
+Json ringOfLights(const Json& first, Vec3 centre, int n);
+
 /// Builds the scene of a run: the scene file, `sets` in order, then the first light replicated
-/// on a ring into `lights` lights (see docs/harness.md) when given.
+/// on a ring into `lights` lights (ringOfLights) when given.
 Scene buildRunScene(const std::string& sceneFile, const std::vector<std::string>& sets,
                     std::optional<int> lights);
 

@@ -456,8 +456,8 @@ void expandRuns(ExperimentPlan& plan, const std::vector<std::string>& globalSets
   }
 }
 
-/// `tmpl` (the scene's first light) replicated on a ring of `n` lights around the box centre `c`
-/// (rotated about +Y), each with 1/n of its power, so the total power stays the same.
+}  // namespace
+
 Json ringOfLights(const Json& tmpl, const Vec3 c, int n) {
   Json out = Json::array();
   const auto rot = [](const Json& v, float phi) {
@@ -487,8 +487,6 @@ Json ringOfLights(const Json& tmpl, const Vec3 c, int n) {
   }
   return out;
 }
-
-}  // namespace
 
 Scene buildRunScene(const std::string& sceneFile, const std::vector<std::string>& sets,
                     std::optional<int> lights) {

@@ -24,15 +24,20 @@ CASE_NAMES = ["gradient paper (plume)", "gradient defaults (plume)", "per-voxel 
               "adaptive paper (shaft)", "adaptive defaults (shaft)",
               "gradient defaults + far field (plume)"]
 
-# The harness's steady rows and the Renderer frames that are the same work (one light; the
-# harness's `lights` ring and the bench's lamp ring differ above one light): (sweep, method,
-# axis value) of data/experiments/table2_gpu.json -> the frame case at 128³.
+# The harness's steady rows and the Renderer frames that are the same work (since 2026-12-07 the
+# report's frames put their lights on the harness's ring, experiment::ringOfLights, so every
+# light count compares): (sweep, method, axis value) of data/experiments/table2_gpu.json -> the
+# frame case at 128³ and its lights.
 SAME_WORK = [
-    (("resolution", "gradient-gpu", 128), GRADIENT_PAPER),
-    (("resolution", "gradient-gpu-defaults", 128), GRADIENT_DEFAULTS),
-    (("resolution", "per-voxel-gpu", 128), PER_VOXEL),
-    (("spot_lights", "adaptive-gpu", 1), ADAPTIVE_PAPER),
-    (("spot_lights", "adaptive-gpu-defaults", 1), ADAPTIVE_DEFAULTS),
+    (("resolution", "gradient-gpu", 128), GRADIENT_PAPER, 1),
+    (("resolution", "gradient-gpu-defaults", 128), GRADIENT_DEFAULTS, 1),
+    (("resolution", "per-voxel-gpu", 128), PER_VOXEL, 1),
+    (("point_lights", "gradient-gpu", 64), GRADIENT_PAPER, 64),
+    (("point_lights", "per-voxel-gpu", 64), PER_VOXEL, 64),
+    (("spot_lights", "adaptive-gpu", 1), ADAPTIVE_PAPER, 1),
+    (("spot_lights", "adaptive-gpu-defaults", 1), ADAPTIVE_DEFAULTS, 1),
+    (("spot_lights", "adaptive-gpu", 64), ADAPTIVE_PAPER, 64),
+    (("spot_lights", "adaptive-gpu-defaults", 64), ADAPTIVE_DEFAULTS, 64),
 ]
 
 
@@ -193,10 +198,11 @@ def harness_targets(res, fr, v):
     runs = [r for r in res.get("runs", []) if r.get("status") == "ok"]
     by = {(r["sweep"], r["method"], next(iter(r["axes"].values()), None)): r for r in runs}
     # The harness's steady rows within 1.5× of the Renderer frames of the same work.
-    for (sweep, method, x), case in SAME_WORK:
+    for (sweep, method, x), case, lights in SAME_WORK:
         h = by.get((sweep, method, x))
-        b = fr.get("steady", case, 128) if fr else None
-        name = f"harness steady {method} within 1.5× of the Renderer frame"
+        b = fr.get("steady", case, 128, lights) if fr else None
+        name = (f"harness steady {method} ({lights} light{'s' if lights > 1 else ''}) "
+                "within 1.5× of the Renderer frame")
         if not (h and h.get("steady") and b):
             v.add(33, name, "—", None)
             continue
