@@ -299,13 +299,21 @@ void Buffer::read(void* dst, std::size_t n, std::size_t offset) const {
   glGetNamedBufferSubData(id_, GLintptr(offset), GLsizeiptr(n), dst);
 }
 
+namespace {
+std::size_t forcedStorageBlock = 0;  ///< setMaxStorageBlockForTesting
+}  // namespace
+
 std::size_t maxStorageBlock() {
   static const std::size_t limit = [] {
     GLint64 v = 0;
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &v);
     return v > 0 ? std::size_t(v) : std::size_t(1) << 24;  // GL's minimum
   }();
-  return limit;
+  return forcedStorageBlock ? std::min(limit, forcedStorageBlock) : limit;
+}
+
+void setMaxStorageBlockForTesting(std::size_t bytes) {
+  forcedStorageBlock = bytes;
 }
 
 void readBuffers(std::span<const BufferRange> ranges) {

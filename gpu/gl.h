@@ -208,6 +208,9 @@ class Buffer : public GlObject<BufferDeleter> {
 /// GL_MAX_SHADER_STORAGE_BLOCK_SIZE of the device (GL's minimum, 16 MiB, where it reports
 /// none): the most bytes one storage buffer binding may hold. Needs the context.
 std::size_t maxStorageBlock();
+/// Makes maxStorageBlock() at most `bytes` (0: the device's again), so that a test sees a
+/// small device's limit (GL's least is 16 MiB; llvmpipe's 128 MiB) at a small scene's sizes.
+void setMaxStorageBlockForTesting(std::size_t bytes);
 
 /// One range of a buffer to read back, and where it goes.
 struct BufferRange {

@@ -134,6 +134,29 @@ TEST(GpuViewMarch, MatchesCpuMarcherLookingDownAnAxis) {
   EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .alongAxis = true}), 9.8e-6);
 }
 
+// A's far field is a 3D texture, not a storage buffer: at 256³ its grid (257³ vertices × 16
+// bytes, 260 MiB) was above llvmpipe's 128 MiB storage block (and Mesa's Intel drivers'; GL's
+// least is 16 MiB), a GpuError with no image until 2026-12-07. Here a device whose storage
+// block holds less than the grid (33³ × 16 = 574 992 bytes, the limit set at 512 KiB) renders
+// it, bit for bit as without the limit.
+TEST(GpuViewMarch, AsFarFieldLargerThanTheDeviceStorageBlockRenders) {
+  SCATTERLAB_REQUIRE_GPU();
+  Json doc = testing::blobSceneDoc(32, 40, 30);
+  doc["medium"]["phase"] = {{"type", "isotropic"}};
+  testing::addRingOfLamps(doc, 6, 0.3, 0.5, {0.5, 0.4, 0.3});
+  doc["render"] = {{"method", "gradient"}, {"voxel_switch", 0}, {"far_field", 4}};
+  const Image full = testing::renderOn(doc, "gpu").image;
+  struct Limit {
+    Limit() { gpu::setMaxStorageBlockForTesting(std::size_t(512) << 10); }
+    ~Limit() { gpu::setMaxStorageBlockForTesting(0); }
+  } limit;
+  ASSERT_LT(gpu::maxStorageBlock(), std::size_t(33 * 33 * 33) * 16);
+  RenderResult small;
+  ASSERT_NO_THROW(small = testing::renderOn(doc, "gpu"));
+  EXPECT_GT(small.stats.extra.at("far_field_terms").get<long long>(), 0);
+  EXPECT_EQ(relL2(small.image, full), 0.0);
+}
+
 // A's far field (render.far_field): the GPU's grid of far terms (far_field.comp.glsl) and its
 // lookups in the march are the CPU's arithmetic; the raster pipeline refuses the key.
 TEST(GpuViewMarch, AsFarFieldMatchesTheCpus) {
