@@ -30,25 +30,6 @@ void ScreenPass::bind(const Program& p) const {
   setScreenCamera(p, scene_);
 }
 
-namespace {
-int forcedLightDispatches = 0;  ///< setLightDispatchesForTesting
-}  // namespace
-
-void setLightDispatchesForTesting(int parts) {
-  forcedLightDispatches = std::max(0, parts);
-}
-
-int lightDispatches(const Scene& scene, long long steps, double perLight) {
-  const int lights = int(scene.lights.size());
-  if (forcedLightDispatches > 0) return std::clamp(forcedLightDispatches, 1, std::max(1, lights));
-  const int cap = loopIterationLimit();
-  if (cap <= 0 || lights <= 1) return 1;
-  const double budget = 0.5 * double(cap) - double(steps);
-  const double perDispatch = budget > 0.0 ? budget / (double(steps) * perLight) : 0.0;
-  const double n = std::ceil(double(lights) / std::max(1.0, std::floor(perDispatch)));
-  return int(std::clamp(n, 1.0, double(lights)));
-}
-
 double shadowRayIterations(const Scene& scene, float delta1) {
   return std::ceil(double(glm::length(scene.medium.bounds.extent())) / double(delta1)) + 1.0;
 }

@@ -44,24 +44,9 @@ class ScreenPass {
   ScreenSurfaces surfaces_;
 };
 
-/// How many dispatches a per-pixel pass splits the scene's lights over (dispatch c of n traces
-/// lights c, c + n, c + 2n, …: sourceRadiancePart's first and stride, common.glsl), adding its
-/// part to what the dispatches before it stored. 1 on a driver that does not cap loop
-/// iterations (gpu/shaders.h loopIterationLimit(): NVIDIA's, AMD's). On one that does
-/// (llvmpipe: 65 535 in all per invocation), enough that an invocation's worst case fits half
-/// the cap: `steps` steps, each evaluating `perLight` loop iterations per light it traces (a
-/// shadow ray's steps across the box's diagonal at `delta1`, unless the pass says otherwise),
-/// and one of its own. The parts add up to every light's term, in another order than one pass
-/// sums them (the image moves by float rounding, ~1e-7 relative); a light whose own shadow
-/// rays pass the cap is still the loop guard's GpuError.
-int lightDispatches(const Scene& scene, long long steps, double perLight);
-/// Makes lightDispatches return min(`parts`, lights) on any driver (0: back to the cap's), so
-/// that a test takes the split path where nothing caps loops or a scene is small.
-void setLightDispatchesForTesting(int parts);
-
 /// The iterations of one shadow ray across the medium's box at step `delta1` (opticalDepth's
-/// stepCount, common.glsl), plus one for the light loop's own: lightDispatches' `perLight` of a
-/// pass that traces each light's shadow ray at each step.
+/// stepCount, common.glsl), plus one for the light loop's own: lightDispatches' (gpu/shaders.h)
+/// `perLight` of a pass that traces each light's shadow ray at each step.
 double shadowRayIterations(const Scene& scene, float delta1);
 
 /// The camera's ray frame as the per-pixel shaders read it (Camera::RayGenerator): uForward,

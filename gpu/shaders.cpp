@@ -1,5 +1,7 @@
 #include "gpu/shaders.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -173,6 +175,24 @@ int loopIterationLimit() {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding::kLoopGuard, g.buffer);
   }
   return g.limit;
+}
+
+namespace {
+int forcedLightDispatches = 0;  ///< setLightDispatchesForTesting
+}  // namespace
+
+void setLightDispatchesForTesting(int parts) {
+  forcedLightDispatches = std::max(0, parts);
+}
+
+int lightDispatches(int lights, double steps, double perLight) {
+  if (forcedLightDispatches > 0) return std::clamp(forcedLightDispatches, 1, std::max(1, lights));
+  const int cap = loopIterationLimit();
+  if (cap <= 0 || lights <= 1) return 1;
+  const double budget = 0.5 * double(cap) - steps;
+  const double perDispatch = budget > 0.0 ? budget / (steps * perLight) : 0.0;
+  const double n = std::ceil(double(lights) / std::max(1.0, std::floor(perDispatch)));
+  return int(std::clamp(n, 1.0, double(lights)));
 }
 
 void resetLoopGuard() {

@@ -40,6 +40,19 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
 /// a cap, every compute and fragment stage is built with a guard that records a program whose
 /// invocation reached it (loopGuardCut()). Needs a current context.
 int loopIterationLimit();
+/// How many dispatches a pass whose invocations evaluate every light splits `lights` lights over
+/// (dispatch c of n takes lights c, c + n, c + 2n, …: sourceRadiancePart's and
+/// lightFactorStepPart's first and stride, common.glsl), each adding its part to what the
+/// dispatches before it stored: froxel's and jittered-march's passes, the factored view march. 1
+/// where loops are not capped (NVIDIA, AMD). Where they are (llvmpipe), the fewest that keep an
+/// invocation's worst case under half the cap: `steps` steps, each evaluating `perLight` loop
+/// iterations per light of its part, and one of its own. The parts add up to every light's term
+/// in another order than one pass sums them (the image moves by float rounding, ~1e-7
+/// relative); a single light whose own work passes the cap is still the loop guard's GpuError.
+int lightDispatches(int lights, double steps, double perLight);
+/// Makes lightDispatches return min(`parts`, lights) on any driver (0: back to the cap's), so
+/// that a test takes the split path where nothing caps loops or a scene is small.
+void setLightDispatchesForTesting(int parts);
 /// Clears the guard's record (at the start of each render). Nothing where there is no cap.
 void resetLoopGuard();
 /// The label of a program an invocation of which reached the loop cap since the last reset

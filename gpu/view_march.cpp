@@ -9,6 +9,7 @@
 #include "gpu/frame.h"
 #include "gpu/records.h"
 #include "gpu/screen_pass.h"
+#include "gpu/shaders.h"
 #include "gpu/volume.h"
 
 namespace scatterlab::gpu {
@@ -223,8 +224,21 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     glUniform1i(march.uniform("uStrata"), strata);
     setVec3(march, "uBackground", scene.background);
     counters->bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
-    bindScreenImage(binding::kOutputImage, out, GL_WRITE_ONLY);
-    dispatch("view march", {groups(cam.width, 8), groups(cam.height, 8), 1});
+    // With factored lights every step evaluates each light's term of A (and a few substeps near
+    // a lamp, the glow): where the driver caps loops, the lights over as many dispatches as it
+    // asks, each adding its part (1 on a GPU without a cap). The steps of the longest ray: the
+    // box's diagonal at the march's step, for each of the strata.
+    const double steps =
+        double(strata) * double(strata) *
+        (std::ceil(double(glm::length(medium.bounds.extent())) / double(settings_.step)) + 1.0);
+    const int parts = factor_ ? lightDispatches(int(scene.lights.size()), steps, 2.0) : 1;
+    bindScreenImage(binding::kOutputImage, out, parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY);
+    if (factor_) glUniform1i(march.uniform("uLightStride"), parts);
+    for (int part = 0; part < parts; ++part) {
+      if (factor_) glUniform1i(march.uniform("uLightFirst"), part);
+      dispatch("view march", {groups(cam.width, 8), groups(cam.height, 8), 1});
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    }
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
   checkGl("view march");

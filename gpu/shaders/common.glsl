@@ -417,26 +417,33 @@ vec3 lightStepTerm(int li, vec3 origin, vec3 dir, vec3 x, float t, float dt) {
 // A over the view march's step: every light's lightStepTerm. With SL_FAR_FIELD the far field's
 // lookup plus each light's near part, (1 − w_l) times its term, for the lights the step's brick
 // lists (far_mask.comp.glsl: every spot and directional light, the point lights within 2R of the
-// brick), in ascending order as the CPU's sum.
-vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
+// brick), in ascending order as the CPU's sum. The part of lights first, first + stride, … (the
+// far field's lookup with the part of first 0): a march split over dispatches where the driver
+// caps loops (gpu::lightDispatches) adds the parts; (0, 1) is every light.
+vec3 lightFactorStepPart(vec3 origin, vec3 dir, float t, float dt, int first, int stride) {
   vec3 x = origin + dir * t;
 #ifdef SL_FAR_FIELD
-  vec3 a = farLookup(x);
+  vec3 a = first == 0 ? farLookup(x) : vec3(0.0);
   int base = farBrick(x) * uFarWords;
   for (int w = 0; w < uFarWords; ++w) {
     uint bits = farMask[base + w];
     while (bits != 0u) {
       int li = w * 32 + findLSB(bits);
       bits &= bits - 1u;
+      if (li % stride != first) continue;
       float keep = 1.0 - farWeight(li, x, uFarR);
       if (keep > 0.0) a += keep * lightStepTerm(li, origin, dir, x, t, dt);
     }
   }
 #else
   vec3 a = vec3(0.0);
-  for (int li = 0; li < uLightCount; ++li) a += lightStepTerm(li, origin, dir, x, t, dt);
+  for (int li = first; li < uLightCount; li += stride)
+    a += lightStepTerm(li, origin, dir, x, t, dt);
 #endif
   return a;
+}
+vec3 lightFactorStep(vec3 origin, vec3 dir, float t, float dt) {
+  return lightFactorStepPart(origin, dir, t, dt, 0, 1);
 }
 
 // FactoredSourceRadiance::operator() in parts, for lights li = first, first + stride, … (the

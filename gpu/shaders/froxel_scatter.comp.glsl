@@ -46,7 +46,7 @@ float mapAt(int li, vec3 x) {
 // TransmittanceMaps::source: Σ_l E_l(x)·f(ω_l → ω)·map_l(x).
 vec3 mapSource(vec3 x, vec3 toViewer) {
   vec3 s = vec3(0.0);
-  for (int li = uLightFirst; li < uLightCount; li += uLightStride) {
+  for (int li = uLightFirst; li < uLightCount; li += max(uLightStride, 1)) {
     GpuLight l = lights[li];
     vec3 toLight;
     float dist, dist2, f;
@@ -79,7 +79,7 @@ void main() {
 #ifdef SL_TRANSMITTANCE_MAP
       vec3 S = mapSource(x, -dir);
 #else
-      vec3 S = sourceRadiancePart(x, -dir, uLightFirst, uLightStride);
+      vec3 S = sourceRadiancePart(x, -dir, uLightFirst, max(uLightStride, 1));
 #endif
       L += (T * uAlbedo * (1.0 - a)) * S;
       T *= a;

@@ -47,7 +47,8 @@ void main() {
       if (!(D > 0.0)) continue;
       float a = stepTransmittance(uSigmaT * D * dt);
       vec3 x = uEye + dir * (t0 + (float(k) + o) * dt);
-      L += (T * uAlbedo * (1.0 - a)) * sourceRadiancePart(x, -dir, uLightFirst, uLightStride);
+      vec3 S = sourceRadiancePart(x, -dir, uLightFirst, max(uLightStride, 1));
+      L += (T * uAlbedo * (1.0 - a)) * S;
       T *= a;
     }
   }

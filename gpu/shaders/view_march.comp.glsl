@@ -8,10 +8,21 @@
 // steps inside blocks of zero density (block_walk.glsl) are jumped over: they add exactly 0, so
 // the image is the plain march's bit for bit. Every march counts the steps it looked up and the
 // steps it jumped over into uMarchCounts (64-bit sums as two 32-bit words each). After
-// common.glsl, screen_common.glsl (and block_walk.glsl with SL_SKIP).
+// common.glsl, screen_common.glsl (and block_walk.glsl with SL_SKIP). With SL_FACTOR_LIGHTS, on
+// a driver that caps loop iterations, the lights may be split over dispatches
+// (gpu::lightDispatches): this one multiplies V by the part of A of lights uLightFirst,
+// uLightFirst + uLightStride, … and, unless it is the first (uLightFirst 0, which also adds the
+// background or the surface and counts the steps), adds its L to the image's.
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#ifdef SL_FACTOR_LIGHTS
+layout(rgba32f, binding = BINDING_OUTPUT_IMAGE) uniform image2D uOutput;
+uniform int uLightFirst;
+uniform int uLightStride;
+#else
 layout(rgba32f, binding = BINDING_OUTPUT_IMAGE) uniform writeonly image2D uOutput;
+const int uLightFirst = 0;
+#endif
 layout(binding = BINDING_RADIANCE_TEXTURE) uniform sampler3D uRadiance;
 uniform vec3 uRadScale;  // world -> radiance index
 uniform vec3 uRadOffset;
@@ -97,7 +108,9 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
 #ifdef SL_FACTOR_LIGHTS
           // The volume holds V = S / A; where V = 0 (outside every spot cone, or fully
           // shadowed) S is 0 without evaluating A, as on the CPU.
-          if (S != vec3(0.0)) S *= lightFactorStep(uEye, dir, t0 + (float(i) + 0.5) * dt, dt);
+          if (S != vec3(0.0))
+            S *= lightFactorStepPart(uEye, dir, t0 + (float(i) + 0.5) * dt, dt, uLightFirst,
+                                     max(uLightStride, 1));
 #endif
           float a = stepTransmittance(uSigmaT * D * dt);
           L += (T * uAlbedo * (1.0 - a)) * S;
@@ -106,6 +119,8 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
       }
     }
   }
+  // A later part of the lights: its L only (the first part added what lies behind the medium).
+  if (uLightFirst > 0) return vec4(L, hit ? 1.0 : 1.0 - T);
   if (!hit) return vec4(L + T * uBackground, 1.0 - T);
 #ifdef SL_OBJECTS
   // Below uMinT the surface's share is below it too (as for the medium).
@@ -137,14 +152,23 @@ void main() {
         vec2 f = vec2(p) + (vec2(i, j) + 0.5) / float(uStrata);
         sum += marchRay(cameraRay(f), p);
       }
-    imageStore(uOutput, p, sum / float(uStrata * uStrata));
+    sum /= float(uStrata * uStrata);
+#ifdef SL_FACTOR_LIGHTS
+    if (uLightFirst > 0) sum.rgb += imageLoad(uOutput, p).rgb;
+#endif
+    imageStore(uOutput, p, sum);
+  }
+  // The steps are the first part's (every part walks the same ones): a later part counts none.
+  if (uLightFirst > 0) {
+    stepsLooked = 0u;
+    stepsSkipped = 0u;
   }
   // One global atomic per workgroup and counter.
   atomicAdd(groupLooked, stepsLooked);
   atomicAdd(groupSkipped, stepsSkipped);
   memoryBarrierShared();
   barrier();
-  if (gl_LocalInvocationIndex == 0u) {
+  if (gl_LocalInvocationIndex == 0u && uLightFirst == 0) {
     addCount(0u, groupLooked);
     addCount(2u, groupSkipped);
   }

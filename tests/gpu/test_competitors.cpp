@@ -8,7 +8,7 @@
 #include "core/method.h"
 #include "gpu/frame.h"
 #include "gpu/screen_march.h"
-#include "gpu/screen_pass.h"
+#include "gpu/shaders.h"
 #include "gpu_support.h"
 
 namespace scatterlab::testing {
