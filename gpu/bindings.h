@@ -157,6 +157,13 @@ inline constexpr GLuint kTransmittanceMapImage = 6;
 /// is added to.
 inline constexpr GLuint kResidualImage = 0;
 inline constexpr GLuint kDensityImage = 1;
+/// Per-voxel S split over dispatches with factored lights (per_voxel.comp.glsl SL_LIGHT_PARTS,
+/// where the driver caps loops): RGBA32F sums per voxel over the parts' lights, (s, outside), a,
+/// sf and af of FactoredSourceRadiance. That program binds no screen image.
+inline constexpr GLuint kPartSumsImage0 = 2;
+inline constexpr GLuint kPartSumsImage1 = 3;
+inline constexpr GLuint kPartSumsImage2 = 4;
+inline constexpr GLuint kPartSumsImage3 = 5;
 /// The RGBA32F grid of A's far field as far_field.comp.glsl writes it (and, updating it in
 /// place, reads it). That program binds no other image.
 inline constexpr GLuint kFarFieldImage = 0;
@@ -211,6 +218,10 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_BLOCK_MAX_IMAGE", binding::kBlockMaxImage},
     {"BINDING_FAR_FIELD_TEXTURE", binding::kFarFieldTexture},
     {"BINDING_FAR_FIELD_IMAGE", binding::kFarFieldImage},
+    {"BINDING_PART_SUMS_IMAGE0", binding::kPartSumsImage0},
+    {"BINDING_PART_SUMS_IMAGE1", binding::kPartSumsImage1},
+    {"BINDING_PART_SUMS_IMAGE2", binding::kPartSumsImage2},
+    {"BINDING_PART_SUMS_IMAGE3", binding::kPartSumsImage3},
     {"BINDING_SHADOW_TEXTURE", binding::kShadowTexture},
     {"BINDING_SURFACE_TEXTURE", binding::kSurfaceTexture},
     {"BINDING_SURFACE_RADIANCE_TEXTURE", binding::kSurfaceRadianceTexture},

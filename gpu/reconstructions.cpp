@@ -223,9 +223,15 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
                           Buffer* countersOut) {
   context();
   ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
+  // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one): a
+  // voxel traces each light's shadow ray (with factored lights a second time where the
+  // cones-ignored sums are needed).
+  const int parts = lightDispatches(int(scene.lights.size()), 1.0,
+                                    (factored_ ? 2.0 : 1.0) * shadowRayIterations(scene, delta1_));
   variant.define("SL_FACTOR_LIGHTS", factored_)
       .define("SL_LAMP_MODEL", factored_ && lampModel_)
-      .define("SL_LIT_REACH", factored_);
+      .define("SL_LIT_REACH", factored_)
+      .define("SL_LIGHT_PARTS", parts > 1);
   addShadowRaySkip(variant);
   const Program& program = gpu::program(addShadowVariant(shadows, variant), "per-voxel S");
   Volume out = makeRadianceVolume(bounds, dims, "source radiance (per voxel)",
@@ -237,8 +243,8 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
   {
     program.use();
     inputs.apply(program);
-    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY,
-                       GL_RGBA32F);
+    glBindImageTexture(binding::kRadianceImage, out.texture.id(), 0, GL_TRUE, 0,
+                       parts > 1 && !factored_ ? GL_READ_WRITE : GL_WRITE_ONLY, GL_RGBA32F);
     counters.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kCounters);
     setIVec3(program, "uRadDims", dims);
     glUniform1i(program.uniform("uSameGrid"), sameGrid(density, bounds, dims));
@@ -247,7 +253,32 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
     const Vec3 cell = bounds.extent() / Vec3(dims);
     setVec3(program, "uRadCell", cell);
     if (factored_) glUniform1f(program.uniform("uReach"), glm::length(cell));
-    dispatch("per-voxel S", {groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4)}, timer);
+    const UVec3 size(groups(dims.x, 4), groups(dims.y, 4), groups(dims.z, 4));
+    if (parts == 1) {
+      dispatch("per-voxel S", size, timer);
+    } else {
+      // Factored: the parts' sums per voxel (each part stores every occupied voxel's), V made of
+      // them by a last dispatch.
+      std::vector<Texture> sums;
+      if (factored_)
+        for (GLuint k = 0; k < 4; ++k) {
+          sums.push_back(Texture::make3D(GL_RGBA32F, dims.x, dims.y, dims.z, "per-voxel part sums",
+                                         Texture::Contents::Overwritten));
+          glBindImageTexture(binding::kPartSumsImage0 + k, sums.back().id(), 0, GL_TRUE, 0,
+                             GL_READ_WRITE, GL_RGBA32F);
+        }
+      glUniform1i(program.uniform("uLightStride"), parts);
+      if (factored_) glUniform1i(program.uniform("uCombine"), 0);
+      for (int part = 0; part < parts; ++part) {
+        glUniform1i(program.uniform("uLightFirst"), part);
+        dispatch("per-voxel S", size, timer);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+      }
+      if (factored_) {
+        glUniform1i(program.uniform("uCombine"), 1);
+        dispatch("per-voxel S", size, timer);
+      }
+    }
     glMemoryBarrier(GL_ALL_BARRIER_BITS);
   }
   if (countersOut) {

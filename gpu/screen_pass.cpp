@@ -30,10 +30,6 @@ void ScreenPass::bind(const Program& p) const {
   setScreenCamera(p, scene_);
 }
 
-double shadowRayIterations(const Scene& scene, float delta1) {
-  return std::ceil(double(glm::length(scene.medium.bounds.extent())) / double(delta1)) + 1.0;
-}
-
 void setScreenCamera(const Program& p, const Scene& scene) {
   const auto gen = scene.camera.rayGenerator();
   setVec3(p, "uForward", gen.forward);

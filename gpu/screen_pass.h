@@ -44,11 +44,6 @@ class ScreenPass {
   ScreenSurfaces surfaces_;
 };
 
-/// The iterations of one shadow ray across the medium's box at step `delta1` (opticalDepth's
-/// stepCount, common.glsl), plus one for the light loop's own: lightDispatches' (gpu/shaders.h)
-/// `perLight` of a pass that traces each light's shadow ray at each step.
-double shadowRayIterations(const Scene& scene, float delta1);
-
 /// The camera's ray frame as the per-pixel shaders read it (Camera::RayGenerator): uForward,
 /// uRight, uUp, uTanHalf, the image size (ivec2 uImageSize or vec2 uSize, whichever the program
 /// declares) and uAlbedo. `p` must be in use.

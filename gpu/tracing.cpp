@@ -1,6 +1,7 @@
 #include "gpu/tracing.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 #include <vector>
@@ -86,6 +87,10 @@ TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float de
       delta1_(delta1),
       shadows_(shadows),
       lights_(deviceLights(scene, density, timer)) {}
+
+double shadowRayIterations(const Scene& scene, float delta1) {
+  return std::ceil(double(glm::length(scene.medium.bounds.extent())) / double(delta1)) + 1.0;
+}
 
 void TracingInputs::skipEmptySpace(StageTimer* timer) {
   blockMax_ = &blockMaxGrid(density_, timer);

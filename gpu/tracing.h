@@ -48,6 +48,12 @@ struct DeviceLights {
 std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volume& density,
                                                  StageTimer* timer);
 
+/// The iterations of one shadow ray across the medium's box at step `delta1` (opticalDepth's
+/// stepCount, common.glsl), plus one for the light loop's own: lightDispatches' (gpu/shaders.h)
+/// `perLight` of a pass that traces each light's shadow ray at each step (froxel, jittered-march,
+/// per-voxel's S).
+double shadowRayIterations(const Scene& scene, float delta1);
+
 /// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
 /// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs
 /// a current context.
