@@ -499,9 +499,10 @@ void factoredFreePart(vec3 x, vec3 toViewer, int first, int stride, out vec3 sf,
   }
 }
 // factoredPart's and factoredFreePart's sums for lights first, first + stride, … in one loop,
-// each light's T traced once (the free sums for every light that lights x): a per-voxel pass
-// split over dispatches (gpu::lightDispatches) adds the parts' sums and combines them after the
-// last, when whether the free sums are needed is known.
+// each light's T traced once (the free sums for every light that lights x; factoredPart, on
+// every GPU's path, traces no T for a light whose cone misses x, so it keeps its own loop),
+// for a per-voxel pass split over dispatches (gpu::lightDispatches), which adds the parts' sums
+// and combines them after the last, when whether the free sums are needed is known.
 void factoredSums(vec3 x, vec3 toViewer, int first, int stride, out vec3 s, out vec3 a,
                   out float outside, out vec3 sf, out vec3 af) {
   s = vec3(0.0);
