@@ -83,10 +83,21 @@ bool preferGpu(std::string* why) {
   return true;
 }
 
-/// What the GPU backend cannot render yet.
+/// What the GPU backend cannot render yet. camera.spp > 1: the compute view march takes the
+/// CPU's k × k strata (view_march.comp.glsl), but the surface pass of scene objects finds one
+/// surface per pixel, not per stratum, and the raster pipeline's slice marcher one ray per pixel.
 std::string unsupported(const Scene& scene) {
-  if (scene.camera.spp > 1)
-    return "camera.spp > 1 is not supported on the GPU backend yet; use --backend cpu";
+  if (scene.camera.spp <= 1) return "";
+  if (scene.objects)
+    return "camera.spp > 1 is not supported on the GPU backend yet with scene objects (its "
+           "surface pass finds one surface per pixel); use --backend cpu";
+  const Json* pipeline = scene.render.is_object() && scene.render.contains("gpu_pipeline")
+                             ? &scene.render["gpu_pipeline"]
+                             : nullptr;
+  if (pipeline && pipeline->is_string() && pipeline->get<std::string>() == "raster")
+    return "camera.spp > 1 is not supported on the GPU backend yet with render.gpu_pipeline = "
+           "\"raster\" (the slice marcher casts one ray per pixel); use the compute pipeline or "
+           "--backend cpu";
   return "";
 }
 
