@@ -207,11 +207,13 @@ TEST(GpuComputePipeline, SeveralSamplesPerPixelMatchTheCpu) {
     EXPECT_EQ(gpu.stats.backend, "gpu") << method;
     const double e = relL2(gpu.image, cpu.image);
     std::printf("%s, spp 4: gpu vs cpu relative L2 %.3g\n", method, e);
-    // Measured on llvmpipe 2026-12-07: 1.7e-7, 4.5e-7, 4.5e-7 (fig3 at 80 × 60: 3.0e-7,
-    // 3.5e-7, 3.7e-7). Limit: the view march's own (9.8e-6, above: llvmpipe, a GPU's
-    // approximate built-ins simulated, the H200's per-pixel march), as these frames are its
-    // strata over the same volumes.
-    EXPECT_LT(e, 9.8e-6) << method;
+    // Measured 2026-12-07 on llvmpipe: 1.7e-7, 4.5e-7, 4.5e-7; with a GPU's approximate
+    // built-ins simulated (SCATTERLAB_GPU_IMPRECISE=4, the CI's second run) 4.5e-7, 3.52e-5,
+    // 3.52e-5. The 3.52e-5 is one pixel: the core of the glow of the point light inside the blob
+    // (257.9 bright, 0.012 off, 4.8e-5 of it), where a stratum ray passes close to the lamp and
+    // the factored march's A ∝ 1/d² magnifies 4-ulp errors; at spp 1 the same run gives 1.8e-6,
+    // and fig3, the shaft and the glow scene at spp 4 1.2e-6 – 4.7e-6. Limit 1.5 × 3.52e-5.
+    EXPECT_LT(e, 5.3e-5) << method;
   }
   doc["render"] = {{"method", "gradient"}, {"gpu_pipeline", "raster"}};
   try {
