@@ -224,8 +224,8 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
   context();
   ProgramVariant variant{.compute = {"common.glsl", "per_voxel.comp.glsl"}};
   // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one): a
-  // voxel traces each light's shadow ray (with factored lights a second time where the
-  // cones-ignored sums are needed).
+  // voxel traces each light's shadow ray (with factored lights twice: factoredPart's and, for
+  // the cones-ignored sums, factoredFreePart's).
   const int parts = lightDispatches(int(scene.lights.size()), 1.0,
                                     (factored_ ? 2.0 : 1.0) * shadowRayIterations(scene, delta1_));
   variant.define("SL_FACTOR_LIGHTS", factored_)

@@ -498,42 +498,6 @@ void factoredFreePart(vec3 x, vec3 toViewer, int first, int stride, out vec3 sf,
 #endif
   }
 }
-// factoredPart's and factoredFreePart's sums for lights first, first + stride, … in one loop,
-// each light's T traced once (the free sums for every light that lights x; factoredPart, on
-// every GPU's path, traces no T for a light whose cone misses x, so it keeps its own loop),
-// for a per-voxel pass split over dispatches (gpu::lightDispatches), which adds the parts' sums
-// and combines them after the last, when whether the free sums are needed is known.
-void factoredSums(vec3 x, vec3 toViewer, int first, int stride, out vec3 s, out vec3 a,
-                  out float outside, out vec3 sf, out vec3 af) {
-  s = vec3(0.0);
-  a = vec3(0.0);
-  sf = vec3(0.0);
-  af = vec3(0.0);
-  outside = 0.0;
-  for (int li = first; li < uLightCount; li += stride) {
-    vec3 w, segEnd;
-    float cone;
-    if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
-    float T = lightTransmittance(li, x, segEnd);
-    sf += w * T;
-#ifdef SL_LAMP_MODEL
-    float m = lampModel(li, x);
-    af += w * m;
-#else
-    af += w;
-#endif
-    if (cone <= 0.0) {
-      outside += 1.0;
-      continue;
-    }
-    s += w * (cone * T);
-#ifdef SL_LAMP_MODEL
-    a += w * (cone * m);
-#else
-    a += w * cone;
-#endif
-  }
-}
 // V from the sums over every light: s / a per channel; where a is zero, sf / af (sf and af are
 // zero unless factoredNeedsFree: a channel no light lights has af = 0 too, so V is 0 there).
 vec3 factoredCombine(vec3 s, vec3 a, vec3 sf, vec3 af) {

@@ -48,9 +48,12 @@ void main() {
 #ifdef SL_FACTOR_LIGHTS
   if (uCombine == 0) {
     if (!occupied) return;
-    vec3 s, a, sf, af;
+    // Both sums of the part's lights: whether V needs the cones-ignored ones is known only
+    // from every light's a, after the last part.
+    vec3 toViewer = towardsEye(c), s, a, sf, af;
     float outside;
-    factoredSums(c, towardsEye(c), uLightFirst, stride, s, a, outside, sf, af);
+    factoredPart(c, toViewer, uLightFirst, stride, s, a, outside);
+    factoredFreePart(c, toViewer, uLightFirst, stride, sf, af);
     if (uLightFirst > 0) {
       vec4 s0 = imageLoad(uSums0, v);
       s += s0.rgb;
