@@ -227,7 +227,7 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
   // voxel traces each light's shadow ray (with factored lights twice: factoredPart's and, for
   // the cones-ignored sums, factoredFreePart's).
   const int parts = lightDispatches(int(scene.lights.size()), 1.0,
-                                    (factored_ ? 2.0 : 1.0) * shadowRayIterations(scene, delta1_));
+                                    (factored_ ? 2.0 : 1.0) * diagonalSteps(scene, delta1_));
   variant.define("SL_FACTOR_LIGHTS", factored_)
       .define("SL_LAMP_MODEL", factored_ && lampModel_)
       .define("SL_LIT_REACH", factored_)

@@ -46,7 +46,7 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     tableBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kJitterTable);
     // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one).
     const int parts =
-        lightDispatches(int(scene.lights.size()), s_.steps, shadowRayIterations(scene, delta1_));
+        lightDispatches(int(scene.lights.size()), s_.steps, diagonalSteps(scene, delta1_));
     bindScreenImage(binding::kLowResImage, low, parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY);
     glBindImageTexture(binding::kLowResDepthImage, lowDepth.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_R32F);
@@ -141,7 +141,7 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one):
     // a slice evaluates each light's shadow ray, or with the maps its 8 texels.
     const int parts = lightDispatches(int(scene.lights.size()), g.z,
-                                      useMap ? 10.0 : shadowRayIterations(scene, delta1_));
+                                      useMap ? 10.0 : diagonalSteps(scene, delta1_));
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0,
                        parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY, GL_RGBA32F);
     if (useMap) {

@@ -88,8 +88,8 @@ TracingInputs::TracingInputs(const Scene& scene, const Volume& density, float de
       shadows_(shadows),
       lights_(deviceLights(scene, density, timer)) {}
 
-double shadowRayIterations(const Scene& scene, float delta1) {
-  return std::ceil(double(glm::length(scene.medium.bounds.extent())) / double(delta1)) + 1.0;
+double diagonalSteps(const Scene& scene, float step) {
+  return std::ceil(double(glm::length(scene.medium.bounds.extent())) / double(step)) + 1.0;
 }
 
 void TracingInputs::skipEmptySpace(StageTimer* timer) {

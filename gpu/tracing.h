@@ -48,11 +48,12 @@ struct DeviceLights {
 std::shared_ptr<const DeviceLights> deviceLights(const Scene& scene, const Volume& density,
                                                  StageTimer* timer);
 
-/// The iterations of one shadow ray across the medium's box at step `delta1` (opticalDepth's
-/// stepCount, common.glsl), plus one for the light loop's own: lightDispatches' (gpu/shaders.h)
-/// `perLight` of a pass that traces each light's shadow ray at each step (froxel, jittered-march,
-/// per-voxel's S).
-double shadowRayIterations(const Scene& scene, float delta1);
+/// The steps of a march across the medium box's diagonal at step `step` (stepCount, common.glsl),
+/// plus one: the most a ray through the box takes. For lightDispatches (gpu/shaders.h): a shadow
+/// ray's at delta1 is `perLight` of a pass that traces each light at each step (froxel,
+/// jittered-march, per-voxel's S; the one is the light loop's own iteration), a view ray's at
+/// the march's step the steps of the factored view march.
+double diagonalSteps(const Scene& scene, float step);
 
 /// Buffers and uniforms every tracing shader (common.glsl) needs: the lights SSBO
 /// (binding::kLights), the density texture (binding::kDensityTexture), phase, σt, Δ1, eye. Needs

@@ -228,9 +228,7 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     // a lamp, the glow): where the driver caps loops, the lights over as many dispatches as it
     // asks, each adding its part (1 on a GPU without a cap). The steps of the longest ray: the
     // box's diagonal at the march's step, for each of the strata.
-    const double steps =
-        double(strata) * double(strata) *
-        (std::ceil(double(glm::length(medium.bounds.extent())) / double(settings_.step)) + 1.0);
+    const double steps = double(strata) * double(strata) * diagonalSteps(scene, settings_.step);
     const int parts = factor_ ? lightDispatches(int(scene.lights.size()), steps, 2.0) : 1;
     bindScreenImage(binding::kOutputImage, out, parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY);
     if (factor_) glUniform1i(march.uniform("uLightStride"), parts);
