@@ -12,6 +12,7 @@
 #include "core/grid.h"
 #include "core/image.h"
 #include "gpu/context.h"
+#include "gpu/shaders.h"
 #include "support/scenes.h"
 
 namespace scatterlab::testing {
@@ -91,6 +92,17 @@ inline Json blobSceneDoc(int resolution, int width, int height) {
 inline RenderResult renderOn(const Json& doc, const char* backend) {
   const Scene s = sceneFromJson(doc);
   return createMethod(s, "", backend)->render(s, nullptr);
+}
+
+/// renderOn(doc, "gpu") with the lights of every pass that may split them over dispatches split
+/// over `parts` (gpu::setLightDispatchesForTesting; 1: one dispatch, as on a GPU without a loop
+/// cap), on any driver; back to the driver's own split after.
+inline RenderResult renderSplittingLights(const Json& doc, int parts) {
+  struct Reset {
+    ~Reset() { gpu::setLightDispatchesForTesting(0); }
+  } reset;
+  gpu::setLightDispatchesForTesting(parts);
+  return renderOn(doc, "gpu");
 }
 
 }  // namespace scatterlab::testing

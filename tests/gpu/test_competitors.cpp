@@ -8,7 +8,6 @@
 #include "core/method.h"
 #include "gpu/frame.h"
 #include "gpu/screen_march.h"
-#include "gpu/shaders.h"
 #include "gpu_support.h"
 
 namespace scatterlab::testing {
@@ -67,9 +66,6 @@ TEST(GpuScreenMarches, LightsSplitOverDispatchesAddUpToOnePass) {
   SCATTERLAB_REQUIRE_GPU();
   Json doc = blobSceneDoc(24, 40, 30);
   addRingOfLamps(doc, 2, 0.3, 0.5, {0.4, 0.3, 0.2});
-  struct Split {
-    ~Split() { gpu::setLightDispatchesForTesting(0); }
-  } restore;
   for (const Json& r :
        {Json{{"method", "jittered-march"}}, Json{{"method", "jittered-march"}, {"downsample", 2}},
         Json{{"method", "froxel"}, {"froxel_grid", {20, 15, 32}}},
@@ -78,13 +74,10 @@ TEST(GpuScreenMarches, LightsSplitOverDispatchesAddUpToOnePass) {
              {"light_transmittance", "map"},
              {"transmittance_map_resolution", 16}}}) {
     doc["render"] = r;
-    const Scene scene = sceneFromJson(doc);
-    ASSERT_EQ(scene.lights.size(), 4u);
+    ASSERT_EQ(sceneFromJson(doc).lights.size(), 4u);
     const std::string pass = r["method"] == "froxel" ? "froxel accumulate" : "jittered march";
-    gpu::setLightDispatchesForTesting(1);
-    const RenderResult one = createMethod(scene, "", "gpu")->render(scene, nullptr);
-    gpu::setLightDispatchesForTesting(3);
-    const RenderResult split = createMethod(scene, "", "gpu")->render(scene, nullptr);
+    const RenderResult one = renderSplittingLights(doc, 1);
+    const RenderResult split = renderSplittingLights(doc, 3);
     const auto dispatches = [&](const RenderResult& res) {
       return res.stats.extra.at("dispatches_by_pass").value(pass, 0);
     };

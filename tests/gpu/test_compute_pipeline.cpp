@@ -12,7 +12,6 @@
 #include "gpu/frame.h"
 #include "gpu/reconstructions.h"
 #include "gpu/records.h"
-#include "gpu/shaders.h"
 #include "gpu/slice_marcher.h"
 #include "gpu/sphere_bins.h"
 #include "gpu/tracing.h"
@@ -168,16 +167,11 @@ TEST(GpuViewMarch, FactoredLightsSplitOverDispatchesAddUpToOnePass) {
   Json doc = testing::blobSceneDoc(32, 40, 30);
   doc["medium"]["phase"] = {{"type", "isotropic"}};
   testing::addRingOfLamps(doc, 2, 0.3, 0.5, {0.5, 0.4, 0.3});
-  struct Split {
-    ~Split() { gpu::setLightDispatchesForTesting(0); }
-  } restore;
   for (const int far : {0, 4}) {
     doc["render"] = {{"method", "gradient"}, {"voxel_switch", 0}};
     if (far) doc["render"]["far_field"] = far;
-    gpu::setLightDispatchesForTesting(1);
-    const RenderResult one = testing::renderOn(doc, "gpu");
-    gpu::setLightDispatchesForTesting(3);
-    const RenderResult split = testing::renderOn(doc, "gpu");
+    const RenderResult one = testing::renderSplittingLights(doc, 1);
+    const RenderResult split = testing::renderSplittingLights(doc, 3);
     const auto marches = [](const RenderResult& r) {
       return r.stats.extra.at("dispatches_by_pass").value("view march", 0);
     };
@@ -237,16 +231,11 @@ TEST(GpuComputePipeline, PerVoxelLightsSplitOverDispatchesAddUpToOnePass) {
   SCATTERLAB_REQUIRE_GPU();
   Json doc = testing::blobSceneDoc(24, 40, 30);
   testing::addRingOfLamps(doc, 2, 0.3, 0.5, {0.5, 0.4, 0.3});
-  struct Split {
-    ~Split() { gpu::setLightDispatchesForTesting(0); }
-  } restore;
   for (const Json& render :
        {Json{{"method", "per-voxel"}}, Json{{"method", "gradient"}, {"voxel_switch", 1000}}}) {
     doc["render"] = render;
-    gpu::setLightDispatchesForTesting(1);
-    const RenderResult one = testing::renderOn(doc, "gpu");
-    gpu::setLightDispatchesForTesting(3);
-    const RenderResult split = testing::renderOn(doc, "gpu");
+    const RenderResult one = testing::renderSplittingLights(doc, 1);
+    const RenderResult split = testing::renderSplittingLights(doc, 3);
     const auto passes = [](const RenderResult& r) {
       return r.stats.extra.at("dispatches_by_pass").value("per-voxel S", 0);
     };
