@@ -52,8 +52,8 @@ void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(v, uGridDims))) return;
   // The rasterised splat's voxel centre: (min.xy + gl_FragCoord.xy·cell.xy, the slice's z).
-  vec3 x = vec3(uGridMin.xy + (vec2(v.xy) + 0.5) * uGridCell.xy,
-                uGridMin.z + (float(v.z) + 0.5) * uGridCell.z);
+  precise vec3 x = vec3(uGridMin.xy + (vec2(v.xy) + 0.5) * uGridCell.xy,
+                        uGridMin.z + (float(v.z) + 0.5) * uGridCell.z);
 #ifdef SL_LIT_REACH
   if (!litReaches(x, uReach)) {
     imageStore(uSums, v, vec4(0.0, 0.0, 0.0, -1.0));
@@ -72,10 +72,16 @@ void main() {
   for (uint k = binOffsets[bin]; k < binOffsets[bin + 1]; ++k) {
     uint j = binItems[k];
     vec4 positionRadius = points[j];
-    vec3 d = x - positionRadius.xyz;
-    float dist = length(d);
+    precise vec3 d = x - positionRadius.xyz;
     float R = positionRadius.w;
-    if (!(dist < R)) continue;
+    // Inside the valid sphere by the CPU's test (cpu/gather_rows_impl.h: d² < R², d² summed
+    // in its order, `precise`: no fused multiply-add): decided without a square root, so that
+    // a GPU's approximate sqrt (a few ulps) cannot move a voxel centre on the sphere in or out
+    // (W is about 1 there, not 0: one such voxel moves the image by ~1e-4).
+    precise float d2 = d.x * d.x + (d.y * d.y + d.z * d.z);
+    precise float R2 = R * R;
+    if (!(d2 < R2)) continue;
+    float dist = sqrt(d2);
     float W = R / max(dist, SL_SINGULAR_EPS * R);
 #ifdef SL_OCCLUSION
     vec3 p = positionRadius.xyz;

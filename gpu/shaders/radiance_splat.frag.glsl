@@ -17,11 +17,14 @@ flat in vec3 vDz;
 layout(location = 0) out vec4 outSum;
 
 void main() {
-  vec3 x = vec3(uGridMin.xy + gl_FragCoord.xy * uGridCell.xy, uSliceZ);
-  vec3 d = x - vPosR.xyz;
-  float dist = length(d);
+  precise vec3 x = vec3(uGridMin.xy + gl_FragCoord.xy * uGridCell.xy, uSliceZ);
+  precise vec3 d = x - vPosR.xyz;
   float R = vPosR.w;
-  if (!(dist < R)) discard;
+  // Inside the valid sphere by the CPU's test, without a square root (radiance_gather.comp.glsl).
+  precise float d2 = d.x * d.x + (d.y * d.y + d.z * d.z);
+  precise float R2 = R * R;
+  if (!(d2 < R2)) discard;
+  float dist = sqrt(d2);
   // A voxel centre on the sample itself: W is unbounded; a large finite weight keeps the sum a
   // weighted average dominated by this sample (the same clamp as the CPU twin in the tests).
   float W = R / max(dist, SL_SINGULAR_EPS * R);
