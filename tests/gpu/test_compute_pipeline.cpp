@@ -565,8 +565,8 @@ TEST(GpuRadianceGather, EqualsTheRasterSplatWithOcclusionWeights) {
 /// imprecise run with the old test: 4.2e-2 relative L2 over the covered voxels (compute; the
 /// raster splat 4.1e-2), at N = 4 and at N = 2.
 void gatherOnSpheres(GpuPipeline pipeline) {
-  const Scene scene = sceneFromJson(homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 1.3f, 0.6f),
-                                                      1.0f, 8, 6, 32));
+  const Scene scene =
+      sceneFromJson(homogeneousBoxDoc(1.0f, 1.2f, 0.6f, Vec3(0.5f, 1.3f, 0.6f), 1.0f, 8, 6, 32));
   const IVec3 dims(32);
   const DensityGrid density = buildDensityVolume(scene);
   std::mt19937 rng(17);
