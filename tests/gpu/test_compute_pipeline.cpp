@@ -798,10 +798,12 @@ TEST(GpuComputePipeline, PerVoxelEndToEndMatchesCpu) {
 
 TEST(GpuComputePipeline, AdaptiveEndToEndMatchesCpu) {
   SCATTERLAB_REQUIRE_GPU();
-  // With SCATTERLAB_GPU_IMPRECISE=2 or 4 (2026-12-07) both pipelines 1.75e-5: the same samples
-  // per level, but one split taken by another sample of an error group (a flipped decision at
-  // a smaller scale than kFlippedSplitBound's). 1.5x that for the compute pipeline.
-  endToEnd("adaptive", 2.7e-5, 2.1e-4);
+  // With SCATTERLAB_GPU_IMPRECISE=2 or 4 (2026-12-07) both pipelines gave 1.75e-5, the same
+  // samples per level: not a split, as was thought, but the gathers' sphere test (length(d) < R,
+  // voxel centres on level samples' spheres; d² < R² since 2026-12-08). Re-measured then:
+  // compute 2.6e-7 / 4.0e-7, raster 2.6e-7 / 2.7e-7 (N = 2 / 4); llvmpipe 8.9e-8 / 4.1e-7. The
+  // limits stay 1.5x the H200's figures above (measured with the old test: not re-measured).
+  endToEnd("adaptive", 2.9e-6, 2.1e-4);
 }
 
 // Where no spot cone reaches (LitReach, shading/transport.h): the tracer leaves samples no cone

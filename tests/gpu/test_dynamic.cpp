@@ -613,12 +613,14 @@ TEST_P(GpuAdaptiveMethod, EndToEndMatchesCpuMethod) {
               *gpu.stats.samples, err);
   // Measured on llvmpipe 2026-11-26 (compute pipeline): extensions 1.45e-6, paper 1.33e-6; on
   // an NVIDIA H200 (driver 580), 2026-11, issue 23 (raster pipeline): extensions 3.3e-5,
-  // paper 1.0e-3 (the paper's tiny epsilon splits where hardware and CPU arithmetic differ by a
-  // rounding: the same sample counts, other splits' order). With a GPU's approximate built-ins
-  // simulated (SCATTERLAB_GPU_IMPRECISE=2 / 4, 2026-12-07): extensions 1.0e-4 / 1.04e-4, paper
-  // 7.2e-3 / 7.9e-3, the same counts again — the paper's decisions at epsilon 2e-4 move its
-  // image by most of a percent at a rounding. ×1.5 of the largest, per variant.
-  EXPECT_LT(err, GetParam() ? 1.2e-2 : 1.6e-4);
+  // paper 1.0e-3 (the same sample counts). With a GPU's approximate built-ins simulated
+  // (SCATTERLAB_GPU_IMPRECISE=2 / 4, 2026-12-07): extensions 1.0e-4 / 1.04e-4, paper 7.2e-3 /
+  // 7.9e-3, the same counts again. That was put down to the paper's tiny epsilon taking other
+  // splits; it was the gathers' sphere test (length(d) < R let voxel centres on the level
+  // samples' spheres in; d² < R² since 2026-12-08). Re-measured then: llvmpipe 5.9e-7 / 3.7e-7,
+  // N = 2: 2.8e-6 / 5.9e-6, N = 4: 6.8e-6 / 1.33e-5. The H200's figures (old test, raster
+  // splat) are not re-measured and still set the limits: ×1.5 of the largest, per variant.
+  EXPECT_LT(err, GetParam() ? 1.5e-3 : 5.0e-5);
 }
 INSTANTIATE_TEST_SUITE_P(ExtensionsAndPaper, GpuAdaptiveMethod, ::testing::Bool());
 
@@ -732,9 +734,11 @@ TEST(GpuAdaptiveMethod, VisibleTauTracesTheSampleAndItsProbesInParallel) {
       evaluate(visible), evaluate(sample), initial, err);
   // Measured on llvmpipe 2026-11-28: 5.6e-7 (4 096 invocations for 494 initial samples; 512
   // with tau "sample"), the CPU's samples per level; 2026-12-07 8.3e-7, with
-  // SCATTERLAB_GPU_IMPRECISE=2 / 4 4.8e-5 / 5.2e-5 (the same counts, other splits). 1.5x that.
+  // SCATTERLAB_GPU_IMPRECISE=2 / 4 4.8e-5 / 5.2e-5 (the same counts: the gathers' old
+  // length(d) < R test); 2026-12-08, with d² < R²: 8.3e-7, N = 2 / 4 2.95e-6 / 4.89e-6.
+  // 1.5x the largest.
   EXPECT_LT(err, decisionBound(visible.stats.extra.value("samples_per_level", Json()),
-                               cpu.stats.extra.value("samples_per_level", Json()), 7.8e-5));
+                               cpu.stats.extra.value("samples_per_level", Json()), 7.4e-6));
 }
 
 /// The glow scene (a point light inside the medium) at 32³, 80×60: the compute march and the
