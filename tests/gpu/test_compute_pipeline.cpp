@@ -611,8 +611,10 @@ void gatherOnSpheres(GpuPipeline pipeline) {
   // (only the centres some other sphere covers count; uncovered voxels take the nearest S).
   EXPECT_GT(onSphere, 200);
   // Measured 2026-12-08 on llvmpipe: 7.2e-8 (compute and raster); with
-  // SCATTERLAB_GPU_IMPRECISE=4 and 2: 8.0e-8 (the old length(d) < R test: 4.2e-2).
-  EXPECT_LT(err, 1.2e-7);
+  // SCATTERLAB_GPU_IMPRECISE=4 and 2: 8.0e-8 (the old length(d) < R test: 4.2e-2). Not yet on
+  // hardware, whose division and fused Taylor sums the simulation does not reach: the hardware
+  // factor on the largest (3.4e-7, five orders below what one centre let in costs).
+  EXPECT_LT(err, unmeasuredOnHardware(8.0e-8));
 }
 
 TEST(GpuRadianceGather, AVoxelCentreOnASphereIsOutsideItAsOnTheCpu) {
