@@ -70,7 +70,10 @@ if [[ $TABLE2 == 1 ]]; then
     $([[ -f $OUT/frames.json ]] && echo --report "$OUT")
 else
   echo "== test_gpu (compute and raster pipelines)"
-  timeout 150 "$TESTS" --gtest_brief=1 2>&1 | tee "$OUT/test_gpu.txt"
+  # Validated from the start, as ctest runs every GPU test (tests/CMakeLists.txt): installed
+  # only by the first GpuValidate test, it would find programs already built unchecked, and
+  # Mesa's shader cache still on.
+  SCATTERLAB_GPU_VALIDATE=1 timeout 150 "$TESTS" --gtest_brief=1 2>&1 | tee "$OUT/test_gpu.txt"
   [[ ${PIPESTATUS[0]} -eq 0 ]] || status=1
 
   echo "== frames (steady and cold; ms per frame, gpu_ms, host_waits)"

@@ -128,6 +128,35 @@ def main():
             check("frame failed: steady gradient defaults + far field (plume) 256³ 1 lights: 'far field'"
                   in p.stdout and lines[-1].endswith(", 1 frames failed"),
                   f"{device}: a frame that failed is listed")
+        # A frames.json the report's timeout cut after its third record (Google Benchmark's
+        # own layout: a record per benchmark as it ends): the frames it holds are judged, the
+        # others are not measured, and the output says it was cut.
+        cut = os.path.join(tmp, "cut")
+        os.makedirs(cut, exist_ok=True)
+        whole = json.dumps(benchmarks("NVIDIA H100 80GB HBM3/PCIe/SSE2"), indent=2)
+        third = whole.index("\n    }", whole.index("\n    }", whole.index("\n    }") + 1) + 1)
+        with open(os.path.join(cut, "frames.json"), "w") as f:
+            f.write(whole[:third + 6])
+        with open(os.path.join(cut, "test_gpu.txt"), "w") as f:
+            # --gtest_brief=1, as the report runs it: no FAILED count, a line per failed test.
+            f.write("/work/tests/gpu/test_validate.cpp:171: Failure\n"
+                    "[  FAILED  ] GpuValidate.ATexelFetchOutsideItsTextureNamesThePass (0 ms)\n"
+                    "[==========] 138 tests from 47 test suites ran. (67525 ms total)\n"
+                    "[  PASSED  ] 137 tests.\n")
+        p = subprocess.run([sys.executable, SCRIPT, "--report", cut], capture_output=True,
+                           text=True)
+        lines = p.stdout.splitlines()
+        check(p.returncode == 0, f"a cut frames.json: exit 0 ({p.stderr.strip()})")
+        check("frames.json was cut short" in p.stdout and "3 frames read" in p.stdout,
+              "a cut frames.json: says so, with the frames read")
+        got = [x for x in lines if x.startswith("#33  gradient paper 128³ ≥ 1000 fps GPU")]
+        check(len(got) == 1 and got[0].endswith("met"), f"a cut frames.json: judged ({got})")
+        got = [x for x in lines if x.startswith("#33  test_gpu: 0 failures")]
+        check(len(got) == 1 and "137 passed, 1 failed" in got[0] and got[0].endswith("MISSED"),
+              f"a brief test_gpu.txt: its failed test counted ({got})")
+        got = [x for x in lines if x.startswith("#33  adaptive paper (shaft) 128³ ≥ 500 fps GPU")]
+        check(len(got) == 1 and got[0].endswith("not measured"),
+              f"a cut frames.json: the frames after the cut not measured ({got})")
         p = subprocess.run([sys.executable, SCRIPT, "--report", os.path.join(tmp, "none")],
                            capture_output=True, text=True)
         check(p.returncode == 2 and "frames.json" in p.stderr, "a missing report: exit 2")
