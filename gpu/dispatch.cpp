@@ -81,4 +81,14 @@ void dispatchIndirect(std::string_view pass, GLintptr offset, StageTimer* timer)
   checkGl(pass);
 }
 
+void dispatchLightParts(const Program& program, int parts, std::string_view pass, UVec3 count,
+                        GLbitfield barrier, StageTimer* timer) {
+  glUniform1i(program.uniform("uLightStride"), parts);
+  for (int part = 0; part < parts; ++part) {
+    glUniform1i(program.uniform("uLightFirst"), part);
+    dispatch(pass, count, timer);
+    glMemoryBarrier(barrier);
+  }
+}
+
 }  // namespace scatterlab::gpu

@@ -68,5 +68,11 @@ void dispatch(std::string_view pass, UVec3 count, StageTimer* timer = nullptr);
 /// Same, with the sizes read by the GPU from the GL_DISPATCH_INDIRECT_BUFFER bound, at byte
 /// `offset` (no size check: the shader that wrote them keeps them within the limit).
 void dispatchIndirect(std::string_view pass, GLintptr offset, StageTimer* timer = nullptr);
+/// A pass whose lights are split over `parts` dispatches (lightDispatches, gpu/shaders.h):
+/// `program` (in use, declaring uLightFirst and uLightStride) gets uLightStride = parts, then for
+/// each part c uLightFirst = c, the dispatch of `count` as `pass` and `barrier`, so that each
+/// part adds to what the ones before it stored. `parts` 1: one dispatch, as without a split.
+void dispatchLightParts(const Program& program, int parts, std::string_view pass, UVec3 count,
+                        GLbitfield barrier, StageTimer* timer = nullptr);
 
 }  // namespace scatterlab::gpu

@@ -267,13 +267,9 @@ Volume PerVoxelGpu::build(const Scene& scene, const Volume& density, const Box& 
           glBindImageTexture(binding::kPartSumsImage0 + k, sums.back().id(), 0, GL_TRUE, 0,
                              GL_READ_WRITE, GL_RGBA32F);
         }
-      glUniform1i(program.uniform("uLightStride"), parts);
       if (factored_) glUniform1i(program.uniform("uCombine"), 0);
-      for (int part = 0; part < parts; ++part) {
-        glUniform1i(program.uniform("uLightFirst"), part);
-        dispatch("per-voxel S", size, timer);
-        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-      }
+      dispatchLightParts(program, parts, "per-voxel S", size,
+                         GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT, timer);
       if (factored_) {
         glUniform1i(program.uniform("uCombine"), 1);
         dispatch("per-voxel S", size, timer);

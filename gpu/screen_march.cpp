@@ -56,12 +56,8 @@ Image JitteredMarchGpu::integrate(const Scene& scene, const Volume& density, Sta
     glUniform1i(march.uniform("uJitter"), int(s_.jitter));
     glUniform1i(march.uniform("uTableSize"), kBlueNoiseSize);
     glUniform1f(march.uniform("uMinTransmittance"), minT_);
-    glUniform1i(march.uniform("uLightStride"), parts);
-    for (int part = 0; part < parts; ++part) {
-      glUniform1i(march.uniform("uLightFirst"), part);
-      dispatch("jittered march", {groups(lw, 8), groups(lh, 8), 1});
-      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-    }
+    dispatchLightParts(march, parts, "jittered march", {groups(lw, 8), groups(lh, 8), 1},
+                       GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("jittered march");
   {
@@ -149,12 +145,8 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
                          GL_R32F);
       glUniform1i(scatter.uniform("uMapRes"), R);
     }
-    glUniform1i(scatter.uniform("uLightStride"), parts);
-    for (int part = 0; part < parts; ++part) {
-      glUniform1i(scatter.uniform("uLightFirst"), part);
-      dispatch("froxel accumulate", {groups(g.x, 8), groups(g.y, 8), 1});
-      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-    }
+    dispatchLightParts(scatter, parts, "froxel accumulate", {groups(g.x, 8), groups(g.y, 8), 1},
+                       GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
   checkGl("froxel accumulate");
   {

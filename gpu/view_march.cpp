@@ -231,11 +231,13 @@ Image ViewMarchGpu::integrate(const Scene& scene, const Volume& density, const V
     const double steps = double(strata) * double(strata) * diagonalSteps(scene, settings_.step);
     const int parts = factor_ ? lightDispatches(int(scene.lights.size()), steps, 2.0) : 1;
     bindScreenImage(binding::kOutputImage, out, parts > 1 ? GL_READ_WRITE : GL_WRITE_ONLY);
-    if (factor_) glUniform1i(march.uniform("uLightStride"), parts);
-    for (int part = 0; part < parts; ++part) {
-      if (factor_) glUniform1i(march.uniform("uLightFirst"), part);
-      dispatch("view march", {groups(cam.width, 8), groups(cam.height, 8), 1});
-      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    const UVec3 size(groups(cam.width, 8), groups(cam.height, 8), 1);
+    const GLbitfield barrier = GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT;
+    if (factor_) {  // only the factored variant declares the parts' uniforms
+      dispatchLightParts(march, parts, "view march", size, barrier);
+    } else {
+      dispatch("view march", size);
+      glMemoryBarrier(barrier);
     }
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   }
