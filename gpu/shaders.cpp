@@ -125,6 +125,21 @@ std::string imprecisePrologue(int ulps) {
       "vec2 slImprecise(vec2 v) { return vec2(slImprecise(v.x), slImprecise(v.y)); }\n"
       "vec3 slImprecise(vec3 v) { return vec3(slImprecise(v.xy), slImprecise(v.z)); }\n"
       "vec4 slImprecise(vec4 v) { return vec4(slImprecise(v.xyz), slImprecise(v.w)); }\n"
+      // A double's built-in (cpuSqrt, common.glsl) moves by as many units of a double's last
+      // place: what a GPU's double square root may be off by.
+      "double slImprecise(double v) {\n"
+      "  if (v == 0.0 || abs(v) == 1.0 || isinf(v) || isnan(v)) return v;\n"
+      "  uvec2 b = unpackDouble2x32(v);\n"
+      "  if ((b.y & 0x7ff00000u) == 0u) return v;\n"
+      "  uint h = (b.x ^ b.y ^ (b.x >> 16)) * 0x45d9f3bu;\n"
+      "  h ^= h >> 16;\n"
+      "  uint lo = (h & 1u) != 0u ? b.x + " +
+      std::to_string(ulps) + "u : b.x - " + std::to_string(ulps) +
+      "u;\n"
+      "  if ((h & 1u) != 0u && lo < b.x) b.y += 1u;\n"
+      "  if ((h & 1u) == 0u && lo > b.x) b.y -= 1u;\n"
+      "  return packDouble2x32(uvec2(lo, b.y));\n"
+      "}\n"
       "#define pow(x, y) slImprecise(pow(x, y))\n";
   for (const char* f : kImpreciseBuiltins)
     s += "#define " + std::string(f) + "(x) slImprecise(" + f + "(x))\n";
@@ -232,6 +247,10 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
   for (const std::string& c : sharedConstantDefines()) src += "#define " + c + "\n";
   for (const std::string& d : defines) src += "#define " + d + "\n";
   if (const int ulps = impreciseUlps()) src += imprecisePrologue(ulps);
+  // The CPU's arithmetic where an ulp decides (file index 0 in the info log's lines).
+  src += "#line 1 0\n";
+  src += shaderSource("cpu_arithmetic.glsl");
+  src += "\n";
   if (stage == GL_COMPUTE_SHADER)  // a 1D pass's index when it spans two axes (linearDispatch)
     src +=
         "#define SL_LINEAR_GROUP (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x)\n"
@@ -254,8 +273,8 @@ Shader compileShader(GLenum stage, const std::vector<std::string>& files,
   }
   if (guarded)
     src += "#line 1 " + std::to_string(files.size() + 1) + "\n" + loopGuardEpilogue(serial);
-  if (files.size() > 1) {
-    names += " (log lines are 'file-index:line' with ";
+  if (!files.empty()) {
+    names += " (log lines are 'file-index:line' with 0 = cpu_arithmetic.glsl, ";
     for (size_t i = 0; i < files.size(); ++i)
       names += (i ? ", " : "") + std::to_string(i + 1) + " = " + files[i];
     names += ")";

@@ -50,6 +50,13 @@ float smoothStepCpu(float x, float e0, float e1) {
   float t = clamp((x - e0) / (e1 - e0), 0.0, 1.0);
   return t * t * (3.0 - 2.0 * t);
 }
+// smoothStep in the CPU's arithmetic (cpuDiv, `precise`): a spot's cone factor at a sample.
+float smoothStepExact(float x, float e0, float e1) {
+  if (e0 == e1) return x < e0 ? 0.0 : 1.0;
+  precise float t = clamp(cpuDiv(x - e0, e1 - e0), 0.0, 1.0);
+  precise float r = t * t * (3.0 - 2.0 * t);
+  return r;
+}
 
 // exp(−x) for one march step's optical depth x ≥ 0, to float rounding near 1 as the CPU's
 // std::exp. GLSL lets exp err by 3 + 2|x| ulp (~2e-7 absolute near 1; NVIDIA's ex2.approx
@@ -71,13 +78,15 @@ float phaseEvalCos(float c) {
 }
 
 // Box::intersect: slab test; false when the ray misses.
+// The CPU's arithmetic (cpuDiv, `precise`: cpu_arithmetic.glsl): a ray's entry and exit decide
+// its step count.
 bool intersectBox(vec3 o, vec3 d, float tmin, float tmax, out float t0, out float t1) {
   t0 = tmin;
   t1 = tmax;
   for (int a = 0; a < 3; ++a) {
-    float inv = 1.0 / d[a];
-    float tn = (uBoxMin[a] - o[a]) * inv;
-    float tf = (uBoxMax[a] - o[a]) * inv;
+    float inv = cpuDiv(1.0, d[a]);
+    precise float tn = (uBoxMin[a] - o[a]) * inv;
+    precise float tf = (uBoxMax[a] - o[a]) * inv;
     if (tn > tf) { float s = tn; tn = tf; tf = s; }
     t0 = tn > t0 ? tn : t0;
     t1 = tf < t1 ? tf : t1;
@@ -86,11 +95,6 @@ bool intersectBox(vec3 o, vec3 d, float tmin, float tmax, out float t0, out floa
   return true;
 }
 
-// stepCount (core/stages.h): the equal midpoint steps of at most `stepLen` (up to SL_STEP_SLACK
-// longer) over a segment of `len`, so that an integer ratio does not round apart from the CPU's.
-int stepCount(float len, float stepLen) {
-  return max(1, int(ceil(len / stepLen - SL_STEP_SLACK)));
-}
 
 // VoxelOccupancy (cpu/per_voxel.h): whether a density voxel with D > 0 has a trilinear support
 // overlapping that of the radiance voxel centred at c with edge `cell` (the range shrunk by 1e-4
@@ -148,16 +152,17 @@ float densityAtPoint(vec3 p) {
 // SL_SKIP_SHADOWS (gpu::addShadowRaySkip) empty blocks are jumped over, and the sum stops after
 // the block where it passes maxDepth (the CPU's shadow rays: shading/transport.h).
 float opticalDepth(vec3 a, vec3 b, float stepLen, float maxDepth) {
-  vec3 d = b - a;
-  float len = length(d);
+  // The segment's steps in the CPU's arithmetic (indexSteps): the same n, dt and lookups.
+  precise vec3 d = b - a;
+  float len = cpuLength(d);
   if (len <= 0.0) return 0.0;
-  vec3 dir = d / len;
+  vec3 dir = cpuDiv(d, len);
   float t0, t1;
   if (!intersectBox(a, dir, 0.0, len, t0, t1) || t1 <= t0) return 0.0;
   int n = stepCount(t1 - t0, stepLen);
-  float dt = (t1 - t0) / float(n);
-  vec3 u0 = (a + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
-  vec3 du = dir * dt * uDensityScale;
+  float dt = cpuDiv(t1 - t0, float(n));
+  precise vec3 u0 = (a + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
+  precise vec3 du = dir * dt * uDensityScale;
   float sum = 0.0;
 #ifdef SL_SKIP_SHADOWS
   // The steps in blocks of zero density add exactly 0 (block_walk.glsl, compiled before this
@@ -186,15 +191,28 @@ float shadowDepthCutoff() { return uSigmaT > 0.0 ? SL_SHADOW_DEPTH_CUTOFF / uSig
 
 // Light::geometry (core/light.h): direction and distance towards light l from x, and the spot
 // cone factor (1 for point and directional lights); false only at a point or spot light itself.
-bool lightGeometry(GpuLight l, vec3 x, out vec3 toLight, out float dist, out float dist2,
-                   out float cone) {
+// `exact` (a sample's or a voxel's S, a shadow ray's end): in the CPU's arithmetic (cpuSqrt,
+// cpuDiv, cpuDot), the same toLight, distance and cone bit for bit; without (A at every view-march
+// step, where the result only moves continuously) in the GPU's own, at float speed.
+bool lightGeometry(GpuLight l, vec3 x, bool exact, out vec3 toLight, out float dist,
+                   out float dist2, out float cone) {
   cone = 1.0;
   if (int(l.positionType.w) == 2) {
     toLight = -l.directionCosInner.xyz;
     dist = dist2 = kInf;
     return true;
   }
-  vec3 d = l.positionType.xyz - x;
+  precise vec3 d = l.positionType.xyz - x;
+  if (exact) {
+    dist2 = cpuDot(d, d);
+    if (dist2 <= 0.0) return false;
+    dist = cpuSqrt(dist2);
+    toLight = cpuDiv(d, dist);
+    if (int(l.positionType.w) == 1)
+      cone = smoothStepExact(cpuDot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
+                             l.directionCosInner.w);
+    return true;
+  }
   dist2 = dot(d, d);
   if (dist2 <= 0.0) return false;
   dist = sqrt(dist2);
@@ -229,7 +247,9 @@ bool litReaches(vec3 c, float r) {
 // The end of the segment to trace towards a directional light: where the ray leaves the box.
 vec3 boxExit(vec3 x, vec3 toLight) {
   float t0, t1;
-  return intersectBox(x, toLight, 0.0, kInf, t0, t1) ? x + toLight * t1 : x;
+  precise vec3 end = x;
+  if (intersectBox(x, toLight, 0.0, kInf, t0, t1)) end = x + toLight * t1;
+  return end;
 }
 
 // SourceRadiance::operator()'s terms for lights li = first, first + stride, … (S at x for
@@ -241,13 +261,14 @@ vec3 sourceRadiancePart(vec3 x, vec3 toViewer, int first, int stride) {
     GpuLight l = lights[li];
     vec3 toLight, irradiance, segEnd;
     float dist, dist2, f;
-    if (!lightGeometry(l, x, toLight, dist, dist2, f) || f <= 0.0) continue;
+    if (!lightGeometry(l, x, true, toLight, dist, dist2, f) || f <= 0.0) continue;
     if (int(l.positionType.w) == 2) {
       irradiance = l.intensityCosOuter.rgb;
       segEnd = boxExit(x, toLight);
     } else {
       irradiance = l.intensityCosOuter.rgb * (f / dist2);
-      segEnd = x + toLight * dist;
+      precise vec3 end = x + toLight * dist;  // lightSegmentEnd, as the CPU rounds it
+      segEnd = end;
     }
 #ifdef SL_OBJECTS
     // V_l through scene objects (shadow.glsl): the CPU skips a blocked light.
@@ -286,14 +307,17 @@ float lampModel(int li, vec3 x) {
 
 // One light's analytic weight, the twin of FactoredSourceRadiance::term (shading/transport.h):
 // w = E0·f (cone not applied), the cone factor, and the far end of the segment to trace.
-bool lightTerm(int li, vec3 x, vec3 toViewer, out vec3 w, out float cone, out vec3 segEnd) {
+// `exact`: lightGeometry's; without it (A, which traces nothing) segEnd is not set up: the box
+// exit's divisions would run at every march step.
+bool lightTerm(int li, vec3 x, vec3 toViewer, bool exact, out vec3 w, out float cone,
+               out vec3 segEnd) {
   GpuLight l = lights[li];
   vec3 toLight, e0;
   float dist, dist2;
-  if (!lightGeometry(l, x, toLight, dist, dist2, cone)) return false;
+  if (!lightGeometry(l, x, exact, toLight, dist, dist2, cone)) return false;
   if (int(l.positionType.w) == 2) {
     e0 = l.intensityCosOuter.rgb;
-    segEnd = boxExit(x, toLight);
+    segEnd = exact ? boxExit(x, toLight) : x;
   } else {
     e0 = l.intensityCosOuter.rgb / dist2;
     segEnd = l.positionType.xyz;
@@ -322,9 +346,9 @@ vec3 lightFactor(vec3 x, vec3 toViewer) {
     vec3 w, segEnd;
     float cone;
 #ifdef SL_LAMP_MODEL
-    if (lightTerm(li, x, toViewer, w, cone, segEnd)) a += w * (cone * lampModel(li, x));
+    if (lightTerm(li, x, toViewer, true, w, cone, segEnd)) a += w * (cone * lampModel(li, x));
 #else
-    if (lightTerm(li, x, toViewer, w, cone, segEnd)) a += w * cone;
+    if (lightTerm(li, x, toViewer, true, w, cone, segEnd)) a += w * cone;
 #endif
   }
   return a;
@@ -334,7 +358,7 @@ vec3 lightFactor(vec3 x, vec3 toViewer) {
 vec3 lightFactorTerm(int li, vec3 x, vec3 toViewer) {
   vec3 w, segEnd;
   float cone;
-  if (!lightTerm(li, x, toViewer, w, cone, segEnd)) return vec3(0.0);
+  if (!lightTerm(li, x, toViewer, false, w, cone, segEnd)) return vec3(0.0);
 #ifdef SL_LAMP_MODEL
   return w * (cone * lampModel(li, x));
 #else
@@ -350,12 +374,20 @@ float glowDistance(vec3 p, vec3 x, vec3 dir, float dt) {
   return length(v - tc * dir);
 }
 
+// glowDistance in the CPU's arithmetic (cpuDot, cpuLength, `precise`).
+float glowDistanceExact(vec3 p, vec3 x, vec3 dir, float dt) {
+  precise vec3 v = p - x;
+  precise float tc = clamp(cpuDot(v, dir), -0.5 * dt, 0.5 * dt);
+  precise vec3 w = v - tc * dir;
+  return cpuLength(w);
+}
+
 // The substeps of a light's glow at a step `dist` from it (glowSubsteps of core/stages.h,
-// kGlowRatio and kGlowMaxSubsteps).
+// kGlowRatio and kGlowMaxSubsteps), the ratio in the CPU's arithmetic.
 int glowSubsteps(float dist, float reach) {
   if (!(dist < reach)) return 1;
   if (!(dist > 0.0)) return int(SL_GLOW_MAX_SUBSTEPS);
-  return int(min(ceil(reach / dist), SL_GLOW_MAX_SUBSTEPS));
+  return int(min(ceil(cpuDiv(reach, dist)), SL_GLOW_MAX_SUBSTEPS));
 }
 
 // A's far field (FarField of shading/transport.h): w_l at x, smoothstep(R, 2R, |p_l − x|) for a
@@ -404,9 +436,15 @@ vec3 farLookup(vec3 x) {
 uniform float uGlow;  // render.glow: 1 (the glow's substeps), 0 (each step's midpoint only)
 vec3 lightStepTerm(int li, vec3 origin, vec3 dir, vec3 x, float t, float dt) {
   int n = 1;
-  if (int(lights[li].positionType.w) != 2)
-    n = glowSubsteps(glowDistance(lights[li].positionType.xyz, x, dir, dt),
-                     lights[li].lamp.z * dt * uGlow);
+  if (int(lights[li].positionType.w) != 2) {
+    float reach = lights[li].lamp.z * dt * uGlow;
+    float d = glowDistance(lights[li].positionType.xyz, x, dir, dt);
+    // Where the count is decided (near the reach and inside it) the distance is taken in the
+    // CPU's arithmetic, so that an ulp does not give the step another count of substeps; the
+    // GPU's own is within 1e-6 of it, far inside the margin.
+    if (d < reach * 1.001) d = glowDistanceExact(lights[li].positionType.xyz, x, dir, dt);
+    n = glowSubsteps(d, reach);
+  }
   if (n == 1) return lightFactorTerm(li, x, -dir);
   vec3 s = vec3(0.0);
   for (int m = 0; m < n; ++m)
@@ -421,7 +459,7 @@ vec3 lightStepTerm(int li, vec3 origin, vec3 dir, vec3 x, float t, float dt) {
 // far field's lookup with the part of first 0): a march split over dispatches where the driver
 // caps loops (gpu::lightDispatches) adds the parts; (0, 1) is every light.
 vec3 lightFactorStepPart(vec3 origin, vec3 dir, float t, float dt, int first, int stride) {
-  vec3 x = origin + dir * t;
+  precise vec3 x = origin + dir * t;  // Ray::at, as the CPU rounds it
 #ifdef SL_FAR_FIELD
   vec3 a = first == 0 ? farLookup(x) : vec3(0.0);
   int base = farBrick(x) * uFarWords;
@@ -458,7 +496,7 @@ void factoredPart(vec3 x, vec3 toViewer, int first, int stride, out vec3 s, out 
   for (int li = first; li < uLightCount; li += stride) {
     vec3 w, segEnd;
     float cone;
-    if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
+    if (!lightTerm(li, x, toViewer, true, w, cone, segEnd)) continue;
     if (cone <= 0.0) {
       outside += 1.0;
       continue;
@@ -489,7 +527,7 @@ void factoredFreePart(vec3 x, vec3 toViewer, int first, int stride, out vec3 sf,
   for (int li = first; li < uLightCount; li += stride) {
     vec3 w, segEnd;
     float cone;
-    if (!lightTerm(li, x, toViewer, w, cone, segEnd)) continue;
+    if (!lightTerm(li, x, toViewer, true, w, cone, segEnd)) continue;
     sf += w * lightTransmittance(li, x, segEnd);
 #ifdef SL_LAMP_MODEL
     af += w * lampModel(li, x);
@@ -524,10 +562,10 @@ vec3 factoredSource(vec3 x, vec3 toViewer) {
 // cpu/radiance_evaluator.h) with SL_LOG_SPACE too.
 uniform vec3 uEye;
 // The unit direction from p to the camera, (0, 0, 1) at the camera itself.
-vec3 towardsEye(vec3 p) {
-  vec3 v = uEye - p;
-  float len = length(v);
-  return len > 0.0 ? v / len : vec3(0.0, 0.0, 1.0);
+vec3 towardsEye(vec3 p) {  // in the CPU's arithmetic (once per sample or voxel)
+  precise vec3 v = uEye - p;
+  float len = cpuLength(v);
+  return len > 0.0 ? cpuDiv(v, len) : vec3(0.0, 0.0, 1.0);
 }
 vec3 sourceTowardsEye(vec3 p) {
   vec3 toViewer = towardsEye(p);

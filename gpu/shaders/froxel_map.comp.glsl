@@ -9,14 +9,17 @@ void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (v.x >= uMapRes || v.y >= uMapRes || v.z >= uMapRes * uLightCount) return;
   int li = v.z / uMapRes;
-  vec3 cell = (uBoxMax - uBoxMin) / float(uMapRes);
-  vec3 x = uBoxMin + (vec3(v.x, v.y, v.z - li * uMapRes) + 0.5) * cell;
+  // Grid3::cellCenter as the CPU rounds it (cpuDiv, `precise`).
+  precise vec3 extent = uBoxMax - uBoxMin;
+  vec3 cell = cpuDiv(extent, float(uMapRes));
+  precise vec3 x = uBoxMin + (vec3(v.x, v.y, v.z - li * uMapRes) + 0.5) * cell;
   GpuLight l = lights[li];
   vec3 toLight;
   float dist, dist2, cone;
   float value = 0.0;
-  if (lightGeometry(l, x, toLight, dist, dist2, cone)) {
-    vec3 segEnd = int(l.positionType.w) == 2 ? boxExit(x, toLight) : x + toLight * dist;
+  if (lightGeometry(l, x, true, toLight, dist, dist2, cone)) {
+    precise vec3 end = x + toLight * dist;  // lightSegmentEnd
+    vec3 segEnd = int(l.positionType.w) == 2 ? boxExit(x, toLight) : end;
     value = exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
 #ifdef SL_OBJECTS
     value *= lightVisibility(li, x);  // the shadow maps (the CPU: 0 where an object blocks)

@@ -50,7 +50,7 @@ vec3 mapSource(vec3 x, vec3 toViewer) {
     GpuLight l = lights[li];
     vec3 toLight;
     float dist, dist2, f;
-    if (!lightGeometry(l, x, toLight, dist, dist2, f) || f <= 0.0) continue;
+    if (!lightGeometry(l, x, true, toLight, dist, dist2, f) || f <= 0.0) continue;
     vec3 irradiance = int(l.positionType.w) == 2 ? l.intensityCosOuter.rgb
                                                  : l.intensityCosOuter.rgb * (f / dist2);
     s += irradiance * (phaseEvalCos(dot(-toLight, toViewer)) * mapAt(li, x));
@@ -62,8 +62,10 @@ vec3 mapSource(vec3 x, vec3 toViewer) {
 void main() {
   ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(ij, uGrid.xy))) return;
-  vec3 dir = cameraRay((vec2(ij) + 0.5) * uSize / vec2(uGrid.xy));
-  float c = dot(dir, uForward);
+  // columnRay and the slices' clip in the CPU's arithmetic (cpuDiv, cpuDot, `precise`).
+  precise vec2 fs = (vec2(ij) + 0.5) * uSize;
+  vec3 dir = cameraRay(vec2(cpuDiv(fs.x, float(uGrid.x)), cpuDiv(fs.y, float(uGrid.y))));
+  float c = cpuDot(dir, uForward);
   // Each slice clipped to the column's piece inside the box (cpu/froxel.cpp).
   float t0 = 0.0, t1 = -1.0;
   if (uSigmaT > 0.0 && !intersectBox(uEye, dir, 0.0, kInf, t0, t1)) t1 = -1.0;
@@ -71,8 +73,8 @@ void main() {
   float T = 1.0;
   for (int k = 0; k < uGrid.z; ++k) {
     float za = sliceDepth(float(k)), zb = sliceDepth(float(k + 1));
-    float ta = max(za / c, t0), tb = min(zb / c, t1);
-    vec3 x = uEye + dir * (0.5 * (ta + tb));
+    float ta = max(cpuDiv(za, c), t0), tb = min(cpuDiv(zb, c), t1);
+    precise vec3 x = uEye + dir * (0.5 * (ta + tb));
     float D = tb > ta ? densityAtIndex(x * uDensityScale + uDensityOffset) : 0.0;
     if (D > 0.0) {
       float a = stepTransmittance(uSigmaT * D * (tb - ta));

@@ -38,15 +38,17 @@ void main() {
   float depth = !isinf(hitT) ? hitT : inBox ? t1 : kInf;
   if (inBox && uSigmaT > 0.0 && min(t1, hitT) > t0) {
     t1 = min(t1, hitT);
-    float dt = (t1 - t0) / float(uSteps);
+    // The CPU's steps as it rounds them (cpuDiv, `precise`; the ray from cameraRay).
+    float dt = cpuDiv(t1 - t0, float(uSteps));
     float o = jitterOffset(p);
-    vec3 u0 = (uEye + dir * (t0 + o * dt)) * uDensityScale + uDensityOffset;
-    vec3 du = dir * dt * uDensityScale;
+    precise vec3 u0 = (uEye + dir * (t0 + o * dt)) * uDensityScale + uDensityOffset;
+    precise vec3 du = dir * dt * uDensityScale;
     for (int k = 0; k < uSteps && T > uMinTransmittance; ++k) {
-      float D = densityAtIndex(u0 + float(k) * du);
+      precise vec3 uk = u0 + float(k) * du;
+      float D = densityAtIndex(uk);
       if (!(D > 0.0)) continue;
       float a = stepTransmittance(uSigmaT * D * dt);
-      vec3 x = uEye + dir * (t0 + (float(k) + o) * dt);
+      precise vec3 x = uEye + dir * (t0 + (float(k) + o) * dt);
       vec3 S = sourceRadiancePart(x, -dir, uLightFirst, max(uLightStride, 1));
       L += (T * uAlbedo * (1.0 - a)) * S;
       T *= a;

@@ -43,7 +43,7 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     GpuLight l = lights[li];
     vec3 toLight;
     float dist, dist2, cone;
-    if (!lightGeometry(l, x, toLight, dist, dist2, cone) || cone <= 0.0) continue;
+    if (!lightGeometry(l, x, true, toLight, dist, dist2, cone) || cone <= 0.0) continue;
     bool directional = int(l.positionType.w) == 2;
     vec3 irradiance = directional ? l.intensityCosOuter.rgb : l.intensityCosOuter.rgb * (cone / dist2);
 #ifdef SL_OBJECTS
@@ -53,7 +53,8 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     const float vis = 1.0;  // v_l = 1 without objects
 #endif
 #ifdef SL_TRACED
-    vec3 segEnd = directional ? boxExit(x, toLight) : x + toLight * dist;
+    precise vec3 end = x + toLight * dist;
+    vec3 segEnd = directional ? boxExit(x, toLight) : end;
     float tau = opticalDepth(x, segEnd, uDelta1);
 #else
     // lengthInBox (shading/post_process.h)
@@ -69,9 +70,12 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
 void main() {
   ivec2 px = ivec2(gl_GlobalInvocationID.xy);
   if (px.x >= uImageSize.x || px.y >= uImageSize.y) return;
-  float u = ((float(px.x) + 0.5) / float(uImageSize.x) * 2.0 - 1.0) * uTanHalf.x;
-  float v = (1.0 - (float(px.y) + 0.5) / float(uImageSize.y) * 2.0) * uTanHalf.y;
-  vec3 dir = normalize(uForward + u * uRight + v * uUp);
+  // The camera's ray in the CPU's arithmetic (cameraRay of screen_common.glsl; common.glsl's
+  // cpuDiv and cpuNormalize): its box entry and exit, and where it passes a lamp, are the CPU's.
+  precise float u = (cpuDiv(float(px.x) + 0.5, float(uImageSize.x)) * 2.0 - 1.0) * uTanHalf.x;
+  precise float v = (1.0 - cpuDiv(float(px.y) + 0.5, float(uImageSize.y)) * 2.0) * uTanHalf.y;
+  precise vec3 w = uForward + u * uRight + v * uUp;
+  vec3 dir = cpuNormalize(w);
   int stride = uInterleave * uInterleave;
   int first = (px.x % uInterleave) + uInterleave * (px.y % uInterleave);
   vec3 L = vec3(0.0);
@@ -89,15 +93,16 @@ void main() {
     // From the box entry to the surface or the box exit (LightSpaceMarcher::march).
     t1 = min(t1, hitT);
     int n = uSteps;
-    float dt = (t1 - t0) / float(n);
-    vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
-    vec3 du = dir * dt * uDensityScale;
+    float dt = cpuDiv(t1 - t0, float(n));
+    precise vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
+    precise vec3 du = dir * dt * uDensityScale;
     for (int i = 0; i < n; ++i) {
-      float D = densityAtIndex(u0 + float(i) * du);
+      precise vec3 ui = u0 + float(i) * du;
+      float D = densityAtIndex(ui);
       if (D <= 0.0) continue;
       float a = stepTransmittance(uSigmaT * D * dt);
       if (i % stride == first) {
-        vec3 p = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+        precise vec3 p = uEye + dir * (t0 + (float(i) + 0.5) * dt);
         L += (T * uAlbedo * (1.0 - a)) * lsmSource(p, -dir);
       }
       T *= a;

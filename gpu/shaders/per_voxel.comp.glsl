@@ -37,7 +37,7 @@ uniform float uReach;
 void main() {
   ivec3 v = ivec3(gl_GlobalInvocationID);
   if (any(greaterThanEqual(v, uRadDims))) return;
-  vec3 c = uRadMin + (vec3(v) + 0.5) * uRadCell;
+  precise vec3 c = uRadMin + (vec3(v) + 0.5) * uRadCell;  // Grid3::cellCenter, as the CPU rounds it
   bool occupied = radianceVoxelOccupied(c, uRadCell);
 #ifdef SL_LIT_REACH
   occupied = occupied && litReaches(c, uReach);

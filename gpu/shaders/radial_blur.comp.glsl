@@ -43,9 +43,11 @@ void main() {
 #else
   vec2 f = vec2(px) + 0.5;
 #endif
-  float u = (f.x / float(uImageSize.x) * 2.0 - 1.0) * uTanHalf.x;
-  float v = (1.0 - f.y / float(uImageSize.y) * 2.0) * uTanHalf.y;
-  vec3 dir = normalize(uForward + u * uRight + v * uUp);
+  // The camera's ray in the CPU's arithmetic (cameraRay of screen_common.glsl).
+  precise float u = (cpuDiv(f.x, float(uImageSize.x)) * 2.0 - 1.0) * uTanHalf.x;
+  precise float v = (1.0 - cpuDiv(f.y, float(uImageSize.y)) * 2.0) * uTanHalf.y;
+  precise vec3 w = uForward + u * uRight + v * uUp;
+  vec3 dir = cpuNormalize(w);
   vec3 L = vec3(0.0);
   float T = 1.0;
   float t0, t1;
@@ -69,19 +71,20 @@ void main() {
   if (inBox && min(t1, hitT) > t0) {
     t1 = min(t1, hitT);
     int n = stepCount(t1 - t0, uStep);
-    float dt = (t1 - t0) / float(n);
-    vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
-    vec3 du = dir * dt * uDensityScale;
+    float dt = cpuDiv(t1 - t0, float(n));
+    precise vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
+    precise vec3 du = dir * dt * uDensityScale;
     for (int i = 0; i < n && T > uMinTransmittance; ++i) {
-      float D = densityAtIndex(u0 + float(i) * du);
+      precise vec3 ui = u0 + float(i) * du;
+      float D = densityAtIndex(ui);
       if (D <= 0.0) continue;
       float a = stepTransmittance(uSigmaT * D * dt);
 #ifdef SL_PREPASS
-      vec3 p = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+      precise vec3 p = uEye + dir * (t0 + (float(i) + 0.5) * dt);
       vec3 toLight;
       float dist, dist2, cone;
       GpuLight l = lights[uLight];
-      if (lightGeometry(l, p, toLight, dist, dist2, cone) && cone > 0.0) {
+      if (lightGeometry(l, p, false, toLight, dist, dist2, cone) && cone > 0.0) {
         vec3 e = int(l.positionType.w) == 2 ? l.intensityCosOuter.rgb
                                             : l.intensityCosOuter.rgb * (cone / dist2);
         L += (T * uAlbedo * (1.0 - a) * phaseEvalCos(dot(-toLight, -dir))) * e;

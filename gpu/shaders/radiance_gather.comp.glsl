@@ -85,13 +85,15 @@ void main() {
     float dist = sqrt(d2);
     float W = R / max(dist, SL_SINGULAR_EPS * R);
 #ifdef SL_OCCLUSION
+    // Its steps as the CPU counts them: the length in its arithmetic (cpuLength, glm::length).
     vec3 p = positionRadius.xyz;
-    int steps = stepCount(dist, uDensityVoxel);
+    float len = cpuLength(d);
+    int steps = stepCount(len, uDensityVoxel);
     float tau = 0.0;
     for (int m = 0; m < steps; ++m)
       tau += densityAtIndex((p + d * ((float(m) + 0.5) / float(steps))) * uDensityScale +
                             uDensityOffset);
-    W *= exp(-uSigmaT * tau * (dist / float(steps)));
+    W *= exp(-uSigmaT * tau * (len / float(steps)));
 #endif
     GatherRecord s = records[j];
     vec3 taylor = s.S.rgb + d.x * s.dS[0].rgb + d.y * s.dS[1].rgb + d.z * s.dS[2].rgb;

@@ -31,13 +31,15 @@ void main() {
 #ifdef SL_OCCLUSION
   // Occlusion-aware weight (interpolateSamples' twin): exp(−σt·τ) of the segment from the
   // sample to the voxel, τ by the midpoint rule with steps of at most one density voxel.
+  // Its steps as the CPU counts them: the length in its arithmetic (cpuLength, glm::length).
   vec3 p = vPosR.xyz;
-  int steps = stepCount(dist, uDensityVoxel);
+  float len = cpuLength(d);
+  int steps = stepCount(len, uDensityVoxel);
   float sum = 0.0;
   for (int m = 0; m < steps; ++m)
     sum += densityAtIndex((p + d * ((float(m) + 0.5) / float(steps))) * uDensityScale +
                           uDensityOffset);
-  W *= exp(-uSigmaT * sum * (dist / float(steps)));
+  W *= exp(-uSigmaT * sum * (len / float(steps)));
 #endif
   vec3 taylor = vS + d.x * vDx + d.y * vDy + d.z * vDz;
 #ifdef SL_BOUNDED

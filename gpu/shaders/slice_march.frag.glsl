@@ -27,9 +27,11 @@ layout(location = 0) out vec4 outColor;
 void main() {
   // GL row r is image row r (row 0 at the top once read back without flipping).
   vec2 pix = gl_FragCoord.xy;  // (px + 0.5, py + 0.5)
-  float u = (pix.x / uSize.x * 2.0 - 1.0) * uTanHalf.x;
-  float v = (1.0 - pix.y / uSize.y * 2.0) * uTanHalf.y;
-  vec3 dir = normalize(uForward + u * uRight + v * uUp);
+  // The camera's ray in the CPU's arithmetic (cameraRay of screen_common.glsl).
+  precise float u = (cpuDiv(pix.x, uSize.x) * 2.0 - 1.0) * uTanHalf.x;
+  precise float v = (1.0 - cpuDiv(pix.y, uSize.y) * 2.0) * uTanHalf.y;
+  precise vec3 w = uForward + u * uRight + v * uUp;
+  vec3 dir = cpuNormalize(w);
   float t0, t1;
   if (!intersectBox(uEye, dir, 0.0, kInf, t0, t1) || !(t1 > t0)) discard;
 #ifdef SL_OBJECTS
@@ -43,9 +45,9 @@ void main() {
   int n = stepCount(t1 - t0, uStep);
   int i = n - 1 - uLayer;
   if (i < 0) discard;
-  float dt = (t1 - t0) / float(n);
-  float tMid = t0 + (float(i) + 0.5) * dt;
-  vec3 x = uEye + dir * tMid;
+  float dt = cpuDiv(t1 - t0, float(n));
+  precise float tMid = t0 + (float(i) + 0.5) * dt;
+  precise vec3 x = uEye + dir * tMid;
 #else
   float c = dot(dir, uForward);
   float a = max(t0, uDepthNear / c), b = min(t1, uDepthFar / c);

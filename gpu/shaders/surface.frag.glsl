@@ -28,7 +28,7 @@ void main() {
       GpuLight l = lights[li];
       vec3 toLight;
       float d, d2, cone;
-      if (!lightGeometry(l, p, toLight, d, d2, cone) || cone <= 0.0) continue;
+      if (!lightGeometry(l, p, true, toLight, d, d2, cone) || cone <= 0.0) continue;
       float cosine = dot(ns, toLight);
       if (cosine <= 0.0 || dot(n, toLight) <= 0.0) continue;
       float vis = surfaceVisibility(li, p, n);

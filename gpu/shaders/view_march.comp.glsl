@@ -72,10 +72,11 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
   if (uSigmaT > 0.0 && intersectBox(uEye, dir, 0.0, kInf, t0, t1) && t1 > t0) {
     if (hit) t1 = min(t1, tSurface);
     if (t1 > t0) {
+      // The CPU's steps bit for bit (cpuDiv, `precise`; the ray from cameraRay).
       int n = stepCount(t1 - t0, uStep);
-      float dt = (t1 - t0) / float(n);
-      vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
-      vec3 du = dir * dt * uDensityScale;
+      float dt = cpuDiv(t1 - t0, float(n));
+      precise vec3 u0 = (uEye + dir * (t0 + 0.5 * dt)) * uDensityScale + uDensityOffset;
+      precise vec3 du = dir * dt * uDensityScale;
 #ifdef SL_SKIP
       BlockWalk walk = blockWalk(u0, du, n);
 #endif
@@ -93,24 +94,24 @@ vec4 marchRay(vec3 dir, ivec2 pixel) {
 #endif
         for (; i < end && T > uMinT; ++i) {
           ++stepsLooked;
+          precise vec3 u = u0 + float(i) * du;  // the CPU's lookup points, as it rounds them
+          precise float t = t0 + (float(i) + 0.5) * dt;
 #ifdef SL_FUSED
-          vec4 DS = radianceAtIndex(u0 + float(i) * du);
+          vec4 DS = radianceAtIndex(u);
           float D = DS.a;
           if (!(D > 0.0)) continue;
-          vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
           vec3 S = DS.rgb;
 #else
-          float D = densityAtIndex(u0 + float(i) * du);
+          float D = densityAtIndex(u);
           if (!(D > 0.0)) continue;
-          vec3 x = uEye + dir * (t0 + (float(i) + 0.5) * dt);
+          precise vec3 x = uEye + dir * t;
           vec3 S = radianceAtIndex(x * uRadScale + uRadOffset).rgb;
 #endif
 #ifdef SL_FACTOR_LIGHTS
           // The volume holds V = S / A; where V = 0 (outside every spot cone, or fully
           // shadowed) S is 0 without evaluating A, as on the CPU.
           if (S != vec3(0.0))
-            S *= lightFactorStepPart(uEye, dir, t0 + (float(i) + 0.5) * dt, dt, uLightFirst,
-                                     max(uLightStride, 1));
+            S *= lightFactorStepPart(uEye, dir, t, dt, uLightFirst, max(uLightStride, 1));
 #endif
           float a = stepTransmittance(uSigmaT * D * dt);
           L += (T * uAlbedo * (1.0 - a)) * S;
@@ -149,7 +150,8 @@ void main() {
     vec4 sum = vec4(0.0);
     for (int j = 0; j < uStrata; ++j)
       for (int i = 0; i < uStrata; ++i) {
-        vec2 f = vec2(p) + (vec2(i, j) + 0.5) / float(uStrata);
+        precise vec2 f = vec2(p) + vec2(cpuDiv(float(i) + 0.5, float(uStrata)),
+                                        cpuDiv(float(j) + 0.5, float(uStrata)));
         sum += marchRay(cameraRay(f), p);
       }
     sum /= float(uStrata * uStrata);
