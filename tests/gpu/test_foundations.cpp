@@ -304,7 +304,8 @@ TEST(GpuShaders, ImpreciseBuiltInsAreTheUlpsAskedAwayAndExactValuesStay) {
 /// The GPU's results of cpu_arithmetic.glsl's helpers and of the plain built-ins beside them, for
 /// `in` (8 floats per case: a, b, x, v.xyz, len, step), with `prologue` before the helpers: per
 /// case a / b, √x, |v|, v / |v| (3), stepCount(len, step) (as a float), twice (helpers, plain).
-std::vector<float> cpuArithmeticOnTheGpu(const std::vector<float>& in, const std::string& prologue) {
+std::vector<float> cpuArithmeticOnTheGpu(const std::vector<float>& in,
+                                         const std::string& prologue) {
   std::string src = "#version 450 core\n";
   for (const std::string& d : gpu::sharedConstantDefines()) src += "#define " + d + "\n";
   src += prologue;
@@ -382,7 +383,12 @@ TEST(GpuShaders, TheCpuArithmeticIsTheCpusBitForBit) {
     for (int c = 0; c < kCases; ++c) {
       const float* i = &in[std::size_t(c) * 8];
       const Vec3 v(i[3], i[4], i[5]), n = glm::normalize(v);
-      const float want[7] = {i[0] / i[1],  std::sqrt(i[2]), glm::length(v), n.x, n.y, n.z,
+      const float want[7] = {i[0] / i[1],
+                             std::sqrt(i[2]),
+                             glm::length(v),
+                             n.x,
+                             n.y,
+                             n.z,
                              float(stepCount(i[6], i[7]))};
       const float* g = &got[std::size_t(c) * 14];
       for (int r = 0; r < 7; ++r) {
@@ -395,9 +401,10 @@ TEST(GpuShaders, TheCpuArithmeticIsTheCpusBitForBit) {
                stepCount(std::nextafter(i[6], 0.0f), i[7]) != stepCount(i[6], i[7]);
     }
     EXPECT_EQ(wrong, 0) << ulps << " ulps";
-    std::printf("built-ins %d ulps off: %d of %d helper results differ from the CPU's, %d plain "
-                "built-in results; %d of %d lengths an ulp from their step count's edge\n",
-                ulps, wrong, 7 * kCases, plainOff, edges, kCases);
+    std::printf(
+        "built-ins %d ulps off: %d of %d helper results differ from the CPU's, %d plain "
+        "built-in results; %d of %d lengths an ulp from their step count's edge\n",
+        ulps, wrong, 7 * kCases, plainOff, edges, kCases);
     // The simulation moves the plain sqrt, length and normalize (nothing to show without it).
     if (ulps > 0) {
       EXPECT_GT(plainOff, kCases);
