@@ -103,6 +103,8 @@ inline constexpr GLuint kNextRadiance = 19;
 inline constexpr GLuint kAssembleParts = 1;
 /// float[kBlueNoiseSize²] blue-noise table of `jittered-march` (shading/screen_march.h).
 inline constexpr GLuint kJitterTable = 1;
+/// float[slices + 1]: the view depths of `froxel`'s slice boundaries (FroxelSlicing::depth).
+inline constexpr GLuint kFroxelDepths = 1;
 
 // ---- texture units
 
@@ -234,6 +236,7 @@ inline constexpr BindingDefine kBindingDefines[] = {
     {"BINDING_SCREEN_OUT_IMAGE", binding::kScreenOutImage},
     {"BINDING_SCREEN_BASE_IMAGE", binding::kScreenBaseImage},
     {"BINDING_JITTER_TABLE", binding::kJitterTable},
+    {"BINDING_FROXEL_DEPTHS", binding::kFroxelDepths},
     {"BINDING_LOW_RES_IMAGE", binding::kLowResImage},
     {"BINDING_LOW_RES_DEPTH_IMAGE", binding::kLowResDepthImage},
     {"BINDING_OUTPUT_IMAGE", binding::kOutputImage},

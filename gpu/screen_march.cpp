@@ -123,17 +123,16 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
   checkGl("froxel transmittance map");
   const Texture froxels = Texture::make3D(GL_RGBA32F, g.x, g.y, g.z, "froxel volume");
   const Texture out = Texture::make2D(GL_RGBA32F, cam.width, cam.height, "froxel image");
-  const auto slicingUniforms = [&](const Program& p) {
-    setIVec3(p, "uGrid", g);
-    glUniform1f(p.uniform("uNear"), slicing.near);
-    glUniform1f(p.uniform("uFar"), slicing.far);
-    glUniform1i(p.uniform("uExponential"), slicing.exponential ? 1 : 0);
-  };
+  // The slices' boundaries as the CPU computes them (its std::pow, not the GPU's pow).
+  std::vector<float> depths(std::size_t(g.z) + 1);
+  for (int k = 0; k <= g.z; ++k) depths[std::size_t(k)] = slicing.depth(float(k));
+  const Buffer depthBuf(depths.size() * sizeof(float), depths.data(), 0, "froxel slice depths");
   {
     ScopedGpuTimer t(timer, "froxel accumulate");
     scatter.use();
     pass.bind(scatter);
-    slicingUniforms(scatter);
+    setIVec3(scatter, "uGrid", g);
+    depthBuf.bindBase(GL_SHADER_STORAGE_BUFFER, binding::kFroxelDepths);
     // The lights over as many dispatches as a driver's loop cap asks (1 on a GPU without one):
     // a slice evaluates each light's shadow ray, or with the maps its 8 texels.
     const int parts = lightDispatches(int(scene.lights.size()), g.z,
@@ -154,7 +153,10 @@ Image FroxelGpu::integrate(const Scene& scene, const Volume& density, StageTimer
     lookup.use();
     pass.bind(lookup);
     glUniform1f(lookup.uniform("uMinTransmittance"), minT_);
-    slicingUniforms(lookup);
+    setIVec3(lookup, "uGrid", g);
+    glUniform1f(lookup.uniform("uNear"), slicing.near);
+    glUniform1f(lookup.uniform("uFar"), slicing.far);
+    glUniform1i(lookup.uniform("uExponential"), slicing.exponential ? 1 : 0);
     glBindImageTexture(binding::kFroxelImage, froxels.id(), 0, GL_TRUE, 0, GL_READ_ONLY,
                        GL_RGBA32F);
     bindScreenImage(binding::kOutputImage, out, GL_WRITE_ONLY);

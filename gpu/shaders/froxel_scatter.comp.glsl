@@ -11,17 +11,16 @@ layout(r32f, binding = BINDING_TRANSMITTANCE_MAP_IMAGE) uniform readonly image3D
 uniform int uMapRes;
 #endif
 uniform ivec3 uGrid;
-uniform float uNear;
-uniform float uFar;
-uniform int uExponential;
 uniform int uLightFirst;
 uniform int uLightStride;
-
-// FroxelSlicing::depth (shading/screen_march.h).
-float sliceDepth(float k) {
-  float s = k / float(uGrid.z);
-  return uExponential != 0 ? uNear * pow(uFar / uNear, s) : uNear + (uFar - uNear) * s;
-}
+// The view depths of the slices' boundaries 0 … uGrid.z: FroxelSlicing::depth (shading/
+// screen_march.h) computed by the host, the CPU's floats. A GPU's pow is further off than its
+// other built-ins, and a boundary that moves moves the froxel's centre: next to a lamp, where
+// the source radiance grows as 1/distance², a few ulps of pow moved pixels by 6e-4 relative
+// (the population's fog_shaft_3 with the built-ins simulated 4 ulps off, 2026-12-08).
+layout(std430, binding = BINDING_FROXEL_DEPTHS) readonly buffer FroxelDepths {
+  float sliceDepths[];
+};
 
 #ifdef SL_TRANSMITTANCE_MAP
 // Grid3::sample of light li's map at x (inside the box).
@@ -72,7 +71,7 @@ void main() {
   vec3 L = vec3(0.0);
   float T = 1.0;
   for (int k = 0; k < uGrid.z; ++k) {
-    float za = sliceDepth(float(k)), zb = sliceDepth(float(k + 1));
+    float za = sliceDepths[k], zb = sliceDepths[k + 1];
     float ta = max(cpuDiv(za, c), t0), tb = min(cpuDiv(zb, c), t1);
     precise vec3 x = uEye + dir * (0.5 * (ta + tb));
     float D = tb > ta ? densityAtIndex(x * uDensityScale + uDensityOffset) : 0.0;

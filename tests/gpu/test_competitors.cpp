@@ -45,7 +45,9 @@ TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
   const std::string m = "froxel";
   // Measured on llvmpipe (slices clipped to the box, 2026-12-07): 4.7e-7, 3.2e-6, 3.3e-7 (float
   // rounding of pow, log and exp); with SCATTERLAB_GPU_IMPRECISE=4 1.5e-6, 2.7e-6, 3.8e-7; on an
-  // NVIDIA H200 (driver 580, unclipped), 2026-11, issue 23: up to 2.8e-6. Limit 1.5x the largest.
+  // NVIDIA H200 (driver 580, unclipped), 2026-11, issue 23: up to 2.8e-6. Since the rays are the
+  // CPU's (cpu_arithmetic.glsl) and the slices' depths the host's (2026-12-08): 9.3e-8, 1.1e-7,
+  // 3.4e-7; N = 4 1.2e-7, 8.9e-7, 3.9e-7. Limit 1.5x the largest, the H200's (not re-measured).
   for (const Json& r :
        {Json{{"method", m}, {"froxel_grid", {20, 15, 32}}},
         Json{{"method", m}, {"froxel_grid", {40, 30, 16}}, {"depth_distribution", "linear"}},
@@ -53,7 +55,7 @@ TEST(GpuFroxel, MatchesCpuForBothDistributionsAndTransmittances) {
              {"froxel_grid", {13, 11, 24}},
              {"light_transmittance", "map"},
              {"transmittance_map_resolution", 16}}})
-    EXPECT_LT(blobGpuVsCpu(r), 4.8e-6) << r.dump();
+    EXPECT_LT(blobGpuVsCpu(r), 4.2e-6) << r.dump();
 }
 
 // On a driver that caps loop iterations (llvmpipe) the lights are split over dispatches

@@ -31,8 +31,10 @@ struct MarchCase {
   int spp = 1;
   float minT = 0.0f;
   bool glow = true;  ///< render.glow
-  /// The camera zoomed to 0.1° down the box's z axis from (0.5, 0.5, −2) instead of oblique.
+  /// The camera zoomed to `axisFov` degrees down the box's z axis from (0.5, 0.5, −2) instead of
+  /// oblique.
   bool alongAxis = false;
+  float axisFov = 0.1f;
 };
 
 /// CPU marcher and the compute view march on the same volumes (the blob scene, an oblique
@@ -42,7 +44,7 @@ double viewMarchVsCpu(const MarchCase& c) {
   Json doc = blobSceneDoc(24, 32, 24);
   if (!c.lightInside) doc["lights"][0]["position"] = {1.25, 0.8, 0.3};
   doc["camera"]["spp"] = c.spp;
-  if (c.alongAxis) doc["camera"]["fov_y_deg"] = 0.1;
+  if (c.alongAxis) doc["camera"]["fov_y_deg"] = c.axisFov;
   Scene scene = sceneFromJson(doc);
   scene.background = Vec3(0.05f, 0.1f, 0.2f);
   if (!c.alongAxis) scene.camera.position = Vec3(1.6f, 1.1f, -1.5f);
@@ -103,21 +105,25 @@ double viewMarchVsCpu(const MarchCase& c) {
 // has not run on hardware yet). The view march on uploaded volumes: llvmpipe 1.93e-6 / 1.99e-6 /
 // 1.02e-6 (2026-12-07: 1.3e-7 / 2.1e-8 / 3.0e-8); imprecise 3.6e-6 / 2.3e-6 / 1.4e-6 (2 ulps),
 // 6.5e-6 / 3.5e-6 / 4.6e-6 (4 ulps); on the H200 a per-pixel march with the same per-step exp
-// (jittered-march) differed from the CPU by up to 3.3e-6. Limit 9.8e-6.
+// (jittered-march) differed from the CPU by up to 3.3e-6. Since the rays are set up in the CPU's
+// arithmetic (cpu_arithmetic.glsl, 2026-12-08), what the imprecise figures held of a GPU's
+// normalize is gone: llvmpipe 8.2e-8 / 2.1e-8 / 2.2e-8, 4 ulps 1.5e-7 / 1.1e-7 / 2.9e-7 (the
+// glow's substeps, the phase function and exp remain). Limit 5.0e-6: 1.5 × the H200's 3.3e-6,
+// which was measured before and still holds its exp.
 TEST(GpuViewMarch, MatchesCpuMarcherWithTheLightInsideTheMedium) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({}), 9.8e-6);
+  EXPECT_LT(viewMarchVsCpu({}), 5.0e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithFactoredLightsStrataAndEarlyExit) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 9.8e-6);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .spp = 4, .minT = 0.05f}), 5.0e-6);
 }
 
 TEST(GpuViewMarch, MatchesCpuMarcherWithoutTheGlowsSubsteps) {
   SCATTERLAB_REQUIRE_GPU();
   // render.glow false: A at each step's midpoint only, on the GPU as on the CPU.
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .glow = false}), 9.8e-6);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .glow = false}), 5.0e-6);
 }
 
 // Looking down an axis of the box, zoomed: the central rays cross the unit box's depth, 48
@@ -131,7 +137,22 @@ TEST(GpuViewMarch, MatchesCpuMarcherWithoutTheGlowsSubsteps) {
 // ceil alone (the CPU with the slack) 4.9e-3. The limit is the view march's above.
 TEST(GpuViewMarch, MatchesCpuMarcherLookingDownAnAxis) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .alongAxis = true}), 9.8e-6);
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true, .factor = true, .alongAxis = true}), 5.0e-6);
+}
+
+// The same view at 0.5°, where the corner rays' ratios lie within a few ulps of the slack's edge
+// (48.0007 to 48.001): only a ray set up as the CPU rounds it (cpu_arithmetic.glsl: its
+// direction, box entry and exit and the ratio, bit for bit) takes the CPU's count there on any
+// device. Measured 2026-12-08 on llvmpipe: 7.2e-8, with SCATTERLAB_GPU_IMPRECISE=4 1.4e-7; with
+// the rays in the GPU's own arithmetic and N = 4 5.3e-4 (four corner pixels at 49 steps where
+// the CPU takes 48). The view march's limit.
+TEST(GpuViewMarch, MatchesCpuMarcherWhereRaysLieAtTheirStepCountsEdge) {
+  SCATTERLAB_REQUIRE_GPU();
+  EXPECT_LT(viewMarchVsCpu({.lightInside = true,
+                            .factor = true,
+                            .alongAxis = true,
+                            .axisFov = 0.5f}),
+            5.0e-6);
 }
 
 // A's far field is a 3D texture, not a storage buffer: at 256³ its grid (257³ vertices × 16
