@@ -41,3 +41,13 @@ int stepCount(float len, float stepLen) {
   precise float r = cpuDiv(len, stepLen) - SL_STEP_SLACK;
   return max(1, int(ceil(r)));
 }
+
+// Camera::RayGenerator::at (core/camera.h): the unit ray through continuous image coordinates
+// f (x right, y down) of an image `size` pixels wide and high, from the camera's frame and
+// tanHalf = (tan(fov/2)·aspect, tan(fov/2)), as the CPU rounds it.
+vec3 cpuCameraRay(vec2 f, vec2 size, vec3 forward, vec3 right, vec3 up, vec2 tanHalf) {
+  precise float u = (cpuDiv(f.x, size.x) * 2.0 - 1.0) * tanHalf.x;
+  precise float v = (1.0 - cpuDiv(f.y, size.y) * 2.0) * tanHalf.y;
+  precise vec3 w = forward + u * right + v * up;
+  return cpuNormalize(w);
+}

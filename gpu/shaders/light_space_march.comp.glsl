@@ -70,12 +70,9 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
 void main() {
   ivec2 px = ivec2(gl_GlobalInvocationID.xy);
   if (px.x >= uImageSize.x || px.y >= uImageSize.y) return;
-  // The camera's ray in the CPU's arithmetic (cameraRay of screen_common.glsl; common.glsl's
-  // cpuDiv and cpuNormalize): its box entry and exit, and where it passes a lamp, are the CPU's.
-  precise float u = (cpuDiv(float(px.x) + 0.5, float(uImageSize.x)) * 2.0 - 1.0) * uTanHalf.x;
-  precise float v = (1.0 - cpuDiv(float(px.y) + 0.5, float(uImageSize.y)) * 2.0) * uTanHalf.y;
-  precise vec3 w = uForward + u * uRight + v * uUp;
-  vec3 dir = cpuNormalize(w);
+  // The camera's ray as the CPU rounds it (cpu_arithmetic.glsl): its box entry and exit, and
+  // where it passes a lamp, are the CPU's.
+  vec3 dir = cpuCameraRay(vec2(px) + 0.5, vec2(uImageSize), uForward, uRight, uUp, uTanHalf);
   int stride = uInterleave * uInterleave;
   int first = (px.x % uInterleave) + uInterleave * (px.y % uInterleave);
   vec3 L = vec3(0.0);

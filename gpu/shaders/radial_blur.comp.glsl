@@ -43,11 +43,8 @@ void main() {
 #else
   vec2 f = vec2(px) + 0.5;
 #endif
-  // The camera's ray in the CPU's arithmetic (cameraRay of screen_common.glsl).
-  precise float u = (cpuDiv(f.x, float(uImageSize.x)) * 2.0 - 1.0) * uTanHalf.x;
-  precise float v = (1.0 - cpuDiv(f.y, float(uImageSize.y)) * 2.0) * uTanHalf.y;
-  precise vec3 w = uForward + u * uRight + v * uUp;
-  vec3 dir = cpuNormalize(w);
+  // The camera's ray as the CPU rounds it (cpu_arithmetic.glsl).
+  vec3 dir = cpuCameraRay(f, vec2(uImageSize), uForward, uRight, uUp, uTanHalf);
   vec3 L = vec3(0.0);
   float T = 1.0;
   float t0, t1;

@@ -27,15 +27,10 @@ float surfaceDistance(ivec2 p) {
 }
 
 // The ray through continuous image coordinates f (x right, y down), in the CPU's arithmetic
-// (cpuDiv, cpuNormalize, `precise`: common.glsl): the same direction bit for bit, so that the
+// (cpuCameraRay, cpu_arithmetic.glsl): the same direction bit for bit, so that the
 // pixel's box entry, exit and step count are the CPU's, and a ray passing a lamp passes it at
 // the CPU's distance.
-vec3 cameraRay(vec2 f) {
-  precise float u = (cpuDiv(f.x, uSize.x) * 2.0 - 1.0) * uTanHalf.x;
-  precise float v = (1.0 - cpuDiv(f.y, uSize.y) * 2.0) * uTanHalf.y;
-  precise vec3 w = uForward + u * uRight + v * uUp;
-  return cpuNormalize(w);
-}
+vec3 cameraRay(vec2 f) { return cpuCameraRay(f, uSize, uForward, uRight, uUp, uTanHalf); }
 
 // Grid3::sample: zero outside the box (inclusive faces), trilinear inside.
 float densityAt(vec3 x) {

@@ -27,11 +27,8 @@ layout(location = 0) out vec4 outColor;
 void main() {
   // GL row r is image row r (row 0 at the top once read back without flipping).
   vec2 pix = gl_FragCoord.xy;  // (px + 0.5, py + 0.5)
-  // The camera's ray in the CPU's arithmetic (cameraRay of screen_common.glsl).
-  precise float u = (cpuDiv(pix.x, uSize.x) * 2.0 - 1.0) * uTanHalf.x;
-  precise float v = (1.0 - cpuDiv(pix.y, uSize.y) * 2.0) * uTanHalf.y;
-  precise vec3 w = uForward + u * uRight + v * uUp;
-  vec3 dir = cpuNormalize(w);
+  // The camera's ray as the CPU rounds it (cpu_arithmetic.glsl).
+  vec3 dir = cpuCameraRay(pix, uSize, uForward, uRight, uUp, uTanHalf);
   float t0, t1;
   if (!intersectBox(uEye, dir, 0.0, kInf, t0, t1) || !(t1 > t0)) discard;
 #ifdef SL_OBJECTS

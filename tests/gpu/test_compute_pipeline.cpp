@@ -148,11 +148,9 @@ TEST(GpuViewMarch, MatchesCpuMarcherLookingDownAnAxis) {
 // the CPU takes 48). The view march's limit.
 TEST(GpuViewMarch, MatchesCpuMarcherWhereRaysLieAtTheirStepCountsEdge) {
   SCATTERLAB_REQUIRE_GPU();
-  EXPECT_LT(viewMarchVsCpu({.lightInside = true,
-                            .factor = true,
-                            .alongAxis = true,
-                            .axisFov = 0.5f}),
-            5.0e-6);
+  EXPECT_LT(
+      viewMarchVsCpu({.lightInside = true, .factor = true, .alongAxis = true, .axisFov = 0.5f}),
+      5.0e-6);
 }
 
 // A's far field is a 3D texture, not a storage buffer: at 256³ its grid (257³ vertices × 16
