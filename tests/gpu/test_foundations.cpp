@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <regex>
 #include <set>
@@ -302,11 +303,13 @@ TEST(GpuShaders, ImpreciseBuiltInsAreTheUlpsAskedAwayAndExactValuesStay) {
   EXPECT_EQ(gpu::impreciseUlps(), v && *v ? std::atoi(v) : 0);
 }
 
-/// The GPU's results of cpu_arithmetic.glsl's helpers and of the plain built-ins beside them, for
-/// `in` (8 floats per case: a, b, x, v.xyz, len, step), with `prologue` before the helpers: per
-/// case a / b, √x, |v|, v / |v| (3), stepCount(len, step) (as a float), twice (helpers, plain).
-std::vector<float> cpuArithmeticOnTheGpu(const std::vector<float>& in,
-                                         const std::string& prologue) {
+/// Runs `body` (GLSL: invocation i < uCount reads `a[]` and writes `v[]`) after `prologue` (a
+/// GPU's rounding simulated, or nothing), cpu_arithmetic.glsl and `uniforms` (declarations), for
+/// `count` invocations on `in`; `set` sets the uniforms. Returns `outFloats` floats of `v`.
+std::vector<float> afterCpuArithmetic(const std::string& prologue, const std::string& uniforms,
+                                      const std::string& body, const std::vector<float>& in,
+                                      std::size_t count, std::size_t outFloats,
+                                      const std::function<void(const gpu::Program&)>& set) {
   std::string src = "#version 450 core\n";
   for (const std::string& d : gpu::sharedConstantDefines()) src += "#define " + d + "\n";
   src += prologue;
@@ -315,10 +318,36 @@ std::vector<float> cpuArithmeticOnTheGpu(const std::vector<float>& in,
       "\nlayout(local_size_x = 64) in;\n"
       "layout(std430, binding = 0) readonly buffer In { float a[]; };\n"
       "layout(std430, binding = 1) writeonly buffer Out { float v[]; };\n"
-      "uniform uint uCount;\n"
+      "uniform uint uCount;\n" +
+      uniforms +
       "void main() {\n"
       "  uint i = gl_GlobalInvocationID.x;\n"
-      "  if (i >= uCount) return;\n"
+      "  if (i >= uCount) return;\n" +
+      body + "}\n";
+  const gpu::Shader cs(GL_COMPUTE_SHADER, src, "cpu arithmetic test");
+  const gpu::Program p({&cs}, "cpu arithmetic test");
+  const gpu::Buffer input(in.size() * sizeof(float), in.data(), 0, "cpu arithmetic in");
+  const gpu::Buffer output(outFloats * sizeof(float), nullptr, 0, "cpu arithmetic out");
+  p.use();
+  glUniform1ui(p.uniform("uCount"), GLuint(count));
+  if (set) set(p);
+  input.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
+  output.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
+  gpu::dispatch("cpu arithmetic test", {GLuint((count + 63) / 64), 1, 1});
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<float> got(outFloats);
+  output.read(got.data(), got.size() * sizeof(float));
+  return got;
+}
+
+/// The GPU's results of cpu_arithmetic.glsl's helpers and of the plain built-ins beside them, for
+/// `in` (8 floats per case: a, b, x, v.xyz, len, step), with `prologue` before the helpers: per
+/// case a / b, √x, |v|, v / |v| (3), stepCount(len, step) (as a float), twice (helpers, plain).
+std::vector<float> cpuArithmeticOnTheGpu(const std::vector<float>& in,
+                                         const std::string& prologue) {
+  const std::size_t cases = in.size() / 8;
+  return afterCpuArithmetic(
+      prologue, "",
       "  uint s = 8u * i, o = 14u * i;\n"
       "  vec3 w = vec3(a[s + 3u], a[s + 4u], a[s + 5u]);\n"
       "  vec3 n = cpuNormalize(w), m = normalize(w);\n"
@@ -331,22 +360,8 @@ std::vector<float> cpuArithmeticOnTheGpu(const std::vector<float>& in,
       "  v[o + 8u] = sqrt(a[s + 2u]);\n"
       "  v[o + 9u] = length(w);\n"
       "  v[o + 10u] = m.x; v[o + 11u] = m.y; v[o + 12u] = m.z;\n"
-      "  v[o + 13u] = float(max(1, int(ceil(a[s + 6u] / a[s + 7u] - SL_STEP_SLACK))));\n"
-      "}\n";
-  const gpu::Shader cs(GL_COMPUTE_SHADER, src, "cpu arithmetic test");
-  const gpu::Program p({&cs}, "cpu arithmetic test");
-  const std::size_t cases = in.size() / 8;
-  const gpu::Buffer input(in.size() * sizeof(float), in.data(), 0, "cpu arithmetic in");
-  const gpu::Buffer output(cases * 14 * sizeof(float), nullptr, 0, "cpu arithmetic out");
-  p.use();
-  glUniform1ui(p.uniform("uCount"), GLuint(cases));
-  input.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
-  output.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-  gpu::dispatch("cpu arithmetic test", {GLuint((cases + 63) / 64), 1, 1});
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  std::vector<float> got(cases * 14);
-  output.read(got.data(), got.size() * sizeof(float));
-  return got;
+      "  v[o + 13u] = float(max(1, int(ceil(a[s + 6u] / a[s + 7u] - SL_STEP_SLACK))));\n",
+      in, cases, cases * 14, nullptr);
 }
 
 // cpu_arithmetic.glsl, what every ray's set-up goes through (the camera's rays, box entries and
@@ -437,40 +452,20 @@ TEST(GpuShaders, TheCameraRaysAreTheCpusBitForBit) {
           want.push_back(gen.at(fx, fy).dir);
         }
   for (const int ulps : {0, 4}) {
-    std::string src = "#version 450 core\n";
-    for (const std::string& d : gpu::sharedConstantDefines()) src += "#define " + d + "\n";
-    if (ulps) src += gpu::imprecisePrologue(ulps);
-    src += gpu::shaderSource("cpu_arithmetic.glsl");
-    src +=
-        "\nlayout(local_size_x = 64) in;\n"
-        "layout(std430, binding = 0) readonly buffer In { vec2 f[]; };\n"
-        "layout(std430, binding = 1) writeonly buffer Out { float v[]; };\n"
-        "uniform uint uCount;\n"
+    const std::vector<float> got = afterCpuArithmetic(
+        ulps ? gpu::imprecisePrologue(ulps) : std::string(),
         "uniform vec2 uSize, uTanHalf;\n"
-        "uniform vec3 uForward, uRight, uUp;\n"
-        "void main() {\n"
-        "  uint i = gl_GlobalInvocationID.x;\n"
-        "  if (i >= uCount) return;\n"
-        "  vec3 d = cpuCameraRay(f[i], uSize, uForward, uRight, uUp, uTanHalf);\n"
-        "  v[3u * i] = d.x; v[3u * i + 1u] = d.y; v[3u * i + 2u] = d.z;\n"
-        "}\n";
-    const gpu::Shader cs(GL_COMPUTE_SHADER, src, "camera ray test");
-    const gpu::Program p({&cs}, "camera ray test");
-    const gpu::Buffer input(at.size() * sizeof(float), at.data(), 0, "camera ray in");
-    const gpu::Buffer output(want.size() * 3 * sizeof(float), nullptr, 0, "camera ray out");
-    p.use();
-    glUniform1ui(p.uniform("uCount"), GLuint(want.size()));
-    glUniform2f(p.uniform("uSize"), float(gen.width), float(gen.height));
-    glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
-    glUniform3f(p.uniform("uForward"), gen.forward.x, gen.forward.y, gen.forward.z);
-    glUniform3f(p.uniform("uRight"), gen.right.x, gen.right.y, gen.right.z);
-    glUniform3f(p.uniform("uUp"), gen.up.x, gen.up.y, gen.up.z);
-    input.bindBase(GL_SHADER_STORAGE_BUFFER, 0);
-    output.bindBase(GL_SHADER_STORAGE_BUFFER, 1);
-    gpu::dispatch("camera ray test", {GLuint((want.size() + 63) / 64), 1, 1});
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    std::vector<float> got(want.size() * 3);
-    output.read(got.data(), got.size() * sizeof(float));
+        "uniform vec3 uForward, uRight, uUp;\n",
+        "  vec3 d = cpuCameraRay(vec2(a[2u * i], a[2u * i + 1u]), uSize, uForward, uRight, uUp,\n"
+        "                        uTanHalf);\n"
+        "  v[3u * i] = d.x; v[3u * i + 1u] = d.y; v[3u * i + 2u] = d.z;\n",
+        at, want.size(), want.size() * 3, [&](const gpu::Program& p) {
+          glUniform2f(p.uniform("uSize"), float(gen.width), float(gen.height));
+          glUniform2f(p.uniform("uTanHalf"), gen.sx, gen.sy);
+          glUniform3f(p.uniform("uForward"), gen.forward.x, gen.forward.y, gen.forward.z);
+          glUniform3f(p.uniform("uRight"), gen.right.x, gen.right.y, gen.right.z);
+          glUniform3f(p.uniform("uUp"), gen.up.x, gen.up.y, gen.up.z);
+        });
     int wrong = 0;
     for (std::size_t r = 0; r < want.size(); ++r)
       for (int k = 0; k < 3; ++k)
