@@ -736,10 +736,13 @@ TEST(GpuAdaptiveMethod, VisibleTauTracesTheSampleAndItsProbesInParallel) {
   // with tau "sample"), the CPU's samples per level; 2026-12-07 8.3e-7, with
   // SCATTERLAB_GPU_IMPRECISE=2 / 4 4.8e-5 / 5.2e-5 (the same counts: the gathers' old
   // length(d) < R test); 2026-12-08, with d² < R²: 8.3e-7, N = 2 / 4 / 8 2.95e-6 / 4.89e-6 /
-  // 1.42e-5. Not measured on hardware, where `exp` of a large argument is off by about ten
-  // ulps (exp2 of x·log2 e, the product rounded): 1.5x the N = 8 figure.
+  // 1.42e-5. Since the rays and a sample's light geometry are the CPU's (cpu_arithmetic.glsl,
+  // 2026-12-08): 4.4e-7 (478 initial samples), N = 2 / 4 / 8 4.1e-7 / 3.9e-7 / 4.0e-7 — what
+  // grew with N was the geometry, not `exp`. Not measured on hardware: the hardware factor on
+  // llvmpipe's figure (unmeasuredOnHardware, 1.8e-6).
   EXPECT_LT(err, decisionBound(visible.stats.extra.value("samples_per_level", Json()),
-                               cpu.stats.extra.value("samples_per_level", Json()), 2.1e-5));
+                               cpu.stats.extra.value("samples_per_level", Json()),
+                               unmeasuredOnHardware(4.4e-7)));
 }
 
 /// The glow scene (a point light inside the medium) at 32³, 80×60: the compute march and the

@@ -589,8 +589,10 @@ TEST(GpuSteadyFrame, ASparseMediumRenderedAsPerVoxelWaitsForNothing) {
         std::printf("switched %s, gpu vs cpu: relative L2 %.3g\n", method.c_str(), toCpu);
         // Measured on llvmpipe: 1.94e-7 (2026-11-28), 2.05e-7 for both (2026-11-29); with
         // SCATTERLAB_GPU_IMPRECISE=2 / 4 (a GPU's approximate built-ins, 2026-12-07) 1.08e-6 /
-        // 9.4e-7. 1.5x the largest.
-        EXPECT_LT(toCpu, 1.6e-6);
+        // 9.4e-7. Since the rays are the CPU's (cpu_arithmetic.glsl, 2026-12-08): 1.94e-7, N = 2
+        // / 4 / 8 1.1e-7 / 1.86e-7 / 2.17e-7. Not measured on hardware: the hardware factor on
+        // llvmpipe's figure (unmeasuredOnHardware, 8.1e-7; above N = 8's).
+        EXPECT_LT(toCpu, unmeasuredOnHardware(1.94e-7));
       }
       // The same passes as a fresh render.
       EXPECT_EQ(compareImages(deviceImage(res), fresh).maxAbs, 0.0) << "frame " << f;
