@@ -189,6 +189,13 @@ float opticalDepth(vec3 a, vec3 b, float stepLen) { return opticalDepth(a, b, st
 // of the light gets through), as the CPU's shadow rays stop.
 float shadowDepthCutoff() { return uSigmaT > 0.0 ? SL_SHADOW_DEPTH_CUTOFF / uSigmaT : kInf; }
 
+// Light::spotFalloff in the CPU's arithmetic: spot l's cone factor for the unit direction towards
+// it, toLight.
+float spotConeExact(GpuLight l, vec3 toLight) {
+  return smoothStepExact(cpuDot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
+                         l.directionCosInner.w);
+}
+
 // Light::geometry (core/light.h): direction and distance towards light l from x, and the spot
 // cone factor (1 for point and directional lights); false only at a point or spot light itself.
 // `exact` (a sample's or a voxel's S, a shadow ray's end): in the CPU's arithmetic (cpuSqrt,
@@ -208,9 +215,7 @@ bool lightGeometry(GpuLight l, vec3 x, bool exact, out vec3 toLight, out float d
     if (dist2 <= 0.0) return false;
     dist = cpuSqrt(dist2);
     toLight = cpuDiv(d, dist);
-    if (int(l.positionType.w) == 1)
-      cone = smoothStepExact(cpuDot(-toLight, l.directionCosInner.xyz), l.intensityCosOuter.w,
-                             l.directionCosInner.w);
+    if (int(l.positionType.w) == 1) cone = spotConeExact(l, toLight);
     return true;
   }
   dist2 = dot(d, d);
@@ -225,8 +230,7 @@ bool lightGeometry(GpuLight l, vec3 x, bool exact, out vec3 toLight, out float d
     // with the built-ins 4 ulps off): there the cosine is the CPU's (cpu_arithmetic.glsl).
     // Outside it the cone is 0 or 1 whatever the rounding, and a step pays no double.
     if (c > cosOuter - 1e-5 && c < cosInner + 1e-5)
-      cone = smoothStepExact(cpuDot(-cpuDiv(d, cpuSqrt(cpuDot(d, d))), l.directionCosInner.xyz),
-                             cosOuter, cosInner);
+      cone = spotConeExact(l, cpuDiv(d, cpuSqrt(cpuDot(d, d))));
     else
       cone = smoothStepCpu(c, cosOuter, cosInner);
   }
@@ -262,6 +266,15 @@ vec3 boxExit(vec3 x, vec3 toLight) {
   return end;
 }
 
+// lightSegmentEnd (shading/transport.h): the far end of the shadow ray from x towards light l,
+// the light itself (x + toLight·dist, as the CPU rounds it) or, for a directional light, where
+// the ray leaves the box.
+vec3 lightSegmentEnd(GpuLight l, vec3 x, vec3 toLight, float dist) {
+  if (int(l.positionType.w) == 2) return boxExit(x, toLight);
+  precise vec3 end = x + toLight * dist;
+  return end;
+}
+
 // SourceRadiance::operator()'s terms for lights li = first, first + stride, … (S at x for
 // light leaving towards the viewer along toViewer is their sum over every light; the volume
 // tracer splits the lights between invocations and adds the parts in shared memory).
@@ -272,14 +285,9 @@ vec3 sourceRadiancePart(vec3 x, vec3 toViewer, int first, int stride) {
     vec3 toLight, irradiance, segEnd;
     float dist, dist2, f;
     if (!lightGeometry(l, x, true, toLight, dist, dist2, f) || f <= 0.0) continue;
-    if (int(l.positionType.w) == 2) {
-      irradiance = l.intensityCosOuter.rgb;
-      segEnd = boxExit(x, toLight);
-    } else {
-      irradiance = l.intensityCosOuter.rgb * (f / dist2);
-      precise vec3 end = x + toLight * dist;  // lightSegmentEnd, as the CPU rounds it
-      segEnd = end;
-    }
+    irradiance = int(l.positionType.w) == 2 ? l.intensityCosOuter.rgb
+                                             : l.intensityCosOuter.rgb * (f / dist2);
+    segEnd = lightSegmentEnd(l, x, toLight, dist);
 #ifdef SL_OBJECTS
     // V_l through scene objects (shadow.glsl): the CPU skips a blocked light.
     float vis = lightVisibility(li, x);

@@ -18,9 +18,7 @@ void main() {
   float dist, dist2, cone;
   float value = 0.0;
   if (lightGeometry(l, x, true, toLight, dist, dist2, cone)) {
-    precise vec3 end = x + toLight * dist;  // lightSegmentEnd
-    vec3 segEnd = int(l.positionType.w) == 2 ? boxExit(x, toLight) : end;
-    value = exp(-uSigmaT * opticalDepth(x, segEnd, uDelta1));
+    value = exp(-uSigmaT * opticalDepth(x, lightSegmentEnd(l, x, toLight, dist), uDelta1));
 #ifdef SL_OBJECTS
     value *= lightVisibility(li, x);  // the shadow maps (the CPU: 0 where an object blocks)
 #endif

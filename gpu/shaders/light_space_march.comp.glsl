@@ -53,9 +53,7 @@ vec3 lsmSource(vec3 x, vec3 toViewer) {
     const float vis = 1.0;  // v_l = 1 without objects
 #endif
 #ifdef SL_TRACED
-    precise vec3 end = x + toLight * dist;
-    vec3 segEnd = directional ? boxExit(x, toLight) : end;
-    float tau = opticalDepth(x, segEnd, uDelta1);
+    float tau = opticalDepth(x, lightSegmentEnd(l, x, toLight, dist), uDelta1);
 #else
     // lengthInBox (shading/post_process.h)
     float t0, t1, tau = 0.0;
